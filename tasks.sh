@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# The README's two commands:  ./tasks.sh run   (main job)   and   ./tasks.sh test   (test suite).
+# Each first runs scripts/setup.sh, which installs whatever is missing and is quick otherwise.
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+cd "$here"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OPENBLAS_NUM_THREADS=1
+cmd=${1:-}
+[ $# -gt 0 ] && shift
+case "$cmd" in
+  run)
+    scripts/setup.sh
+    exec .venv/bin/dolfinx-fretting run hertz --out results/hertz "$@" ;;
+  test)
+    scripts/setup.sh
+    exec .venv/bin/python -m pytest -q -m "not slow" tests "$@" ;;
+  bench)
+    scripts/setup.sh
+    exec .venv/bin/python -m pytest -q -m slow tests "$@" ;;
+  *)
+    echo "usage: ./tasks.sh run [run options] | test [pytest options] | bench" >&2; exit 2 ;;
+esac
