@@ -1,0 +1,120 @@
+"""The DOLFINx side: displacement space, stiffness K, boundary conditions and stress output.
+
+:class:`ElasticProblem` owns its PETSc objects (the assembled K and, through
+:class:`~dolfinx_fretting.compliance.DelassusOperator`, the MUMPS factorisation reused for every
+solve and for W = H K^-1 H^T). Loads on the contact are applied through the obstacle's rigid motion and
+the contact forces, so K carries only homogeneous Dirichlet conditions (the fixed faces).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from petsc4py import PETSc
+
+from .compliance import DelassusOperator
+from .materials import LinearElastic
+from .meshes import BodyMesh
+
+__all__ = ["ElasticProblem"]
+
+
+class ElasticProblem:
+    """Small-strain linear elasticity (plane strain in 2D) with fixed faces.
+
+    K is assembled on construction; call ``self.delassus.factorize()`` once before solving (kept
+    separate so that cheap input checks can run before the factorisation).
+
+    Args:
+        body: The meshed body with its facet tags.
+        material: Elastic constants.
+        fixed: Names of facet tags whose displacement is zero.
+        delassus_method: Route for W (see :class:`DelassusOperator`).
+        petsc_options: Extra PETSc options for the factorisation.
+    """
+
+    def __init__(self, body: BodyMesh, material: LinearElastic, fixed: list[str],
+                 delassus_method: str = "auto", petsc_options: dict | None = None):
+        self.body = body
+        self.material = material
+        msh = body.mesh
+        self.mesh = msh
+        self.comm = msh.comm
+        self.gdim = msh.geometry.dim
+        self.V = fem.VectorFunctionSpace(msh, ("Lagrange", 1))
+        fdim = msh.topology.dim - 1
+
+        zero = np.zeros(self.gdim, dtype=PETSc.ScalarType)
+        self.bcs = []
+        fixed_nodes = []
+        for name in fixed:
+            facets = body.facets(name)
+            dofs = fem.locate_dofs_topological(self.V, fdim, facets)
+            fixed_nodes.append(dofs)
+            self.bcs.append(fem.dirichletbc(zero, dofs, self.V))
+        #: Local block indices of constrained nodes (never contact candidates).
+        self.fixed_nodes = np.unique(np.concatenate(fixed_nodes)) if fixed_nodes else np.zeros(0, np.int32)
+
+        u, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
+        self._a = fem.form(ufl.inner(self.sigma(u), self.epsilon(v)) * ufl.dx)
+        self.K = fem.petsc.assemble_matrix(self._a, bcs=self.bcs)
+        self.K.assemble()
+        self.delassus = DelassusOperator(self.K, self.comm, method=delassus_method,
+                                         petsc_options=petsc_options)
+        self.u = fem.Function(self.V, name="displacement")
+        self._rhs = self.K.createVecRight()
+
+    # Constitutive relations -------------------------------------------------------------------------
+    def epsilon(self, u):
+        return ufl.sym(ufl.grad(u))
+
+    def sigma(self, u):
+        lmbda, mu = self.material.lame
+        eps = self.epsilon(u)
+        return lmbda * ufl.tr(eps) * ufl.Identity(self.gdim) + 2.0 * mu * eps
+
+    def von_mises_expression(self, u):
+        """Von Mises stress; in 2D plane strain it includes sigma_zz = lambda tr(eps)."""
+        s = self.sigma(u)
+        if self.gdim == 2:
+            lmbda, _ = self.material.lame
+            szz = lmbda * ufl.tr(self.epsilon(u))
+            dev = s - (ufl.tr(s) + szz) / 3.0 * ufl.Identity(2)
+            szz_dev = szz - (ufl.tr(s) + szz) / 3.0
+            return ufl.sqrt(1.5 * (ufl.inner(dev, dev) + szz_dev**2))
+        dev = ufl.dev(s)
+        return ufl.sqrt(1.5 * ufl.inner(dev, dev))
+
+    # Solves -----------------------------------------------------------------------------------------
+    def solve_contact_response(self, H, r: np.ndarray) -> fem.Function:
+        """Displacement due to contact forces R = H^T r (replicated H, r); collective.
+
+        Returns:
+            ``self.u`` updated (ghosts included).
+        """
+        rstart, rend = self._rhs.getOwnershipRange()
+        R = H.T.tocsr() @ r
+        owned = np.arange(rstart, rend)
+        with self._rhs.localForm() as loc:
+            loc.set(0.0)
+        self._rhs.setValues(owned, R[rstart:rend])
+        self._rhs.assemble()
+        fem.petsc.set_bc(self._rhs, self.bcs)
+        self.delassus.solve(self._rhs, self.u.vector)
+        self.u.x.scatter_forward()
+        return self.u
+
+    def von_mises(self) -> fem.Function:
+        """Cell-wise (DG0) von Mises stress of the current displacement."""
+        if not hasattr(self, "_vm"):
+            W0 = fem.FunctionSpace(self.mesh, ("DG", 0))
+            self._vm = fem.Function(W0, name="von_mises")
+            self._vm_expr = fem.Expression(self.von_mises_expression(self.u), W0.element.interpolation_points())
+        self._vm.interpolate(self._vm_expr)
+        return self._vm
+
+    def destroy(self) -> None:
+        self.delassus.destroy()
+        self.K.destroy()
+        self._rhs.destroy()
