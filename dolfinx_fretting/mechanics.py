@@ -95,9 +95,9 @@ class ElasticProblem:
         """
         rstart, rend = self._rhs.getOwnershipRange()
         R = H.T.tocsr() @ r
-        owned = np.arange(rstart, rend)
-        with self._rhs.localForm() as loc:
-            loc.set(0.0)
+        owned = np.arange(rstart, rend, dtype=PETSc.IntType)
+        # K's vectors are not ghosted: localForm() would hand back a null Vec in parallel.
+        self._rhs.set(0.0)
         self._rhs.setValues(owned, R[rstart:rend])
         self._rhs.assemble()
         fem.petsc.set_bc(self._rhs, self.bcs)

@@ -52,13 +52,24 @@ def test_hertz_peak_pressure_and_half_width(tmp_path, P):
 
 
 def test_hertz_error_falls_with_refinement(tmp_path):
+    """The RMS pressure error inside the contact falls at every halving of the contact element size.
+
+    The error is taken over |x| <= 0.8 a: near the edge the pressure has a square-root tail that nodes
+    sample at positions that jump around as h changes (the edge falls anywhere between two nodes), so an
+    error over the whole contact is not monotone in h even though it converges (measured: 1.1 %, 1.7 %,
+    0.5 %, 0.3 % over 1.2 a at h = 40, 20, 10, 5 um); the edge itself is checked to within one element in
+    the test above.
+    """
     P = 199.24
+    a, p0 = hertz_line_contact(P, R, E_STAR)
+    sizes = (0.04, 0.02, 0.01, 0.005)
     errors = []
-    for h in (0.04, 0.02, 0.01):
+    for h in sizes:
         _, x, p = _frictionless(tmp_path, P, h, f"h{h}")
-        ref = hertz_pressure(x, P, R, E_STAR)
-        a, p0 = hertz_line_contact(P, R, E_STAR)
-        inside = np.abs(x) <= 1.2 * a
-        errors.append(np.sqrt(np.mean((p[inside] - ref[inside]) ** 2)) / p0)
-    # Each halving of the contact element size must reduce the RMS pressure error.
-    assert errors[1] < errors[0] and errors[2] < errors[1], errors
+        inside = np.abs(x) <= 0.8 * a
+        ref = hertz_pressure(x[inside], P, R, E_STAR)
+        errors.append(np.sqrt(np.mean((p[inside] - ref) ** 2)) / p0)
+    # Monotone decrease (measured 1.33 %, 0.37 %, 0.17 %, 0.084 %) ...
+    assert all(e1 < e0 for e0, e1 in zip(errors, errors[1:])), errors
+    # ... at least first order overall: an 8x smaller h gives an 8x smaller error (measured 16x).
+    assert errors[-1] < errors[0] / 8, errors

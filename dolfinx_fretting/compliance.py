@@ -1,0 +1,534 @@
+"""The Delassus (compliance) matrix W = H K^-1 H^T from one MUMPS factorisation of K.
+
+K is factorised once (symbolic + numeric) by a ``preonly`` KSP with MUMPS; the factor then serves plain
+solves ``K x = b`` and the construction of the small dense W by one of three routes:
+
+``"columns"``
+    One KSP solve per row h_i of H (y = K^-1 h_i), keeping only the entries at the dofs S touched by H:
+    ``W[:, i] = H[:, S] y_S``. Simple, but each solve re-reads the whole factor.
+``"block"``
+    The same solves as one MUMPS multiple right-hand-side call (``MatMatSolve``) on a sparse RHS
+    (``H^T``, given to PETSc as a transpose-wrapped AIJ matrix), in chunks that bound the dense
+    solution block to ``block_memory_mb``.
+``"selected_inverse"``
+    MUMPS computes only the entries (K^-1)_{SS} (ICNTL(30), PETSc's ``MatMumpsGetInverse``, which
+    petsc4py 3.18 does not wrap and which is therefore called through ctypes), and
+    ``W = H[:, S] (K^-1)_{SS} H[:, S]^T``. Fastest by far (see ``benchmarks/results/delassus.md``).
+
+``"auto"`` picks ``"selected_inverse"`` (serial and parallel; measured fastest in both).
+
+Dirichlet conditions: DOLFINx assembles K with the constrained rows and columns zeroed and 1 on the
+diagonal, so (K^-1)_{dd} = 1 at a constrained dof d, in the wrong units and unrelated to the mechanics.
+H must therefore never touch a constrained dof; :func:`check_no_constrained_dofs` verifies it.
+
+Dof numbering: H's columns are global PETSc indices of K (for a DOLFINx vector space with block size
+bs: ``bs * global_node + component``), and H is replicated identically on every rank.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import functools
+import os
+import time
+from contextlib import contextmanager
+from typing import Iterator
+
+import numpy as np
+import scipy.sparse as sp
+from mpi4py import MPI
+from petsc4py import PETSc
+
+__all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs", "ROUTES", "METHODS"]
+
+#: Routes that build W.
+ROUTES = ("columns", "block", "selected_inverse")
+#: Accepted values of ``method``.
+METHODS = ROUTES + ("auto",)
+
+# Route chosen by "auto", from benchmarks/results/delassus.md: the selected inverse beats the block
+# solve by 2-30x and the column solves by 10-200x in serial, and stays fastest under mpirun -n 2.
+_AUTO_SERIAL = "selected_inverse"
+_AUTO_PARALLEL = "selected_inverse"
+
+# MUMPS INFOG(1) codes worth a sentence of their own.
+_MUMPS_HINTS = {
+    -5: "not enough memory during analysis",
+    -6: "K is structurally singular",
+    -8: "integer workspace too small (raise mat_mumps_icntl_14)",
+    -9: "real workspace too small (raise mat_mumps_icntl_14)",
+    -10: "K is numerically singular: are enough Dirichlet conditions applied to remove rigid-body modes?",
+    -13: "memory allocation failed",
+    -47: "entries of the inverse requested with an incompatible solve setting (ICNTL(30))",
+}
+
+
+class DelassusError(RuntimeError):
+    """A PETSc or MUMPS failure while factorising K or building W."""
+
+
+def check_no_constrained_dofs(H: sp.spmatrix, bc_dofs_global: np.ndarray) -> None:
+    """Raise if H touches a Dirichlet-constrained dof of K.
+
+    K assembled by DOLFINx carries an identity row and column at each constrained dof, so such a column
+    of H would add a meaningless unit compliance to W.
+
+    Args:
+        H: Sparse (m, N) contact operator in global PETSc dof numbering.
+        bc_dofs_global: Global PETSc indices of the constrained dofs (for a blocked DOLFINx space,
+            ``bs * global_node + component``). Pass the union over ranks to check every dof.
+
+    Raises:
+        ValueError: Naming the offending dofs and the rows of H that touch them.
+    """
+    H = sp.csr_matrix(H)
+    bc = np.unique(np.asarray(bc_dofs_global, dtype=np.int64).ravel())
+    coo = H.tocoo()
+    nonzero = coo.data != 0
+    rows, cols = coo.row[nonzero], coo.col[nonzero]
+    bad = np.isin(cols, bc)
+    if bad.any():
+        dofs = np.unique(cols[bad])
+        hrows = np.unique(rows[bad])
+        shown = ", ".join(str(d) for d in dofs[:20]) + (", ..." if dofs.size > 20 else "")
+        raise ValueError(f"H touches {dofs.size} Dirichlet-constrained dof(s) of K (global dofs {shown}; "
+                         f"rows of H {hrows[:20].tolist()}): K has identity rows there, so W would be "
+                         "meaningless; exclude constrained nodes from the contact candidates")
+
+
+# ------------------------------------------------------------------------------------------------------
+# PETSc C API through ctypes (MatMumpsGetInverse is not wrapped by petsc4py 3.18)
+# ------------------------------------------------------------------------------------------------------
+def _loaded_petsc_paths() -> list[str]:
+    """Paths of libpetsc objects already mapped into this process (Linux), best match first."""
+    paths: list[str] = []
+    try:
+        with open("/proc/self/maps") as maps:
+            for line in maps:
+                path = line.split()[-1] if line.strip() else ""
+                name = os.path.basename(path)
+                if name.startswith("libpetsc") and ".so" in name and path not in paths:
+                    paths.append(path)
+    except OSError:
+        pass
+    return paths
+
+
+@functools.lru_cache(maxsize=None)
+def _petsc_c_api() -> ctypes.CDLL:
+    """The libpetsc that petsc4py uses, with the prototypes we call.
+
+    The petsc4py extension module is tried first: dlopen returns the already-loaded module and symbol
+    lookup through its handle reaches the very libpetsc it is linked against (a second copy of PETSc
+    would have its own global state). Then the libpetsc already mapped into the process, then the
+    library of petsc4py's configuration.
+    """
+    import petsc4py
+
+    candidates = [PETSc.__file__, *_loaded_petsc_paths()]
+    try:
+        cfg = petsc4py.get_config()
+        libdir = os.path.join(cfg["PETSC_DIR"], cfg.get("PETSC_ARCH") or "", "lib")
+        if os.path.isdir(libdir):
+            candidates += sorted(os.path.join(libdir, f) for f in os.listdir(libdir)
+                                 if f.startswith("libpetsc") and ".so" in f)
+    except Exception:  # noqa: BLE001 - configuration lookup is best effort
+        pass
+    for name in ("petsc_real", "petsc"):
+        found = ctypes.util.find_library(name)
+        if found:
+            candidates.append(found)
+    tried = []
+    for path in candidates:
+        try:
+            lib = ctypes.CDLL(path)
+        except OSError as exc:
+            tried.append(f"{path} ({exc})")
+            continue
+        if hasattr(lib, "MatMumpsGetInverse"):
+            lib.MatMumpsGetInverse.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+            lib.MatMumpsGetInverse.restype = ctypes.c_int
+            return lib
+        tried.append(f"{path} (no MatMumpsGetInverse)")
+    raise DelassusError("cannot find MatMumpsGetInverse in the PETSc library used by petsc4py; tried: "
+                        + "; ".join(tried))
+
+
+def _petsc_error_text(ierr: int) -> str:
+    try:
+        return str(PETSc.Error(ierr))
+    except Exception:  # noqa: BLE001 - the code alone is still informative
+        return f"error code {ierr}"
+
+
+# ------------------------------------------------------------------------------------------------------
+class DelassusOperator:
+    """Factorisation of K (MUMPS through a ``preonly`` KSP) and the Delassus matrix W = H K^-1 H^T.
+
+    All methods except :meth:`destroy` and the attributes are collective on ``comm``.
+
+    The factorisation defaults to MUMPS Cholesky with K flagged symmetric positive definite (MUMPS
+    SYM=1, LDL^T without pivoting): for our elasticity K it is about as fast to factorise as LU, and
+    each solve reads half the factor. ``petsc_options`` override it DOLFINx-style (keys without the
+    prefix, e.g. ``{"pc_type": "lu"}`` or ``{"mat_mumps_icntl_14": 50}``); they are set under
+    ``options_prefix`` only while the KSP reads them and removed from the global options database after.
+
+    Args:
+        K: Assembled stiffness matrix (symmetric; SPD once Dirichlet conditions are applied).
+        comm: Communicator of K (default: K's).
+        method: Route for :meth:`build`: ``"columns"``, ``"block"``, ``"selected_inverse"`` or
+            ``"auto"``.
+        petsc_options: Options for the KSP/PC/MUMPS (without the prefix).
+        options_prefix: Options prefix of the KSP.
+        spd: Declare K SPD so that Cholesky uses MUMPS SYM=1 (set False for a symmetric indefinite K:
+            SYM=2, with pivoting).
+        block_memory_mb: Bound on the dense solution block of the ``"block"`` route (per call; the RHS
+            columns are processed in chunks that fit).
+        symmetrize: Return (W + W^T)/2 (the raw asymmetry is recorded in ``stats``).
+
+    Attributes:
+        method: Route actually used by :meth:`build` ("auto" resolved).
+        factorization: ``"cholesky"`` or ``"lu"`` (after options).
+        last_build_time: Wall time (s) of the last :meth:`build`.
+        last_factorize_time: Wall time (s) of the last :meth:`factorize` or :meth:`refactorize`.
+        stats: Counters and timings (factorisations, solves, MUMPS memory, asymmetry of the last W).
+    """
+
+    def __init__(self, K: PETSc.Mat, comm: MPI.Comm | None = None, method: str = "auto",
+                 petsc_options: dict | None = None,
+                 options_prefix: str = "dolfinx_fretting_delassus_", *, spd: bool = True,
+                 block_memory_mb: float = 256.0, symmetrize: bool = True):
+        if method not in METHODS:
+            raise ValueError(f"unknown Delassus method {method!r}; choose one of {', '.join(METHODS)}")
+        self.K = K
+        self.comm: MPI.Comm = comm if comm is not None else K.getComm().tompi4py()
+        if self.comm.size != K.getComm().getSize():
+            raise ValueError("comm must be the communicator of K")
+        self.requested_method = method
+        if method == "auto":
+            method = _AUTO_SERIAL if self.comm.size == 1 else _AUTO_PARALLEL
+        self.method: str = method
+        self.petsc_options = dict(petsc_options or {})
+        self.options_prefix = options_prefix
+        self.spd = spd
+        self.block_memory_mb = float(block_memory_mb)
+        self.symmetrize = symmetrize
+        self.factorization: str | None = None
+        self.ksp: PETSc.KSP | None = None
+        self.last_build_time = 0.0
+        self.last_factorize_time = 0.0
+        self.stats: dict[str, float | int | str] = {
+            "factorizations": 0, "refactorizations": 0, "solves": 0, "builds": 0,
+            "factorize_time": 0.0, "refactorize_time": 0.0, "last_build_time": 0.0,
+        }
+
+    # Options ------------------------------------------------------------------------------------------
+    @contextmanager
+    def _options(self) -> Iterator[None]:
+        """User options in the global database under our prefix, only while PETSc reads them."""
+        opts = PETSc.Options()
+        opts.prefixPush(self.options_prefix)
+        try:
+            for key, value in self.petsc_options.items():
+                opts[key] = value
+        finally:
+            opts.prefixPop()
+        try:
+            yield
+        finally:
+            for key in self.petsc_options:
+                name = self.options_prefix + key
+                if opts.hasName(name):
+                    opts.delValue(name)
+
+    # Factorisation ------------------------------------------------------------------------------------
+    @property
+    def factor(self) -> PETSc.Mat:
+        """The MUMPS factor matrix F (after :meth:`factorize`)."""
+        self._require_factor()
+        return self.ksp.getPC().getFactorMatrix()
+
+    def _require_factor(self) -> None:
+        if self.ksp is None:
+            raise DelassusError("K is not factorised: call factorize() first")
+
+    def factorize(self) -> None:
+        """Symbolic and numeric factorisation of K (a fresh KSP; any previous factor is dropped)."""
+        t0 = time.perf_counter()
+        if self.ksp is not None:
+            self.ksp.destroy()
+        ksp = PETSc.KSP().create(self.K.getComm())
+        ksp.setOperators(self.K)
+        ksp.setOptionsPrefix(self.options_prefix)
+        ksp.setType("preonly")
+        pc = ksp.getPC()
+        pc.setType("cholesky")
+        pc.setFactorSolverType("mumps")
+        ksp.setErrorIfNotConverged(True)
+        with self._options():
+            ksp.setFromOptions()
+            ptype = pc.getType()
+            if ptype not in ("cholesky", "lu"):
+                raise ValueError(f"pc_type {ptype!r}: the Delassus operator needs a direct factorisation "
+                                 "(cholesky or lu) with MUMPS")
+            if pc.getFactorSolverType() != "mumps":
+                raise ValueError(f"pc_factor_mat_solver_type {pc.getFactorSolverType()!r}: MUMPS is "
+                                 "required (multiple right-hand sides, entries of the inverse)")
+            if ptype == "cholesky" and self.spd:
+                # MUMPS reads the flag when the factor is created: SYM=1 (no pivoting) instead of SYM=2.
+                self.K.setOption(PETSc.Mat.Option.SPD, True)
+            pc.setFactorSetUpSolverType()  # creates F so that MUMPS reads the prefixed options
+            # A failed factorisation must not leave a PC that silently returns Inf.
+            pc.setReusePreconditioner(True)
+            self.ksp = ksp
+            self._setup("factorize")
+        self.factorization = ptype
+        self.last_factorize_time = time.perf_counter() - t0
+        self.stats["factorizations"] += 1
+        self.stats["factorize_time"] = self.last_factorize_time
+
+    def refactorize(self) -> None:
+        """Numeric-only refactorisation after K's values changed (same sparsity pattern).
+
+        Raises:
+            DelassusError: if :meth:`factorize` was not called, or MUMPS fails.
+        """
+        self._require_factor()
+        t0 = time.perf_counter()
+        pc = self.ksp.getPC()
+        # Reuse is on so that solves never refactorise behind the caller's back; lift it for this call.
+        # PCSetUp sees the same nonzero state and runs the numeric phase only.
+        pc.setReusePreconditioner(False)
+        try:
+            self._setup("refactorize")
+        finally:
+            pc.setReusePreconditioner(True)
+        self.last_factorize_time = time.perf_counter() - t0
+        self.stats["refactorizations"] += 1
+        self.stats["refactorize_time"] = self.last_factorize_time
+
+    def _setup(self, what: str) -> None:
+        try:
+            self.ksp.setUp()
+        except PETSc.Error as exc:
+            raise DelassusError(f"MUMPS {what} failed: {self._mumps_status()} ({exc})") from exc
+        infog1 = self.factor.getMumpsInfog(1)
+        if infog1 < 0:  # INFOG is global: every rank raises together
+            raise DelassusError(f"MUMPS {what} failed: {self._mumps_status()}")
+        F = self.factor
+        # INFOG(29): entries in the factors (negative: millions); INFOG(22): total MB used.
+        nz = F.getMumpsInfog(29)
+        self.stats["factor_entries"] = nz if nz >= 0 else -nz * 1_000_000
+        self.stats["mumps_memory_mb"] = F.getMumpsInfog(22)
+
+    def _mumps_status(self) -> str:
+        try:
+            F = self.ksp.getPC().getFactorMatrix()
+            g1, g2 = F.getMumpsInfog(1), F.getMumpsInfog(2)
+        except PETSc.Error:
+            return "no MUMPS factor"
+        hint = _MUMPS_HINTS.get(g1, "")
+        return f"INFOG(1)={g1}, INFOG(2)={g2}" + (f": {hint}" if hint else "")
+
+    # Solves -------------------------------------------------------------------------------------------
+    def solve(self, b: PETSc.Vec, x: PETSc.Vec) -> None:
+        """Solve K x = b with the existing factor (no refactorisation, even if K changed)."""
+        self._require_factor()
+        try:
+            self.ksp.solve(b, x)
+        except PETSc.Error as exc:
+            raise DelassusError(f"MUMPS solve failed: {self._mumps_status()} ({exc})") from exc
+        self.stats["solves"] += 1
+
+    # W ------------------------------------------------------------------------------------------------
+    def build(self, H: sp.spmatrix, method: str | None = None) -> np.ndarray:
+        """Dense W = H K^-1 H^T, identical on every rank. Collective.
+
+        Args:
+            H: Sparse (m, N) contact operator in global PETSc dof numbering, identical on every rank;
+                it must not touch Dirichlet-constrained dofs (see :func:`check_no_constrained_dofs`).
+            method: Route for this call only (default: ``self.method``).
+
+        Returns:
+            W, shape (m, m), float64, symmetric if ``symmetrize``.
+
+        Raises:
+            ValueError: if H has the wrong number of columns.
+            DelassusError: on a PETSc/MUMPS failure.
+        """
+        self._require_factor()
+        route = self.method if method is None or method == "auto" else method
+        if method == "auto":
+            route = _AUTO_SERIAL if self.comm.size == 1 else _AUTO_PARALLEL
+        if route not in ROUTES:
+            raise ValueError(f"unknown Delassus route {route!r}; choose one of {', '.join(ROUTES)}")
+        H = sp.csr_matrix(H, dtype=np.float64)
+        N = self.K.getSize()[1]
+        if H.shape[1] != N:
+            raise ValueError(f"H has {H.shape[1]} columns, K has {N} (global) dofs")
+        H.eliminate_zeros()
+        t0 = time.perf_counter()
+        m = H.shape[0]
+        S = np.unique(H.indices).astype(np.int64)  # the few dofs touched by H
+        if m == 0 or S.size == 0:
+            W = np.zeros((m, m))
+        else:
+            HS = H[:, S].tocsr()
+            if route == "selected_inverse":
+                W = self._build_selected_inverse(HS, S)
+            else:
+                Y = self._solve_columns(H, S) if route == "columns" else self._solve_block(H, S)
+                W = HS @ Y if self.comm.rank == 0 else None
+            W = self._finish(W, m)
+        self.last_build_time = time.perf_counter() - t0
+        self.stats["builds"] += 1
+        self.stats["last_build_time"] = self.last_build_time
+        self.stats["last_build_route"] = route
+        return W
+
+    def _finish(self, W: np.ndarray | None, m: int) -> np.ndarray:
+        """Symmetrise on rank 0 and broadcast: bitwise identical W on every rank."""
+        out = np.empty((m, m), dtype=np.float64)
+        if self.comm.rank == 0:
+            W = np.asarray(W, dtype=np.float64)
+            scale = np.abs(W).max() or 1.0
+            self.stats["asymmetry"] = float(np.abs(W - W.T).max() / scale)
+            out[...] = 0.5 * (W + W.T) if self.symmetrize else W
+        self.comm.Bcast(out, root=0)
+        self.stats["asymmetry"] = self.comm.bcast(self.stats.get("asymmetry"), root=0)
+        return out
+
+    def _owned(self, S: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+        """(rstart, positions in S, local indices) of the entries of S owned by this rank."""
+        rstart, rend = self.K.getOwnershipRange()
+        pos = np.flatnonzero((S >= rstart) & (S < rend))
+        return rstart, pos, (S[pos] - rstart).astype(np.int64)
+
+    def _gather_rows(self, S: np.ndarray, pos: np.ndarray, local_rows: np.ndarray) -> np.ndarray | None:
+        """Assemble Y_S (|S|, m) on rank 0 from each rank's owned rows."""
+        parts = self.comm.gather((pos, local_rows), root=0)
+        if self.comm.rank != 0:
+            return None
+        Y = np.empty((S.size, local_rows.shape[1]))
+        for p, rows in parts:
+            Y[p] = rows
+        return Y
+
+    def _solve_columns(self, H: sp.csr_matrix, S: np.ndarray) -> np.ndarray | None:
+        """Y_S = (K^-1 H^T)_S by one KSP solve per row of H."""
+        rstart, pos, loc = self._owned(S)
+        rend = self.K.getOwnershipRange()[1]
+        Hown = H[:, rstart:rend].tocsr()  # the owned part of each right-hand side
+        m = H.shape[0]
+        b, x = self.K.createVecs()
+        Yloc = np.empty((pos.size, m))
+        try:
+            barr = b.getArray()
+            for i in range(m):
+                barr[:] = 0.0
+                lo, hi = Hown.indptr[i], Hown.indptr[i + 1]
+                barr[Hown.indices[lo:hi]] = Hown.data[lo:hi]
+                self.solve(b, x)
+                Yloc[:, i] = x.getArray(readonly=True)[loc]
+        finally:
+            b.destroy()
+            x.destroy()
+        return self._gather_rows(S, pos, Yloc)
+
+    def _solve_block(self, H: sp.csr_matrix, S: np.ndarray) -> np.ndarray | None:
+        """Y_S = (K^-1 H^T)_S by MUMPS multiple sparse right-hand sides, in memory-bounded chunks."""
+        F = self.factor
+        comm_p = self.K.getComm()
+        rank0 = self.comm.rank == 0
+        N = self.K.getSize()[0]
+        nloc = self.K.getLocalSize()[0]
+        m = H.shape[0]
+        rstart, pos, loc = self._owned(S)
+        chunk = int(max(1, min(m, self.block_memory_mb * 2**20 // (8 * max(N, 1)))))
+        self.stats["block_chunk"] = chunk
+        Yloc = np.empty((pos.size, m))
+        for c0 in range(0, m, chunk):
+            c1 = min(m, c0 + chunk)
+            k = c1 - c0
+            # MUMPS takes a centralised sparse RHS from the host's diagonal block: rank 0 owns every
+            # row and column of Bt = H[c0:c1] (rows = right-hand sides, columns = dofs).
+            Hc = H[c0:c1].sorted_indices() if rank0 else sp.csr_matrix((0, N))
+            Bt = PETSc.Mat().createAIJ(size=((Hc.shape[0], k), (N if rank0 else 0, N)),
+                                       csr=(Hc.indptr.astype(PETSc.IntType), Hc.indices.astype(PETSc.IntType),
+                                            Hc.data.astype(PETSc.ScalarType)), comm=comm_p)
+            Bt.assemble()
+            B = PETSc.Mat().createTranspose(Bt)
+            X = PETSc.Mat().createDense(size=((nloc, N), (None, k)), comm=comm_p)
+            X.setUp()
+            try:
+                F.matSolve(B, X)
+                Yloc[:, c0:c1] = X.getDenseArray()[loc, :]
+            except PETSc.Error as exc:
+                raise DelassusError(f"MUMPS multiple-RHS solve failed: {self._mumps_status()} ({exc})") from exc
+            finally:
+                for obj in (X, B, Bt):
+                    obj.destroy()
+        return self._gather_rows(S, pos, Yloc)
+
+    def _build_selected_inverse(self, HS: sp.csr_matrix, S: np.ndarray) -> np.ndarray | None:
+        """W = H_S (K^-1)_{SS} H_S^T with (K^-1)_{SS} from MUMPS entries of the inverse (ICNTL(30)).
+
+        PETSc 3.18's MatMumpsGetInverse takes the requested pattern (and returns the values) in the
+        diagonal block of rank 0 only, and in parallel leaves ICNTL(21) = 0 (centralised solution)
+        behind, which would corrupt every later distributed MatSolve: we restore ICNTL(30) = 0 and
+        ICNTL(21) = 1 after each call.
+        """
+        lib = _petsc_c_api()
+        F = self.factor
+        comm_p = self.K.getComm()
+        rank0 = self.comm.rank == 0
+        N = self.K.getSize()[0]
+        s = S.size
+        # Bt (N x N): row j lists the rows i of column j of K^-1 wanted; rows S with columns S.
+        if rank0:
+            indptr = np.zeros(N + 1, dtype=PETSc.IntType)
+            indptr[S + 1] = s
+            indptr = np.cumsum(indptr, dtype=PETSc.IntType)
+            indices = np.tile(S.astype(PETSc.IntType), s)
+            values = np.zeros(s * s, dtype=PETSc.ScalarType)
+            nrows = N
+        else:
+            indptr = np.zeros(1, dtype=PETSc.IntType)
+            indices = np.zeros(0, dtype=PETSc.IntType)
+            values = np.zeros(0, dtype=PETSc.ScalarType)
+            nrows = 0
+        Bt = PETSc.Mat().createAIJ(size=((nrows, N), (nrows, N)), csr=(indptr, indices, values), comm=comm_p)
+        Bt.assemble()
+        spRHS = PETSc.Mat().createTranspose(Bt)
+        ierr = 0
+        try:
+            ierr = int(lib.MatMumpsGetInverse(ctypes.c_void_p(F.handle), ctypes.c_void_p(spRHS.handle)))
+        finally:
+            F.setMumpsIcntl(30, 0)  # else the next solve fails with INFOG(1) = -47
+            if self.comm.size > 1:
+                F.setMumpsIcntl(21, 1)  # PETSc's MatSolve expects the distributed solution back
+        # Every rank raises together if any rank failed.
+        worst = self.comm.allreduce(ierr, op=MPI.MAX if ierr >= 0 else MPI.MIN)
+        bad = self.comm.allreduce(ierr != 0, op=MPI.LOR)
+        try:
+            if bad:
+                code = ierr or worst
+                raise DelassusError(f"MatMumpsGetInverse failed ({_petsc_error_text(code)}); "
+                                    f"{self._mumps_status()}")
+            if not rank0:
+                return None
+            ai, aj, av = Bt.getValuesCSR()
+            inv = sp.csr_matrix((av, aj, ai), shape=(N, N))[S][:, S].toarray()
+            self.stats["selected_entries"] = int(s * s)
+            return HS @ (HS @ inv.T).T  # H_S Kinv_SS H_S^T with sparse H_S
+        finally:
+            spRHS.destroy()
+            Bt.destroy()
+
+    # ------------------------------------------------------------------------------------------------
+    def destroy(self) -> None:
+        """Free the KSP and the factor (K belongs to the caller)."""
+        if self.ksp is not None:
+            self.ksp.destroy()
+            self.ksp = None
