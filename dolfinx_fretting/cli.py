@@ -20,6 +20,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
                      help="override a scene value (TOML syntax, e.g. --set contact.mu=0.5); repeatable")
     run.add_argument("--quiet", action="store_true", help="print only errors")
+    run.add_argument("--resume", action="store_true",
+                     help="continue the run checkpointed in --out (the scene may differ only in its solver and "
+                          "output sections and in loading.cycles)")
     show = sub.add_parser("show", help="print a scene with every default filled in, as validated")
     show.add_argument("scene")
     show.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
@@ -48,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
     from .simulation import SimulationError, run_scene
 
     try:
-        run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet)
+        run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet, resume=args.resume)
     except SimulationError as exc:
         if MPI.COMM_WORLD.rank == 0:
             print(f"dolfinx-fretting: run failed: {exc}", file=sys.stderr)

@@ -1,13 +1,14 @@
-"""Results on disk: ``summary.json``, ``history.csv``, contact profiles, XDMF fields and PNG plots.
+"""Results on disk: ``summary.json``, ``history.csv``, ``cycles.csv``, contact profiles, XDMF fields, plots.
 
-Tables are written by rank 0 only, row by row and flushed, so an interrupted run leaves every finished
-increment readable; ``summary.json`` is replaced atomically (write to a temporary file, then rename).
-XDMF output is collective (every rank calls it).
+Tables are written by rank 0 only and flushed after each increment (monotonic runs) or cycle (cyclic
+runs), so an interrupted run leaves every finished row readable; ``summary.json`` and checkpoints are
+replaced atomically (write to a temporary file, then rename). On resume the tables are truncated back to
+the sizes recorded in the checkpoint, so rows written after it do not appear twice. XDMF output is
+collective (every rank calls it).
 """
 
 from __future__ import annotations
 
-import csv
 import json
 import os
 from pathlib import Path
@@ -16,16 +17,22 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-__all__ = ["ResultWriter", "write_json_atomic", "HISTORY_FIELDS", "PROFILE_FIELDS"]
+from .wear import ROW_FIELDS
+
+__all__ = ["ResultWriter", "write_json_atomic", "HISTORY_FIELDS", "CYCLE_FIELDS", "PROFILE_FIELDS",
+           "plot_profiles"]
 
 #: Columns of ``history.csv`` (one row per increment).
-HISTORY_FIELDS = [
-    "increment", "stage", "normal_displacement", "tangential_displacement", "normal_force",
-    "tangential_force", "max_pressure", "contact_width", "stick_width", "n_open", "n_stick", "n_slip",
-    "local_iterations", "local_error", "load_solves", "converged", "wall_time_s",
-]
-#: Columns of ``contact_profiles.csv`` (one row per contact node and increment).
-PROFILE_FIELDS = ["increment", "node", "position", "gap", "pressure", "shear", "slip", "state"]
+HISTORY_FIELDS = ["increment", "cycle", "step", "stage", "normal_displacement", "tangential_displacement",
+                  "face_pressure", *ROW_FIELDS, "local_iterations", "local_error", "load_solves"]
+#: Columns of ``cycles.csv`` (one row per cycle of a cyclic run).
+CYCLE_FIELDS = ["cycle", "equivalent_cycles", "dissipated_energy", "wear_area", "max_wear_depth",
+                "tangential_force_max", "tangential_force_min", "displacement_max", "displacement_min",
+                "energy_ratio", "min_stick", "regime", "max_pressure_end", "local_iterations", "wall_time_s"]
+#: Columns of ``contact_profiles.csv`` (one row per contact node and kept increment).
+PROFILE_FIELDS = ["increment", "cycle", "step", "node", "position", "gap", "pressure", "shear", "slip",
+                  "relative_tangential", "wear", "state"]
+_TABLES = {"history": HISTORY_FIELDS, "cycles": CYCLE_FIELDS, "contact_profiles": PROFILE_FIELDS}
 
 
 def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
@@ -47,47 +54,89 @@ def _jsonable(value: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
+def _fmt(v: Any) -> str:
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (bool, np.bool_)):
+        return str(bool(v))
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return f"{float(v):.10g}"
+
+
 class ResultWriter:
-    """Writes a run's outputs into ``out_dir``.
+    """Writes a run's tables into ``out_dir`` (rank 0) and its fields (collective).
 
     Args:
         out_dir: Output folder (created).
         comm: Communicator; tables and pictures are written by its rank 0.
         profiles: Write ``contact_profiles.csv``.
+        resume_sizes: Byte sizes of the tables at the checkpoint to resume from: the tables are
+            truncated to them and appended to. ``None``: new tables.
+        xdmf_started: The XDMF file already holds the mesh (resume).
     """
 
-    def __init__(self, out_dir: str | Path, comm: MPI.Comm, profiles: bool = True):
+    def __init__(self, out_dir: str | Path, comm: MPI.Comm, profiles: bool = True,
+                 resume_sizes: dict[str, int] | None = None, xdmf_started: bool = False):
         self.out = Path(out_dir)
         self.comm = comm
         self.rank0 = comm.rank == 0
         if self.rank0:
             self.out.mkdir(parents=True, exist_ok=True)
         comm.barrier()
-        self._history = self._profiles = None
+        self._files: dict[str, Any] = {}
         if self.rank0:
-            self._history_file = open(self.out / "history.csv", "w", newline="")
-            self._history = csv.DictWriter(self._history_file, fieldnames=HISTORY_FIELDS)
-            self._history.writeheader()
-            if profiles:
-                self._profiles_file = open(self.out / "contact_profiles.csv", "w", newline="")
-                self._profiles = csv.writer(self._profiles_file)
-                self._profiles.writerow(PROFILE_FIELDS)
+            names = ["history", "cycles"] + (["contact_profiles"] if profiles else [])
+            for name in names:
+                path = self.out / f"{name}.csv"
+                if resume_sizes is not None and name in resume_sizes and path.is_file():
+                    f = open(path, "r+")
+                    f.truncate(resume_sizes[name])
+                    f.seek(resume_sizes[name])
+                else:
+                    f = open(path, "w")
+                    f.write(",".join(_TABLES[name]) + "\n")
+                self._files[name] = f
         self._xdmf_path = self.out / "fields.xdmf"
-        self._xdmf_started = False
+        self._xdmf_started = xdmf_started
 
-    def history_row(self, row: dict[str, Any]) -> None:
-        if self._history is not None:
-            self._history.writerow({k: row[k] for k in HISTORY_FIELDS})
-            self._history_file.flush()
+    def _write(self, name: str, lines: list[str]) -> None:
+        f = self._files.get(name)
+        if f is not None and lines:
+            f.write("\n".join(lines) + "\n")
 
-    def profile_rows(self, increment: int, position: np.ndarray, gap: np.ndarray, pressure: np.ndarray,
-                     shear: np.ndarray, slip: np.ndarray, state: np.ndarray) -> None:
-        if self._profiles is not None:
-            for i in range(position.size):
-                self._profiles.writerow([increment, i, f"{position[i]:.10g}", f"{gap[i]:.10g}",
-                                         f"{pressure[i]:.10g}", f"{shear[i]:.10g}", f"{slip[i]:.10g}",
-                                         int(state[i])])
-            self._profiles_file.flush()
+    def rows(self, name: str, rows: list[dict[str, Any]]) -> None:
+        """Append rows (dicts keyed by the table's columns) to ``name`` (``history``, ``cycles``)."""
+        if name in self._files:
+            cols = _TABLES[name]
+            self._write(name, [",".join(_fmt(r[c]) for c in cols) for r in rows])
+
+    def history_block(self, head: list[tuple], table: np.ndarray, stage: str) -> None:
+        """Fast path for many increments: ``head`` holds (increment, cycle, step) per row, ``table`` the
+        remaining numeric columns of :data:`HISTORY_FIELDS` after ``stage``, in order."""
+        if "history" not in self._files:
+            return
+        fmt = "%d,%d,%d," + stage + "," + ",".join(["%.10g"] * table.shape[1])
+        self._write("history", [fmt % (*h, *row) for h, row in zip(head, table.tolist())])
+
+    def profile_block(self, increment: int, cycle: int, step: int, columns: list[np.ndarray]) -> None:
+        """Append one increment's contact profile; ``columns`` follow :data:`PROFILE_FIELDS` from ``position``."""
+        if "contact_profiles" not in self._files:
+            return
+        n = columns[0].size
+        data = np.column_stack([np.full(n, increment), np.full(n, cycle), np.full(n, step), np.arange(n),
+                                *columns])
+        fmt = "%d,%d,%d,%d," + ",".join(["%.10g"] * (len(columns) - 1)) + ",%d"
+        self._write("contact_profiles", [fmt % tuple(r) for r in data.tolist()])
+
+    def flush(self) -> None:
+        for f in self._files.values():
+            f.flush()
+
+    def sizes(self) -> dict[str, int]:
+        """Byte size of each table after a flush (rank 0; empty elsewhere)."""
+        self.flush()
+        return {name: f.tell() for name, f in self._files.items()}
 
     def fields(self, t: float, functions: list) -> None:
         """Append functions at time ``t`` to ``fields.xdmf`` (collective); the file is closed after each
@@ -103,15 +152,18 @@ class ResultWriter:
                 f.write_function(fn, t)
         self._xdmf_started = True
 
+    @property
+    def xdmf_started(self) -> bool:
+        return self._xdmf_started
+
     def summary(self, data: dict[str, Any]) -> None:
         if self.rank0:
             write_json_atomic(self.out / "summary.json", data)
 
     def close(self) -> None:
-        if self.rank0:
-            self._history_file.close()
-            if self._profiles is not None:
-                self._profiles_file.close()
+        for f in self._files.values():
+            f.close()
+        self._files = {}
 
 
 def plot_profiles(path: Path, position: np.ndarray, curves: list[tuple[str, np.ndarray, np.ndarray]],

@@ -17,7 +17,8 @@ import numpy as np
 
 from .scenes import LoadingSettings
 
-__all__ = ["LoadStep", "monotonic_path", "find_displacement", "LoadControlError"]
+__all__ = ["LoadStep", "waveform", "preload_path", "monotonic_path", "cycle_path", "find_displacement",
+           "LoadControlError"]
 
 
 class LoadControlError(RuntimeError):
@@ -29,7 +30,9 @@ class LoadStep:
     """Targets of one increment along the plane's normal (n) and first tangent (t).
 
     ``normal``/``tangential`` are displacements (mm) where the matching ``*_force_controlled`` flag is
-    false, forces (N/mm in 2D) where it is true.
+    false, forces (N/mm in 2D) where it is true; ``pressure`` is the face pressure (MPa).
+    ``cycle`` is 0 in the preload and monotonic stages, 1, 2, ... in the cyclic stage, where ``step`` is
+    the increment's position in its cycle (1 .. increments_per_cycle).
     """
 
     increment: int
@@ -38,24 +41,72 @@ class LoadStep:
     tangential: float
     normal_force_controlled: bool
     tangential_force_controlled: bool
+    pressure: float = 0.0
+    cycle: int = 0
+    step: int = 0
+
+
+def waveform(kind: str, n: int) -> np.ndarray:
+    """Shape of one load cycle at the ends of its ``n`` increments, t = j/n (j = 1 .. n), in [-1, 1].
+
+    ``"triangular"``: 0 -> 1 at t = 1/4 -> 0 at 1/2 -> -1 at 3/4 -> 0 at t = 1 (the paper's Example 1
+    path); ``"sinusoidal"``: sin(2 pi t).
+    """
+    if n < 1:
+        raise ValueError(f"n = {n}: expected >= 1 increments per cycle")
+    t = np.arange(1, n + 1) / n
+    if kind == "triangular":
+        return np.interp(t, [0.0, 0.25, 0.75, 1.0], [0.0, 1.0, -1.0, 0.0])
+    if kind == "sinusoidal":
+        w = np.sin(2 * np.pi * t)
+        w[np.isclose(t, 0.5) | np.isclose(t, 1.0)] = 0.0  # exact zeros at the half and full cycle
+        return w
+    raise ValueError(f"loading.waveform = {kind!r}: allowed 'triangular', 'sinusoidal'")
+
+
+def _normal_target(loading: LoadingSettings) -> float:
+    return loading.normal_force if loading.normal_force_controlled else loading.normal_displacement
+
+
+def preload_path(loading: LoadingSettings) -> list[LoadStep]:
+    """The normal preload: a linear ramp of the normal target with no tangential load.
+
+    During the preload the tangential component is held: zero displacement, or zero force when the
+    tangential load is force controlled (the body is free to slide sideways).
+    """
+    n_target = _normal_target(loading)
+    t_fc = loading.tangential_force_controlled
+    ni = loading.normal_increments
+    return [LoadStep(i, "normal", n_target * i / ni, 0.0, loading.normal_force_controlled, t_fc)
+            for i in range(1, ni + 1)]
+
+
+def _tangential_step(loading: LoadingSettings, increment: int, stage: str, value: float, cycle: int = 0,
+                     step: int = 0) -> LoadStep:
+    pressure = value if loading.tangential_kind == "pressure" else 0.0
+    tangential = 0.0 if loading.tangential_kind in ("pressure", "none") else value
+    return LoadStep(increment, stage, _normal_target(loading), tangential, loading.normal_force_controlled,
+                    loading.tangential_force_controlled, pressure, cycle, step)
 
 
 def monotonic_path(loading: LoadingSettings) -> Iterator[LoadStep]:
-    """Preload (linear ramp of the normal target, no tangential motion), then a tangential ramp."""
-    n_target = loading.normal_force if loading.normal_force_controlled else loading.normal_displacement
-    t_fc = loading.tangential_force_controlled
-    t_target = (loading.tangential_force if t_fc else loading.tangential_displacement) or 0.0
-    inc = 0
-    for i in range(1, loading.normal_increments + 1):
-        inc += 1
-        # During the preload the tangential component is held: zero displacement, or zero force when
-        # the tangential load is force controlled (the cylinder is free to slide sideways).
-        yield LoadStep(inc, "normal", n_target * i / loading.normal_increments, 0.0,
-                       loading.normal_force_controlled, t_fc)
-    nt = loading.tangential_increments if t_target != 0.0 else 0
+    """Preload, then a linear ramp of the tangential load to its value (``cycles = 0``)."""
+    steps = preload_path(loading)
+    yield from steps
+    inc = len(steps)
+    target = loading.tangential_amplitude
+    nt = loading.tangential_increments if target != 0.0 else 0
     for i in range(1, nt + 1):
         inc += 1
-        yield LoadStep(inc, "tangential", n_target, t_target * i / nt, loading.normal_force_controlled, t_fc)
+        yield _tangential_step(loading, inc, "tangential", target * i / nt)
+
+
+def cycle_path(loading: LoadingSettings, cycle: int) -> list[LoadStep]:
+    """The increments of cycle ``cycle`` (1-based) of a cyclic load, numbered after the preload."""
+    n = loading.increments_per_cycle
+    wave = loading.tangential_amplitude * waveform(loading.waveform, n)
+    first = loading.normal_increments + (cycle - 1) * n
+    return [_tangential_step(loading, first + j + 1, "cycle", float(wave[j]), cycle, j + 1) for j in range(n)]
 
 
 def find_displacement(force: Callable[[float], float], target: float, d0: float, stiffness: float,

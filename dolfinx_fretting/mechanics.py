@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import ufl
 from dolfinx import fem
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from .compliance import DelassusOperator
@@ -64,6 +65,7 @@ class ElasticProblem:
                                          petsc_options=petsc_options)
         self.u = fem.Function(self.V, name="displacement")
         self._rhs = self.K.createVecRight()
+        self._loads: list[PETSc.Vec] = []
 
     # Constitutive relations -------------------------------------------------------------------------
     def epsilon(self, u):
@@ -87,8 +89,37 @@ class ElasticProblem:
         return ufl.sqrt(1.5 * ufl.inner(dev, dev))
 
     # Solves -----------------------------------------------------------------------------------------
-    def solve_contact_response(self, H, r: np.ndarray) -> fem.Function:
-        """Displacement due to contact forces R = H^T r (replicated H, r); collective.
+    def face_pressure_load(self, face: str) -> PETSc.Vec:
+        """Load vector of a unit pressure on a named face, pushing into the body (traction -n). Collective.
+
+        Returns:
+            A vector owned by this problem (freed by :meth:`destroy`); zero at the fixed dofs.
+        """
+        msh = self.mesh
+        ds = ufl.Measure("ds", domain=msh, subdomain_data=self.body.facet_tags)
+        v = ufl.TestFunction(self.V)
+        n = ufl.FacetNormal(msh)
+        form = fem.form(-ufl.dot(n, v) * ds(self.body.tags[face]))
+        f = fem.petsc.assemble_vector(form)
+        fem.petsc.apply_lifting(f, [self._a], bcs=[self.bcs])
+        f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fem.petsc.set_bc(f, self.bcs)
+        self._loads.append(f)
+        return f
+
+    def local_response(self, H, f: PETSc.Vec) -> np.ndarray:
+        """``H K^-1 f``: the local relative displacements due to a load vector (replicated). Collective."""
+        u = f.duplicate()
+        self.delassus.solve(f, u)
+        rstart, rend = u.getOwnershipRange()
+        part = H[:, rstart:rend] @ u.getArray(readonly=True)
+        u.destroy()
+        return self.comm.allreduce(part, op=MPI.SUM)
+
+    def solve_contact_response(self, H, r: np.ndarray, load: PETSc.Vec | None = None,
+                               load_factor: float = 0.0) -> fem.Function:
+        """Displacement due to contact forces R = H^T r (replicated H, r) plus ``load_factor * load``.
+        Collective.
 
         Returns:
             ``self.u`` updated (ghosts included).
@@ -101,6 +132,8 @@ class ElasticProblem:
         self._rhs.setValues(owned, R[rstart:rend])
         self._rhs.assemble()
         fem.petsc.set_bc(self._rhs, self.bcs)
+        if load is not None and load_factor != 0.0:
+            self._rhs.axpy(load_factor, load)
         self.delassus.solve(self._rhs, self.u.vector)
         self.u.x.scatter_forward()
         return self.u
@@ -118,3 +151,5 @@ class ElasticProblem:
         self.delassus.destroy()
         self.K.destroy()
         self._rhs.destroy()
+        for f in self._loads:
+            f.destroy()

@@ -122,43 +122,76 @@ class ContactSettings(_Section):
 
 
 class WearSettings(_Section):
-    """Wear law (Archard: wear gap rate = k p |slip rate|)."""
+    """Wear law (Archard, paper eq. 4-5: wear gap rate = k p_n |slip rate|).
+
+    ``acceleration`` is the paper's "hypothetical" wear coefficient made explicit: each simulated cycle
+    stands for ``acceleration`` physical cycles, the wear coefficient used is ``k * acceleration``, and
+    the outputs record both (``wear_acceleration``, ``equivalent_cycles``). It is exact when the contact
+    state changes little over ``acceleration`` cycles.
+    """
 
     law: Literal["none", "archard"] = "none"
     #: Archard wear coefficient (1/MPa).
     k: float = Field(0.0, ge=0)
+    #: Physical cycles per simulated cycle (the wear coefficient used is k * acceleration).
+    acceleration: float = Field(1.0, ge=1.0)
+
+    @model_validator(mode="after")
+    def _k_given(self) -> WearSettings:
+        if self.law == "archard" and self.k <= 0:
+            raise _range_error("wear.k", self.k, "k > 0 (1/MPa) with wear.law = 'archard'")
+        return self
+
+    @property
+    def k_effective(self) -> float:
+        """The wear coefficient applied per simulated increment (1/MPa): 0 without a wear law."""
+        return self.k * self.acceleration if self.law == "archard" else 0.0
 
 
 class LoadingSettings(_Section):
-    """Normal preload, then a tangential load, applied through the obstacle's rigid motion.
+    """Normal preload, then a tangential load, applied through the obstacle's rigid motion or a face pressure.
 
     Exactly one of ``normal_displacement`` (approach of the obstacle, mm) and ``normal_force``
-    (total normal contact force, N/mm in 2D) is given; at most one of ``tangential_displacement`` (mm)
-    and ``tangential_force`` (N/mm in 2D).
+    (total normal contact force, N/mm in 2D) is given, and at most one of ``tangential_displacement``
+    (obstacle motion, mm), ``tangential_force`` (total tangential contact force, N/mm) and
+    ``tangential_pressure`` (a pressure on the face ``pressure_face``, MPa, positive pushing into the body).
+    With ``cycles = 0`` the tangential value is reached monotonically in ``tangential_increments``; with
+    ``cycles > 0`` it is the amplitude of a periodic load of ``increments_per_cycle`` increments per cycle
+    and shape ``waveform`` (``"triangular"``: 0 -> +A -> 0 -> -A -> 0, the paper's path for Example 1,
+    whose quarter points are the four load points of its Fig. 6; ``"sinusoidal"``: A sin(2 pi t)).
     """
 
     normal_displacement: float | None = Field(None, gt=0)
     normal_force: float | None = Field(None, gt=0)
     tangential_displacement: float | None = None
     tangential_force: float | None = None
-    #: Increments of the normal preload stage and of the tangential stage.
+    tangential_pressure: float | None = None
+    #: Facet tag of the face that carries ``tangential_pressure``.
+    pressure_face: str = "right"
+    #: Increments of the normal preload stage and of the monotonic tangential stage (cycles = 0).
     normal_increments: int = Field(4, ge=1, le=100000)
     tangential_increments: int = Field(10, ge=0, le=100000)
     #: Number of fretting cycles; 0 = preload then a monotonic tangential load.
-    cycles: int = Field(0, ge=0)
-    increments_per_cycle: int = Field(80, ge=2, le=100000)
+    cycles: int = Field(0, ge=0, le=100_000_000)
+    increments_per_cycle: int = Field(80, ge=4, le=100000)
+    waveform: Literal["triangular", "sinusoidal"] = "triangular"
 
     @model_validator(mode="after")
     def _one_control_each(self) -> LoadingSettings:
-        if self.cycles != 0:
-            raise _range_error("loading.cycles", self.cycles,
-                               "0 (preload and a monotonic tangential load; cyclic loading is not in this version)")
         if (self.normal_displacement is None) == (self.normal_force is None):
             raise ValueError("loading: give exactly one of loading.normal_displacement (mm, > 0) and "
                              "loading.normal_force (N/mm, > 0)")
-        if self.tangential_displacement is not None and self.tangential_force is not None:
-            raise ValueError("loading: give at most one of loading.tangential_displacement (mm) and "
-                             "loading.tangential_force (N/mm)")
+        given = [k for k in ("tangential_displacement", "tangential_force", "tangential_pressure")
+                 if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError("loading: give at most one of loading.tangential_displacement (mm), "
+                             f"loading.tangential_force (N/mm) and loading.tangential_pressure (MPa); got {given}")
+        if self.cycles > 0 and not given:
+            raise ValueError(f"loading.cycles = {self.cycles}: a cyclic load needs its amplitude: one of "
+                             "loading.tangential_displacement, loading.tangential_force, loading.tangential_pressure")
+        if self.cycles > 0 and self.increments_per_cycle % 4:
+            raise _range_error("loading.increments_per_cycle", self.increments_per_cycle,
+                               "a multiple of 4 >= 4 (the quarter points of the cycle are increments)")
         return self
 
     @property
@@ -168,6 +201,19 @@ class LoadingSettings(_Section):
     @property
     def tangential_force_controlled(self) -> bool:
         return self.tangential_force is not None
+
+    @property
+    def tangential_kind(self) -> str:
+        """``"displacement"``, ``"force"``, ``"pressure"`` or ``"none"``."""
+        for kind in ("displacement", "force", "pressure"):
+            if getattr(self, f"tangential_{kind}") is not None:
+                return kind
+        return "none"
+
+    @property
+    def tangential_amplitude(self) -> float:
+        value = getattr(self, f"tangential_{self.tangential_kind}", None)
+        return float(value) if value is not None else 0.0
 
 
 class SolverSettings(_Section):
@@ -181,17 +227,43 @@ class SolverSettings(_Section):
     force_tol: float = Field(1e-8, gt=0, lt=1)
     #: How W = H K^-1 H^T is built from the MUMPS factorisation.
     delassus_method: Literal["auto", "columns", "block", "selected_inverse"] = "auto"
+    #: Run displacement- and pressure-controlled cycles in the compiled loop (``dolfinx_fretting.cycling``);
+    #: false: the per-increment Python path (same results, slower; force control always uses it).
+    cycle_kernel: bool = True
+    #: Warm start of an increment in the compiled loop: ``"cycle"``, the same increment of the previous
+    #: cycle (nearly periodic states: few sweeps); ``"increment"``, the previous increment.
+    warm_start: Literal["cycle", "increment"] = "cycle"
+    #: 2D compiled loop: first try the previous cycle's contact pattern at each increment (a cached LU
+    #: solve, accepted only if it meets ``local_tol``), then Uzawa sweeps if it does not.
+    pattern_reuse: bool = True
     #: Extra PETSc options for the factorisation (prefix ``dolfinx_fretting_delassus_`` is added).
     petsc_options: dict[str, str | int | float | bool] = Field(default_factory=dict)
 
 
 class OutputSettings(_Section):
-    """What the run writes besides ``summary.json`` and ``history.csv``."""
+    """What the run writes besides ``summary.json``, ``history.csv`` and (cyclic runs) ``cycles.csv``."""
 
     xdmf: bool = True
     plots: bool = True
-    #: Write contact profiles (position, pressure, shear, slip, state) of every increment.
+    #: Write contact profiles (position, pressure, shear, slip, wear, state): every increment of a
+    #: monotonic run; every increment of the ``snapshot_cycles`` of a cyclic run.
     contact_profiles: bool = True
+    #: Cycles whose every increment is kept in ``contact_profiles.csv`` and whose end is written to the
+    #: XDMF files; empty: 1, 2, 5, 10, 20, 50, ... and the last cycle.
+    snapshot_cycles: list[int] = Field(default_factory=list)
+    #: Cycles whose fretting loop (tangential force against displacement) is plotted; empty: a few
+    #: snapshot cycles.
+    loop_cycles: list[int] = Field(default_factory=list)
+    #: Positions along the contact surface (mm) of nodes whose state history is plotted (the paper's
+    #: points A and B); the nearest contact node is used.
+    track_positions: list[float] = Field(default_factory=list)
+    #: Write ``history.csv`` rows for every increment of every ``history_every``-th cycle (and of the
+    #: preload and the snapshot cycles); ``cycles.csv`` always has every cycle.
+    history_every: int = Field(1, ge=1)
+    #: Wall time (s) between checkpoints of a cyclic run (one is also written at the end).
+    checkpoint_interval: float = Field(60.0, gt=0)
+    #: A progress bar over the cycles when the terminal is interactive.
+    progress: bool = True
 
 
 class Scene(_Section):
@@ -209,7 +281,15 @@ class Scene(_Section):
 
     @model_validator(mode="after")
     def _window_fits(self) -> Scene:
-        g, c = self.geometry, self.contact
+        g, c, lo = self.geometry, self.contact, self.loading
+        if lo.tangential_kind == "pressure":
+            faces = ("bottom", "right", "top", "left") if g.kind == "rectangle" else ("top", "surface")
+            if lo.pressure_face not in faces:
+                raise _range_error("loading.pressure_face", lo.pressure_face,
+                                   f"a face of the {g.kind}: {', '.join(faces)}")
+            if lo.pressure_face in ("top", c.surface):
+                raise _range_error("loading.pressure_face", lo.pressure_face,
+                                   "a face that is neither fixed (top) nor the contact surface")
         if g.kind == "half_cylinder" and c.candidate_half_width is not None and c.candidate_half_width > g.radius:
             raise _range_error("contact.candidate_half_width", c.candidate_half_width,
                                f"0 < candidate_half_width <= geometry.radius = {g.radius} mm")

@@ -1,22 +1,39 @@
-"""From a validated scene to results: mesh, K, contact set, W, then the increments.
+"""From a validated scene to results: mesh, K, contact set, W, then the increments and cycles.
 
-Each increment solves the local problem x = W r + q on the replicated contact set (paper eq. 28):
-the normal rows of x are gaps, the tangential rows slip increments, so
+Each increment solves the local problem x = W r + q on the replicated contact set (paper eq. 28): the
+normal rows of x are gaps, the tangential rows slip increments, so
 
-    q_n = g_0 + g_w - n.D,     q_t = -t.D - y_t(previous),
+    q_n = g_0 + g_w - n.D + s (H K^-1 f)_n,     q_t = -t.D + s (H K^-1 f)_t - y_t(previous),
 
-where D is the obstacle's rigid displacement and ``y = W r + q_abs`` the total relative position of the
-last converged increment. K is factorised once, W built once; an increment costs local solves only,
-plus one back-substitution when fields are written.
+where D is the obstacle's rigid displacement, s the face pressure and f the load of a unit face pressure,
+and ``y = W r + q_abs`` the total relative position of the last converged increment. K is factorised
+once and W built once; an increment costs local solves only. After each converged increment the Archard
+law updates the wear gap g_w (:mod:`dolfinx_fretting.wear`), which enters the next increment's gap.
+
+Two ways through the increments give the same answer:
+
+* the Python path (:class:`IncrementSolver`), one local solve per increment or several when a force is
+  prescribed (the obstacle position is then an unknown found by :func:`~dolfinx_fretting.loading.find_displacement`);
+* the compiled path (:mod:`dolfinx_fretting.cycling`), a whole cycle per call, used for cycles whose loads
+  are all displacements or face pressures; it warm-starts every increment from the same increment of the
+  previous cycle.
 
 The local problem is solved on rank 0 and its result broadcast, so every rank holds the same contact
 state whatever the partition.
+
+A cyclic run writes a checkpoint (``checkpoint.npz``) every ``output.checkpoint_interval`` seconds, at
+snapshot cycles and at the end; ``run_scene(..., resume=True)`` continues from it with the same results
+as an uninterrupted run. A failed increment is reported with its cycle and step; the failed cycle leaves
+no trace in the wear gap, the tables or the checkpoint.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -26,30 +43,20 @@ from mpi4py import MPI
 from . import local_solvers
 from .analytic import hertz_line_contact
 from .contact import ContactSet, RigidPlane, find_candidates
-from .loading import LoadControlError, LoadStep, find_displacement, monotonic_path
+from .loading import LoadControlError, LoadStep, cycle_path, find_displacement, monotonic_path, preload_path, waveform
 from .scenes import Scene
+from .wear import ROW, ROW_FIELDS, commit_increment
 
-__all__ = ["ContactModel", "IncrementState", "SimulationError", "run_scene"]
+__all__ = ["ContactModel", "IncrementSolver", "RunState", "SimulationError", "run_scene", "CHECKPOINT"]
+
+#: Checkpoint file name in the output folder.
+CHECKPOINT = "checkpoint.npz"
+# Scene sections that may change between a checkpoint and its resume (they do not change the physics).
+_RESUMABLE_SECTIONS = ("solver", "output")
 
 
 class SimulationError(RuntimeError):
-    """An increment could not be solved; the message says which, and why."""
-
-
-@dataclass
-class IncrementState:
-    """Converged state of an increment (replicated on every rank)."""
-
-    increment: int
-    stage: str
-    r: np.ndarray            #: Contact forces, (n, t...) per contact.
-    x: np.ndarray            #: Local solution: gaps (normal rows), slip increments (tangential rows).
-    y: np.ndarray            #: Total relative position W r + q_abs (tangential rows: total slip).
-    D: np.ndarray            #: Obstacle displacement (global coordinates).
-    iterations: int = 0
-    error: float = 0.0
-    load_solves: int = 0
-    states: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int8))
+    """An increment could not be solved, or a run cannot be resumed; the message says which, and why."""
 
 
 class ContactModel:
@@ -74,10 +81,9 @@ class ContactModel:
             self.body = meshes.half_cylinder(comm, g.radius, contact_mesh_size=g.contact_mesh_size,
                                              contact_half_width=g.refined_half_width,
                                              coarse_mesh_size=g.coarse_mesh_size, quadrilateral=g.quadrilateral)
-            fixed = ["top"]
         else:
             self.body = meshes.rectangle(comm, g.width, g.height, g.nx, g.ny, quadrilateral=g.quadrilateral)
-            fixed = ["top"]
+        fixed = ["top"]
         self.timings["mesh_s"] = time.perf_counter() - t0
 
         surface = scene.contact.surface
@@ -113,14 +119,37 @@ class ContactModel:
         self.timings["delassus_s"] = time.perf_counter() - t0
         self.delassus_method = self.problem.delassus.method
 
+        # A face pressure reaches the contact through q_f = H K^-1 f (one more solve with the same factor).
+        self.face_load = None
+        self.q_f = np.zeros(self.contact.nc * self.contact.dim)
+        if scene.loading.tangential_kind == "pressure":
+            self.face_load = self.problem.face_pressure_load(scene.loading.pressure_face)
+            self.q_f = self.problem.local_response(self.contact.H, self.face_load)  # allreduced: replicated
+
     @property
     def n_dofs(self) -> int:
         V = self.problem.V
         return V.dofmap.index_map.size_global * V.dofmap.index_map_bs
 
 
+@dataclass
+class Solved:
+    """A converged increment from the Python path (before the wear update)."""
+
+    r: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    d: np.ndarray       #: Obstacle displacement (normal, tangential).
+    iterations: int
+    error: float
+    load_solves: int
+
+
 class IncrementSolver:
-    """Solves increments on the local problem, with displacement or force control of the obstacle."""
+    """Solves increments on the local problem, with displacement or force control of the obstacle.
+
+    Rank-local: call on one rank; the caller broadcasts.
+    """
 
     def __init__(self, model: ContactModel):
         s = model.scene
@@ -135,52 +164,51 @@ class IncrementSolver:
         self.force_tol = s.solver.force_tol
         self.frame = model.obstacle.frame
         self.G = self.cs.rigid_modes
+        self.q_f = model.q_f
         nrows = self.cs.nc * self.dim
         self.normal_rows = np.arange(nrows) % self.dim == 0
-        self.gap = np.zeros(nrows)
-        self.gap[self.normal_rows] = self.cs.gap0
         # Point stiffness of the closest node: a safe first guess of the load-displacement slope.
         k = int(np.argmin(self.cs.gap0))
         blk = slice(k * self.dim, (k + 1) * self.dim)
         self.stiffness = np.array([1.0 / self.W[blk, blk][0, 0], 1.0 / self.W[blk, blk][1, 1]])
 
-    def initial_state(self) -> IncrementState:
-        nrows = self.cs.nc * self.dim
-        return IncrementState(0, "initial", np.zeros(nrows), self.gap.copy(), self.gap.copy(),
-                              np.zeros(self.dim), states=np.zeros(self.cs.nc, dtype=np.int8))
-
-    def _q(self, D: np.ndarray, prev: IncrementState) -> tuple[np.ndarray, np.ndarray]:
-        q_abs = self.gap - self.G @ D
+    def _q(self, D: np.ndarray, pressure: float, y_prev: np.ndarray, gw: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray]:
+        q_abs = -self.G @ D + pressure * self.q_f
+        q_abs[self.normal_rows] += self.cs.gap0 + gw
         q = q_abs.copy()
-        q[~self.normal_rows] -= prev.y[~self.normal_rows]
+        q[~self.normal_rows] -= y_prev[~self.normal_rows]
         return q, q_abs
 
-    def solve(self, step: LoadStep, prev: IncrementState) -> IncrementState:
-        """Solve one increment from the converged state ``prev``; rank-local (call on one rank).
+    def solve(self, step: LoadStep, d_prev: np.ndarray, y_prev: np.ndarray, r_prev: np.ndarray,
+              gw: np.ndarray) -> Solved:
+        """Solve one increment from the converged state (``d_prev``, ``y_prev``, ``r_prev``, wear gap ``gw``).
 
         Raises:
             SimulationError: local solver failure or unreachable prescribed force.
         """
         n, t = self.frame[0], self.frame[1]
-        d = np.array([prev.D @ n, prev.D @ t])
-        r_warm = prev.r.copy()
+        d = np.array(d_prev, dtype=float)
+        r_warm = r_prev.copy()
         count = {"solves": 0, "iterations": 0}
         last: dict[str, Any] = {}
+        where = f"increment {step.increment}" + (f" (cycle {step.cycle}, step {step.step})" if step.cycle
+                                                 else f" ({step.stage})")
 
         def local(dn: float, dt: float):
             nonlocal r_warm
             D = dn * n + dt * t
-            q, q_abs = self._q(D, prev)
+            q, q_abs = self._q(D, step.pressure, y_prev, gw)
             res = local_solvers.solve(self.W, q, self.mu, self.dim, method=self.method, tol=self.tol,
                                       max_iter=self.max_iter, r0=r_warm)
             count["solves"] += 1
             count["iterations"] += res.iterations
             if not res.converged:
-                raise SimulationError(f"increment {step.increment} ({step.stage}): local solver did not "
-                                      f"converge: {res.message}")
+                raise SimulationError(f"{where}: local solver did not converge: {res.message}; "
+                                      "raise solver.local_max_iter or loosen solver.local_tol")
             r_warm = res.r
             F = self.cs.total_force(res.r)
-            last.update(res=res, D=D, q_abs=q_abs, F=np.array([F @ n, F @ t]))
+            last.update(res=res, d=np.array([dn, dt]), q_abs=q_abs, F=np.array([F @ n, F @ t]))
             return last["F"]
 
         targets = np.array([step.normal, step.tangential])
@@ -206,156 +234,465 @@ class IncrementSolver:
                     if d[k] != d_old and F[k] != F_old:
                         self.stiffness[k] = abs((F[k] - F_old) / (d[k] - d_old))
             else:
-                raise SimulationError(f"increment {step.increment}: prescribed forces not reached after 100 "
-                                      f"sweeps (residual {np.abs(F - targets)[controlled]}, tolerance {ftol:.3g})")
+                raise SimulationError(f"{where}: prescribed forces not reached after 100 sweeps (residual "
+                                      f"{np.abs(F - targets)[controlled]}, tolerance {ftol:.3g})")
         except LoadControlError as exc:
-            raise SimulationError(f"increment {step.increment} ({step.stage}): {exc}") from None
+            raise SimulationError(f"{where}: {exc}") from None
 
         res = last["res"]
         y = self.W @ res.r + last["q_abs"]
-        states = local_solvers.contact_states(res.r, res.x, self.mu, self.dim)
-        return IncrementState(step.increment, step.stage, res.r.copy(), res.x.copy(), y, last["D"].copy(),
-                              iterations=count["iterations"], error=res.error, load_solves=count["solves"],
-                              states=states)
+        return Solved(res.r.copy(), res.x.copy(), y, last["d"].copy(), count["iterations"], res.error,
+                      count["solves"])
 
 
-def _span(position: np.ndarray, mask: np.ndarray) -> float:
-    return float(position[mask].max() - position[mask].min()) if mask.any() else 0.0
+@dataclass
+class RunState:
+    """Everything needed to continue a run (what a checkpoint holds), replicated on every rank.
+
+    ``r_warm`` (forces of every increment of the last cycle, the compiled path's warm start) lives on
+    rank 0 only.
+    """
+
+    increment: int            #: Increments done.
+    cycle: int                #: Cycles completed.
+    d: np.ndarray             #: Obstacle displacement (normal, tangential) of the last increment.
+    y: np.ndarray             #: Total relative position of the last increment.
+    r: np.ndarray             #: Contact forces of the last increment.
+    gw: np.ndarray            #: Wear gap per contact.
+    energy: float = 0.0       #: Cumulative dissipated energy.
+    local_iterations: int = 0
+    r_warm: np.ndarray | None = None
+    last_row: dict[str, Any] | None = None
+    last_cycle_row: dict[str, Any] | None = None
+
+    @classmethod
+    def initial(cls, model: ContactModel) -> RunState:
+        cs = model.contact
+        m = cs.nc * cs.dim
+        y = np.zeros(m)
+        y[0::cs.dim] = cs.gap0
+        return cls(0, 0, np.zeros(2), y, np.zeros(m), np.zeros(cs.nc))
 
 
-def contact_quantities(model: ContactModel, st: IncrementState) -> dict[str, Any]:
-    """Nodal pressure, shear traction and slip; totals, widths and state counts of an increment."""
-    cs, dim = model.contact, model.contact.dim
-    rn, rt = st.r[0::dim], st.r[1::dim]
-    frame = model.obstacle.frame
-    F = cs.total_force(st.r)
-    loaded = rn > 1e-12 * max(rn.max(initial=0.0), 1e-300)
-    pressure = rn / cs.tributary
-    return {
-        "position": cs.abscissa, "gap": st.y[0::dim], "pressure": pressure, "shear": rt / cs.tributary,
-        "slip": st.x[1::dim], "state": st.states,
-        "normal_force": float(F @ frame[0]), "tangential_force": float(F @ frame[1]),
-        "max_pressure": float(pressure.max(initial=0.0)),
-        "contact_width": _span(cs.abscissa, loaded),
-        "stick_width": _span(cs.abscissa, st.states == local_solvers.STICK),
-        "n_open": int(np.sum(st.states == local_solvers.OPEN)),
-        "n_stick": int(np.sum(st.states == local_solvers.STICK)),
-        "n_slip": int(np.sum(st.states == local_solvers.SLIP)),
-        "edge_loaded": bool(loaded[0] or loaded[-1]),
-    }
+def _snapshot_cycles(scene: Scene) -> set[int]:
+    N = scene.loading.cycles
+    chosen = set(scene.output.snapshot_cycles)
+    if not chosen and N > 0:
+        decade = 1
+        while decade <= N:
+            chosen.update(c for c in (decade, 2 * decade, 5 * decade) if c <= N)
+            decade *= 10
+    if N > 0:
+        chosen.add(N)
+    return {c for c in chosen if 1 <= c <= N}
 
 
-def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False
-              ) -> dict[str, Any]:
+def _scene_identity(scene: Scene) -> str:
+    data = scene.model_dump(mode="json")
+    for key in _RESUMABLE_SECTIONS:
+        data.pop(key, None)
+    data["loading"].pop("cycles", None)  # a run may be extended by more cycles
+    return json.dumps(data, sort_keys=True)
+
+
+class _Run:
+    """One run of a scene: the increment loops, the outputs and the checkpoints. Collective."""
+
+    def __init__(self, scene: Scene, out_dir: Path, comm: MPI.Comm, quiet: bool, resume: bool):
+        from .io import ResultWriter
+
+        self.scene = scene
+        self.out = out_dir
+        self.comm = comm
+        self.rank0 = comm.rank == 0
+        self.say = (lambda msg: print(msg, flush=True)) if (self.rank0 and not quiet) else (lambda msg: None)
+        self.t_start = time.perf_counter()
+        checkpoint = self._read_checkpoint() if resume else None
+        self.model = model = ContactModel(scene, comm)
+        self.solver = IncrementSolver(model)
+        cs = model.contact
+        self.mu = np.full(cs.nc, scene.contact.mu)
+        self.k = scene.wear.k_effective
+        self.snapshots = _snapshot_cycles(scene)
+        if checkpoint is None:
+            self.state = RunState.initial(model)
+            sizes, xdmf_started = None, False
+        else:
+            self.state, sizes, xdmf_started = self._restore(checkpoint)
+        self.writer = ResultWriter(out_dir, comm, profiles=scene.output.contact_profiles, resume_sizes=sizes,
+                                   xdmf_started=xdmf_started)
+        self.last_checkpoint = time.perf_counter()
+        self.say(f"[{scene.name}] {model.n_dofs} dofs, {cs.nc} contact candidates, "
+                 f"W by {model.delassus_method} in {model.timings['delassus_s']:.3f} s"
+                 + (f"; resumed after increment {self.state.increment} (cycle {self.state.cycle})"
+                    if checkpoint is not None else ""))
+
+    # Checkpoints ------------------------------------------------------------------------------------
+    def _read_checkpoint(self) -> dict[str, Any]:
+        path = self.out / CHECKPOINT
+        if not path.is_file():
+            raise SimulationError(f"--resume: no checkpoint {path}; run without --resume to start afresh")
+        with np.load(path, allow_pickle=False) as data:
+            ck = {k: data[k] for k in data.files}
+        meta = json.loads(str(ck["meta"]))
+        if meta["identity"] != _scene_identity(self.scene):
+            raise SimulationError(f"--resume: the scene differs from the one checkpointed in {path} beyond "
+                                  f"the sections {', '.join(_RESUMABLE_SECTIONS)} and loading.cycles; "
+                                  "resume with the same scene, or start afresh in a new folder")
+        ck["meta"] = meta
+        return ck
+
+    def _restore(self, ck: dict[str, Any]) -> tuple[RunState, dict[str, int], bool]:
+        meta = ck["meta"]
+        st = RunState(int(meta["increment"]), int(meta["cycle"]), ck["d"].copy(), ck["y"].copy(), ck["r"].copy(),
+                      ck["gw"].copy(), float(meta["energy"]), int(meta["local_iterations"]),
+                      ck["r_warm"].copy() if ck["r_warm"].size else None, meta.get("last_row"),
+                      meta.get("last_cycle_row"))
+        if st.gw.size != self.model.contact.nc:
+            raise SimulationError("--resume: the checkpoint's contact set does not match the scene's mesh")
+        return st, {k: int(v) for k, v in meta["sizes"].items()}, bool(meta["xdmf_started"])
+
+    def checkpoint(self) -> None:
+        sizes = self.writer.sizes()
+        if self.rank0:
+            st = self.state
+            meta = {"identity": _scene_identity(self.scene), "increment": st.increment, "cycle": st.cycle,
+                    "energy": st.energy, "local_iterations": st.local_iterations, "sizes": sizes,
+                    "xdmf_started": self.writer.xdmf_started, "last_row": st.last_row,
+                    "last_cycle_row": st.last_cycle_row, "written": time.strftime("%Y-%m-%dT%H:%M:%S")}
+            tmp = self.out / (CHECKPOINT + ".tmp.npz")
+            np.savez(tmp, meta=json.dumps(meta, default=_plain), d=st.d, y=st.y, r=st.r, gw=st.gw,
+                     r_warm=st.r_warm if st.r_warm is not None else np.zeros(0))
+            with open(tmp, "rb+") as f:
+                os.fsync(f.fileno())
+            os.replace(tmp, self.out / CHECKPOINT)
+        self.last_checkpoint = time.perf_counter()
+
+    # Increments -----------------------------------------------------------------------------------------
+    def _python_increment(self, step: LoadStep) -> tuple[dict[str, Any], np.ndarray, np.ndarray, np.ndarray]:
+        """Solve and commit one increment by the Python path; returns (history row, x, y, states)."""
+        st = self.state
+        solved, failure = None, None
+        if self.rank0:
+            try:
+                solved = self.solver.solve(step, st.d, st.y, st.r, st.gw)
+            except SimulationError as exc:
+                failure = str(exc)
+        if self.comm.size > 1:
+            solved, failure = self.comm.bcast((solved, failure), root=0)
+        if failure is not None:
+            raise SimulationError(failure)
+        cs = self.model.contact
+        states = np.empty(cs.nc, dtype=np.int8)
+        row = np.empty(len(ROW_FIELDS))
+        gw = st.gw.copy()
+        commit_increment(solved.r, solved.x, solved.y, self.mu, cs.dim, cs.tributary, cs.abscissa, self.k, gw,
+                         states, row)
+        st.increment += 1
+        st.d, st.y, st.r, st.gw = solved.d, solved.y, solved.r, gw
+        st.energy += row[ROW["dissipated_energy"]]
+        st.local_iterations += solved.iterations
+        hist = {"increment": step.increment, "cycle": step.cycle, "step": step.step, "stage": step.stage,
+                "normal_displacement": solved.d[0], "tangential_displacement": solved.d[1],
+                "face_pressure": step.pressure, **dict(zip(ROW_FIELDS, row.tolist())),
+                "local_iterations": solved.iterations, "local_error": solved.error,
+                "load_solves": solved.load_solves}
+        st.last_row = hist
+        return hist, solved.x, solved.y, states
+
+    def _profile(self, hist: dict[str, Any], x: np.ndarray, y: np.ndarray, r: np.ndarray, gw: np.ndarray,
+                 states: np.ndarray) -> None:
+        cs = self.model.contact
+        dim = cs.dim
+        self.writer.profile_block(hist["increment"], hist["cycle"], hist["step"], [
+            cs.abscissa, y[0::dim], r[0::dim] / cs.tributary, r[1::dim] / cs.tributary, x[1::dim], y[1::dim],
+            gw, states])
+
+    def _fields(self, t: float, r: np.ndarray, pressure: float) -> None:
+        if not self.scene.output.xdmf:
+            return
+        p = self.model.problem
+        p.solve_contact_response(self.model.contact.H, r, self.model.face_load, pressure)
+        self.writer.fields(t, [p.u, p.von_mises()])
+
+    def _say_increment(self, h: dict[str, Any]) -> None:
+        self.say(f"[{self.scene.name}] inc {h['increment']:4d} {h['stage']:10s} P = {h['normal_force']:.6g} "
+                 f"Q = {h['tangential_force']:.6g} p_max = {h['max_pressure']:.6g} it = {h['local_iterations']}")
+
+    def run_stepwise(self, steps: list[LoadStep] | Any) -> None:
+        """Preload and monotonic stages: every increment written (history, profile, fields)."""
+        for step in steps:
+            if step.increment <= self.state.increment:
+                continue  # done before the checkpoint
+            hist, x, y, states = self._python_increment(step)
+            self.writer.rows("history", [hist])
+            self._profile(hist, x, y, self.state.r, self.state.gw, states)
+            self._fields(float(step.increment), self.state.r, step.pressure)
+            self.writer.flush()
+            self._say_increment(hist)
+
+    def run_cycles(self) -> None:
+        sc = self.scene
+        lo = sc.loading
+        N = lo.cycles
+        n = lo.increments_per_cycle
+        use_kernel = sc.solver.cycle_kernel and not (lo.normal_force_controlled or lo.tangential_force_controlled)
+        self.cycle_mode = "compiled" if use_kernel else "python"
+        every = sc.output.history_every
+        loop_cycles = set(sc.output.loop_cycles)
+        t_report = time.perf_counter()
+        progress = None
+        if self.rank0 and sc.output.progress and sys.stderr.isatty():
+            from tqdm import tqdm
+            progress = tqdm(total=N, initial=self.state.cycle, unit="cycle", desc=sc.name, leave=False,
+                            mininterval=1.0)
+        for cycle in range(self.state.cycle + 1, N + 1):
+            t0 = time.perf_counter()
+            keep = cycle in self.snapshots
+            write_history = keep or cycle == 1 or cycle % every == 0 or cycle in loop_cycles
+            if use_kernel:
+                hists, keeps = self._kernel_cycle(cycle, keep)
+            else:
+                hists, keeps = self._python_cycle(cycle, keep)
+            dt_cycle = time.perf_counter() - t0
+            crow = self._cycle_row(cycle, hists, dt_cycle)
+            self.state.cycle = cycle
+            self.state.last_cycle_row = crow
+            if write_history:
+                self._write_history(cycle, hists)
+            self.writer.rows("cycles", [crow])
+            if keep:
+                for k in keeps:
+                    self._profile(*k)
+                last = keeps[-1]
+                self._fields(float(last[0]["increment"]), last[3], last[0]["face_pressure"])
+            self.writer.flush()
+            if progress is not None:
+                progress.update(1)
+            now = time.perf_counter()
+            if keep or cycle == N or now - self.last_checkpoint >= sc.output.checkpoint_interval:
+                self.checkpoint()
+            if progress is None and (keep or now - t_report > 10.0):
+                t_report = now
+                self.say(f"[{sc.name}] cycle {cycle}/{N}: max wear depth {crow['max_wear_depth']:.4g} mm, "
+                         f"energy {crow['dissipated_energy']:.4g}, {crow['regime']}, p_max(end) "
+                         f"{crow['max_pressure_end']:.4g} MPa")
+        if progress is not None:
+            progress.close()
+
+    def _write_history(self, cycle: int, hists: dict[str, np.ndarray]) -> None:
+        n = hists["increment"].size
+        head = list(zip(hists["increment"].tolist(), [cycle] * n, hists["step"].tolist()))
+        cols = ["normal_displacement", "tangential_displacement", "face_pressure", *ROW_FIELDS,
+                "local_iterations", "local_error", "load_solves"]
+        self.writer.history_block(head, np.column_stack([hists[c] for c in cols]), "cycle")
+
+    def _cycle_row(self, cycle: int, h: dict[str, np.ndarray], wall: float) -> dict[str, Any]:
+        sc = self.scene
+        Q = h["tangential_force"]
+        disp = h["tangential_displacement"] if sc.loading.tangential_kind == "displacement" \
+            else h["mean_relative_tangential"]
+        E = float(h["dissipated_energy"].sum())
+        Qa = 0.5 * (Q.max() - Q.min())
+        da = 0.5 * (disp.max() - disp.min())
+        loaded = (h["n_stick"] + h["n_slip"]) > 0
+        min_stick = int(h["n_stick"][loaded].min()) if loaded.any() else 0
+        gross = bool(np.any((h["n_stick"] == 0) & (h["n_slip"] > 0)))
+        return {"cycle": cycle, "equivalent_cycles": cycle * sc.wear.acceleration, "dissipated_energy": E,
+                "wear_area": float(h["wear_area"][-1]), "max_wear_depth": float(h["max_wear_depth"][-1]),
+                "tangential_force_max": float(Q.max()), "tangential_force_min": float(Q.min()),
+                "displacement_max": float(disp.max()), "displacement_min": float(disp.min()),
+                "energy_ratio": E / (4 * Qa * da) if Qa * da > 0 else 0.0, "min_stick": min_stick,
+                "regime": "gross_slip" if gross else ("partial_slip" if loaded.any() else "open"),
+                "max_pressure_end": float(h["max_pressure"][-1]),
+                "local_iterations": int(h["local_iterations"].sum()), "wall_time_s": round(wall, 6)}
+
+    def _python_cycle(self, cycle: int, keep: bool):
+        saved = (self.state.increment, self.state.d, self.state.y, self.state.r, self.state.gw, self.state.energy,
+                 self.state.local_iterations)
+        rows, keeps = [], []
+        try:
+            for step in cycle_path(self.scene.loading, cycle):
+                hist, x, y, states = self._python_increment(step)
+                rows.append(hist)
+                if keep:
+                    keeps.append((hist, x, y, self.state.r, self.state.gw, states))
+        except SimulationError:
+            st = self.state
+            st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations = saved
+            raise
+        h = {k: np.array([r[k] for r in rows]) for k in rows[0] if k != "stage"}
+        return h, keeps
+
+    def _kernel_cycle(self, cycle: int, keep: bool):
+        from .cycling import N_ROW, run_increments
+
+        sc, st, cs = self.scene, self.state, self.model.contact
+        lo = sc.loading
+        n = lo.increments_per_cycle
+        m = cs.nc * cs.dim
+        wave = lo.tangential_amplitude * waveform(lo.waveform, n)
+        dn = np.full(n, lo.normal_displacement)
+        dt = wave if lo.tangential_kind == "displacement" else np.zeros(n)
+        s = wave if lo.tangential_kind == "pressure" else np.zeros(n)
+        result = None
+        if self.rank0:
+            if not hasattr(self, "_kernel_data"):
+                from .cycling import ActivePatternCache
+                W = np.ascontiguousarray(self.model.W.T)
+                self._kernel_data = (W, local_solvers.block_rho(self.model.W, cs.dim))
+                self.pattern_cache = ActivePatternCache(n, cs.nc, cs.dim)
+            Wc, rho = self._kernel_data
+            pc = self.pattern_cache
+            active = pc.enabled and sc.solver.pattern_reuse
+            warm = 1 if st.r_warm is not None and st.r_warm.shape == (n, m) and sc.solver.warm_start == "cycle" else 0
+            r_warm = st.r_warm.copy() if warm else np.zeros((n, m))
+            gw, y, r_last = st.gw.copy(), st.y.copy(), st.r.copy()
+            shape_k = (n, m) if keep else (1, 1)
+            out_r, out_x, out_y = np.zeros(shape_k), np.zeros(shape_k), np.zeros(shape_k)
+            out_gw = np.zeros((n, cs.nc) if keep else (1, 1))
+            out_states = np.zeros((n, cs.nc) if keep else (1, 1), dtype=np.int8)
+            hist = np.zeros((n, N_ROW))
+            done, status, err = run_increments(
+                Wc, rho, self.mu, cs.dim, cs.gap0, gw, self.model.q_f, cs.tributary, cs.abscissa, dn, dt, s, y,
+                r_last, r_warm, warm, self.k, sc.solver.local_tol, sc.solver.local_max_iter,
+                local_solvers._REFRESH, keep, out_r, out_x, out_y, out_gw, out_states, hist, active, pc.pattern,
+                pc.lu, pc.piv, pc.lu_ok, pc.counts)
+            if done < n:
+                step = done + 1
+                result = ("fail", f"increment {st.increment + step} (cycle {cycle}, step {step}): local solver "
+                          f"did not converge ({'non-finite values' if status == 2 else 'max_iter reached'}, "
+                          f"error {err:.3e} >= tol {sc.solver.local_tol:.1e} after {sc.solver.local_max_iter} "
+                          "sweeps); raise solver.local_max_iter or loosen solver.local_tol, then resume")
+            else:
+                st.r_warm = r_warm
+                result = ("ok", hist, gw, y, r_last, (out_r, out_x, out_y, out_gw, out_states) if keep else None)
+        if self.comm.size > 1:  # (a serial bcast would still pickle every array)
+            result = self.comm.bcast(result, root=0)
+        if result[0] == "fail":
+            raise SimulationError(result[1])
+        _, hist, gw, y, r_last, outs = result
+        first = st.increment + 1
+        st.increment += n
+        st.gw, st.y, st.r = gw, y, r_last
+        st.d = np.array([dn[-1], dt[-1]])
+        nf = len(ROW_FIELDS)
+        st.energy += float(hist[:, ROW["dissipated_energy"]].sum())
+        st.local_iterations += int(hist[:, nf].sum())
+        h = {name: hist[:, i] for i, name in enumerate(ROW_FIELDS)}
+        h.update(increment=np.arange(first, first + n), step=np.arange(1, n + 1), normal_displacement=dn,
+                 tangential_displacement=dt, face_pressure=s, local_iterations=hist[:, nf].astype(int),
+                 local_error=hist[:, nf + 1], load_solves=np.ones(n, dtype=int))
+        st.last_row = {"increment": first + n - 1, "cycle": cycle, "step": n, "stage": "cycle",
+                       **{k: (v[-1].item() if hasattr(v[-1], "item") else v[-1]) for k, v in h.items()
+                          if k not in ("increment", "step")}}
+        keeps = []
+        if keep:
+            out_r, out_x, out_y, out_gw, out_states = outs
+            for j in range(n):
+                row = {"increment": first + j, "cycle": cycle, "step": j + 1, "face_pressure": float(s[j])}
+                keeps.append((row, out_x[j], out_y[j], out_r[j], out_gw[j], out_states[j]))
+        return h, keeps
+
+    # Summary ----------------------------------------------------------------------------------------
+    def summary(self, error: str | None) -> dict[str, Any]:
+        sc, model, st = self.scene, self.model, self.state
+        g = sc.geometry
+        summary: dict[str, Any] = {
+            "scene": sc.name, "dofs": model.n_dofs, "contacts": model.contact.nc,
+            "delassus_method": model.delassus_method, **{k: round(v, 6) for k, v in model.timings.items()},
+            "increments": st.increment, "cycles": st.cycle, "converged": error is None,
+            "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
+            "wear_law": sc.wear.law, "wear_k": sc.wear.k, "wear_acceleration": sc.wear.acceleration,
+            "wear_k_effective": self.k, "equivalent_cycles": st.cycle * sc.wear.acceleration,
+            "dissipated_energy": st.energy,
+        }
+        if sc.loading.cycles > 0:
+            summary["cycle_path"] = getattr(self, "cycle_mode", "python")
+            if hasattr(self, "pattern_cache"):
+                c = self.pattern_cache.counts
+                summary["pattern_solves"] = {"accepted": int(c[0]), "rejected": int(c[1]), "factorizations": int(c[2])}
+        if st.last_row:
+            r = st.last_row
+            summary.update({k: r[k] for k in ("normal_force", "tangential_force", "max_pressure", "contact_width",
+                                              "stick_width", "max_wear_depth", "wear_area")})
+            summary.update({k: int(r[k]) for k in ("n_open", "n_stick", "n_slip")})
+            summary["edge_loaded"] = bool(self._edge_loaded())
+        if st.last_cycle_row:
+            summary["regime"] = st.last_cycle_row["regime"]
+        if g.kind == "half_cylinder" and st.last_row:
+            a, p0 = hertz_line_contact(st.last_row["normal_force"], g.radius,
+                                       sc.material.E / (1 - sc.material.nu**2))
+            summary.update({"hertz_reference": "rigid plane, frictionless: E* = E/(1-nu^2)",
+                            "hertz_half_width": a, "hertz_max_pressure": p0})
+        if error is not None:
+            summary["error"] = error
+        return summary
+
+    def _edge_loaded(self) -> bool:
+        rn = self.state.r[0::self.model.contact.dim]
+        return bool(rn[0] > 0 or rn[-1] > 0) and self.scene.geometry.kind == "half_cylinder"
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False,
+              resume: bool = False) -> dict[str, Any]:
     """Run a scene and write its outputs into ``out_dir``. Collective.
+
+    Args:
+        scene: A validated scene.
+        out_dir: Output folder.
+        comm: Communicator.
+        quiet: Print nothing.
+        resume: Continue from ``out_dir/checkpoint.npz`` (the scene may differ only in its ``solver`` and
+            ``output`` sections and in ``loading.cycles``).
 
     Returns:
         The summary (also written to ``out_dir/summary.json``).
 
     Raises:
-        SimulationError: when an increment fails; the outputs of the converged increments and a summary
-            with ``converged = false`` and the diagnostic are on disk.
+        SimulationError: when an increment fails; the outputs of the converged increments (of the last
+            complete cycle in a cyclic run), a checkpoint to resume from and a summary with
+            ``converged = false`` and the diagnostic are on disk.
     """
-    from .io import ResultWriter, plot_profiles
-
-    t_start = time.perf_counter()
-    rank0 = comm.rank == 0
-    say = (lambda msg: print(msg, flush=True)) if (rank0 and not quiet) else (lambda msg: None)
     out = Path(out_dir)
-
-    model = ContactModel(scene, comm)
-    solver = IncrementSolver(model)
-    say(f"[{scene.name}] {model.n_dofs} dofs, {model.contact.nc} contact candidates, "
-        f"W by {model.delassus_method} in {model.timings['delassus_s']:.3f} s")
-    writer = ResultWriter(out, comm, profiles=scene.output.contact_profiles)
-    summary: dict[str, Any] = {
-        "scene": scene.name, "dofs": model.n_dofs, "contacts": model.contact.nc,
-        "delassus_method": model.delassus_method, **{k: round(v, 6) for k, v in model.timings.items()},
-    }
-    g = scene.geometry
-    if g.kind == "half_cylinder":
-        summary["hertz_reference"] = "rigid plane, frictionless: E* = E/(1-nu^2)"
-
-    state = solver.initial_state()
-    snapshots: list[tuple[str, dict[str, Any]]] = []
-    total_iterations = 0
-    error_message = None
-    quantities: dict[str, Any] = {}
-    increments = 0
-    for step in monotonic_path(scene.loading):
-        t_inc = time.perf_counter()
-        new_state, failure = None, None
-        if rank0:
-            try:
-                new_state = solver.solve(step, state)
-            except SimulationError as exc:
-                failure = str(exc)
-        new_state, failure = comm.bcast((new_state, failure), root=0)
-        if failure is not None:
-            error_message = failure
-            say(f"[{scene.name}] STOPPED: {failure}")
-            break
-        state = new_state
-        increments += 1
-        total_iterations += state.iterations
-        quantities = contact_quantities(model, state)
-        frame = model.obstacle.frame
-        writer.history_row({
-            "increment": step.increment, "stage": step.stage,
-            "normal_displacement": float(state.D @ frame[0]), "tangential_displacement": float(state.D @ frame[1]),
-            **{k: quantities[k] for k in ("normal_force", "tangential_force", "max_pressure", "contact_width",
-                                           "stick_width", "n_open", "n_stick", "n_slip")},
-            "local_iterations": state.iterations, "local_error": state.error, "load_solves": state.load_solves,
-            "converged": True, "wall_time_s": round(time.perf_counter() - t_inc, 6),
-        })
-        writer.profile_rows(step.increment, *(quantities[k] for k in
-                                              ("position", "gap", "pressure", "shear", "slip", "state")))
-        if scene.output.xdmf:
-            model.problem.solve_contact_response(model.contact.H, state.r)
-            writer.fields(float(step.increment), [model.problem.u, model.problem.von_mises()])
-        last_of_stage = step.stage == "normal" and step.increment == scene.loading.normal_increments
-        if last_of_stage:
-            snapshots.append((f"end of preload (inc {step.increment})", quantities))
-        say(f"[{scene.name}] inc {step.increment:4d} {step.stage:10s} P = {quantities['normal_force']:.6g} "
-            f"Q = {quantities['tangential_force']:.6g} p_max = {quantities['max_pressure']:.6g} "
-            f"it = {state.iterations}")
-
-    if quantities and quantities["edge_loaded"]:
-        say(f"[{scene.name}] WARNING: the outermost contact candidate carries load: the contact may extend "
-            "beyond the candidate window; widen contact.candidate_half_width")
-    summary.update({
-        "increments": increments, "converged": error_message is None, "local_iterations": total_iterations,
-        "wall_time_s": round(time.perf_counter() - t_start, 6),
-    })
-    if quantities:
-        summary.update({k: quantities[k] for k in ("normal_force", "tangential_force", "max_pressure",
-                                                    "contact_width", "stick_width", "n_open", "n_stick",
-                                                    "n_slip", "edge_loaded")})
-    if g.kind == "half_cylinder" and quantities:
-        a, p0 = hertz_line_contact(quantities["normal_force"], g.radius, scene.material.E / (1 - scene.material.nu**2))
-        summary.update({"hertz_half_width": a, "hertz_max_pressure": p0})
-    if error_message is not None:
-        summary["error"] = error_message
-    writer.summary(summary)
-    writer.close()
-
-    if scene.output.plots and rank0 and quantities:
-        snapshots.append((f"final (inc {state.increment})", quantities))
-        reference = None
-        if g.kind == "half_cylinder":
-            from .analytic import hertz_pressure
-            P = snapshots[0][1]["normal_force"]
-            xs = np.linspace(quantities["position"].min(), quantities["position"].max(), 400)
-            reference = ("Hertz, frictionless, end of preload", xs,
-                         hertz_pressure(xs, P, g.radius, scene.material.E / (1 - scene.material.nu**2)))
-        plot_profiles(out / "profiles.png", quantities["position"],
-                      [(label, q["pressure"], q["shear"]) for label, q in snapshots], reference,
-                      title=f"{scene.name}: contact tractions")
-    say(f"[{scene.name}] {'done' if error_message is None else 'FAILED'}: {increments} increments, "
-        f"P = {summary.get('normal_force', 0):.6g} N/mm, Q = {summary.get('tangential_force', 0):.6g} N/mm, "
-        f"p_max = {summary.get('max_pressure', 0):.6g} MPa, contact width = {summary.get('contact_width', 0):.4g} mm, "
-        f"stick width = {summary.get('stick_width', 0):.4g} mm, {summary['wall_time_s']:.2f} s -> {out}")
-    model.problem.destroy()
-    if error_message is not None:
-        raise SimulationError(error_message)
+    run = _Run(scene, out, comm, quiet, resume)
+    error = None
+    try:
+        run.run_stepwise(preload_path(scene.loading) if scene.loading.cycles > 0 else monotonic_path(scene.loading))
+        if scene.loading.cycles > 0:
+            run.run_cycles()
+    except SimulationError as exc:
+        error = str(exc)
+        run.say(f"[{scene.name}] STOPPED: {error}")
+        if scene.loading.cycles > 0 and run.state.increment >= scene.loading.normal_increments:
+            run.checkpoint()  # the last complete cycle: resume from it with other solver settings
+    summary = run.summary(error)
+    run.writer.summary(summary)
+    run.writer.close()
+    if run.rank0 and scene.output.plots and run.state.last_row:
+        from .plots import plot_run
+        try:
+            plot_run(out, scene)
+        except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
+            run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
+    if summary.get("edge_loaded"):
+        run.say(f"[{scene.name}] WARNING: the outermost contact candidate carries load: the contact may extend "
+                "beyond the candidate window; widen contact.candidate_half_width")
+    run.say(f"[{scene.name}] {'done' if error is None else 'FAILED'}: {summary['increments']} increments, "
+            f"{summary['cycles']} cycles, P = {summary.get('normal_force', 0):.6g} N/mm, "
+            f"Q = {summary.get('tangential_force', 0):.6g} N/mm, p_max = {summary.get('max_pressure', 0):.6g} MPa, "
+            f"contact width = {summary.get('contact_width', 0):.4g} mm, stick width = "
+            f"{summary.get('stick_width', 0):.4g} mm, max wear depth = {summary.get('max_wear_depth', 0):.4g} mm, "
+            f"{summary['wall_time_s']:.2f} s -> {out}")
+    run.model.problem.destroy()
+    if error is not None:
+        raise SimulationError(error)
     return summary

@@ -27,7 +27,12 @@ from dolfinx_fretting.scenes import SceneError, apply_overrides, builtin_scenes,
         ("loading.normal_displacement=0.008", ["exactly one of loading.normal_displacement"]),
         ("loading.tangential_displacement=0.001", ["at most one of loading.tangential_displacement"]),
         ("loading.normal_increments=0", ["loading.normal_increments", "greater than or equal to 1"]),
-        ("loading.cycles=5", ["loading.cycles", "allowed: 0"]),
+        ("loading.increments_per_cycle=3", ["loading.increments_per_cycle", "greater than or equal to 4"]),
+        ("loading.cycles=-1", ["loading.cycles", "greater than or equal to 0"]),
+        ("wear.law='archard'", ["wear.k", "k > 0"]),
+        ("wear.acceleration=0.5", ["wear.acceleration", "greater than or equal to 1"]),
+        ("loading.tangential_pressure=10.0", ["at most one of", "tangential_pressure"]),
+        ("output.history_every=0", ["output.history_every", "greater than or equal to 1"]),
         ("solver.local_tol=2", ["solver.local_tol", "less than 1"]),
         ("contact.plane_normal=[0.0, 0.0]", ["contact.plane_normal", "non-zero"]),
         ("material.model='plastic'", ["material.model", "'elastic'"]),
@@ -42,11 +47,25 @@ def test_bad_values_name_the_key_and_range(override, expected):
 
 def test_builtin_hertz_is_valid_and_overrides_apply():
     assert "hertz" in builtin_scenes()
-    scene = load_scene("hertz", ["contact.mu=0.3", "geometry.contact_mesh_size=0.02", "wear.law=archard"])
+    scene = load_scene("hertz", ["contact.mu=0.3", "geometry.contact_mesh_size=0.02", "wear.law=archard",
+                                 "wear.k=1e-8"])
     assert scene.contact.mu == 0.3
     assert scene.geometry.contact_mesh_size == 0.02
     assert scene.wear.law == "archard"
     assert scene.material.E == 115000.0 and scene.material.nu == 0.342
+
+
+def test_cyclic_loading_checks():
+    with pytest.raises(SceneError, match="a multiple of 4"):
+        load_scene("hertz", ["loading.cycles=2", "loading.increments_per_cycle=10"])
+    base = {"loading": {"normal_force": 10.0, "cycles": 3}}
+    with pytest.raises(SceneError, match="needs its amplitude"):
+        load_scene(base)
+    with pytest.raises(SceneError, match="loading.pressure_face = 'top'"):
+        load_scene({"geometry": {"kind": "rectangle"}, "contact": {"surface": "bottom"},
+                    "loading": {"normal_displacement": 1e-4, "tangential_pressure": 10.0, "pressure_face": "top"}})
+    scene = load_scene({"loading": {"normal_force": 10.0, "cycles": 3, "tangential_displacement": 0.001}})
+    assert scene.loading.tangential_kind == "displacement" and scene.loading.tangential_amplitude == 0.001
 
 
 def test_override_syntax_and_unknown_scene():

@@ -1,0 +1,284 @@
+"""Compiled loop over the increments of displacement- or pressure-controlled fretting cycles.
+
+When no load is force controlled, an increment's right-hand side is known in advance:
+
+    q_abs = g0 + g_w - (n.D, t.D) + s q_f          (normal rows: gaps; tangential rows: positions)
+    q     = q_abs - y_prev   in the tangential rows  (so x_t is the slip increment, paper eq. 3)
+
+with D = dn n + dt t the obstacle's motion, s the face pressure and q_f = H K^-1 f the contact
+displacement per unit face pressure. So a whole cycle (thousands in a run) can run in one compiled call:
+local Uzawa solve (:mod:`dolfinx_fretting.local_solvers`), then :func:`dolfinx_fretting.wear.commit_increment`.
+Python only sees a cycle's outputs. The result is the same as the per-increment Python path (a test
+checks it); only the warm start may differ: ``warm = 1`` starts each increment from the same increment of
+the previous cycle (the state is nearly periodic, so few sweeps are needed), ``warm = 0`` from the
+previous increment (the straightforward choice).
+
+In 2D the loop can also reuse the previous cycle's *contact pattern* (``active = True``): the state of
+every contact (open, stick, slip with the sign of its friction force) at the same increment of the
+previous cycle turns the local problem into a linear one,
+
+    open:  r = 0;     stick:  (W r + q)_n = 0, (W r + q)_t = 0;     slip:  (W r + q)_n = 0, r_t = s mu r_n,
+
+whose LU factors are cached per increment of the cycle and reused while the pattern holds. Its solution
+is accepted only if it meets the same natural-map tolerance as the Uzawa iteration (so it is then exact to
+rounding); otherwise the Uzawa sweeps start from it. Patterns change rarely once the wear is under way,
+so most increments cost one triangular solve and one residual check.
+
+A failed increment stops the loop: the converged increments before it are committed (their wear is
+legitimate), the failed one leaves no trace in ``gw``, ``y`` or ``r_warm``.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from .local_solvers import _blocked_norm, _error, _recompute_x, _uzawa_kernel
+from .wear import ROW_FIELDS, commit_increment
+
+__all__ = ["run_increments", "ActivePatternCache", "N_ROW"]
+
+#: Columns of the per-increment output: the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then
+#: local iterations and local error.
+N_ROW = len(ROW_FIELDS) + 2
+
+
+class ActivePatternCache:
+    """Per-increment contact patterns and LU factors of the previous cycle (2D), for ``run_increments``.
+
+    Args:
+        n: Increments per cycle.
+        nc: Contacts.
+        dim: Must be 2 for the cache to be used (an empty cache otherwise).
+    """
+
+    def __init__(self, n: int, nc: int, dim: int):
+        m = nc * dim
+        used = dim == 2
+        self.enabled = used
+        shape_n, shape_m = (n, nc) if used else (1, 1), (n, m, m) if used else (1, 1, 1)
+        self.pattern = np.full(shape_n, -1, dtype=np.int8)     # -1: unknown
+        self.lu = np.zeros(shape_m)
+        self.piv = np.zeros((n, m) if used else (1, 1), dtype=np.int64)
+        self.lu_ok = np.zeros(n if used else 1, dtype=np.bool_)
+        #: Counters: exact pattern solves accepted, rejected, factorisations.
+        self.counts = np.zeros(3, dtype=np.int64)
+
+
+@numba.njit(cache=True)
+def _lu_factor(A: np.ndarray, piv: np.ndarray) -> bool:
+    """In-place LU with partial pivoting (A = P L U); False if a pivot is zero to rounding."""
+    m = A.shape[0]
+    scale = 0.0
+    for i in range(m):
+        for j in range(m):
+            scale = max(scale, abs(A[i, j]))
+    for k in range(m):
+        p = k
+        best = abs(A[k, k])
+        for i in range(k + 1, m):
+            if abs(A[i, k]) > best:
+                best = abs(A[i, k])
+                p = i
+        piv[k] = p
+        if best <= 1e-13 * scale:
+            return False
+        if p != k:
+            for j in range(m):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, m):
+            f = A[i, k] * inv
+            if f != 0.0:
+                A[i, k] = f
+                for j in range(k + 1, m):
+                    A[i, j] -= f * A[k, j]
+            else:
+                A[i, k] = 0.0
+    return True
+
+
+@numba.njit(cache=True)
+def _lu_solve(LU: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
+    """Solve in place with the factors of :func:`_lu_factor`."""
+    m = b.size
+    for k in range(m):
+        p = piv[k]
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for i in range(m):
+        s = b[i]
+        for j in range(i):
+            s -= LU[i, j] * b[j]
+        b[i] = s
+    for i in range(m - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, m):
+            s -= LU[i, j] * b[j]
+        b[i] = s / LU[i, i]
+
+
+@numba.njit(cache=True)
+def _pattern_matrix(W: np.ndarray, pattern: np.ndarray, mu: np.ndarray, A: np.ndarray) -> None:
+    """The linear system of a 2D contact pattern (0 open, 1 stick, 2 slip with r_t > 0, 3 slip r_t < 0)."""
+    nc = pattern.size
+    m = 2 * nc
+    for i in range(m):
+        for j in range(m):
+            A[i, j] = 0.0
+    for a in range(nc):
+        o = 2 * a
+        code = pattern[a]
+        if code == 0:
+            A[o, o] = 1.0
+            A[o + 1, o + 1] = 1.0
+            continue
+        for j in range(m):
+            A[o, j] = W[o, j]           # x_n = 0
+        if code == 1:
+            for j in range(m):
+                A[o + 1, j] = W[o + 1, j]   # x_t = 0
+        else:
+            sgn = 1.0 if code == 2 else -1.0
+            A[o + 1, o + 1] = 1.0           # r_t - s mu r_n = 0
+            A[o + 1, o] = -sgn * mu[a]
+
+
+@numba.njit(cache=True)
+def _pattern_rhs(q: np.ndarray, pattern: np.ndarray, b: np.ndarray) -> None:
+    for a in range(pattern.size):
+        o = 2 * a
+        code = pattern[a]
+        b[o] = 0.0 if code == 0 else -q[o]
+        b[o + 1] = -q[o + 1] if code == 1 else 0.0
+
+
+@numba.njit(cache=True)
+def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0: np.ndarray,
+                   gw: np.ndarray, q_f: np.ndarray, tributary: np.ndarray, abscissa: np.ndarray,
+                   dn: np.ndarray, dt: np.ndarray, s: np.ndarray, y: np.ndarray, r_last: np.ndarray,
+                   r_warm: np.ndarray, warm: int, k: float, tol: float, max_iter: int, refresh: int,
+                   keep: bool, out_r: np.ndarray, out_x: np.ndarray, out_y: np.ndarray, out_gw: np.ndarray,
+                   out_states: np.ndarray, hist: np.ndarray, active: bool, pattern: np.ndarray,
+                   lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray
+                   ) -> tuple[int, int, float]:
+    """Solve ``dn.size`` increments in sequence, committing each converged one.
+
+    Args:
+        Wc: W transposed, C-contiguous (m, m) (W is symmetric: W itself).
+        rho: Per-contact Uzawa step (``local_solvers.block_rho``).
+        mu: Friction coefficient per contact.
+        dim: 2 or 3.
+        g0: Initial normal gap per contact.
+        gw: Wear gap per contact (in/out).
+        q_f: Local displacement per unit face pressure (m,).
+        tributary, abscissa: Per contact (see :func:`~dolfinx_fretting.wear.commit_increment`).
+        dn, dt, s: Obstacle normal and tangential displacement and face pressure per increment.
+        y: Total relative position of the last converged increment (m,) (in/out).
+        r_last: Forces of the last converged increment (m,) (in/out).
+        r_warm: (n, m) forces of the same increments of the previous cycle (in/out: overwritten with
+            this cycle's).
+        warm: 1: start increment j from ``r_warm[j]``; 0: from ``r_last``.
+        k: Wear coefficient applied (1/MPa).
+        tol, max_iter, refresh: Local solver settings.
+        keep: Store every increment's r, x, y, gw and states in the ``out_*`` arrays ((n, ...) each).
+        hist: (n, N_ROW) output rows.
+        active: Try the previous cycle's contact pattern first (2D only); ``pattern``, ``lu``, ``piv``,
+            ``lu_ok`` and ``counts`` are the arrays of an :class:`ActivePatternCache` (in/out).
+
+    Returns:
+        (converged increments, local status of the first failure (1 if none), its error).
+    """
+    n = dn.size
+    m = q_f.size
+    nc = mu.size
+    q = np.empty(m)
+    q_abs = np.empty(m)
+    x = np.empty(m)
+    r = np.empty(m)
+    xs = np.empty(m)
+    its = 0
+    err = 0.0
+    states = np.empty(nc, dtype=np.int8)
+    empty_i = np.zeros(1, dtype=np.int64)
+    empty_f = np.zeros(1)
+    nfields = N_ROW - 2
+    row = np.empty(nfields)
+    for j in range(n):
+        for a in range(nc):
+            o = a * dim
+            q_abs[o] = g0[a] + gw[a] - dn[j] + s[j] * q_f[o]
+            q[o] = q_abs[o]
+            q_abs[o + 1] = -dt[j] + s[j] * q_f[o + 1]
+            q[o + 1] = q_abs[o + 1] - y[o + 1]
+            for c in range(2, dim):
+                q_abs[o + c] = s[j] * q_f[o + c]
+                q[o + c] = q_abs[o + c] - y[o + c]
+        if warm == 1:
+            for i in range(m):
+                r[i] = r_warm[j, i]
+        else:
+            for i in range(m):
+                r[i] = r_last[i]
+        exact = False
+        if active and pattern[j, 0] >= 0:
+            if not lu_ok[j]:
+                _pattern_matrix(Wc, pattern[j], mu, lu[j])   # Wc = W^T = W
+                lu_ok[j] = _lu_factor(lu[j], piv[j])
+                counts[2] += 1
+            if lu_ok[j]:
+                for i in range(m):
+                    xs[i] = r[i]
+                _pattern_rhs(q, pattern[j], r)
+                _lu_solve(lu[j], piv[j], r)
+                _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
+                err = _error(r, x, mu, rho, dim, _blocked_norm(q, rho, dim))
+                if err < tol:
+                    exact = True
+                    its = 0
+                    counts[0] += 1
+                else:
+                    counts[1] += 1
+                    for i in range(m):     # back to the warm start: the pattern was wrong
+                        r[i] = xs[i]
+        if not exact:
+            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
+            its, err, change, status = _uzawa_kernel(Wc, empty_i, empty_i, empty_f, False, q, mu, rho, rho, dim,
+                                                     r, x, tol, max_iter, refresh)
+            if status != 1:
+                return j, status, err
+        # y = W r + q_abs = x + (q_abs - q)
+        for i in range(m):
+            y[i] = x[i] + q_abs[i] - q[i]
+        commit_increment(r, x, y, mu, dim, tributary, abscissa, k, gw, states, row)
+        if active:
+            same = pattern[j, 0] >= 0
+            for a in range(nc):
+                code = states[a]
+                if code == 2 and r[a * dim + 1] < 0.0:
+                    code = 3
+                if pattern[j, a] != code:
+                    same = False
+                    pattern[j, a] = code
+            if not same:
+                lu_ok[j] = False
+        for i in range(nfields):
+            hist[j, i] = row[i]
+        hist[j, nfields] = its
+        hist[j, nfields + 1] = err
+        for i in range(m):
+            r_warm[j, i] = r[i]
+            r_last[i] = r[i]
+        if keep:
+            for i in range(m):
+                out_r[j, i] = r[i]
+                out_x[j, i] = x[i]
+                out_y[j, i] = y[i]
+            for a in range(nc):
+                out_gw[j, a] = gw[a]
+                out_states[j, a] = states[a]
+    return n, 1, 0.0
