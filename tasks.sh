@@ -10,7 +10,7 @@ cmd=${1:-}
 case "$cmd" in
   run)
     scripts/setup.sh
-    exec .venv/bin/dolfinx-fretting run hertz --out results/hertz "$@" ;;
+    exec .venv/bin/dolfinx-fretting run stromberg-block --out results/stromberg-block "$@" ;;
   test)
     scripts/setup.sh
     exec .venv/bin/python -m pytest -q -m "not slow" tests "$@" ;;

@@ -351,7 +351,11 @@ def _parse_override(item: str) -> tuple[list[str], Any]:
 
 
 def apply_overrides(data: dict[str, Any], overrides: list[str] | None) -> dict[str, Any]:
-    """Return a copy of ``data`` with ``section.key=value`` overrides applied (values in TOML syntax)."""
+    """Return a copy of ``data`` with ``section.key=value`` overrides applied (values in TOML syntax).
+
+    The value ``none`` (or ``null``) removes the key, so that its default applies again: e.g.
+    ``loading.tangential_force=none loading.tangential_displacement=0.002`` switches the control.
+    """
     data = copy.deepcopy(data)
     for item in overrides or []:
         path, value = _parse_override(item)
@@ -360,7 +364,10 @@ def apply_overrides(data: dict[str, Any], overrides: list[str] | None) -> dict[s
             node = node.setdefault(p, {})
             if not isinstance(node, dict):
                 raise SceneError(f"--set {item!r}: {p!r} is not a section")
-        node[path[-1]] = value
+        if value in ("none", "null"):  # unset: back to the default (e.g. switch force to displacement control)
+            node.pop(path[-1], None)
+        else:
+            node[path[-1]] = value
     return data
 
 

@@ -109,3 +109,40 @@ def test_resume_refuses_another_scene(tmp_path):
                   quiet=True, resume=True)
     with pytest.raises(SimulationError, match="no checkpoint"):
         run_scene(load_scene("stromberg-block", SMALL_BLOCK), tmp_path / "empty", quiet=True, resume=True)
+
+
+@pytest.mark.parametrize("tangential", ["tangential_force=60.0", "tangential_displacement=0.01"])
+def test_force_controlled_normal_load_during_cycles(tmp_path, tangential):
+    """Cylinder under a constant normal force, cycled by a tangential force (partial slip, Q < mu P) or a
+    displacement (gross slip): the prescribed forces hold at every increment (Python path)."""
+    P, mu = 199.24, 0.9
+    scene = load_scene("hertz", ["geometry.contact_mesh_size=0.02", "loading.tangential_force=none",
+                                 f"loading.{tangential}",
+                                 "loading.cycles=2", "loading.increments_per_cycle=8", "wear.law='archard'",
+                                 "wear.k=1e-6", "output.xdmf=false", "output.plots=false"])
+    s = run_scene(scene, tmp_path, quiet=True)
+    assert s["cycle_path"] == "python" and s["cycles"] == 2
+    hist = read_table(tmp_path / "history.csv")
+    cyc = hist["cycle"] > 0
+    # Force control to solver.force_tol = 1e-8 relative.
+    assert np.allclose(hist["normal_force"][cyc], P, rtol=1e-7)
+    if tangential.startswith("tangential_force"):
+        target = 60.0 * np.interp(hist["step"][cyc] / 8, [0, 0.25, 0.75, 1], [0, 1, -1, 0])
+        assert np.allclose(hist["tangential_force"][cyc], target, rtol=0, atol=1e-7 * P)
+        assert list(read_table(tmp_path / "cycles.csv")["regime"]) == ["partial_slip"] * 2
+    else:
+        # 10 um against ~6 um of tangential compliance up to mu P (measured Q = 58 N/mm at 2 um): gross slip.
+        assert list(read_table(tmp_path / "cycles.csv")["regime"]) == ["gross_slip"] * 2
+        assert np.abs(hist["tangential_force"][cyc]).max() == pytest.approx(mu * P, rel=1e-6)
+    assert s["wear_area"] > 0
+
+
+def test_wear_acceleration_is_k_times_s_and_recorded(tmp_path):
+    """wear.acceleration = s runs k*s per simulated cycle and says so; same wear as k' = k s."""
+    base = SMALL_BLOCK + ["loading.cycles=3", "output.contact_profiles=false"]
+    acc = run_scene(load_scene("stromberg-block", base + ["wear.acceleration=10"]), tmp_path / "acc", quiet=True)
+    big = run_scene(load_scene("stromberg-block", base + ["wear.k=1e-4"]), tmp_path / "big", quiet=True)
+    assert acc["wear_acceleration"] == 10 and acc["wear_k"] == 1e-5
+    assert acc["wear_k_effective"] == pytest.approx(1e-4, rel=1e-15) and acc["equivalent_cycles"] == 30
+    assert acc["max_wear_depth"] == pytest.approx(big["max_wear_depth"], rel=1e-12)
+    assert list(read_table(tmp_path / "acc" / "cycles.csv")["equivalent_cycles"]) == [10, 20, 30]
