@@ -48,7 +48,8 @@ ROUTES = ("columns", "block", "selected_inverse")
 METHODS = ROUTES + ("auto",)
 
 # Route chosen by "auto", from benchmarks/results/delassus.md: the selected inverse beats the block
-# solve by 2-30x and the column solves by 10-200x in serial, and stays fastest under mpirun -n 2.
+# solve by 1.3-14x and the column solves by 8-81x in serial (1.5-7x and 5-29x under mpirun -n 2), on
+# meshes of 1k-206k dofs; it stays fastest under mpirun -n 2.
 _AUTO_SERIAL = "selected_inverse"
 _AUTO_PARALLEL = "selected_inverse"
 
@@ -298,9 +299,15 @@ class DelassusOperator:
         t0 = time.perf_counter()
         pc = self.ksp.getPC()
         # Reuse is on so that solves never refactorise behind the caller's back; lift it for this call.
-        # PCSetUp sees the same nonzero state and runs the numeric phase only.
+        # KSPSetUp alone returns at once on a set-up KSP: setOperators marks the operator changed, and
+        # PCSetUp then sees the same nonzero pattern and runs the numeric phase only.
         pc.setReusePreconditioner(False)
         try:
+            self.ksp.setOperators(self.K)
+            try:
+                pc.setUp()
+            except PETSc.Error as exc:
+                raise DelassusError(f"MUMPS refactorize failed: {self._mumps_status()} ({exc})") from exc
             self._setup("refactorize")
         finally:
             pc.setReusePreconditioner(True)
