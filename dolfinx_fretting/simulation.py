@@ -509,7 +509,7 @@ class _Run:
 
     def _python_cycle(self, cycle: int, keep: bool):
         saved = (self.state.increment, self.state.d, self.state.y, self.state.r, self.state.gw, self.state.energy,
-                 self.state.local_iterations)
+                 self.state.local_iterations, self.state.last_row)
         rows, keeps = [], []
         try:
             for step in cycle_path(self.scene.loading, cycle):
@@ -519,7 +519,7 @@ class _Run:
                     keeps.append((hist, x, y, self.state.r, self.state.gw, states))
         except SimulationError:
             st = self.state
-            st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations = saved
+            st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row = saved
             raise
         h = {k: np.array([r[k] for r in rows]) for k in rows[0] if k != "stage"}
         return h, keeps

@@ -146,3 +146,25 @@ def test_wear_acceleration_is_k_times_s_and_recorded(tmp_path):
     assert acc["wear_k_effective"] == pytest.approx(1e-4, rel=1e-15) and acc["equivalent_cycles"] == 30
     assert acc["max_wear_depth"] == pytest.approx(big["max_wear_depth"], rel=1e-12)
     assert list(read_table(tmp_path / "acc" / "cycles.csv")["equivalent_cycles"]) == [10, 20, 30]
+
+
+def test_failed_increment_is_reported_and_leaves_no_trace(tmp_path):
+    """A cycle whose local solve fails stops the run with a diagnostic naming it; the tables, the wear gap
+    and the checkpoint stay at the last complete cycle, and a resume with other solver settings then ends
+    as an uninterrupted run does."""
+    base = SMALL_BLOCK + ["output.contact_profiles=false", "solver.local_tol=1e-12"]
+    straight = run_scene(load_scene("stromberg-block", base + ["loading.cycles=4"]), tmp_path / "straight", quiet=True)
+    out = tmp_path / "run"
+    two = run_scene(load_scene("stromberg-block", base + ["loading.cycles=2"]), out, quiet=True)
+    starved = base + ["loading.cycles=4", "solver.local_max_iter=1", "solver.pattern_reuse=false"]
+    with pytest.raises(SimulationError, match=r"increment 162 \(cycle 3, step 1\): local solver did not converge"):
+        run_scene(load_scene("stromberg-block", starved), out, quiet=True, resume=True)
+    s = json.loads((out / "summary.json").read_text())
+    assert s["converged"] is False and "cycle 3, step 1" in s["error"]
+    assert s["cycles"] == 2 and s["max_wear_depth"] == two["max_wear_depth"]
+    assert list(read_table(out / "cycles.csv")["cycle"]) == [1, 2]
+    with np.load(out / CHECKPOINT) as data:
+        assert json.loads(str(data["meta"]))["cycle"] == 2
+    done = run_scene(load_scene("stromberg-block", base + ["loading.cycles=4"]), out, quiet=True, resume=True)
+    assert done["max_wear_depth"] == pytest.approx(straight["max_wear_depth"], rel=1e-8)
+    assert list(read_table(out / "cycles.csv")["cycle"]) == [1, 2, 3, 4]
