@@ -17,8 +17,8 @@ Pictures (all in the output folder):
   - ``fretting_loops.png``: tangential contact force against displacement for the loop cycles;
   - ``wear_growth.png``: maximum wear depth, wear area and dissipated energy per cycle.
 
-Each picture is drawn independently: one that cannot be drawn (missing or partial table) is skipped
-with a warning, and :func:`plot_run` never raises.
+Each picture is drawn independently: one whose data are missing (a partly written folder) is left
+out, one that fails is left out with a :class:`RuntimeWarning`, and :func:`plot_run` never raises.
 """
 
 from __future__ import annotations
@@ -26,11 +26,15 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
 from .scenes import Scene
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["plot_run", "read_table", "plot_wear_first_cycle", "plot_wear_evolution", "plot_node_history",
            "plot_fretting_loops", "plot_wear_growth", "tracked_nodes", "CYCLIC_PICTURES"]
@@ -38,12 +42,18 @@ __all__ = ["plot_run", "read_table", "plot_wear_first_cycle", "plot_wear_evoluti
 #: PNG files :func:`plot_run` writes for a cyclic run besides ``profiles.png``.
 CYCLIC_PICTURES = ("wear_first_cycle.png", "wear_evolution.png", "node_history.png", "fretting_loops.png",
                    "wear_growth.png")
+#: Lengths (mm) below this are round-off of the contact solver (gaps, slips of closed/sticking nodes).
+_ROUND_OFF = 1e-9
 #: Colours of the contact states (0 open, 1 stick, 2 slip).
 STATE_COLORS = {0: "#d9d9d9", 1: "#4c9be8", 2: "#f28e2b"}
 
 
-def _figure(figsize: tuple[float, float]):
-    """A matplotlib figure drawn by the Agg canvas, without pyplot's global state."""
+def _figure(figsize: tuple[float, float]) -> Figure:
+    """A matplotlib figure drawn by the Agg canvas, without pyplot's global state.
+
+    The pictures use fixed margins (``gridspec_kw``) rather than ``tight_layout``, which draws every
+    figure twice.
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -52,7 +62,8 @@ def _figure(figsize: tuple[float, float]):
     return fig
 
 
-def _save(fig, path: Path) -> Path:
+def _save(fig: Figure, path: Path) -> Path:
+    """Write ``fig`` as a PNG (110 dpi) and return ``path``."""
     fig.savefig(path, dpi=110)
     return path
 
@@ -67,6 +78,11 @@ def _length_unit(values: np.ndarray | float) -> tuple[float, str]:
     if m >= 1e-4:
         return 1e3, "µm"
     return 1e6, "nm"
+
+
+def _mm(x: float) -> str:
+    """A position (mm) for a label: round-off around 0 printed as 0."""
+    return f"{round(float(x), 9) + 0.0:.4g}"
 
 
 class _History:
@@ -91,20 +107,41 @@ class _History:
         return rows[np.argsort(self.t["increment"][rows], kind="stable")]
 
     def cycles(self) -> np.ndarray:
+        """Cycles present in the table, ascending."""
         return np.unique(self.t["cycle"]) if self.n else np.zeros(0, dtype=int)
 
 
 def _load_label(scene: Scene, hist: _History, cycle: int, step: int) -> str:
-    """The tangential load at (cycle, step) read from ``history.csv``, e.g. ``q = +10 MPa``."""
+    """The tangential load at (cycle, step) read from ``history.csv``, e.g. ``q = +10 MPa``.
+
+    Values within 1e-6 of the load amplitude of zero (round-off of a force-controlled load) read 0.
+    """
     r = hist.row(cycle, step)
     kind = scene.loading.tangential_kind
     if r is None or kind == "none":
         return ""
-    if kind == "pressure":
-        return f"q = {hist.t['face_pressure'][r]:+.3g} MPa"
-    if kind == "displacement":
-        return f"δ = {hist.t['tangential_displacement'][r]:+.3g} mm"
-    return f"Q = {hist.t['tangential_force'][r]:+.3g} N/mm"
+    column, symbol, unit = {"pressure": ("face_pressure", "q", "MPa"),
+                            "displacement": ("tangential_displacement", "δ", "mm"),
+                            "force": ("tangential_force", "Q", "N/mm")}[kind]
+    value = float(hist.t[column][r])
+    if abs(value) <= 1e-6 * abs(scene.loading.tangential_amplitude):
+        return f"{symbol} = 0 {unit}"
+    return f"{symbol} = {value:+.3g} {unit}"
+
+
+def _profile_pair_legend(fig: Figure, ax_w, ax_p, wear: np.ndarray) -> None:
+    """One legend under the two panels of a profile picture; a note on an all-zero wear panel."""
+    handles, labels = ax_p.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), fontsize=8.5, frameon=False)
+    if not np.any(wear):
+        ax_w.text(0.5, 0.6, "no wear (wear.law = none or no slip)", transform=ax_w.transAxes, ha="center",
+                  color="0.4")
+
+
+def _side_by_side(n_labels: int) -> dict[str, float]:
+    """Margins of a two-panel profile picture with a legend of ``n_labels`` entries under it."""
+    rows = -(-n_labels // 5)
+    return dict(left=0.065, right=0.99, bottom=0.12 + 0.05 * rows, top=0.91, wspace=0.2)
 
 
 def _preload_row(prof: ContactProfiles) -> int | None:
@@ -188,15 +225,18 @@ def plot_wear_first_cycle(path: Path, scene: Scene, prof: ContactProfiles, hist:
         return None
     wear = prof.values["wear"][[r for _, r in chosen]]
     f, unit = _length_unit(wear)
-    fig = _figure((12, 4.6))
-    ax_w, ax_p = fig.subplots(1, 2)
-    colours = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
-    for (s, r), c in zip(chosen, colours):
+    pre = _preload_row(prof)
+    n_labels = len(chosen) + (pre is not None)
+    fig = _figure((12, 4.6 + 0.25 * -(-n_labels // 5)))
+    ax_w, ax_p = fig.subplots(1, 2, gridspec_kw=_side_by_side(n_labels))
+    # later curves drawn thinner on top of earlier ones, so that equal stretches stay visible
+    styles = [("tab:blue", "o", 3.2), ("tab:orange", "s", 2.4), ("tab:green", "^", 1.7),
+              ("tab:red", "v", 1.0)]
+    for (s, r), (c, marker, lw) in zip(chosen, styles):
         load = _load_label(scene, hist, cycle, s)
         label = f"step {s}/{n}" + (f", {load}" if load else "")
-        ax_w.plot(prof.position, prof.values["wear"][r] * f, ".-", ms=3, color=c, label=label)
-        ax_p.plot(prof.position, prof.values["pressure"][r], ".-", ms=3, color=c, label=label)
-    pre = _preload_row(prof)
+        for ax, y in ((ax_w, prof.values["wear"][r] * f), (ax_p, prof.values["pressure"][r])):
+            ax.plot(prof.position, y, "-", marker=marker, ms=3.5, lw=lw, color=c, label=label)
     if pre is not None:
         ax_p.plot(prof.position, prof.values["pressure"][pre], "k--", lw=1, label="end of preload")
     ax_w.set_ylabel(f"wear gap ({unit})")
@@ -204,9 +244,8 @@ def plot_wear_first_cycle(path: Path, scene: Scene, prof: ContactProfiles, hist:
     for ax in (ax_w, ax_p):
         ax.set_xlabel("position along the surface (mm)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+    _profile_pair_legend(fig, ax_w, ax_p, wear)
     fig.suptitle(f"{scene.name}: wear gap and contact pressure during cycle {cycle} (quarter points)")
-    fig.tight_layout()
     return _save(fig, path)
 
 
@@ -231,15 +270,16 @@ def plot_wear_evolution(path: Path, scene: Scene, prof: ContactProfiles, hist: _
     last = [(c, int(prof.rows_of_cycle(c)[-1])) for c in cycles]
     f, unit = _length_unit(prof.values["wear"][[r for _, r in last]])
     cmap = matplotlib.colormaps["viridis"]
-    fig = _figure((12, 4.6))
-    ax_w, ax_p = fig.subplots(1, 2)
+    pre = _preload_row(prof)
+    n_labels = len(last) + (pre is not None)
+    fig = _figure((12, 4.6 + 0.25 * -(-n_labels // 5)))
+    ax_w, ax_p = fig.subplots(1, 2, gridspec_kw=_side_by_side(n_labels))
     for k, (c, r) in enumerate(last):
         colour = cmap(k / max(len(last) - 1, 1) * 0.9)
         s = int(prof.steps[r])
         label = f"cycle {c}" + ("" if s == n else f" (step {s} of {n})")
         ax_w.plot(prof.position, prof.values["wear"][r] * f, ".-", ms=3, color=colour, label=label)
         ax_p.plot(prof.position, prof.values["pressure"][r], ".-", ms=3, color=colour, label=label)
-    pre = _preload_row(prof)
     if pre is not None:
         ax_p.plot(prof.position, prof.values["pressure"][pre], "k--", lw=1, label="end of preload")
     ax_w.set_ylabel(f"wear gap ({unit})")
@@ -247,20 +287,22 @@ def plot_wear_evolution(path: Path, scene: Scene, prof: ContactProfiles, hist: _
     for ax in (ax_w, ax_p):
         ax.set_xlabel("position along the surface (mm)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, ncol=2 if len(last) > 6 else 1)
+    _profile_pair_legend(fig, ax_w, ax_p, prof.values["wear"][[r for _, r in last]])
     load = _load_label(scene, hist, last[-1][0], n)
     fig.suptitle(f"{scene.name}: wear gap and contact pressure at the end of the cycle (step {n}"
                  + (f", {load}" if load else "") + ")")
-    fig.tight_layout()
     return _save(fig, path)
 
 
 def plot_node_history(path: Path, scene: Scene, prof: ContactProfiles) -> Path | None:
     """State of the tracked nodes over the steps of up to three snapshot cycles (paper Figs. 8-9).
 
-    One column per (node, cycle) with the first, a middle and the last kept cycle; three rows: the
-    normal gap x_n, the slip increment Δx_t and the contact tractions P_n, P_t. The background of every
-    panel is coloured by the contact state of the node at each step (open, stick, slip).
+    One block of panels per tracked node (:func:`tracked_nodes`) and one column per cycle (the first, a
+    middle and the last kept cycle); three rows per block: the normal gap x_n, the tangential relative
+    displacement increment Δx_t (the ``slip`` column, which is the slip increment while the node slips
+    and 0 while it sticks) and the contact tractions P_n, P_t. The background of every panel is coloured
+    by the contact state of the node at each step (open, stick, slip); dotted lines mark the quarter
+    points of the cycle.
 
     Args:
         path: PNG file.
@@ -270,6 +312,7 @@ def plot_node_history(path: Path, scene: Scene, prof: ContactProfiles) -> Path |
     Returns:
         ``path``, or ``None`` when no cycle was kept.
     """
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     cycles = _snapshot_cycles(prof)
@@ -278,40 +321,69 @@ def plot_node_history(path: Path, scene: Scene, prof: ContactProfiles) -> Path |
     shown = list(dict.fromkeys([cycles[0], cycles[len(cycles) // 2], cycles[-1]]))
     nodes = tracked_nodes(scene, prof)
     n = scene.loading.increments_per_cycle
-    columns = [(j, c) for j in nodes for c in shown]
     rows_of = {c: prof.rows_of_cycle(c) for c in shown}
     gap, slip = prof.values["gap"], prof.values["slip"]
-    fg, ug = _length_unit(np.concatenate([gap[rows_of[c], j] for j, c in columns]))
-    fs, us = _length_unit(np.concatenate([slip[rows_of[c], j] for j, c in columns]))
-    ncol = len(columns)
-    fig = _figure((max(3.4 * ncol, 7.0), 8.2))
-    axes = fig.subplots(3, ncol, sharex=True, sharey="row", squeeze=False)
-    for k, (j, c) in enumerate(columns):
-        rows = rows_of[c]
-        steps = prof.steps[rows]
-        states = prof.values["state"][rows, j]
-        ax_g, ax_s, ax_p = axes[:, k]
-        for ax in axes[:, k]:
-            _shade_states(ax, steps, states)
-            _quarter_lines(ax, n)
-            ax.axhline(0.0, color="k", lw=0.5, zorder=1)
-            ax.grid(alpha=0.3)
-        ax_g.plot(steps, gap[rows, j] * fg, "k.-", ms=3, lw=1)
-        ax_s.plot(steps, slip[rows, j] * fs, "k.-", ms=3, lw=1)
-        ax_p.plot(steps, prof.values["pressure"][rows, j], ".-", ms=3, lw=1, color="tab:red", label="P_n")
-        ax_p.plot(steps, prof.values["shear"][rows, j], ".-", ms=3, lw=1, color="tab:purple", label="P_t")
-        ax_g.set_title(f"x = {prof.position[j]:.3g} mm, cycle {c}", fontsize=9)
-        ax_p.set_xlabel(f"step in the cycle (of {n})")
-        ax_p.set_xlim(0.5, n + 0.5)
-        if k == 0:
-            ax_g.set_ylabel(f"normal gap x_n ({ug})")
-            ax_s.set_ylabel(f"slip increment Δx_t ({us})")
-            ax_p.set_ylabel("P_n, P_t (MPa)")
-            ax_p.legend(fontsize=8, loc="best")
+    pairs = [(j, c) for j in nodes for c in shown]
+    fg, ug = _length_unit(np.concatenate([gap[rows_of[c], j] for j, c in pairs]))
+    fs, us = _length_unit(np.concatenate([slip[rows_of[c], j] for j, c in pairs]))
+    ncol, nn = len(shown), len(nodes)
+    # three rows of panels per node, a thin empty row between the nodes' blocks
+    ratios: list[float] = []
+    for k in range(nn):
+        ratios += ([0.3] if k else []) + [1.0, 1.0, 1.0]
+    width, height = max(4.2 * ncol, 8.0), 2.0 * sum(ratios) + 1.3
+    fig = _figure((width, height))
+    grid = fig.add_gridspec(len(ratios), ncol, height_ratios=ratios, hspace=0.12, wspace=0.08,
+                            left=0.95 / width, right=0.985, top=1 - 0.75 / height, bottom=0.95 / height)
+    first = None
+    for b, j in enumerate(nodes):
+        top = 4 * b
+        axes = np.empty((3, ncol), dtype=object)
+        for i in range(3):
+            for k in range(ncol):
+                share_y = axes[i, 0] if k else None
+                axes[i, k] = fig.add_subplot(grid[top + i, k], sharex=first, sharey=share_y)
+                first = first or axes[i, k]
+        for k, c in enumerate(shown):
+            rows = rows_of[c]
+            steps = prof.steps[rows]
+            ax_g, ax_s, ax_p = axes[:, k]
+            for ax in axes[:, k]:
+                _shade_states(ax, steps, prof.values["state"][rows, j])
+                _quarter_lines(ax, n)
+                ax.axhline(0.0, color="k", lw=0.5, zorder=1)
+                ax.grid(alpha=0.3)
+                if ax is not ax_p or b < nn - 1:
+                    ax.tick_params(labelbottom=False)
+                if k:
+                    ax.tick_params(labelleft=False)
+            ax_g.plot(steps, gap[rows, j] * fg, "k.-", ms=3, lw=1)
+            ax_s.plot(steps, slip[rows, j] * fs, "k.-", ms=3, lw=1)
+            ax_p.plot(steps, prof.values["pressure"][rows, j], ".-", ms=3, lw=1, color="tab:red")
+            ax_p.plot(steps, prof.values["shear"][rows, j], ".-", ms=3, lw=1, color="tab:purple")
+            ax_g.set_title(f"node {int(prof.nodes[j])} at x = {_mm(prof.position[j])} mm, cycle {c}",
+                           fontsize=9.5)
+            if b == nn - 1:
+                ax_p.set_xlabel(f"step in the cycle (of {n})")
+        # a row of round-off only (a node that never opens: |x_n| ~ 1e-14 mm) is not blown up to fill it
+        for i, (values, factor) in enumerate(((gap, fg), (slip, fs))):
+            block = np.concatenate([values[rows_of[c], j] for c in shown])
+            if not np.nanmax(np.abs(block), initial=0.0) > _ROUND_OFF:
+                every = np.concatenate([values[rows_of[c], jj] for jj, c in pairs])
+                span = 0.05 * float(np.nanmax(np.abs(every), initial=0.0)) * factor
+                axes[i, 0].set_ylim(-(span if span > _ROUND_OFF * factor else 1.0),
+                                    span if span > _ROUND_OFF * factor else 1.0)
+        axes[0, 0].set_ylabel(f"normal gap x_n ({ug})", fontsize=9)
+        axes[1, 0].set_ylabel(f"tangential incr. Δx_t ({us})", fontsize=9)
+        axes[2, 0].set_ylabel("P_n, P_t (MPa)", fontsize=9)
+    first.set_xticks([1, n // 4, n // 2, 3 * n // 4, n])
+    first.set_xlim(0.5, n + 0.5)
     handles = [Patch(color=STATE_COLORS[s], alpha=0.5, label=STATE_NAMES[s]) for s in (0, 1, 2)]
-    fig.legend(handles=handles, loc="upper right", ncol=3, fontsize=9, title="state", title_fontsize=9)
-    fig.suptitle(f"{scene.name}: contact state of tracked nodes over a cycle", x=0.02, ha="left")
-    fig.tight_layout(rect=(0, 0, 1, 0.93))
+    handles += [Line2D([], [], color="tab:red", marker=".", label="P_n (pressure)"),
+                Line2D([], [], color="tab:purple", marker=".", label="P_t (shear)")]
+    fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=9, frameon=False)
+    fig.suptitle(f"{scene.name}: contact state of tracked nodes over a cycle", fontsize=12,
+                 y=1 - 0.12 / height)
     return _save(fig, path)
 
 
@@ -324,9 +396,12 @@ def _loop_displacement(scene: Scene, hist: _History) -> tuple[np.ndarray, str]:
 def plot_fretting_loops(path: Path, scene: Scene, hist: _History) -> Path | None:
     """Tangential contact force against displacement over the loop cycles (``history.csv``).
 
-    The cycles are ``scene.output.loop_cycles`` found in the table, else up to four cycles spread over
-    those present. Each loop starts at the last row before its cycle (the end of the previous cycle or
-    of the preload), so it is closed.
+    The displacement is the obstacle's tangential displacement for a displacement-controlled load, else
+    the mean tangential relative displacement of the loaded contacts (``mean_relative_tangential``; it
+    jumps when the set of loaded contacts changes). A pressure-controlled run gets a second panel with
+    the force against the face pressure q. The cycles are ``scene.output.loop_cycles`` found in the
+    table, else up to four cycles spread over those present. Each loop starts at the last row before
+    its cycle (the end of the previous cycle or of the preload), so it is closed.
 
     Args:
         path: PNG file.
@@ -355,20 +430,27 @@ def plot_fretting_loops(path: Path, scene: Scene, hist: _History) -> Path | None
         loops.append((c, rows))
     f, unit = _length_unit(np.concatenate([x_all[r] for _, r in loops]))
     cmap = matplotlib.colormaps["viridis"]
-    fig = _figure((7, 5.2))
-    ax = fig.subplots()
+    pressure = scene.loading.tangential_kind == "pressure"
+    fig = _figure((12.5, 5.2) if pressure else (7, 5.2))
+    axes = list(np.atleast_1d(fig.subplots(1, 2 if pressure else 1, gridspec_kw=dict(
+        left=0.065 if pressure else 0.12, right=0.985, bottom=0.11, top=0.9, wspace=0.2))))
+    Q = hist.t["tangential_force"]
     for k, (c, rows) in enumerate(loops):
         colour = cmap(k / max(len(loops) - 1, 1) * 0.9)
-        ax.plot(x_all[rows] * f, hist.t["tangential_force"][rows], ".-", ms=3, lw=1.2, color=colour,
-                label=f"cycle {c}")
-    ax.axhline(0, color="k", lw=0.5)
-    ax.axvline(0, color="k", lw=0.5)
-    ax.set_xlabel(f"{what} ({unit})")
-    ax.set_ylabel("tangential contact force Q (N/mm)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title(f"{scene.name}: fretting loops")
-    fig.tight_layout()
+        axes[0].plot(x_all[rows] * f, Q[rows], ".-", ms=3, lw=1.2, color=colour, label=f"cycle {c}")
+        if pressure:
+            axes[1].plot(hist.t["face_pressure"][rows], Q[rows], ".-", ms=3, lw=1.2, color=colour,
+                         label=f"cycle {c}")
+    axes[0].set_xlabel(f"{what} ({unit})")
+    if pressure:
+        axes[1].set_xlabel(f"face pressure q on '{scene.loading.pressure_face}' (MPa)")
+    for ax in axes:
+        ax.axhline(0, color="k", lw=0.5)
+        ax.axvline(0, color="k", lw=0.5)
+        ax.set_ylabel("tangential contact force Q (N/mm)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"{scene.name}: fretting loops")
     return _save(fig, path)
 
 
@@ -392,7 +474,8 @@ def plot_wear_growth(path: Path, scene: Scene, cycles: dict[str, np.ndarray]) ->
     depth = cycles["max_wear_depth"]
     f, unit = _length_unit(depth)
     fig = _figure((7, 8))
-    ax_d, ax_a, ax_e = fig.subplots(3, 1, sharex=True)
+    ax_d, ax_a, ax_e = fig.subplots(3, 1, sharex=True, gridspec_kw=dict(
+        left=0.16, right=0.97, bottom=0.065, top=0.94, hspace=0.14))
     ax_d.plot(x, depth * f, style, ms=3, color="tab:red")
     ax_d.set_ylabel(f"max wear depth ({unit})")
     ax_a.plot(x, cycles["wear_area"], style, ms=3, color="tab:blue")
@@ -407,7 +490,6 @@ def plot_wear_growth(path: Path, scene: Scene, cycles: dict[str, np.ndarray]) ->
     ax_a.set_ylim(bottom=0)
     acc = scene.wear.acceleration
     fig.suptitle(f"{scene.name}: wear growth" + (f" (wear acceleration {acc:g})" if acc != 1 else ""))
-    fig.tight_layout()
     return _save(fig, path)
 
 
@@ -427,14 +509,12 @@ def _plot_profiles(out: Path, scene: Scene, prof: ContactProfiles, hist: _Histor
         curves.append((f"{label} (inc {inc})", prof.values["pressure"][r], prof.values["shear"][r]))
     reference = None
     g = scene.geometry
-    r = hist.row(0, 0) if scene.loading.cycles > 0 else None
     pre_rows = np.flatnonzero(hist.t["increment"] == pre) if hist.n else np.zeros(0, int)
     if g.kind == "half_cylinder" and pre_rows.size:
         P = float(hist.t["normal_force"][pre_rows[-1]])
         xs = np.linspace(prof.position.min(), prof.position.max(), 400)
         reference = ("Hertz, frictionless, end of preload", xs,
                      hertz_pressure(xs, P, g.radius, scene.material.E / (1 - scene.material.nu**2)))
-    del r
     path = out / "profiles.png"
     plot_profiles(path, prof.position, curves, reference, title=f"{scene.name}: contact tractions")
     return path
@@ -485,7 +565,8 @@ def plot_run(out: Path, scene: Scene) -> list[Path]:
                     lambda: plot_wear_evolution(out / "wear_evolution.png", scene, prof, hist))
             attempt("node_history.png", lambda: plot_node_history(out / "node_history.png", scene, prof))
         if hist.n:
-            attempt("fretting_loops.png", lambda: plot_fretting_loops(out / "fretting_loops.png", scene, hist))
+            attempt("fretting_loops.png",
+                    lambda: plot_fretting_loops(out / "fretting_loops.png", scene, hist))
         if cycles:
             attempt("wear_growth.png", lambda: plot_wear_growth(out / "wear_growth.png", scene, cycles))
     return written

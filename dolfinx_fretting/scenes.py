@@ -127,7 +127,8 @@ class WearSettings(_Section):
     ``acceleration`` is the paper's "hypothetical" wear coefficient made explicit: each simulated cycle
     stands for ``acceleration`` physical cycles, the wear coefficient used is ``k * acceleration``, and
     the outputs record both (``wear_acceleration``, ``equivalent_cycles``). It is exact when the contact
-    state changes little over ``acceleration`` cycles.
+    state changes little over ``acceleration`` cycles. The preload and a monotonic load happen once and
+    wear with ``k`` itself.
     """
 
     law: Literal["none", "archard"] = "none"

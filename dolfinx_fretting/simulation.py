@@ -312,7 +312,9 @@ class _Run:
         self.solver = IncrementSolver(model)
         cs = model.contact
         self.mu = np.full(cs.nc, scene.contact.mu)
+        # The wear acceleration scales cycles only: the preload and a monotonic load happen once.
         self.k = scene.wear.k_effective
+        self.k_once = scene.wear.k if scene.wear.law == "archard" else 0.0
         self.snapshots = _snapshot_cycles(scene)
         if checkpoint is None:
             self.state = RunState.initial(model)
@@ -386,8 +388,8 @@ class _Run:
         states = np.empty(cs.nc, dtype=np.int8)
         row = np.empty(len(ROW_FIELDS))
         gw = st.gw.copy()
-        commit_increment(solved.r, solved.x, solved.y, self.mu, cs.dim, cs.tributary, cs.abscissa, self.k, gw,
-                         states, row)
+        commit_increment(solved.r, solved.x, solved.y, self.mu, cs.dim, cs.tributary, cs.abscissa,
+                         self.k if step.cycle > 0 else self.k_once, gw, states, row)
         st.increment += 1
         st.d, st.y, st.r, st.gw = solved.d, solved.y, solved.r, gw
         st.energy += row[ROW["dissipated_energy"]]
@@ -677,6 +679,12 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
     summary = run.summary(error)
     run.writer.summary(summary)
     run.writer.close()
+    if run.rank0 and scene.output.xdmf and scene.output.contact_profiles:
+        from .contact_output import write_contact_xdmf
+        try:
+            write_contact_xdmf(out)
+        except Exception as exc:  # noqa: BLE001 - the CSV it comes from is on disk whatever happens here
+            run.say(f"[{scene.name}] WARNING: contact.xdmf not written: {type(exc).__name__}: {exc}")
     if run.rank0 and scene.output.plots and run.state.last_row:
         from .plots import plot_run
         try:

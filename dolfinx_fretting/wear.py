@@ -39,7 +39,7 @@ ROW_FIELDS = (
     "n_open", "n_stick", "n_slip",
     "contact_width",       # span of the loaded contacts along the surface (mm)
     "stick_width",         # span of the sticking contacts (mm)
-    "mean_relative_tangential",  # mean total tangential relative position of the loaded contacts (mm)
+    "mean_relative_tangential",  # mean total tangential relative position of all contacts (mm)
 )
 #: Index of each field in the row.
 ROW = {name: i for i, name in enumerate(ROW_FIELDS)}
@@ -81,6 +81,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
     nloaded = 0
     for a in range(nc):
         o = a * dim
+        ysum += y[o + 1]
         rn = r[o]
         rt2 = 0.0
         xt2 = 0.0
@@ -101,7 +102,6 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
         pmax = max(pmax, p)
         lo_c = min(lo_c, abscissa[a])
         hi_c = max(hi_c, abscissa[a])
-        ysum += y[o + 1]
         nloaded += 1
         if rt >= (1.0 - _STATE_TOL) * mu[a] * rn:
             states[a] = _SLIP
@@ -132,7 +132,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
     row[9] = n_slip
     row[10] = hi_c - lo_c if n_stick + n_slip > 0 else 0.0
     row[11] = hi_s - lo_s if n_stick > 0 else 0.0
-    row[12] = ysum / nloaded if nloaded > 0 else 0.0
+    row[12] = ysum / nc if nc > 0 else 0.0
 
 
 def archard_increment(k: float, pressure: np.ndarray, slip_increment: np.ndarray) -> np.ndarray:

@@ -1,0 +1,334 @@
+"""Pictures and the contact XDMF of a run, drawn from small synthetic output folders.
+
+The folders are written here with the exact columns of :mod:`dolfinx_fretting.io`, so these tests need
+no simulation; they check that every picture is written, that a partial folder never makes
+``plot_run`` raise, and that ``contact.xdmf``/``contact.h5`` hold the values of ``contact_profiles.csv``.
+"""
+
+from __future__ import annotations
+
+import csv
+import warnings
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dolfinx_fretting import plots
+from dolfinx_fretting.contact_output import (XDMF_FIELDS, read_contact_xdmf, read_profiles, read_table,
+                                             write_contact_xdmf)
+from dolfinx_fretting.io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS
+from dolfinx_fretting.plots import CYCLIC_PICTURES, plot_run, tracked_nodes
+from dolfinx_fretting.scenes import load_scene
+
+N_NODES, N_STEPS, N_CYCLES = 11, 8, 3
+POSITIONS = np.linspace(0.0, 10.0, N_NODES)
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def _triangular(step: int) -> float:
+    """0 -> +1 -> 0 -> -1 -> 0 over the N_STEPS steps of a cycle."""
+    t = step / N_STEPS
+    return 4 * t if t <= 0.25 else (2 - 4 * t if t <= 0.75 else 4 * t - 4)
+
+
+def _profile(inc: int, q: float) -> dict[str, np.ndarray]:
+    """A made-up but consistent contact state: the load tilts the pressure, open where it vanishes."""
+    pressure = np.maximum(0.0, 1.0 + q * (POSITIONS - 5.0) / 5.0) * (1.0 + 0.01 * inc)
+    state = np.where(pressure <= 0, 0, np.where(np.arange(N_NODES) % 3 == 0, 1, 2))
+    sign = 1.0 if q >= 0 else -1.0
+    shear = np.where(state == 2, -0.4 * sign * pressure, np.where(state == 1, 0.1 * pressure, 0.0))
+    slip = np.where(state == 2, 1e-5 * sign * (1 + POSITIONS / 10), np.where(state == 0, 2e-5, 0.0))
+    gap = np.where(state == 0, 1e-4 * (1 + abs(q)) * (1 + POSITIONS), 0.0)
+    wear = 1e-7 * inc * (1 + POSITIONS / 10)
+    return {"position": POSITIONS, "gap": gap, "pressure": pressure, "shear": shear, "slip": slip,
+            "relative_tangential": np.cumsum(slip) + 1e-6 * inc, "wear": wear, "state": state}
+
+
+def _write_csv(path: Path, fields: list[str], rows: list[dict]) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
+
+
+def write_cyclic_folder(out: Path, skip_history_cycles: tuple[int, ...] = (2,),
+                        snapshots: tuple[int, ...] = (1, 3)) -> None:
+    """history.csv (cycle 2 skipped as with output.history_every), cycles.csv and contact_profiles.csv
+    (preload and the snapshot cycles) of a face-pressure-loaded cyclic run with N_CYCLES cycles."""
+    out.mkdir(parents=True, exist_ok=True)
+    hist, prof, cyc = [], [], []
+    schedule = [(1, 0, 0, "normal")] + [(1 + (c - 1) * N_STEPS + s, c, s, "cycle")
+                                        for c in range(1, N_CYCLES + 1) for s in range(1, N_STEPS + 1)]
+    for inc, cycle, step, stage in schedule:
+        q = 10.0 * _triangular(step) if cycle else 0.0
+        p = _profile(inc, q / 10.0)
+        if cycle not in skip_history_cycles:
+            row = {k: 0.0 for k in HISTORY_FIELDS}
+            row.update(increment=inc, cycle=cycle, step=step, stage=stage, normal_displacement=1e-4,
+                       tangential_displacement=0.0, face_pressure=q, normal_force=float(p["pressure"].sum()),
+                       tangential_force=float(p["shear"].sum()), max_pressure=float(p["pressure"].max()),
+                       max_wear_depth=float(p["wear"].max()), wear_area=float(p["wear"].sum()),
+                       n_open=int((p["state"] == 0).sum()), n_stick=int((p["state"] == 1).sum()),
+                       n_slip=int((p["state"] == 2).sum()),
+                       mean_relative_tangential=1e-3 * q / 10 + 1e-4 * step,
+                       local_iterations=10, load_solves=1)
+            hist.append(row)
+        if cycle == 0 or cycle in snapshots:
+            for node in range(N_NODES):
+                row = {"increment": inc, "cycle": cycle, "step": step, "node": node}
+                row.update({k: (int(p[k][node]) if k == "state" else float(p[k][node]))
+                            for k in PROFILE_FIELDS[4:]})
+                prof.append(row)
+    for c in range(1, N_CYCLES + 1):
+        row = {k: 0.0 for k in CYCLE_FIELDS}
+        row.update(cycle=c, equivalent_cycles=float(c), dissipated_energy=0.4 - 0.001 * c, wear_area=1e-5 * c,
+                   max_wear_depth=7e-7 * c, regime="gross_slip", local_iterations=100)
+        cyc.append(row)
+    _write_csv(out / "history.csv", HISTORY_FIELDS, hist)
+    _write_csv(out / "contact_profiles.csv", PROFILE_FIELDS, prof)
+    _write_csv(out / "cycles.csv", CYCLE_FIELDS, cyc)
+
+
+@pytest.fixture
+def cyclic_scene():
+    return load_scene("stromberg-block", [
+        f"loading.cycles={N_CYCLES}", f"loading.increments_per_cycle={N_STEPS}",
+        "output.snapshot_cycles=[1, 3]", "output.loop_cycles=[1, 3]", "output.track_positions=[1.2, 5.0]"])
+
+
+def _csv_rows(path: Path, increment: int) -> list[dict[str, str]]:
+    """Rows of one increment, read independently of the package (csv module)."""
+    with open(path) as f:
+        return sorted((r for r in csv.DictReader(f) if int(r["increment"]) == increment),
+                      key=lambda r: int(r["node"]))
+
+
+def _assert_png(path: Path) -> None:
+    import matplotlib.image
+
+    assert path.is_file(), path
+    assert path.read_bytes()[:8] == PNG_MAGIC, path
+    img = matplotlib.image.imread(path)
+    assert img.shape[0] > 300 and img.shape[1] > 500, (path, img.shape)
+    assert float(img[..., :3].std()) > 0.01, f"{path.name} is blank"
+
+
+def test_plot_run_cyclic_writes_every_picture(tmp_path, cyclic_scene):
+    write_cyclic_folder(tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        written = plot_run(tmp_path, cyclic_scene)
+    problems = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+    assert not problems, problems
+    assert sorted(p.name for p in written) == sorted(["profiles.png", *CYCLIC_PICTURES])
+    for name in ["profiles.png", *CYCLIC_PICTURES]:
+        _assert_png(tmp_path / name)
+
+
+def test_plot_run_monotonic_writes_only_profiles(tmp_path):
+    scene = load_scene("hertz")
+    out = tmp_path
+    hist, prof = [], []
+    x = np.linspace(-0.2, 0.2, 21)
+    for inc in range(1, 6):
+        p = np.maximum(0.0, 1000.0 * (1 - (x / 0.1) ** 2)) * inc / 5
+        row = {k: 0.0 for k in HISTORY_FIELDS}
+        row.update(increment=inc, cycle=0, step=0, stage="normal" if inc <= 4 else "tangential",
+                   normal_force=float(p.sum() * 0.02))
+        hist.append(row)
+        for node in range(x.size):
+            prof.append({"increment": inc, "cycle": 0, "step": 0, "node": node, "position": float(x[node]),
+                         "gap": 0.0, "pressure": float(p[node]), "shear": 0.0, "slip": 0.0,
+                         "relative_tangential": 0.0, "wear": 0.0, "state": int(p[node] > 0)})
+    _write_csv(out / "history.csv", HISTORY_FIELDS, hist)
+    _write_csv(out / "contact_profiles.csv", PROFILE_FIELDS, prof)
+    _write_csv(out / "cycles.csv", CYCLE_FIELDS, [])
+    written = plot_run(out, scene)
+    assert [p.name for p in written] == ["profiles.png"]
+    _assert_png(out / "profiles.png")
+    assert not any((out / name).exists() for name in CYCLIC_PICTURES)
+
+
+def _truncate(path: Path, fraction: float) -> None:
+    data = path.read_bytes()
+    path.write_bytes(data[:int(len(data) * fraction)])
+
+
+@pytest.mark.parametrize("damage", ["empty_folder", "headers_only", "cut_mid_line", "no_profiles",
+                                    "no_history", "garbage_rows"])
+def test_plot_run_never_raises_on_a_partial_folder(tmp_path, cyclic_scene, damage):
+    write_cyclic_folder(tmp_path)
+    files = {n: tmp_path / f"{n}.csv" for n in ("history", "cycles", "contact_profiles")}
+    if damage == "empty_folder":
+        for p in files.values():
+            p.unlink()
+    elif damage == "headers_only":
+        for p in files.values():
+            p.write_text(p.read_text().splitlines()[0] + "\n")
+    elif damage == "cut_mid_line":
+        for p in files.values():
+            _truncate(p, 0.37)
+    elif damage == "no_profiles":
+        files["contact_profiles"].unlink()
+    elif damage == "no_history":
+        files["history"].unlink()
+        files["cycles"].unlink()
+    elif damage == "garbage_rows":
+        with open(files["history"], "a") as f:
+            f.write("1,2,3\nnot,a,row\n")
+        with open(files["contact_profiles"], "a") as f:
+            f.write("999,9,9,0,abc\n")
+    written = plot_run(tmp_path, cyclic_scene)  # must not raise
+    for p in written:
+        _assert_png(p)
+    names = {p.name for p in written}
+    if damage in ("empty_folder", "headers_only"):
+        assert not names
+    if damage == "no_profiles":
+        assert names == {"fretting_loops.png", "wear_growth.png"}
+    if damage == "no_history":
+        assert {"wear_first_cycle.png", "wear_evolution.png", "node_history.png"} <= names
+    if damage == "garbage_rows":
+        assert names == {"profiles.png", *CYCLIC_PICTURES}
+
+
+def test_a_failing_picture_is_skipped_with_a_warning(tmp_path, cyclic_scene, monkeypatch):
+    write_cyclic_folder(tmp_path)
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(plots, "plot_node_history", broken)
+    with pytest.warns(RuntimeWarning, match="node_history.png not drawn: RuntimeError: boom"):
+        written = plot_run(tmp_path, cyclic_scene)
+    names = {p.name for p in written}
+    assert "node_history.png" not in names
+    assert {"wear_first_cycle.png", "wear_evolution.png", "fretting_loops.png", "wear_growth.png"} <= names
+
+
+def test_read_profiles_drops_a_partly_written_increment(tmp_path):
+    write_cyclic_folder(tmp_path)
+    path = tmp_path / "contact_profiles.csv"
+    lines = path.read_text().splitlines(keepends=True)
+    last_inc = int(lines[-1].split(",")[0])
+    # keep 4 complete rows of the last increment and half of a fifth one
+    path.write_text("".join(lines[:-N_NODES + 4]) + lines[-N_NODES + 4][:12])
+    prof = read_profiles(path)
+    assert prof is not None
+    assert last_inc not in prof.increments
+    assert prof.increments[-1] == last_inc - 1
+    assert prof.values["pressure"].shape == (prof.increments.size, N_NODES)
+    np.testing.assert_allclose(prof.position, POSITIONS)
+    # the preload and every step of the snapshot cycles 1 and 3 (less the dropped one)
+    assert prof.increments.size == 1 + 2 * N_STEPS - 1
+    assert set(np.unique(prof.cycles)) == {0, 1, 3}
+
+
+def test_read_table_types_and_unterminated_line(tmp_path):
+    write_cyclic_folder(tmp_path)
+    path = tmp_path / "history.csv"
+    text = path.read_text()
+    path.write_text(text + "999,9,1,cyc")  # a row being written: no newline yet
+    t = read_table(path)
+    assert list(t) == HISTORY_FIELDS
+    assert t["increment"].dtype == np.int64 and 999 not in t["increment"]
+    assert t["stage"][0] == "normal" and t["stage"].dtype.kind == "U"
+    assert t["face_pressure"].dtype == np.float64
+    assert t["increment"].size == 1 + (N_CYCLES - 1) * N_STEPS
+    assert read_table(tmp_path / "missing.csv") == {}
+    # a value that is not a number reads NaN, the rest of its row is kept; a short row is skipped
+    odd = tmp_path / "odd.csv"
+    odd.write_text("increment,regime,energy_ratio\n1,gross_slip,0.5\n2,open,abc\n3,open\n")
+    t = read_table(odd)
+    assert t["increment"].tolist() == [1, 2] and t["regime"].tolist() == ["gross_slip", "open"]
+    assert t["energy_ratio"][0] == 0.5 and np.isnan(t["energy_ratio"][1])
+
+
+def test_tracked_nodes_and_load_labels(tmp_path, cyclic_scene):
+    write_cyclic_folder(tmp_path)
+    prof = read_profiles(tmp_path)
+    assert tracked_nodes(cyclic_scene, prof) == [1, 5]  # nearest to 1.2 mm and 5.0 mm
+    untracked = cyclic_scene.model_copy(deep=True)
+    untracked.output.track_positions = []
+    # the edge node in contact at the end of the preload (all are) and the centre node
+    assert tracked_nodes(untracked, prof) == [0, 5]
+    hist = plots._History(read_table(tmp_path / "history.csv"))
+    assert plots._load_label(cyclic_scene, hist, 1, N_STEPS // 4) == "q = +10 MPa"
+    assert plots._load_label(cyclic_scene, hist, 1, 3 * N_STEPS // 4) == "q = -10 MPa"
+    assert plots._load_label(cyclic_scene, hist, 1, N_STEPS // 2) == "q = 0 MPa"
+    assert plots._load_label(cyclic_scene, hist, 2, 1) == ""  # cycle 2 not in history.csv
+
+
+def test_contact_xdmf_holds_the_csv_values(tmp_path):
+    import h5py
+
+    write_cyclic_folder(tmp_path)
+    xdmf = write_contact_xdmf(tmp_path)
+    assert xdmf == tmp_path / "contact.xdmf"
+    h5_path = tmp_path / "contact.h5"
+    assert h5_path.stat().st_size > 0
+    csv_path = tmp_path / "contact_profiles.csv"
+    with open(csv_path) as f:
+        increments = sorted({int(r["increment"]) for r in csv.DictReader(f)})
+
+    # the XML: a temporal collection, one uniform grid per kept increment, time = increment
+    root = ET.parse(xdmf).getroot()
+    assert root.tag == "Xdmf" and root.get("Version") == "3.0"
+    series = root.find("Domain/Grid")
+    assert series.get("GridType") == "Collection" and series.get("CollectionType") == "Temporal"
+    grids = series.findall("Grid")
+    assert [int(g.find("Time").get("Value")) for g in grids] == increments
+
+    chosen = increments[1 + N_STEPS // 2]  # a step in the middle of cycle 1
+    rows = _csv_rows(csv_path, chosen)
+    grid = grids[increments.index(chosen)]
+    with h5py.File(h5_path, "r") as h5:
+        geometry = h5["Mesh/contact/geometry"][()]
+        np.testing.assert_array_equal(geometry[:, 0], [float(r["position"]) for r in rows])
+        np.testing.assert_array_equal(geometry[:, 1:], 0.0)
+        topology = h5["Mesh/contact/topology"][()]
+        np.testing.assert_array_equal(topology,
+                                      np.column_stack([np.arange(N_NODES - 1), np.arange(1, N_NODES)]))
+        for name in ("pressure", "shear", "slip", "wear", "gap", "state"):
+            expected = np.array([float(r[name]) for r in rows])
+            np.testing.assert_array_equal(h5[f"Data/{name}/{chosen}"][()], expected, err_msg=name)
+        # every DataItem of the chosen grid points at an existing dataset of the announced size
+        for item in grid.iter("DataItem"):
+            fname, dset = item.text.strip().split(":")
+            assert fname == "contact.h5"
+            dims = [int(d) for d in item.get("Dimensions").split()]
+            assert h5[dset].size == int(np.prod(dims)), dset
+        assert {a.get("Name") for a in grid.findall("Attribute")} == set(XDMF_FIELDS)
+
+    back = read_contact_xdmf(xdmf)
+    assert back["times"] == [float(i) for i in increments]
+    assert back["cells"][0] == "Polyline"
+    np.testing.assert_array_equal(back["point_data"][increments.index(chosen)]["pressure"],
+                                  [float(r["pressure"]) for r in rows])
+    assert sorted(set(back["cycles"])) == [0, 1, 3]
+
+
+
+def test_contact_xdmf_reads_with_meshio(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    write_cyclic_folder(tmp_path)
+    xdmf = write_contact_xdmf(tmp_path)
+    prof = read_profiles(tmp_path)
+    k = 3
+    rows = _csv_rows(tmp_path / "contact_profiles.csv", int(prof.increments[k]))
+    with meshio.xdmf.TimeSeriesReader(str(xdmf)) as reader:
+        points, cells = reader.read_points_cells()
+        t, point_data, _ = reader.read_data(k)
+    assert reader.num_steps == prof.increments.size
+    assert t == prof.increments[k] and points.shape == (N_NODES, 3) and cells[0].type == "line"
+    np.testing.assert_array_equal(point_data["pressure"], [float(r["pressure"]) for r in rows])
+
+
+def test_contact_xdmf_without_profiles(tmp_path):
+    assert write_contact_xdmf(tmp_path) is None
+    (tmp_path / "contact_profiles.csv").write_text(",".join(PROFILE_FIELDS) + "\n")
+    assert write_contact_xdmf(tmp_path) is None
+    assert not (tmp_path / "contact.xdmf").exists()
