@@ -172,22 +172,27 @@ class IncrementSolver:
         blk = slice(k * self.dim, (k + 1) * self.dim)
         self.stiffness = np.array([1.0 / self.W[blk, blk][0, 0], 1.0 / self.W[blk, blk][1, 1]])
 
-    def _q(self, D: np.ndarray, pressure: float, y_prev: np.ndarray, gw: np.ndarray
-           ) -> tuple[np.ndarray, np.ndarray]:
-        q_abs = -self.G @ D + pressure * self.q_f
+    def _q(self, D: np.ndarray, pressure: float, y_prev: np.ndarray, gw: np.ndarray,
+           q_body: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        # q_body: the contact displacement of the body before contact forces, H u_pred; elastic: s H K^-1 f.
+        q_abs = -self.G @ D + (pressure * self.q_f if q_body is None else q_body)
         q_abs[self.normal_rows] += self.cs.gap0 + gw
         q = q_abs.copy()
         q[~self.normal_rows] -= y_prev[~self.normal_rows]
         return q, q_abs
 
     def solve(self, step: LoadStep, d_prev: np.ndarray, y_prev: np.ndarray, r_prev: np.ndarray,
-              gw: np.ndarray) -> Solved:
+              gw: np.ndarray, q_body: np.ndarray | None = None, W: np.ndarray | None = None) -> Solved:
         """Solve one increment from the converged state (``d_prev``, ``y_prev``, ``r_prev``, wear gap ``gw``).
+
+        ``q_body`` and ``W`` replace the elastic body's contribution ``s H K^-1 f`` and Delassus matrix
+        (a Newton iteration of an elastic-plastic body passes ``H (u - K^-1 R(u))`` and its W).
 
         Raises:
             SimulationError: local solver failure or unreachable prescribed force.
         """
         n, t = self.frame[0], self.frame[1]
+        Wm = self.W if W is None else W
         d = np.array(d_prev, dtype=float)
         r_warm = r_prev.copy()
         count = {"solves": 0, "iterations": 0}
@@ -198,8 +203,8 @@ class IncrementSolver:
         def local(dn: float, dt: float):
             nonlocal r_warm
             D = dn * n + dt * t
-            q, q_abs = self._q(D, step.pressure, y_prev, gw)
-            res = local_solvers.solve(self.W, q, self.mu, self.dim, method=self.method, tol=self.tol,
+            q, q_abs = self._q(D, step.pressure, y_prev, gw, q_body)
+            res = local_solvers.solve(Wm, q, self.mu, self.dim, method=self.method, tol=self.tol,
                                       max_iter=self.max_iter, r0=r_warm)
             count["solves"] += 1
             count["iterations"] += res.iterations
@@ -240,7 +245,7 @@ class IncrementSolver:
             raise SimulationError(f"{where}: {exc}") from None
 
         res = last["res"]
-        y = self.W @ res.r + last["q_abs"]
+        y = Wm @ res.r + last["q_abs"]
         return Solved(res.r.copy(), res.x.copy(), y, last["d"].copy(), count["iterations"], res.error,
                       count["solves"])
 
