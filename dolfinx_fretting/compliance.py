@@ -494,10 +494,14 @@ class DelassusOperator:
         s = S.size
         # Bt (N x N): row j lists the rows i of column j of K^-1 wanted; rows S with columns S.
         if rank0:
-            indptr = np.zeros(N + 1, dtype=PETSc.IntType)
-            indptr[S + 1] = s
-            indptr = np.cumsum(indptr, dtype=PETSc.IntType)
-            indices = np.tile(S.astype(PETSc.IntType), s)
+            # The request pattern depends on S only: built once and reused by every later build.
+            key = (N, S.tobytes())
+            if getattr(self, "_pattern_key", None) != key:
+                indptr = np.zeros(N + 1, dtype=PETSc.IntType)
+                indptr[S + 1] = s
+                self._pattern = (np.cumsum(indptr, dtype=PETSc.IntType), np.tile(S.astype(PETSc.IntType), s))
+                self._pattern_key = key
+            indptr, indices = self._pattern
             values = np.zeros(s * s, dtype=PETSc.ScalarType)
             nrows = N
         else:
@@ -526,7 +530,11 @@ class DelassusOperator:
             if not rank0:
                 return None
             ai, aj, av = Bt.getValuesCSR()
-            inv = sp.csr_matrix((av, aj, ai), shape=(N, N))[S][:, S].toarray()
+            # Rows S of Bt hold, in order, the s entries of columns S (PETSc keeps the sorted pattern we
+            # gave): the s x s block is the values array itself.
+            if av.size != s * s or not np.array_equal(aj[ai[S[0]]:ai[S[0]] + s], S):
+                raise DelassusError("MatMumpsGetInverse returned an unexpected sparsity pattern")
+            inv = av.reshape(s, s)
             self.stats["selected_entries"] = int(s * s)
             return HS @ (HS @ inv.T).T  # H_S Kinv_SS H_S^T with sparse H_S
         finally:

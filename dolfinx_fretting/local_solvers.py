@@ -139,6 +139,19 @@ def project_coulomb(r: np.ndarray, mu: float) -> np.ndarray:
     return out.reshape(r.shape)
 
 
+@numba.njit(cache=True)
+def _project_all(r: np.ndarray, mu: np.ndarray, dim: int) -> None:
+    """Project every contact's block of ``r`` onto its cone, in place."""
+    for a in range(mu.size):
+        o = a * dim
+        t2 = r[o + 2] if dim == 3 else 0.0
+        pn, p1, p2 = _project(r[o], r[o + 1], t2, mu[a])
+        r[o] = pn
+        r[o + 1] = p1
+        if dim == 3:
+            r[o + 2] = p2
+
+
 def de_saxce_x(x: np.ndarray, mu: float | np.ndarray) -> np.ndarray:
     """De Saxce's modified relative displacement ``x + mu |x_t| e_n`` (paper eq. 22).
 
@@ -466,8 +479,7 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     rho_vec = rho_err * (1.0 if rho is None else float(rho))
     if r0 is not None:
         # A warm start from another problem may lie outside the cones.
-        for a in range(nc):
-            r[a * dim:(a + 1) * dim] = project_coulomb(r[a * dim:(a + 1) * dim], mu_arr[a])
+        _project_all(r, mu_arr, dim)
 
     empty_i = np.zeros(1, dtype=np.int64)
     empty_f = np.zeros(1)

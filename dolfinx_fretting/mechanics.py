@@ -33,10 +33,12 @@ class ElasticProblem:
         fixed: Names of facet tags whose displacement is zero.
         delassus_method: Route for W (see :class:`DelassusOperator`).
         petsc_options: Extra PETSc options for the factorisation.
+        quadrature_degree: Quadrature degree of K (default: estimated by UFL).
     """
 
     def __init__(self, body: BodyMesh, material: LinearElastic, fixed: list[str],
-                 delassus_method: str = "auto", petsc_options: dict | None = None):
+                 delassus_method: str = "auto", petsc_options: dict | None = None,
+                 quadrature_degree: int | None = None):
         self.body = body
         self.material = material
         msh = body.mesh
@@ -58,7 +60,11 @@ class ElasticProblem:
         self.fixed_nodes = np.unique(np.concatenate(fixed_nodes)) if fixed_nodes else np.zeros(0, np.int32)
 
         u, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
-        self._a = fem.form(ufl.inner(self.sigma(u), self.epsilon(v)) * ufl.dx)
+        # An elastic-plastic body integrates its stresses with a fixed rule (plasticity.PlasticState): K
+        # then uses the same one, so that W and the elastic iteration matrix are exact where nothing yields.
+        dx = ufl.dx if quadrature_degree is None else ufl.dx(metadata={"quadrature_degree": quadrature_degree,
+                                                                      "quadrature_scheme": "default"})
+        self._a = fem.form(ufl.inner(self.sigma(u), self.epsilon(v)) * dx)
         self.K = fem.petsc.assemble_matrix(self._a, bcs=self.bcs)
         self.K.assemble()
         self.delassus = DelassusOperator(self.K, self.comm, method=delassus_method,

@@ -184,7 +184,9 @@ class ElastoplasticBody:
     increment that stays elastic is exact: only delta_1 is asked of it). ``K`` is the elastic stiffness
     with its one factorisation and W (``tangent = "elastic"``, the initial-stiffness method: no
     refactorisation), or the consistent tangent refactorised with W rebuilt every iteration
-    (``"consistent"``, full Newton). The wear gap is held fixed during the loop (the caller updates it
+    (``"consistent"``, full Newton), or the last factorised matrix kept while it contracts the residual
+by 10x an iteration and the consistent tangent refactorised when it does not (``"adaptive"``: in shaken-down
+cycles most increments need no refactorisation). The wear gap is held fixed during the loop (the caller updates it
     after convergence), and the plastic state is committed by the caller only after convergence.
 
     Args:
@@ -224,6 +226,10 @@ class ElastoplasticBody:
         self._HS = self.H[:, self.rstart:self.rend].tocsr()
         self._tangent_op = None
         self._KT = None
+        self._W_tangent = None
+        #: Adaptive tangent: refactorise when an iteration reduces delta_1 by less than this factor.
+        self.contraction = 0.1
+        self.refactorizations = 0
         self.last_info: dict = {}
 
     # Linear algebra helpers ---------------------------------------------------------------------------
@@ -248,10 +254,14 @@ class ElastoplasticBody:
     def _contact_force(self, r: np.ndarray) -> np.ndarray:
         return (self.HT @ r)[self.rstart:self.rend]
 
-    def _operator(self):
-        """(factorised operator, W) of the iteration matrix."""
-        if self.tangent == "elastic":
+    def _operator(self, refresh: bool):
+        """(factorised operator, W) of the iteration matrix; ``refresh``: refactorise the current tangent."""
+        if self.tangent == "elastic" or ((self._KT is None or self._W_tangent is None) and not refresh):
             return self.problem.delassus, self.W_elastic
+        if self.tangent == "consistent" and not refresh:
+            return self.problem.delassus, self.W_elastic
+        if not refresh:
+            return self._tangent_op, self._W_tangent
         from .compliance import DelassusOperator
 
         if self._KT is None:
@@ -263,7 +273,9 @@ class ElastoplasticBody:
             self.state.assemble_tangent(self._KT, self.problem.bcs)
             self._tangent_op.refactorize()
         W = self._tangent_op.build(self.H)
-        return self._tangent_op, self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
+        self._W_tangent = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
+        self.refactorizations += 1
+        return self._tangent_op, self._W_tangent
 
     # The increment ------------------------------------------------------------------------------------
     def increment(self, local_solve, pressure: float) -> tuple:
@@ -286,9 +298,14 @@ class ElastoplasticBody:
         solved = None
         R = self._residual(u_i, pressure)
         n = self.rend - self.rstart
+        # The first iteration is the elastic predictor (the exact tangent of an increment that stays
+        # elastic: one iteration, no refactorisation); "consistent" refactorises from the second on.
+        refresh = False
+        refreshed_at = -1
         for it in range(self.max_iter):
-            op, W = self._operator() if (it == 0 or self.tangent != "elastic") else (self.problem.delassus,
-                                                                                    self.W_elastic)
+            op, W = self._operator(refresh)
+            if refresh:
+                refreshed_at = it
             # u_pred = u_i - K^-1 R
             z = fem.Function(self.problem.V)
             self._solve_into(op, R, z)
@@ -324,6 +341,17 @@ class ElastoplasticBody:
                 self.last_info = {"newton_iterations": it + 1, "delta_1": d1, "delta_2": d2,
                                   "yielded_points": int(sums[4])}
                 return solved, self.last_info
+            # Which matrix next: "consistent" refactorises every iteration; "adaptive" keeps the last
+            # factorised matrix (elastic K at first) while it contracts the residual fast enough, and
+            # refactorises the consistent tangent when it does not (at most once per iteration).
+            if self.tangent == "consistent":
+                refresh = True
+            elif self.tangent == "adaptive":
+                slow = len(history) >= 2 and history[-1][1] > self.contraction * history[-2][1]
+                refresh = (slow or (it == 0 and d1 > 1e3 * self.delta_1)) and refreshed_at != it
+            else:
+                refresh = False
+        self._W_tangent = None  # a failed try's tangent is no start for the next one: back to elastic K
         table = "; ".join(f"it {i}: delta_1 = {a:.2e}, delta_2 = {b:.2e}, {y} yielded points"
                           for i, a, b, y in history[-5:])
         raise NewtonError(f"Newton did not converge in {len(history)} iterations (tolerances delta_1 = "

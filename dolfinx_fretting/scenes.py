@@ -86,13 +86,49 @@ class GeometrySettings(_Section):
 
 
 class MaterialSettings(_Section):
-    """Linear elastic material (MPa)."""
+    """Linear elastic, or von Mises elastic-plastic with linear isotropic hardening (MPa).
 
-    model: Literal["elastic"] = "elastic"
+    ``hardening_modulus`` is the *plastic* modulus H of sigma_y(p) = yield_stress + H p (p the equivalent
+    plastic strain); the slope E_t of a uniaxial stress-strain curve past yield is accepted instead under
+    its own key ``tangent_modulus`` (H = E E_t / (E - E_t)).
+    """
+
+    model: Literal["elastic", "elastoplastic"] = "elastic"
     #: Young's modulus (MPa).
     E: float = Field(115000.0, gt=0)
     #: Poisson's ratio; plane strain needs -1 < nu < 0.5.
     nu: float = Field(0.342, gt=-1.0, lt=0.5)
+    #: Initial yield stress sigma_y0 (MPa), elastoplastic only.
+    yield_stress: float | None = Field(None, gt=0)
+    #: Plastic hardening modulus H (MPa), elastoplastic only.
+    hardening_modulus: float | None = Field(None, ge=0)
+    #: Uniaxial tangent modulus E_t (MPa), 0 <= E_t < E, instead of hardening_modulus.
+    tangent_modulus: float | None = Field(None, ge=0)
+
+    @model_validator(mode="after")
+    def _plastic_keys(self) -> MaterialSettings:
+        plastic = ("yield_stress", "hardening_modulus", "tangent_modulus")
+        if self.model == "elastic":
+            given = [k for k in plastic if getattr(self, k) is not None]
+            if given:
+                raise ValueError(f"material.{given[0]} is given but material.model = 'elastic'; set "
+                                 "material.model = 'elastoplastic' or remove it")
+            return self
+        if self.yield_stress is None:
+            raise ValueError("material.yield_stress (MPa, > 0) is required with material.model = 'elastoplastic'")
+        if (self.hardening_modulus is None) == (self.tangent_modulus is None):
+            raise ValueError("material: give exactly one of material.hardening_modulus (plastic modulus H, MPa, "
+                             ">= 0) and material.tangent_modulus (uniaxial slope E_t, MPa, 0 <= E_t < E)")
+        if self.tangent_modulus is not None and self.tangent_modulus >= self.E:
+            raise _range_error("material.tangent_modulus", self.tangent_modulus, f"0 <= E_t < E = {self.E} MPa")
+        return self
+
+    @property
+    def plastic_modulus(self) -> float:
+        """H of sigma_y(p) = sigma_y0 + H p (from ``tangent_modulus`` if that was given)."""
+        if self.hardening_modulus is not None:
+            return self.hardening_modulus
+        return self.E * self.tangent_modulus / (self.E - self.tangent_modulus)
 
 
 class ContactSettings(_Section):
@@ -237,6 +273,20 @@ class SolverSettings(_Section):
     #: 2D compiled loop: first try the previous cycle's contact pattern at each increment (a cached LU
     #: solve, accepted only if it meets ``local_tol``), then Uzawa sweeps if it does not.
     pattern_reuse: bool = True
+    #: Elastic-plastic bodies: the Newton iteration matrix, ``"elastic"`` (the factorised elastic K and its
+    #: W throughout: no refactorisation), ``"consistent"`` (tangent refactorised, W rebuilt every iteration)
+    #: or ``"adaptive"`` (the last factorised matrix while it contracts the residual 10x per iteration).
+    newton_tangent: Literal["elastic", "consistent", "adaptive"] = "consistent"
+    newton_max_iter: int = Field(60, ge=1)
+    #: Newton tolerances: out-of-balance force relative to the forces in play (delta_1), last correction
+    #: relative to the increment's displacement (delta_2).
+    newton_residual_tol: float = Field(1e-8, gt=0, lt=1)
+    newton_displacement_tol: float = Field(1e-6, gt=0, lt=1)
+    #: Quadrature degree of the stiffness and stresses; default: UFL's estimate (elastic), 2 (elastic-plastic:
+    #: 2 x 2 Gauss points per quadrilateral carry the plastic state).
+    quadrature_degree: int | None = Field(None, ge=1, le=8)
+    #: Halvings of an increment whose Newton loop fails before the run stops with a diagnostic.
+    max_cutbacks: int = Field(4, ge=0, le=20)
     #: Extra PETSc options for the factorisation (prefix ``dolfinx_fretting_delassus_`` is added).
     petsc_options: dict[str, str | int | float | bool] = Field(default_factory=dict)
 
@@ -297,6 +347,20 @@ class Scene(_Section):
         if len(c.plane_normal) != 2:
             raise _range_error("contact.plane_normal", c.plane_normal,
                                "a 2-vector: the geometries built in are two-dimensional (plane strain)")
+        return self
+
+    @model_validator(mode="after")
+    def _plastic_tolerances(self) -> Scene:
+        # An elastic-plastic body in sliding contact is soft in the plastic shear mode: the noise of a
+        # force control at 1e-8 shows up as displacement corrections of ~1e-3 of an increment and Newton's
+        # delta_2 test cannot pass (measured on cylinder-flat). Unless the scene sets them, tighten the
+        # load control and the local solver for elastic-plastic scenes.
+        if self.material.model == "elastoplastic":
+            sv = self.solver
+            if "force_tol" not in sv.model_fields_set:
+                sv.force_tol = 1e-11
+            if "local_tol" not in sv.model_fields_set:
+                sv.local_tol = 1e-12
         return self
 
     @property

@@ -93,10 +93,14 @@ class ContactModel:
         self.obstacle = RigidPlane(np.array(scene.contact.plane_point), np.array(scene.contact.plane_normal))
 
         material = LinearElastic(scene.material.E, scene.material.nu)
+        self.quadrature_degree = scene.solver.quadrature_degree
+        if self.quadrature_degree is None and scene.material.model == "elastoplastic":
+            self.quadrature_degree = 2
         t0 = time.perf_counter()
         self.problem = ElasticProblem(self.body, material, fixed=fixed,
                                       delassus_method=scene.solver.delassus_method,
-                                      petsc_options=scene.solver.petsc_options)
+                                      petsc_options=scene.solver.petsc_options,
+                                      quadrature_degree=self.quadrature_degree)
         self.timings["assemble_s"] = time.perf_counter() - t0
 
         facets = self.body.facet_tags.find(self.body.tags[surface])
@@ -125,6 +129,20 @@ class ContactModel:
         if scene.loading.tangential_kind == "pressure":
             self.face_load = self.problem.face_pressure_load(scene.loading.pressure_face)
             self.q_f = self.problem.local_response(self.contact.H, self.face_load)  # allreduced: replicated
+
+        # Elastic-plastic: Newton with the contact inside (plasticity.ElastoplasticBody); nothing plastic is
+        # built for an elastic scene.
+        self.plastic = None
+        if scene.material.model == "elastoplastic":
+            from .materials import J2Plasticity
+            from .plasticity import ElastoplasticBody
+
+            m, sv = scene.material, scene.solver
+            law = J2Plasticity(m.E, m.nu, m.yield_stress, m.plastic_modulus)
+            self.plastic = ElastoplasticBody(self.problem, law, self.contact.H, self.W, self.face_load,
+                                             tangent=sv.newton_tangent, max_iter=sv.newton_max_iter,
+                                             delta_1=sv.newton_residual_tol, delta_2=sv.newton_displacement_tol,
+                                             quadrature_degree=self.quadrature_degree)
 
     @property
     def n_dofs(self) -> int:
@@ -357,54 +375,158 @@ class _Run:
                       meta.get("last_cycle_row"))
         if st.gw.size != self.model.contact.nc:
             raise SimulationError("--resume: the checkpoint's contact set does not match the scene's mesh")
+        if meta.get("last_targets") is not None:
+            self.last_targets = tuple(meta["last_targets"])
+        body = self.model.plastic
+        if body is not None:
+            if meta.get("ranks") != self.comm.size:
+                raise SimulationError(f"--resume: an elastic-plastic run checkpointed on {meta.get('ranks')} "
+                                      f"rank(s) resumes on the same number (here {self.comm.size})")
+            i = self.comm.rank
+            body.u.x.array[:] = ck[f"u_{i}"]
+            body.state.eps_p, body.state.p = ck[f"eps_p_{i}"].copy(), ck[f"p_{i}"].copy()
+            body.state.sigma = body.state.sigma  # recomputed at the next update from eps and eps_p
         return st, {k: int(v) for k, v in meta["sizes"].items()}, bool(meta["xdmf_started"])
+
+    def _plastic_arrays(self) -> dict[str, np.ndarray]:
+        """Committed displacement and plastic state of every rank (on rank 0), for the checkpoint."""
+        body = self.model.plastic
+        if body is None:
+            return {}
+        parts = self.comm.gather((body.u.x.array.copy(), body.state.eps_p, body.state.p), root=0)
+        if not self.rank0:
+            return {}
+        out = {}
+        for i, (u, ep, p) in enumerate(parts):
+            out[f"u_{i}"], out[f"eps_p_{i}"], out[f"p_{i}"] = u, ep, p
+        return out
 
     def checkpoint(self) -> None:
         sizes = self.writer.sizes()
+        plastic = self._plastic_arrays()
         if self.rank0:
             st = self.state
             meta = {"identity": _scene_identity(self.scene), "increment": st.increment, "cycle": st.cycle,
                     "energy": st.energy, "local_iterations": st.local_iterations, "sizes": sizes,
                     "xdmf_started": self.writer.xdmf_started, "last_row": st.last_row,
-                    "last_cycle_row": st.last_cycle_row, "written": time.strftime("%Y-%m-%dT%H:%M:%S")}
+                    "last_cycle_row": st.last_cycle_row, "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
+                    "last_targets": getattr(self, "last_targets", None), "ranks": self.comm.size}
             tmp = self.out / (CHECKPOINT + ".tmp.npz")
             np.savez(tmp, meta=json.dumps(meta, default=_plain), d=st.d, y=st.y, r=st.r, gw=st.gw,
-                     r_warm=st.r_warm if st.r_warm is not None else np.zeros(0))
+                     r_warm=st.r_warm if st.r_warm is not None else np.zeros(0), **plastic)
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
             os.replace(tmp, self.out / CHECKPOINT)
         self.last_checkpoint = time.perf_counter()
 
     # Increments -----------------------------------------------------------------------------------------
-    def _python_increment(self, step: LoadStep) -> tuple[dict[str, Any], np.ndarray, np.ndarray, np.ndarray]:
-        """Solve and commit one increment by the Python path; returns (history row, x, y, states)."""
+    def _local(self, step: LoadStep, r_warm: np.ndarray, q_body: np.ndarray | None = None,
+               W: np.ndarray | None = None) -> Solved:
+        """The contact solve of an increment on rank 0, broadcast; raises SimulationError on failure."""
         st = self.state
         solved, failure = None, None
         if self.rank0:
             try:
-                solved = self.solver.solve(step, st.d, st.y, st.r, st.gw)
+                solved = self.solver.solve(step, st.d, st.y, r_warm, st.gw, q_body=q_body, W=W)
             except SimulationError as exc:
                 failure = str(exc)
         if self.comm.size > 1:
             solved, failure = self.comm.bcast((solved, failure), root=0)
         if failure is not None:
             raise SimulationError(failure)
+        return solved
+
+    def _commit(self, step: LoadStep, solved: Solved, extra: dict[str, Any] | None = None,
+                sums: np.ndarray | None = None) -> tuple[dict[str, Any], np.ndarray]:
+        """Archard update and bookkeeping of a converged (sub-)increment; returns (history row, states)."""
+        st = self.state
         cs = self.model.contact
         states = np.empty(cs.nc, dtype=np.int8)
         row = np.empty(len(ROW_FIELDS))
         gw = st.gw.copy()
         commit_increment(solved.r, solved.x, solved.y, self.mu, cs.dim, cs.tributary, cs.abscissa,
                          self.k if step.cycle > 0 else self.k_once, gw, states, row)
-        st.increment += 1
         st.d, st.y, st.r, st.gw = solved.d, solved.y, solved.r, gw
         st.energy += row[ROW["dissipated_energy"]]
         st.local_iterations += solved.iterations
+        if sums is not None:  # energy and wear of the earlier sub-increments of a cut increment
+            row[ROW["dissipated_energy"]] += sums[0]
+            row[ROW["wear_area_increment"]] += sums[1]
         hist = {"increment": step.increment, "cycle": step.cycle, "step": step.step, "stage": step.stage,
                 "normal_displacement": solved.d[0], "tangential_displacement": solved.d[1],
                 "face_pressure": step.pressure, **dict(zip(ROW_FIELDS, row.tolist())),
                 "local_iterations": solved.iterations, "local_error": solved.error,
-                "load_solves": solved.load_solves}
+                "load_solves": solved.load_solves, "newton_iterations": 1, "cutbacks": 0, "yielded_points": 0,
+                **(extra or {})}
         st.last_row = hist
+        return hist, states
+
+    def _python_increment(self, step: LoadStep) -> tuple[dict[str, Any], np.ndarray, np.ndarray, np.ndarray]:
+        """Solve and commit one increment by the Python path; returns (history row, x, y, states)."""
+        if self.model.plastic is not None:
+            return self._plastic_increment(step)
+        st = self.state
+        solved = self._local(step, st.r)
+        hist, states = self._commit(step, solved)
+        st.increment += 1
+        self.last_targets = (step.normal, step.tangential, step.pressure)
+        return hist, solved.x, solved.y, states
+
+    def _plastic_increment(self, step: LoadStep) -> tuple[dict[str, Any], np.ndarray, np.ndarray, np.ndarray]:
+        """Newton with the contact inside (paper Fig. 4); an increment that fails is halved up to
+        ``solver.max_cutbacks`` times, each converged sub-increment committed (plastic state, wear)."""
+        from dataclasses import replace
+
+        from .plasticity import NewtonError
+
+        body = self.model.plastic
+        st = self.state
+        start = getattr(self, "last_targets", None) or (0.0, 0.0, 0.0)
+        end = (step.normal, step.tangential, step.pressure)
+        done, size = 0.0, 1.0           # fraction of the increment committed, size of the next try
+        cuts = newton = local_its = 0
+        sums = np.zeros(2)
+        while True:
+            f = min(1.0, done + size)
+            sub = replace(step, **{k: a + f * (b - a) for k, a, b in zip(("normal", "tangential", "pressure"),
+                                                                        start, end)})
+            r_warm = [st.r]
+
+            def local_solve(q_body, W, sub=sub, r_warm=r_warm):
+                solved = self._local(sub, r_warm[0], q_body, W)
+                r_warm[0] = solved.r
+                return solved
+
+            try:
+                solved, info = body.increment(local_solve, sub.pressure)
+            except (NewtonError, SimulationError) as exc:
+                if cuts >= self.scene.solver.max_cutbacks:
+                    where = f"increment {step.increment}" + (f" (cycle {step.cycle}, step {step.step})"
+                                                             if step.cycle else f" ({step.stage})")
+                    loaded = self.model.contact.abscissa[st.r[0::self.model.contact.dim] > 0]
+                    span = f"{loaded.min():.4g} .. {loaded.max():.4g} mm" if loaded.size else "none"
+                    raise SimulationError(
+                        f"{where}: no convergence after {cuts} cut-backs (last try: {done:.4g} -> {f:.4g} of the "
+                        f"increment): {exc}. Loaded contacts of the last converged state: {loaded.size} "
+                        f"({span}). Nothing of this increment is committed; raise solver.newton_max_iter or "
+                        "solver.max_cutbacks, or use more increments") from None
+                cuts += 1
+                size *= 0.5
+                continue
+            body.commit()
+            newton += info["newton_iterations"]
+            local_its += solved.iterations
+            done = f
+            if done < 1.0:  # a sub-increment: commit its wear and state, keep its energy for the row
+                self._commit(sub, solved)
+                sums += (st.last_row["dissipated_energy"], st.last_row["wear_area_increment"])
+                continue
+            solved.iterations = local_its
+            hist, states = self._commit(step, solved, {"newton_iterations": newton, "cutbacks": cuts,
+                                                       "yielded_points": info["yielded_points"]}, sums)
+            break
+        st.increment += 1
+        self.last_targets = end
         return hist, solved.x, solved.y, states
 
     def _profile(self, hist: dict[str, Any], x: np.ndarray, y: np.ndarray, r: np.ndarray, gw: np.ndarray,
@@ -418,9 +540,29 @@ class _Run:
     def _fields(self, t: float, r: np.ndarray, pressure: float) -> None:
         if not self.scene.output.xdmf:
             return
+        if self.model.plastic is not None:
+            self.writer.fields(t, self._plastic_fields())
+            return
         p = self.model.problem
         p.solve_contact_response(self.model.contact.H, r, self.model.face_load, pressure)
         self.writer.fields(t, [p.u, p.von_mises()])
+
+    def _plastic_fields(self) -> list:
+        """Displacement, cell-averaged von Mises stress and equivalent plastic strain (committed state)."""
+        from dolfinx import fem
+
+        body = self.model.plastic
+        if not hasattr(self, "_dg0"):
+            Q = fem.FunctionSpace(self.model.problem.mesh, ("DG", 0))
+            self._dg0 = (fem.Function(Q, name="von_mises"), fem.Function(Q, name="equivalent_plastic_strain"))
+        vm, peq = self._dg0
+        ps = body.state
+        n = ps.cells.size
+        vm.x.array[:n] = ps.cell_average(ps.von_mises())
+        peq.x.array[:n] = ps.cell_average(ps.p)
+        vm.x.scatter_forward()
+        peq.x.scatter_forward()
+        return [body.u, vm, peq]
 
     def _say_increment(self, h: dict[str, Any]) -> None:
         self.say(f"[{self.scene.name}] inc {h['increment']:4d} {h['stage']:10s} P = {h['normal_force']:.6g} "
@@ -443,7 +585,8 @@ class _Run:
         lo = sc.loading
         N = lo.cycles
         n = lo.increments_per_cycle
-        use_kernel = sc.solver.cycle_kernel and not (lo.normal_force_controlled or lo.tangential_force_controlled)
+        use_kernel = sc.solver.cycle_kernel and not (lo.normal_force_controlled or lo.tangential_force_controlled
+                                                     or self.model.plastic is not None)
         self.cycle_mode = "compiled" if use_kernel else "python"
         every = sc.output.history_every
         loop_cycles = set(sc.output.loop_cycles)
@@ -491,7 +634,7 @@ class _Run:
         n = hists["increment"].size
         head = list(zip(hists["increment"].tolist(), [cycle] * n, hists["step"].tolist()))
         cols = ["normal_displacement", "tangential_displacement", "face_pressure", *ROW_FIELDS,
-                "local_iterations", "local_error", "load_solves"]
+                "local_iterations", "local_error", "load_solves", "newton_iterations", "cutbacks", "yielded_points"]
         self.writer.history_block(head, np.column_stack([hists[c] for c in cols]), "cycle")
 
     def _cycle_row(self, cycle: int, h: dict[str, np.ndarray], wall: float) -> dict[str, Any]:
@@ -589,7 +732,8 @@ class _Run:
         h = {name: hist[:, i] for i, name in enumerate(ROW_FIELDS)}
         h.update(increment=np.arange(first, first + n), step=np.arange(1, n + 1), normal_displacement=dn,
                  tangential_displacement=dt, face_pressure=s, local_iterations=hist[:, nf].astype(int),
-                 local_error=hist[:, nf + 1], load_solves=np.ones(n, dtype=int))
+                 local_error=hist[:, nf + 1], load_solves=np.ones(n, dtype=int), newton_iterations=np.ones(n, dtype=int),
+                 cutbacks=np.zeros(n, dtype=int), yielded_points=np.zeros(n, dtype=int))
         st.last_row = {"increment": first + n - 1, "cycle": cycle, "step": n, "stage": "cycle",
                        **{k: (v[-1].item() if hasattr(v[-1], "item") else v[-1]) for k, v in h.items()
                           if k not in ("increment", "step")}}
@@ -612,8 +756,16 @@ class _Run:
             "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
             "wear_law": sc.wear.law, "wear_k": sc.wear.k, "wear_acceleration": sc.wear.acceleration,
             "wear_k_effective": self.k, "equivalent_cycles": st.cycle * sc.wear.acceleration,
-            "dissipated_energy": st.energy,
+            "dissipated_energy": st.energy, "material_model": sc.material.model,
+            "obstacle": "rigid plane (the flat is rigid: two deformable bodies are not modelled yet)"
+            if sc.contact.obstacle == "rigid_plane" else sc.contact.obstacle,
         }
+        if model.plastic is not None:
+            ps = model.plastic.state
+            local = np.array([ps.p.max(initial=0.0), ps.von_mises().max(initial=0.0)])
+            gmax = self.comm.allreduce(local, op=MPI.MAX)
+            summary.update({"max_equivalent_plastic_strain": float(gmax[0]), "max_von_mises": float(gmax[1]),
+                            "newton_tangent": sc.solver.newton_tangent})
         if sc.loading.cycles > 0:
             summary["cycle_path"] = getattr(self, "cycle_mode", "python")
             if hasattr(self, "pattern_cache"):
@@ -705,6 +857,8 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
             f"contact width = {summary.get('contact_width', 0):.4g} mm, stick width = "
             f"{summary.get('stick_width', 0):.4g} mm, max wear depth = {summary.get('max_wear_depth', 0):.4g} mm, "
             f"{summary['wall_time_s']:.2f} s -> {out}")
+    if run.model.plastic is not None:
+        run.model.plastic.destroy()
     run.model.problem.destroy()
     if error is not None:
         raise SimulationError(error)

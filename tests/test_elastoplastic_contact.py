@@ -1,0 +1,98 @@
+"""Elastic-plastic bodies in frictional contact: Newton with the contact inside (paper Fig. 4)."""
+
+import numpy as np
+import pytest
+
+from dolfinx_fretting import plasticity
+from dolfinx_fretting import simulation as sim
+from dolfinx_fretting.plots import read_table
+from dolfinx_fretting.scenes import SceneError, load_scene
+from dolfinx_fretting.simulation import run_scene
+
+# Cylinder on a rigid flat, coarse contact mesh, one short gross-slip cycle.
+BASE = ["geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=1",
+        "loading.increments_per_cycle=8", "output.xdmf=false", "output.plots=false",
+        "output.contact_profiles=false", "wear.acceleration=1000"]
+PLASTIC = ["material.model='elastoplastic'", "material.hardening_modulus=7230"]
+KEYS = ("normal_force", "tangential_force", "max_pressure", "max_wear_depth", "wear_area", "dissipated_energy")
+
+
+def test_huge_yield_stress_reproduces_the_elastic_run(tmp_path):
+    """sigma_y far above any stress: the Newton path (quadrature-point stresses, residual, contact inside
+    the loop) must give the elastic path's answer, to the local and load-control tolerances."""
+    common = BASE + ["solver.local_tol=1e-12", "solver.force_tol=1e-11", "solver.quadrature_degree=2"]
+    elastic = run_scene(load_scene("cylinder-flat", common), tmp_path / "e", quiet=True)
+    plastic = run_scene(load_scene("cylinder-flat", common + PLASTIC + ["material.yield_stress=1e12"]),
+                        tmp_path / "p", quiet=True)
+    assert plastic["material_model"] == "elastoplastic" and plastic["max_equivalent_plastic_strain"] == 0.0
+    for key in KEYS:
+        assert plastic[key] == pytest.approx(elastic[key], rel=1e-7), key
+    # An increment that stays elastic is solved exactly by the first iteration (residual at rounding).
+    hist = read_table(tmp_path / "p" / "history.csv")
+    assert np.all(hist["newton_iterations"] == 1)
+
+
+def test_plasticity_lowers_the_peak_pressure(tmp_path):
+    """Gross slip at mu = 0.9 yields the surface layer (Table 2 material): the peak pressure at the end of
+    the cycle falls below the elastic one, as in the paper's Fig. 13 (747 vs ~830 MPa there)."""
+    elastic = run_scene(load_scene("cylinder-flat", BASE), tmp_path / "e", quiet=True)
+    plastic = run_scene(load_scene("cylinder-flat", BASE + PLASTIC + ["material.yield_stress=840"]),
+                        tmp_path / "p", quiet=True)
+    assert plastic["max_equivalent_plastic_strain"] > 1e-3
+    assert plastic["max_pressure"] < 0.95 * elastic["max_pressure"]
+    hist = read_table(tmp_path / "p" / "history.csv")
+    assert hist["yielded_points"].max() > 0 and hist["newton_iterations"].max() > 1
+
+
+def test_cut_back_recovers_and_equals_small_increments(tmp_path, monkeypatch):
+    """Every increment's first (full-size) Newton try is made to fail: each is cut in two halves, and the
+    committed history equals a run with twice as many increments (the same load points)."""
+    fresh = {"flag": False}
+    increment = plasticity.ElastoplasticBody.increment
+    plastic_increment = sim._Run._plastic_increment
+
+    def failing_first_try(self, local_solve, pressure):
+        if fresh["flag"]:
+            fresh["flag"] = False
+            raise plasticity.NewtonError("deliberately too large")
+        return increment(self, local_solve, pressure)
+
+    def mark(self, step):
+        fresh["flag"] = True
+        return plastic_increment(self, step)
+
+    yielding = BASE + PLASTIC + ["material.yield_stress=840"]
+    small = run_scene(load_scene("cylinder-flat", [*yielding, "loading.normal_increments=4",
+                                                   "loading.increments_per_cycle=16"]), tmp_path / "s", quiet=True)
+    monkeypatch.setattr(plasticity.ElastoplasticBody, "increment", failing_first_try)
+    monkeypatch.setattr(sim._Run, "_plastic_increment", mark)
+    cut = run_scene(load_scene("cylinder-flat", yielding), tmp_path / "c", quiet=True)
+    hist = read_table(tmp_path / "c" / "history.csv")
+    assert np.all(hist["cutbacks"] == 1)
+    for key in KEYS + ("max_equivalent_plastic_strain",):
+        # Same sequence of load points, each solved to delta_1 = 1e-8: equal to ~1e-7.
+        assert cut[key] == pytest.approx(small[key], rel=1e-6), key
+
+
+def test_newton_failure_is_reported(tmp_path):
+    scene = load_scene("cylinder-flat", BASE + PLASTIC + ["material.yield_stress=840", "solver.newton_max_iter=1",
+                                                          "solver.max_cutbacks=1", "solver.newton_tangent=elastic"])
+    with pytest.raises(sim.SimulationError, match=r"cycle 1, step \d+\): no convergence after 1 cut-backs"):
+        run_scene(scene, tmp_path, quiet=True)
+
+
+def test_plastic_scene_validation():
+    with pytest.raises(SceneError, match="material.yield_stress .* is required"):
+        load_scene("cylinder-flat", ["material.model='elastoplastic'", "material.hardening_modulus=1.0"])
+    with pytest.raises(SceneError, match="exactly one of material.hardening_modulus"):
+        load_scene("cylinder-flat", PLASTIC + ["material.yield_stress=840", "material.tangent_modulus=100"])
+    with pytest.raises(SceneError, match="material.tangent_modulus"):
+        load_scene("cylinder-flat", ["material.model='elastoplastic'", "material.yield_stress=840",
+                                     "material.tangent_modulus=2e5"])
+    with pytest.raises(SceneError, match="material.model = 'elastic'"):
+        load_scene("cylinder-flat", ["material.yield_stress=840"])
+    s = load_scene("cylinder-flat", ["material.model='elastoplastic'", "material.yield_stress=840",
+                                     "material.tangent_modulus=6830.0"])
+    # H = E E_t / (E - E_t)
+    assert s.material.plastic_modulus == pytest.approx(115000 * 6830 / (115000 - 6830))
+    assert s.solver.local_tol == 1e-12 and s.solver.force_tol == 1e-11
