@@ -1,4 +1,5 @@
-"""Command line: ``dolfinx-fretting scenes`` and ``dolfinx-fretting run SCENE --out DIR [--set k=v ...]``."""
+"""Command line: ``dolfinx-fretting scenes``, ``dolfinx-fretting run SCENE --out DIR [--set k=v ...]`` and
+``dolfinx-fretting compare DIR [DIR ...] --out OUT [--labels a,b] [--cycles 1,10,100] [--node 0.0]``."""
 
 from __future__ import annotations
 
@@ -26,7 +27,69 @@ def _parser() -> argparse.ArgumentParser:
     show = sub.add_parser("show", help="print a scene with every default filled in, as validated")
     show.add_argument("scene")
     show.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
+    cmp = sub.add_parser("compare",
+                         help="compare finished runs: pictures (paper Figs. 13-19) and a summary table")
+    cmp.add_argument("folders", nargs="+", metavar="DIR", help="output folders of the runs")
+    cmp.add_argument("--out", required=True, help="folder for the pictures and compare_summary.csv")
+    cmp.add_argument("--labels", type=_csv_list, default=None, metavar="A,B,...",
+                     help="one label per folder (default: the material model, plus ' k xN' for a wear "
+                          "acceleration N)")
+    cmp.add_argument("--cycles", type=_int_list, default=None, metavar="1,10,100",
+                     help="cycles of compare_cycles.png (default: the snapshot cycles the runs share)")
+    cmp.add_argument("--node", type=_node_position, default=0.0, metavar="X",
+                     help="position (mm) of the node of compare_node_history.png, or 'centre' (default 0.0)")
     return p
+
+
+def _csv_list(text: str) -> list[str]:
+    items = [t.strip() for t in text.split(",")]
+    if not all(items):
+        raise argparse.ArgumentTypeError(f"empty label in {text!r}")
+    return items
+
+
+def _int_list(text: str) -> list[int]:
+    try:
+        values = [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma-separated list of integers: {text!r}") from None
+    if not values or any(v < 1 for v in values):
+        raise argparse.ArgumentTypeError(f"cycles must be integers >= 1: {text!r}")
+    return values
+
+
+def _node_position(text: str) -> float | None:
+    if text.strip().lower() in ("centre", "center"):
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a position (mm) or 'centre': {text!r}") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"not a finite position: {text!r}")
+    return value
+
+
+def _compare(args: argparse.Namespace) -> int:
+    """``dolfinx-fretting compare``: pictures and summary table; 2 for bad input."""
+    from .compare import compare_runs, format_table, read_summary_csv
+
+    import warnings
+
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", RuntimeWarning)
+            written = compare_runs(args.folders, args.labels, args.out, cycles=args.cycles,
+                                   node_position=args.node)
+    except ValueError as exc:
+        print(f"dolfinx-fretting compare: {exc}", file=sys.stderr)
+        return 2
+    for w in caught:
+        print(f"dolfinx-fretting compare: warning: {w.message}", file=sys.stderr)
+    for path in written:
+        print(f"wrote {path}")
+    print(format_table(read_summary_csv(written[-1])))
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -37,6 +100,8 @@ def main(argv: list[str] | None = None) -> int:
         for name in sorted(builtin_scenes()):
             print(f"{name:20s} {_load(name).description}")
         return 0
+    if args.command == "compare":
+        return _compare(args)
     try:
         scene = load_scene(args.scene, args.overrides)
     except SceneError as exc:

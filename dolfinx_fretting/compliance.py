@@ -520,7 +520,7 @@ class DelassusOperator:
             if self.comm.size > 1:
                 F.setMumpsIcntl(21, 1)  # PETSc's MatSolve expects the distributed solution back
         # Every rank raises together if any rank failed.
-        worst = self.comm.allreduce(ierr, op=MPI.MAX if ierr >= 0 else MPI.MIN)
+        worst = self.comm.allreduce(abs(ierr), op=MPI.MAX)  # the same op on every rank
         bad = self.comm.allreduce(ierr != 0, op=MPI.LOR)
         try:
             if bad:

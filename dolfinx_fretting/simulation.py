@@ -620,7 +620,10 @@ class _Run:
             if progress is not None:
                 progress.update(1)
             now = time.perf_counter()
-            if keep or cycle == N or now - self.last_checkpoint >= sc.output.checkpoint_interval:
+            due = now - self.last_checkpoint >= sc.output.checkpoint_interval
+            if self.comm.size > 1:  # clocks differ between ranks: rank 0 decides for all (collective below)
+                due = self.comm.bcast(due, root=0)
+            if keep or cycle == N or due:
                 self.checkpoint()
             if progress is None and (keep or now - t_report > 10.0):
                 t_report = now
@@ -763,7 +766,8 @@ class _Run:
         if model.plastic is not None:
             ps = model.plastic.state
             local = np.array([ps.p.max(initial=0.0), ps.von_mises().max(initial=0.0)])
-            gmax = self.comm.allreduce(local, op=MPI.MAX)
+            gmax = np.empty(2)
+            self.comm.Allreduce(local, gmax, op=MPI.MAX)  # elementwise (the pickle-based max is not)
             summary.update({"max_equivalent_plastic_strain": float(gmax[0]), "max_von_mises": float(gmax[1]),
                             "newton_tangent": sc.solver.newton_tangent})
         if sc.loading.cycles > 0:
