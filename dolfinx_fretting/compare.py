@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
+from .plots import _length_unit, _mm
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -315,23 +316,6 @@ def _save(fig: Figure, path: Path) -> Path:
     return path
 
 
-def _length_unit(values: np.ndarray | float) -> tuple[float, str]:
-    """Factor and name of a length unit (mm, µm or nm) in which ``values`` (mm) read as plain numbers."""
-    arr = np.asarray(values, dtype=float).ravel()
-    arr = arr[np.isfinite(arr)]
-    m = float(np.max(np.abs(arr))) if arr.size else 0.0
-    if m >= 0.1 or m == 0.0:
-        return 1.0, "mm"
-    if m >= 1e-4:
-        return 1e3, "µm"
-    return 1e6, "nm"
-
-
-def _mm(x: float) -> str:
-    """A position (mm) for a label: round-off around 0 printed as 0."""
-    return f"{round(float(x), 9) + 0.0:.4g}"
-
-
 def _obstacle_note(runs: Sequence[RunData]) -> str:
     """The obstacle of the runs for a subtitle (one text when all runs agree, else per run)."""
     texts = {r.label: str(r.summary["obstacle"]) for r in runs if r.summary.get("obstacle")}
@@ -362,6 +346,22 @@ def _acceleration_note(runs: Sequence[RunData]) -> str:
         return ""
     return "wear acceleration: " + ", ".join(f"{k}: 1 simulated cycle = {v:g} physical cycles"
                                                for k, v in fast.items())
+
+
+def _profile_axes(ax_w, ax_p, window, unit: str, wear_all: np.ndarray, empty_text: str) -> None:
+    """Labels, grid, x window and y limits shared by the wear / pressure profile panels."""
+    ax_w.set_ylabel(f"wear gap ({unit})")
+    ax_p.set_ylabel("contact pressure P_n (MPa)")
+    for ax in (ax_w, ax_p):
+        ax.set_xlabel("position along the surface (mm)")
+        ax.grid(alpha=0.3)
+        if window is not None:
+            ax.set_xlim(*window)
+    ax_w.set_ylim(bottom=0.0 if np.nanmin(wear_all, initial=0.0) >= 0 else None)
+    if not np.any(wear_all):
+        ax_w.set_ylim(0.0, 1.0)
+        ax_w.text(0.5, 0.6, empty_text, transform=ax_w.transAxes, ha="center", color="0.4")
+    ax_p.set_ylim(bottom=0.0)
 
 
 def _x_window(curves: list[tuple[np.ndarray, np.ndarray]]) -> tuple[float, float] | None:
@@ -457,19 +457,7 @@ def plot_compare_first_cycle(path: Path, runs: Sequence[RunData]) -> Path | None
                                                         % len(_RUN_COLORS)]
         ax_p.plot(prof.position, p, "--", lw=1, color=colour, alpha=0.85,
                   label=f"end of preload ({who}): max P_n {np.nanmax(p):.4g} MPa")
-    window = _x_window(window_curves)
-    ax_w.set_ylabel(f"wear gap ({unit})")
-    ax_p.set_ylabel("contact pressure P_n (MPa)")
-    for ax in (ax_w, ax_p):
-        ax.set_xlabel("position along the surface (mm)")
-        ax.grid(alpha=0.3)
-        if window is not None:
-            ax.set_xlim(*window)
-    ax_w.set_ylim(bottom=0.0 if np.nanmin(wear_all, initial=0.0) >= 0 else None)
-    if not np.any(wear_all):
-        ax_w.set_ylim(0.0, 1.0)
-        ax_w.text(0.5, 0.6, "no wear in cycle 1", transform=ax_w.transAxes, ha="center", color="0.4")
-    ax_p.set_ylim(bottom=0.0)
+    _profile_axes(ax_w, ax_p, _x_window(window_curves), unit, wear_all, "no wear in cycle 1")
     handles, labels = ax_p.get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 3), fontsize=8.5, frameon=False)
     _titles(fig, "Wear gap and contact pressure at the end of the first cycle", runs)
@@ -559,19 +547,7 @@ def plot_compare_cycles(path: Path, runs: Sequence[RunData], cycles: Sequence[in
     if odd_steps:
         warnings.warn(f"compare_cycles.png: not the last step of the cycle: {'; '.join(odd_steps)}",
                       RuntimeWarning, stacklevel=2)
-    window = _x_window(window_curves)
-    ax_w.set_ylabel(f"wear gap ({unit})")
-    ax_p.set_ylabel("contact pressure P_n (MPa)")
-    for ax in (ax_w, ax_p):
-        ax.set_xlabel("position along the surface (mm)")
-        ax.grid(alpha=0.3)
-        if window is not None:
-            ax.set_xlim(*window)
-    ax_w.set_ylim(bottom=0.0 if np.nanmin(wear_all, initial=0.0) >= 0 else None)
-    if not np.any(wear_all):
-        ax_w.set_ylim(0.0, 1.0)
-        ax_w.text(0.5, 0.6, "no wear", transform=ax_w.transAxes, ha="center", color="0.4")
-    ax_p.set_ylim(bottom=0.0)
+    _profile_axes(ax_w, ax_p, _x_window(window_curves), unit, wear_all, "no wear")
     handles = [Line2D([], [], color=colour(i), lw=2.2, label=f"cycle {chosen[i]}") for i in used_cycles]
     handles += [Line2D([], [], color="k", lw=1.6, ls=_RUN_STYLES[j % len(_RUN_STYLES)], label=runs[k].label)
                 for j, k in enumerate(used_runs)]

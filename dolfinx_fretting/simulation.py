@@ -42,6 +42,7 @@ from mpi4py import MPI
 
 from . import local_solvers
 from .analytic import hertz_line_contact
+from .io import _jsonable
 from .contact import ContactSet, RigidPlane, find_candidates
 from .loading import LoadControlError, LoadStep, cycle_path, find_displacement, monotonic_path, preload_path, waveform
 from .scenes import Scene
@@ -412,7 +413,7 @@ class _Run:
                     "last_cycle_row": st.last_cycle_row, "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
                     "last_targets": getattr(self, "last_targets", None), "ranks": self.comm.size}
             tmp = self.out / (CHECKPOINT + ".tmp.npz")
-            np.savez(tmp, meta=json.dumps(meta, default=_plain), d=st.d, y=st.y, r=st.r, gw=st.gw,
+            np.savez(tmp, meta=json.dumps(meta, default=_jsonable), d=st.d, y=st.y, r=st.r, gw=st.gw,
                      r_warm=st.r_warm if st.r_warm is not None else np.zeros(0), **plastic)
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
@@ -795,14 +796,6 @@ class _Run:
     def _edge_loaded(self) -> bool:
         rn = self.state.r[0::self.model.contact.dim]
         return bool(rn[0] > 0 or rn[-1] > 0) and self.scene.geometry.kind == "half_cylinder"
-
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
 def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False,
