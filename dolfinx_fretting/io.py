@@ -25,7 +25,7 @@ __all__ = ["ResultWriter", "write_json_atomic", "HISTORY_FIELDS", "CYCLE_FIELDS"
 #: Columns of ``history.csv`` (one row per increment).
 HISTORY_FIELDS = ["increment", "cycle", "step", "stage", "normal_displacement", "tangential_displacement",
                   "face_pressure", *ROW_FIELDS, "local_iterations", "local_error", "load_solves",
-                  "newton_iterations", "cutbacks", "yielded_points"]
+                  "newton_iterations", "newton_delta_1", "newton_delta_2", "cutbacks", "yielded_points"]
 #: Columns of ``cycles.csv`` (one row per cycle of a cyclic run).
 CYCLE_FIELDS = ["cycle", "equivalent_cycles", "dissipated_energy", "wear_area", "max_wear_depth",
                 "tangential_force_max", "tangential_force_min", "displacement_max", "displacement_min",

@@ -254,6 +254,16 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
     def _contact_force(self, r: np.ndarray) -> np.ndarray:
         return (self.HT @ r)[self.rstart:self.rend]
 
+    @property
+    def tangent(self) -> str:
+        return self._tangent_mode
+
+    @tangent.setter
+    def tangent(self, mode: str) -> None:
+        if mode not in ("elastic", "consistent", "adaptive"):
+            raise ValueError(f"solver.newton_tangent = {mode!r}: allowed 'elastic', 'consistent', 'adaptive'")
+        self._tangent_mode = mode
+
     def _operator(self, refresh: bool):
         """(factorised operator, W) of the iteration matrix; ``refresh``: refactorise the current tangent."""
         if self.tangent == "elastic" or ((self._KT is None or self._W_tangent is None) and not refresh):

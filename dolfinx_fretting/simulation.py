@@ -457,7 +457,8 @@ class _Run:
                 "normal_displacement": solved.d[0], "tangential_displacement": solved.d[1],
                 "face_pressure": step.pressure, **dict(zip(ROW_FIELDS, row.tolist())),
                 "local_iterations": solved.iterations, "local_error": solved.error,
-                "load_solves": solved.load_solves, "newton_iterations": 1, "cutbacks": 0, "yielded_points": 0,
+                "load_solves": solved.load_solves, "newton_iterations": 1, "newton_delta_1": 0.0,
+                "newton_delta_2": 0.0, "cutbacks": 0, "yielded_points": 0,
                 **(extra or {})}
         st.last_row = hist
         return hist, states
@@ -499,7 +500,18 @@ class _Run:
                 return solved
 
             try:
-                solved, info = body.increment(local_solve, sub.pressure)
+                try:
+                    solved, info = body.increment(local_solve, sub.pressure)
+                except NewtonError:
+                    if body.tangent != "adaptive":
+                        raise
+                    # The adaptive matrix failed: full Newton on the same increment before cutting it.
+                    body.tangent = "consistent"
+                    try:
+                        solved, info = body.increment(local_solve, sub.pressure)
+                    finally:
+                        body.tangent = "adaptive"
+                    self.fallbacks = getattr(self, "fallbacks", 0) + 1
             except (NewtonError, SimulationError) as exc:
                 if cuts >= self.scene.solver.max_cutbacks:
                     where = f"increment {step.increment}" + (f" (cycle {step.cycle}, step {step.step})"
@@ -524,6 +536,8 @@ class _Run:
                 continue
             solved.iterations = local_its
             hist, states = self._commit(step, solved, {"newton_iterations": newton, "cutbacks": cuts,
+                                                       "newton_delta_1": info["delta_1"],
+                                                       "newton_delta_2": info["delta_2"],
                                                        "yielded_points": info["yielded_points"]}, sums)
             break
         st.increment += 1
@@ -638,7 +652,8 @@ class _Run:
         n = hists["increment"].size
         head = list(zip(hists["increment"].tolist(), [cycle] * n, hists["step"].tolist()))
         cols = ["normal_displacement", "tangential_displacement", "face_pressure", *ROW_FIELDS,
-                "local_iterations", "local_error", "load_solves", "newton_iterations", "cutbacks", "yielded_points"]
+                "local_iterations", "local_error", "load_solves", "newton_iterations", "newton_delta_1",
+                "newton_delta_2", "cutbacks", "yielded_points"]
         self.writer.history_block(head, np.column_stack([hists[c] for c in cols]), "cycle")
 
     def _cycle_row(self, cycle: int, h: dict[str, np.ndarray], wall: float) -> dict[str, Any]:
@@ -737,7 +752,8 @@ class _Run:
         h.update(increment=np.arange(first, first + n), step=np.arange(1, n + 1), normal_displacement=dn,
                  tangential_displacement=dt, face_pressure=s, local_iterations=hist[:, nf].astype(int),
                  local_error=hist[:, nf + 1], load_solves=np.ones(n, dtype=int), newton_iterations=np.ones(n, dtype=int),
-                 cutbacks=np.zeros(n, dtype=int), yielded_points=np.zeros(n, dtype=int))
+                 cutbacks=np.zeros(n, dtype=int), yielded_points=np.zeros(n, dtype=int),
+                 newton_delta_1=np.zeros(n), newton_delta_2=np.zeros(n))
         st.last_row = {"increment": first + n - 1, "cycle": cycle, "step": n, "stage": "cycle",
                        **{k: (v[-1].item() if hasattr(v[-1], "item") else v[-1]) for k, v in h.items()
                           if k not in ("increment", "step")}}
@@ -770,7 +786,9 @@ class _Run:
             gmax = np.empty(2)
             self.comm.Allreduce(local, gmax, op=MPI.MAX)  # elementwise (the pickle-based max is not)
             summary.update({"max_equivalent_plastic_strain": float(gmax[0]), "max_von_mises": float(gmax[1]),
-                            "newton_tangent": sc.solver.newton_tangent})
+                            "newton_tangent": sc.solver.newton_tangent,
+                            "newton_full_fallbacks": getattr(self, "fallbacks", 0),
+                            "tangent_refactorizations": model.plastic.refactorizations})
         if sc.loading.cycles > 0:
             summary["cycle_path"] = getattr(self, "cycle_mode", "python")
             if hasattr(self, "pattern_cache"):
