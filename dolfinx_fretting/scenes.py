@@ -276,7 +276,7 @@ class SolverSettings(_Section):
     #: Elastic-plastic bodies: the Newton iteration matrix, ``"elastic"`` (the factorised elastic K and its
     #: W throughout: no refactorisation), ``"consistent"`` (tangent refactorised, W rebuilt every iteration)
     #: or ``"adaptive"`` (the last factorised matrix while it contracts the residual 10x per iteration).
-    newton_tangent: Literal["elastic", "consistent", "adaptive"] = "consistent"
+    newton_tangent: Literal["elastic", "consistent", "adaptive"] = "adaptive"
     newton_max_iter: int = Field(60, ge=1)
     #: Newton tolerances: out-of-balance force relative to the forces in play (delta_1), last correction
     #: relative to the increment's displacement (delta_2).
