@@ -445,8 +445,13 @@ class _Run:
         states = np.empty(cs.nc, dtype=np.int8)
         row = np.empty(len(ROW_FIELDS))
         gw = st.gw.copy()
+        rn = solved.r[0::cs.dim]
+        if self._window_edges_matter and (rn[0] > 0 or rn[-1] > 0):
+            self._window_error(step.increment, step.cycle, step.step)
         commit_increment(solved.r, solved.x, solved.y, self.mu, cs.dim, cs.tributary, cs.abscissa,
                          self.k if step.cycle > 0 else self.k_once, gw, states, row)
+        if step.cycle > 0 and getattr(self, "_cycle_gw0", None) is not None:
+            self._check_wear_step(step.cycle, self._cycle_gw0, gw)  # as soon as the cycle wears too much
         st.d, st.y, st.r, st.gw = solved.d, solved.y, solved.r, gw
         st.energy += row[ROW["dissipated_energy"]]
         st.local_iterations += solved.iterations
@@ -462,6 +467,32 @@ class _Run:
                 **(extra or {})}
         st.last_row = hist
         return hist, states
+
+    @property
+    def _window_edges_matter(self) -> bool:
+        """The ends of the candidate window are not body edges (half-cylinder): load there means the
+        contact is truncated by the window."""
+        return self.scene.geometry.kind == "half_cylinder"
+
+    def _window_error(self, increment: int, cycle: int, step: int) -> None:
+        cs = self.model.contact
+        where = f"increment {increment}" + (f" (cycle {cycle}, step {step})" if cycle else "")
+        raise SimulationError(
+            f"{where}: the outermost contact candidates (x = {cs.abscissa[0]:.4g} .. {cs.abscissa[-1]:.4g} mm) "
+            "carry load: the contact reaches the edge of the candidate window and would be truncated; widen "
+            f"contact.candidate_half_width (now {self.scene.contact.candidate_half_width} mm) and "
+            f"geometry.contact_half_width (the refined zone, now {self.scene.geometry.refined_half_width} mm)")
+
+    def _check_wear_step(self, cycle: int, gw_old: np.ndarray, gw_new: np.ndarray) -> None:
+        """Refuse a cycle that wears more than the contact element size at some contact: the wear gap is
+        explicit over a cycle, and such steps make oscillating edge spikes (the run stops instead)."""
+        h = self.model.body.contact_mesh_size
+        dw = float(np.max(gw_new - gw_old, initial=0.0))
+        if dw > h:
+            raise SimulationError(
+                f"cycle {cycle}: the wear gap grew by up to {dw:.3g} mm in one cycle, more than the contact element "
+                f"size {h:.3g} mm; the explicit wear update is unstable there. Lower wear.acceleration (now "
+                f"{self.scene.wear.acceleration:g}) or wear.k (now {self.scene.wear.k:g} 1/MPa)")
 
     def _python_increment(self, step: LoadStep) -> tuple[dict[str, Any], np.ndarray, np.ndarray, np.ndarray]:
         """Solve and commit one increment by the Python path; returns (history row, x, y, states)."""
@@ -679,6 +710,7 @@ class _Run:
     def _python_cycle(self, cycle: int, keep: bool):
         saved = (self.state.increment, self.state.d, self.state.y, self.state.r, self.state.gw, self.state.energy,
                  self.state.local_iterations, self.state.last_row)
+        self._cycle_gw0 = self.state.gw.copy()
         rows, keeps = [], []
         try:
             for step in cycle_path(self.scene.loading, cycle):
@@ -686,6 +718,7 @@ class _Run:
                 rows.append(hist)
                 if keep:
                     keeps.append((hist, x, y, self.state.r, self.state.gw, states))
+            self._check_wear_step(cycle, saved[4], self.state.gw)
         except SimulationError:
             st = self.state
             st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row = saved
@@ -742,6 +775,11 @@ class _Run:
             raise SimulationError(result[1])
         _, hist, gw, y, r_last, outs = result
         first = st.increment + 1
+        self._check_wear_step(cycle, st.gw, gw)
+        edge = hist[:, ROW["edge_loaded"]] > 0
+        if self._window_edges_matter and edge.any():
+            j = int(np.flatnonzero(edge)[0])
+            self._window_error(first + j, cycle, j + 1)
         st.increment += n
         st.gw, st.y, st.r = gw, y, r_last
         st.d = np.array([dn[-1], dt[-1]])
@@ -799,7 +837,7 @@ class _Run:
             summary.update({k: r[k] for k in ("normal_force", "tangential_force", "max_pressure", "contact_width",
                                               "stick_width", "max_wear_depth", "wear_area")})
             summary.update({k: int(r[k]) for k in ("n_open", "n_stick", "n_slip")})
-            summary["edge_loaded"] = bool(self._edge_loaded())
+            summary["edge_loaded"] = bool(st.last_row.get("edge_loaded", 0))
         if st.last_cycle_row:
             summary["regime"] = st.last_cycle_row["regime"]
         if g.kind == "half_cylinder" and st.last_row:
@@ -810,10 +848,6 @@ class _Run:
         if error is not None:
             summary["error"] = error
         return summary
-
-    def _edge_loaded(self) -> bool:
-        rn = self.state.r[0::self.model.contact.dim]
-        return bool(rn[0] > 0 or rn[-1] > 0) and self.scene.geometry.kind == "half_cylinder"
 
 
 def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False,
@@ -863,9 +897,6 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
             plot_run(out, scene)
         except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
             run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
-    if summary.get("edge_loaded"):
-        run.say(f"[{scene.name}] WARNING: the outermost contact candidate carries load: the contact may extend "
-                "beyond the candidate window; widen contact.candidate_half_width")
     run.say(f"[{scene.name}] {'done' if error is None else 'FAILED'}: {summary['increments']} increments, "
             f"{summary['cycles']} cycles, P = {summary.get('normal_force', 0):.6g} N/mm, "
             f"Q = {summary.get('tangential_force', 0):.6g} N/mm, p_max = {summary.get('max_pressure', 0):.6g} MPa, "

@@ -40,6 +40,7 @@ ROW_FIELDS = (
     "contact_width",       # span of the loaded contacts along the surface (mm)
     "stick_width",         # span of the sticking contacts (mm)
     "mean_relative_tangential",  # mean total tangential relative position of all contacts (mm)
+    "edge_loaded",         # 1 if the first or last contact (the ends of the candidate window) carries load
 )
 #: Index of each field in the row.
 ROW = {name: i for i, name in enumerate(ROW_FIELDS)}
@@ -133,6 +134,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
     row[10] = hi_c - lo_c if n_stick + n_slip > 0 else 0.0
     row[11] = hi_s - lo_s if n_stick > 0 else 0.0
     row[12] = ysum / nc if nc > 0 else 0.0
+    row[13] = 1.0 if nc > 0 and (states[0] != _OPEN or states[nc - 1] != _OPEN) else 0.0
 
 
 def archard_increment(k: float, pressure: np.ndarray, slip_increment: np.ndarray) -> np.ndarray:

@@ -1,0 +1,138 @@
+"""Stability at the extremes: each case converges to the right answer or stops with a clear message —
+never a NaN or a silent wrong result."""
+
+import math
+
+import numpy as np
+import pytest
+
+from dolfinx_fretting.analytic import hertz_line_contact
+from dolfinx_fretting.plots import read_table
+from dolfinx_fretting.scenes import load_scene
+from dolfinx_fretting.simulation import SimulationError, run_scene
+
+QUIET = ["output.xdmf=false", "output.plots=false"]
+R, E, NU = 6.0, 115000.0, 0.342
+
+
+def _finite(summary):
+    return all(math.isfinite(v) for v in summary.values() if isinstance(v, float))
+
+
+def test_frictionless_and_mu_5(tmp_path):
+    """mu = 0: every closed contact slides and Q = 0; mu = 5 with Q = 0.5 mu P is unreachable... so the
+    tangential force is prescribed at 45 % of the mu = 0.9 scene's value: a sticking contact."""
+    s0 = run_scene(load_scene("hertz", QUIET + ["contact.mu=0.0", "loading.tangential_force=0.0",
+                                                "geometry.contact_mesh_size=0.02"]), tmp_path / "mu0", quiet=True)
+    assert s0["n_stick"] == 0 and s0["n_slip"] > 0 and abs(s0["tangential_force"]) < 1e-9 * s0["normal_force"]
+    s5 = run_scene(load_scene("hertz", QUIET + ["contact.mu=5.0", "geometry.contact_mesh_size=0.02"]),
+                   tmp_path / "mu5", quiet=True)
+    assert _finite(s5) and s5["converged"]
+    assert s5["tangential_force"] == pytest.approx(89.658, rel=1e-7)  # the prescribed force (0.09 mu P)
+    # Q / (mu P) = 0.09: Cattaneo-Mindlin stick half-width c = a sqrt(1 - 0.09) = 0.95 a, i.e. nearly all
+    # the contact sticks: at most the two edge nodes slide.
+    assert s5["n_slip"] <= 2 and s5["n_stick"] >= 7
+
+
+def test_nearly_incompressible(tmp_path):
+    """nu = 0.49, frictionless: Hertz with E* = E/(1 - nu^2) within 3 %. Four-node quadrilaterals lock
+    volumetrically as nu -> 0.5, so the body is a little too stiff and the peak too high (measured +2.2 %
+    at h = 10 um, against +0.2 % at nu = 0.342)."""
+    P = 199.24
+    s = run_scene(load_scene("hertz", QUIET + ["material.nu=0.49", "contact.mu=0.0", "loading.tangential_force=0.0",
+                                               "loading.normal_increments=1"]), tmp_path, quiet=True)
+    a, p0 = hertz_line_contact(P, R, E / (1 - 0.49**2))
+    assert s["max_pressure"] == pytest.approx(p0, rel=0.03)
+    assert s["max_pressure"] > p0  # stiffer, not softer: locking, not a wrong load
+
+
+def test_load_so_small_that_one_node_touches(tmp_path):
+    """P = 1e-6 N/mm: one node carries it all (Hertz half-width 8e-6 mm << h); or a clear stop."""
+    try:
+        s = run_scene(load_scene("hertz", QUIET + ["loading.normal_force=1e-6", "loading.tangential_force=2e-7",
+                                                   "geometry.contact_mesh_size=0.02"]), tmp_path, quiet=True)
+    except SimulationError as exc:
+        assert "loading.normal_force" in str(exc) and "not reached" in str(exc)
+        return
+    assert _finite(s)
+    assert s["normal_force"] == pytest.approx(1e-6, rel=1e-6)
+    assert s["n_stick"] + s["n_slip"] == 1 and s["contact_width"] == 0.0
+
+
+def test_contact_window_too_small_stops(tmp_path):
+    with pytest.raises(SimulationError, match="reaches the edge of the candidate window"):
+        run_scene(load_scene("hertz", QUIET + ["contact.candidate_half_width=0.011", "contact.mu=0.0",
+                                               "loading.tangential_force=0.0"]), tmp_path, quiet=True)
+
+
+@pytest.mark.slow
+def test_very_fine_contact_mesh(tmp_path):
+    """401 contact nodes (h = 2.5 um over +-0.5 mm): Hertz peak within 1 % (measured 0.07 %)."""
+    s = run_scene(load_scene("hertz", QUIET + ["geometry.contact_mesh_size=0.0025", "contact.candidate_half_width=0.5025",
+                                               "geometry.contact_half_width=0.55", "contact.mu=0.0",
+                                               "loading.tangential_force=0.0", "loading.normal_increments=1"]),
+                  tmp_path, quiet=True)
+    assert s["contacts"] >= 400
+    assert s["max_pressure"] == pytest.approx(s["hertz_max_pressure"], rel=0.01)
+
+
+def test_tolerance_1e_14(tmp_path):
+    try:
+        s = run_scene(load_scene("hertz", QUIET + ["solver.local_tol=1e-14", "geometry.contact_mesh_size=0.02"]),
+                      tmp_path, quiet=True)
+    except SimulationError as exc:
+        assert "did not converge" in str(exc) and "local_tol" in str(exc)
+        return
+    assert _finite(s) and s["tangential_force"] == pytest.approx(89.658, rel=1e-7)
+
+
+BLOCK = QUIET + ["geometry.nx=20", "geometry.ny=20", "output.history_every=1"]
+
+
+def test_contact_opens_entirely_during_the_cycle(tmp_path):
+    """A block touching a wall with its left face, pushed and pulled by +-100 MPa on its right face after a
+    preload of 1e-5 mm: the whole face separates while it is pulled (zero forces, no NaN) and touches again."""
+    scene = load_scene({
+        "geometry": {"kind": "rectangle", "width": 4.0, "height": 2.0, "nx": 16, "ny": 8},
+        "material": {"E": 210000.0, "nu": 0.3},
+        "contact": {"mu": 0.3, "surface": "left", "plane_point": [0.0, 0.0], "plane_normal": [1.0, 0.0]},
+        "loading": {"normal_displacement": 1e-5, "normal_increments": 1, "tangential_pressure": 100.0,
+                    "pressure_face": "right", "cycles": 2, "increments_per_cycle": 16},
+        "output": {"xdmf": False, "plots": False},
+    })
+    s = run_scene(scene, tmp_path, quiet=True)
+    assert _finite(s) and s["converged"]
+    hist = read_table(tmp_path / "history.csv")
+    opened = hist["n_open"] == s["contacts"]
+    pulled = hist["face_pressure"] < 0
+    assert np.array_equal(opened, pulled)  # open exactly while pulled
+    assert np.all(hist["normal_force"][opened] == 0.0) and np.all(hist["tangential_force"][opened] == 0.0)
+    assert hist["normal_force"][-1] > 0  # back in contact at the end of the cycle
+
+
+@pytest.mark.parametrize("delta, regime", [(6e-6, "partial_slip"), (0.6, "gross_slip")])
+def test_slip_amplitude_extremes(tmp_path, delta, regime):
+    """Gross slip starts near 6 um on cylinder-flat (rigid flat, P = 199.24 N/mm): a thousand times below
+    it the contact sticks almost entirely, a hundred times above it slides with |Q| = mu P."""
+    s = run_scene(load_scene("cylinder-flat", QUIET + ["geometry.contact_mesh_size=0.02", "loading.cycles=1",
+                                                       "loading.increments_per_cycle=8",
+                                                       f"loading.tangential_displacement={delta}"]),
+                  tmp_path, quiet=True)
+    cyc = read_table(tmp_path / "cycles.csv")
+    assert _finite(s) and str(cyc["regime"][0]) == regime
+    if regime == "gross_slip":
+        assert cyc["tangential_force_max"][0] == pytest.approx(0.9 * 199.24, rel=1e-6)
+    else:
+        assert cyc["tangential_force_max"][0] < 0.01 * 0.9 * 199.24
+
+
+def test_wear_larger_than_an_element_per_cycle_is_refused(tmp_path):
+    """k scaled (x 1e5) until one cycle would remove more than a contact element (20 um) under a
+    force-controlled cylinder: the run stops at the increment where the cycle's wear passes h, with a
+    message naming the keys, and keeps nothing of that cycle."""
+    with pytest.raises(SimulationError, match=r"cycle 1: the wear gap grew by up to .* more than the contact element "
+                                              r"size 0.02 mm.*wear.acceleration"):
+        run_scene(load_scene("cylinder-flat", QUIET + ["geometry.contact_mesh_size=0.02", "loading.cycles=2",
+                                                       "loading.increments_per_cycle=8", "wear.acceleration=1e5"]),
+                  tmp_path, quiet=True)
+    assert len(read_table(tmp_path / "cycles.csv")["cycle"]) == 0
