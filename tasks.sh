@@ -13,7 +13,12 @@ case "$cmd" in
     exec .venv/bin/dolfinx-fretting run stromberg-block --out results/stromberg-block "$@" ;;
   test)
     scripts/setup.sh
-    exec .venv/bin/python -m pytest -q -m "not slow" tests "$@" ;;
+    .venv/bin/python -m pytest -q -m "not slow" tests "$@"
+    # The collective tests on 2 and 3 ranks (python -m mpi4py: an error on one rank aborts them all).
+    for n in 2 3; do
+      echo "[test] mpirun -n $n: tests/test_parallel.py"
+      mpirun -n "$n" --oversubscribe .venv/bin/python -m mpi4py -m pytest -q -p no:cacheprovider tests/test_parallel.py
+    done ;;
   bench)
     scripts/setup.sh
     exec .venv/bin/python -m pytest -q -m slow tests "$@" ;;
