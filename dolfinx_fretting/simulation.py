@@ -845,9 +845,34 @@ class _Run:
                                        sc.material.E / (1 - sc.material.nu**2))
             summary.update({"hertz_reference": "rigid plane, frictionless: E* = E/(1-nu^2)",
                             "hertz_half_width": a, "hertz_max_pressure": p0})
+        summary["modelled"] = self._modelled()
         if error is not None:
             summary["error"] = error
         return summary
+
+    def _modelled(self) -> dict[str, str]:
+        """What this run assembled and iterated, and what it skipped (the scene decides)."""
+        sc, model = self.scene, self.model
+        cs = model.contact
+        plastic = model.plastic
+        window = sc.contact.candidate_half_width
+        if window is None and sc.geometry.kind == "half_cylinder":
+            window = sc.geometry.refined_half_width
+        return {
+            "material": ("J2 plasticity: Newton with the contact inside each iteration, tangent "
+                         f"'{sc.solver.newton_tangent}', {plastic.refactorizations} tangent refactorisations"
+                         if plastic is not None else "linear elastic: no Newton loop, no plastic state"),
+            "delassus": ("W of the elastic K built once" + (", W of the tangent rebuilt at each refactorisation"
+                                                          if plastic is not None else "")),
+            "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0)",
+            "wear": (f"Archard, k = {sc.wear.k} 1/MPa x acceleration {sc.wear.acceleration}"
+                     if sc.wear.law == "archard" else "none (wear gap stays zero)"),
+            "contact": f"{cs.nc} candidate nodes" + (f" within {window} mm of the first contact point"
+                                                     if window is not None else " (whole contact face)"),
+            "loads": (f"{sc.loading.cycles} cycles ({getattr(self, 'cycle_mode', 'python')} path)"
+                      if sc.loading.cycles > 0 else "preload and a monotonic tangential load")
+                     + ("; face pressure load" if model.face_load is not None else ""),
+        }
 
 
 def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False,

@@ -24,6 +24,9 @@ def test_example1_short(tmp_path):
     s = run_scene(scene, tmp_path, quiet=True)
     assert s["converged"] and s["cycles"] == 4 and s["increments"] == 1 + 4 * 80
     assert s["contacts"] == 51 and s["cycle_path"] == "compiled"
+    # What was modelled: an elastic scene has no Newton loop and builds W once.
+    assert s["modelled"]["material"].startswith("linear elastic: no Newton loop")
+    assert s["modelled"]["delassus"] == "W of the elastic K built once"
     # +-10 MPa on a 50 mm face against mu P ~ 10 N/mm of friction: gross slip in every cycle.
     cyc = read_table(tmp_path / "cycles.csv")
     assert list(cyc["regime"]) == ["gross_slip"] * 4

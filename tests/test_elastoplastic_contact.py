@@ -51,6 +51,8 @@ def test_plasticity_lowers_the_peak_pressure(tmp_path):
     plastic = run_scene(load_scene("cylinder-flat", BASE + PLASTIC + ["material.yield_stress=840"]),
                         tmp_path / "p", quiet=True)
     assert plastic["max_equivalent_plastic_strain"] > 1e-3
+    assert plastic["modelled"]["material"].startswith("J2 plasticity: Newton")
+    assert "W of the tangent rebuilt" in plastic["modelled"]["delassus"]
     assert plastic["max_pressure"] < 0.95 * elastic["max_pressure"]
     hist = read_table(tmp_path / "p" / "history.csv")
     assert hist["yielded_points"].max() > 0 and hist["newton_iterations"].max() > 1
