@@ -1,4 +1,4 @@
-"""Local frictional contact problem on the Delassus operator: projection, Uzawa solver, contact states.
+"""Local frictional contact problem on the Delassus operator: projection, solvers, contact states.
 
 The local problem (paper eq. 28, FCLIB/Siconos form) is: find ``r`` and ``x`` with
 
@@ -19,18 +19,27 @@ full current ``x^a = sum_b W_ab r^b + q^a``:
 with ``rho_a = 1 / ||W_aa||_2`` (``1/lambda_max`` for a symmetric block), so that the step is a projected
 gradient step no longer than the block's curvature allows.
 
-Convergence is measured by a unit-free natural-map residual (see :func:`natural_map_error`), not by the
-relative change of ``r`` of eq. (34), which can be small while far from the solution.
+Besides this ``"uzawa"`` method, :func:`solve` offers ``"nsgs"`` (the same Gauss-Seidel sweep with an exact
+solve of each contact's own problem, Siconos's NSGS), ``"newton"`` (a safeguarded semismooth Newton on the
+Alart-Curnier function) and ``"auto"`` (NSGS, then Newton when NSGS is slow); benchmarks/results/
+solver_suite.md compares them on the FCLIB problems.
+
+Convergence is measured by a unit-free natural-map residual (see :func:`natural_map_error`), the same for
+every method, not by the relative change of ``r`` of eq. (34), which can be small while far from the
+solution.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numba
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 __all__ = [
     "OPEN",
@@ -51,7 +60,7 @@ OPEN = 0   #: Contact state code: separated, r = 0.
 STICK = 1  #: Contact state code: closed, strictly inside the cone.
 SLIP = 2   #: Contact state code: closed, on the cone boundary.
 
-METHODS = ("uzawa",)
+METHODS = ("uzawa", "nsgs", "newton", "auto")
 
 # Sweeps between exact recomputations of x = W r + q, bounding the drift of the incremental update.
 _REFRESH = 200
@@ -73,8 +82,10 @@ class LocalResult:
         converged: ``error < tol`` with finite values.
         method: Solver name.
         message: Human-readable outcome: iterations, error reached, tolerance.
-        change: Relative change ``||r_k - r_{k-1}|| / ||r_k||`` of the last sweep (paper eq. 34),
-            for information only.
+        change: Relative change ``||r_k - r_{k-1}|| / ||r_k||`` of the last sweep or Newton step (paper
+            eq. 34), for information only.
+        sweeps: Gauss-Seidel sweeps (Uzawa or NSGS) among ``iterations``.
+        newton_steps: Newton steps among ``iterations`` (``"newton"`` and ``"auto"``).
     """
 
     r: np.ndarray
@@ -85,6 +96,8 @@ class LocalResult:
     method: str
     message: str
     change: float = 0.0
+    sweeps: int = 0
+    newton_steps: int = 0
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -296,6 +309,406 @@ def _uzawa_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data:
 
 
 # ----------------------------------------------------------------------------------------------------------
+# NSGS: Gauss-Seidel with an exact solve of each contact's own problem
+# ----------------------------------------------------------------------------------------------------------
+# Angles scanned for the 3D sliding direction when the warm-started Newton on the angle fails.
+_SCAN = 64
+_SCAN_COS = np.cos(2.0 * np.pi * np.arange(_SCAN) / _SCAN)
+_SCAN_SIN = np.sin(2.0 * np.pi * np.arange(_SCAN) / _SCAN)
+
+
+@numba.njit(cache=True)
+def _local_res(B: np.ndarray, dim: int, bn: float, b1: float, b2: float, mu: float, rho: float,
+               rn: float, r1: float, r2: float) -> float:
+    """Squared natural-map residual of one contact's own problem ``x = B r + b`` at ``r``."""
+    xn = B[0, 0] * rn + B[0, 1] * r1 + bn
+    x1 = B[1, 0] * rn + B[1, 1] * r1 + b1
+    x2 = 0.0
+    if dim == 3:
+        xn += B[0, 2] * r2
+        x1 += B[1, 2] * r2
+        x2 = B[2, 0] * rn + B[2, 1] * r1 + B[2, 2] * r2 + b2
+    nxt = math.sqrt(x1 * x1 + x2 * x2)
+    pn, p1, p2 = _project(rn - rho * (xn + mu * nxt), r1 - rho * x1, r2 - rho * x2, mu)
+    return (rn - pn) ** 2 + (r1 - p1) ** 2 + (r2 - p2) ** 2
+
+
+@numba.njit(cache=True)
+def _contact_2d(B: np.ndarray, bn: float, bt: float, mu: float, rho: float, rn: float, rt: float
+                ) -> tuple[float, float]:
+    """Exact solution of one 2D contact's problem ``x = B r + b`` by enumerating its states.
+
+    Open (``b_n >= 0``), stick (``r = -B^-1 b`` inside the cone) and slip in either direction
+    (``x_n = 0``, ``r_t = -s mu r_n``, ``s x_t >= 0``) are tried in this order and the first that satisfies
+    its conditions is returned. If rounding rejects all of them (a contact at a state boundary, or a singular
+    ``B``), the candidate with the smallest residual is kept, the current ``r`` included.
+    """
+    if bn >= 0.0:
+        return 0.0, 0.0
+    b00, b01, b10, b11 = B[0, 0], B[0, 1], B[1, 0], B[1, 1]
+    det = b00 * b11 - b01 * b10
+    sn = st = 0.0
+    have_stick = abs(det) > 1e-13 * (abs(b00 * b11) + abs(b01 * b10))
+    if have_stick:
+        sn = -(b11 * bn - b01 * bt) / det
+        st = (b10 * bn - b00 * bt) / det
+        if sn >= 0.0 and abs(st) <= mu * sn:
+            return sn, st
+    # Sliding with x_t in direction s: x_n = (b00 - s mu b01) r_n + b_n = 0.
+    found = 0
+    cn = ct = 0.0
+    for k in range(2):
+        s = 1.0 if k == 0 else -1.0
+        den = b00 - s * mu * b01
+        if den <= 0.0:
+            continue
+        pn = -bn / den
+        pt = -s * mu * pn
+        xt = b10 * pn + b11 * pt + bt
+        if s * xt >= 0.0:
+            if found == 0 or (rt != 0.0 and (pt > 0.0) == (rt > 0.0)):
+                cn, ct = pn, pt  # a second solution: keep the current sliding direction
+            found += 1
+    if found:
+        return cn, ct
+    # Fallback: smallest residual among the candidates (rounding at a state boundary).
+    best_n, best_t = rn, rt
+    best = _local_res(B, 2, bn, bt, 0.0, mu, rho, rn, rt, 0.0)
+    cands = np.empty((4, 2))
+    nc = 0
+    cands[nc, 0], cands[nc, 1] = 0.0, 0.0
+    nc += 1
+    if have_stick:
+        pn, pt, _ = _project(sn, st, 0.0, mu)
+        cands[nc, 0], cands[nc, 1] = pn, pt
+        nc += 1
+    for k in range(2):
+        s = 1.0 if k == 0 else -1.0
+        den = b00 - s * mu * b01
+        if den > 0.0:
+            cands[nc, 0] = -bn / den
+            cands[nc, 1] = -s * mu * cands[nc, 0]
+            nc += 1
+    for i in range(nc):
+        e = _local_res(B, 2, bn, bt, 0.0, mu, rho, cands[i, 0], cands[i, 1], 0.0)
+        if e < best:
+            best, best_n, best_t = e, cands[i, 0], cands[i, 1]
+    return best_n, best_t
+
+
+@numba.njit(cache=True)
+def _slip_h(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, c: float, s: float
+            ) -> tuple[float, float, float]:
+    """Sliding-direction equation of a 3D contact and its derivative in the angle.
+
+    With ``e = (cos t, sin t)`` and ``r = r_n (1, mu e)``, ``x_n = 0`` gives ``r_n = -b_n / den``,
+    ``den = B_nn + mu B_nt . e``, and sliding needs ``x_t`` parallel to ``e``:
+    ``h = den * (e_perp . x_t) = e_perp . (-b_n (B_tn + mu B_tt e) + den b_t) = 0`` (a trigonometric
+    polynomial of degree 2, at most 4 roots). Returns ``(h, dh/dt, den)``.
+    """
+    den = B[0, 0] + mu * (B[0, 1] * c + B[0, 2] * s)
+    v1 = -bn * (B[1, 0] + mu * (B[1, 1] * c + B[1, 2] * s)) + den * b1
+    v2 = -bn * (B[2, 0] + mu * (B[2, 1] * c + B[2, 2] * s)) + den * b2
+    h = -s * v1 + c * v2
+    dden = mu * (-B[0, 1] * s + B[0, 2] * c)
+    dv1 = -bn * mu * (-B[1, 1] * s + B[1, 2] * c) + dden * b1
+    dv2 = -bn * mu * (-B[2, 1] * s + B[2, 2] * c) + dden * b2
+    dh = -(c * v1 + s * v2) + (-s * dv1 + c * dv2)
+    return h, dh, den
+
+
+@numba.njit(cache=True)
+def _slip_candidate(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, t: float
+                    ) -> tuple[bool, float, float, float]:
+    """Sliding force for the angle ``t`` and whether it satisfies x_n = 0, r_n >= 0, x_t opposed to r_t."""
+    c, s = math.cos(t), math.sin(t)
+    den = B[0, 0] + mu * (B[0, 1] * c + B[0, 2] * s)
+    if not den > 0.0:
+        return False, 0.0, 0.0, 0.0
+    pn = -bn / den
+    p1, p2 = mu * pn * c, mu * pn * s
+    x1 = B[1, 0] * pn + B[1, 1] * p1 + B[1, 2] * p2 + b1
+    x2 = B[2, 0] * pn + B[2, 1] * p1 + B[2, 2] * p2 + b2
+    # x_t must point along -e; |x_t| ~ 0 (at the stick-slip boundary) is accepted.
+    along = c * x1 + s * x2
+    ok = along <= 1e-12 * (abs(b1) + abs(b2) + abs(bn) * (abs(B[1, 0]) + abs(B[2, 0]) + mu * (
+        abs(B[1, 1]) + abs(B[1, 2]) + abs(B[2, 1]) + abs(B[2, 2]))))
+    return ok, pn, p1, p2
+
+
+@numba.njit(cache=True)
+def _newton_angle(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, t: float, lo: float,
+                  hi: float, bracketed: bool) -> tuple[bool, float]:
+    """Root of :func:`_slip_h` in the angle, Newton's method (safeguarded by bisection when bracketed)."""
+    hlo = 0.0
+    if bracketed:
+        hlo = _slip_h(B, bn, b1, b2, mu, math.cos(lo), math.sin(lo))[0]
+    for _ in range(60):
+        h, dh, _ = _slip_h(B, bn, b1, b2, mu, math.cos(t), math.sin(t))
+        if h == 0.0:
+            return True, t
+        if bracketed:
+            if (h > 0.0) == (hlo > 0.0):
+                lo, hlo = t, h
+            else:
+                hi = t
+        step = -h / dh if dh != 0.0 else np.inf
+        if bracketed:
+            tn = t + step
+            if not (min(lo, hi) < tn < max(lo, hi)) or not math.isfinite(tn):
+                tn = 0.5 * (lo + hi)
+            step = tn - t
+            if abs(hi - lo) < 1e-15:
+                return True, tn
+        else:
+            if not math.isfinite(step):
+                return False, t
+            step = max(-0.5, min(0.5, step))
+        t += step
+        if abs(step) < 1e-14:
+            return True, t
+    return bracketed, t
+
+
+@numba.njit(cache=True)
+def _contact_3d(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, rho: float, rn: float,
+                r1: float, r2: float, scan_c: np.ndarray, scan_s: np.ndarray) -> tuple[float, float, float]:
+    """Exact solution of one 3D contact's problem ``x = B r + b``.
+
+    Open if ``b_n >= 0``; stick if ``r = -B^-1 b`` lies in the cone; otherwise sliding, whose direction
+    is a root of :func:`_slip_h`: Newton on the angle from the current direction first, and if that does not
+    give a valid sliding solution, all roots bracketed on 64 angles (Newton-bisection). If several are
+    valid, or none is (rounding at a state boundary, singular ``B``), the smallest residual wins, the
+    current ``r`` included.
+    """
+    if bn >= 0.0:
+        return 0.0, 0.0, 0.0
+    if mu == 0.0 and B[0, 0] > 0.0:
+        return -bn / B[0, 0], 0.0, 0.0
+    # Stick: solve B s = -b (cofactors).
+    c00 = B[1, 1] * B[2, 2] - B[1, 2] * B[2, 1]
+    c01 = B[1, 2] * B[2, 0] - B[1, 0] * B[2, 2]
+    c02 = B[1, 0] * B[2, 1] - B[1, 1] * B[2, 0]
+    det = B[0, 0] * c00 + B[0, 1] * c01 + B[0, 2] * c02
+    scale = abs(B[0, 0] * c00) + abs(B[0, 1] * c01) + abs(B[0, 2] * c02)
+    have_stick = abs(det) > 1e-13 * scale
+    sn = s1 = s2 = 0.0
+    if have_stick:
+        c10 = B[0, 2] * B[2, 1] - B[0, 1] * B[2, 2]
+        c11 = B[0, 0] * B[2, 2] - B[0, 2] * B[2, 0]
+        c12 = B[0, 1] * B[2, 0] - B[0, 0] * B[2, 1]
+        c20 = B[0, 1] * B[1, 2] - B[0, 2] * B[1, 1]
+        c21 = B[0, 2] * B[1, 0] - B[0, 0] * B[1, 2]
+        c22 = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
+        # inverse = adj / det, adj[i, j] = cofactor[j, i]
+        sn = -(c00 * bn + c10 * b1 + c20 * b2) / det
+        s1 = -(c01 * bn + c11 * b1 + c21 * b2) / det
+        s2 = -(c02 * bn + c12 * b1 + c22 * b2) / det
+        if sn >= 0.0 and math.sqrt(s1 * s1 + s2 * s2) <= mu * sn:
+            return sn, s1, s2
+    # Sliding: warm start from the current direction, else from the stick force's (the force that would
+    # hold the contact, capped on the cone).
+    if r1 != 0.0 or r2 != 0.0:
+        t0 = math.atan2(r2, r1)
+    elif have_stick and (s1 != 0.0 or s2 != 0.0):
+        t0 = math.atan2(s2, s1)
+    else:
+        t0 = math.atan2(-b2, -b1)
+    ok, t = _newton_angle(B, bn, b1, b2, mu, t0, 0.0, 0.0, False)
+    if ok:
+        valid, pn, p1, p2 = _slip_candidate(B, bn, b1, b2, mu, t)
+        if valid and abs(_slip_h(B, bn, b1, b2, mu, math.cos(t), math.sin(t))[0]) <= 1e-10 * (
+                abs(bn) * (abs(B[1, 0]) + abs(B[2, 0]) + mu * (abs(B[1, 1]) + abs(B[1, 2]) + abs(B[2, 1])
+                                                                + abs(B[2, 2])))
+                + (abs(B[0, 0]) + mu * (abs(B[0, 1]) + abs(B[0, 2]))) * (abs(b1) + abs(b2))):
+            return pn, p1, p2
+    # Scan for every root; keep the valid one with the smallest residual.
+    best = np.inf
+    best_n, best_1, best_2 = rn, r1, r2
+    best_valid = False
+    n = scan_c.size
+    h0 = _slip_h(B, bn, b1, b2, mu, scan_c[0], scan_s[0])[0]
+    hprev = h0
+    for k in range(n):
+        kn = (k + 1) % n
+        hk = _slip_h(B, bn, b1, b2, mu, scan_c[kn], scan_s[kn])[0] if kn else h0
+        if (hprev > 0.0) != (hk > 0.0) or hk == 0.0:
+            lo = 2.0 * np.pi * k / n
+            hi = 2.0 * np.pi * (k + 1) / n
+            ok, t = _newton_angle(B, bn, b1, b2, mu, 0.5 * (lo + hi), lo, hi, True)
+            valid, pn, p1, p2 = _slip_candidate(B, bn, b1, b2, mu, t)
+            if pn != 0.0 or p1 != 0.0 or p2 != 0.0:
+                e = _local_res(B, 3, bn, b1, b2, mu, rho, pn, p1, p2)
+                if (valid and not best_valid) or ((valid == best_valid) and e < best):
+                    best, best_n, best_1, best_2, best_valid = e, pn, p1, p2, valid
+        hprev = hk
+    if best_valid:
+        return best_n, best_1, best_2
+    # No valid state (rounding, degenerate block): smallest residual, current r and projected stick included.
+    cur = _local_res(B, 3, bn, b1, b2, mu, rho, rn, r1, r2)
+    if cur < best:
+        best, best_n, best_1, best_2 = cur, rn, r1, r2
+    if have_stick:
+        pn, p1, p2 = _project(sn, s1, s2, mu)
+        e = _local_res(B, 3, bn, b1, b2, mu, rho, pn, p1, p2)
+        if e < best:
+            best, best_n, best_1, best_2 = e, pn, p1, p2
+    return best_n, best_1, best_2
+
+
+@numba.njit(cache=True)
+def _nsgs_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, sparse: bool,
+                 blocks: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err: np.ndarray, dim: int,
+                 r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, omega: float,
+                 scan_c: np.ndarray, scan_s: np.ndarray) -> tuple[int, float, float, int]:
+    """Gauss-Seidel sweeps with an exact solve of each contact's own problem. ``x = W r + q`` on entry.
+
+    For contact ``a`` with the others fixed, ``x^a = W_aa r^a + b^a`` with ``b^a = x^a - W_aa r^a``, and
+    ``r^a`` is replaced by the exact solution of that one-contact problem (:func:`_contact_2d`,
+    :func:`_contact_3d`), relaxed by ``omega`` (then projected on the cone) when ``omega != 1``.
+
+    Returns (sweeps, error, change, status) like :func:`_uzawa_kernel`.
+    """
+    nc = mu.size
+    qnorm = _blocked_norm(q, rho_err, dim)
+    err = _error(r, x, mu, rho_err, dim, qnorm)
+    if err < tol:
+        return 0, err, 0.0, 1
+    change = np.inf
+    for k in range(1, max_iter + 1):
+        dr2 = 0.0
+        r2 = 0.0
+        for a in range(nc):
+            o = a * dim
+            B = blocks[a]
+            rn = r[o]
+            r1 = r[o + 1]
+            if dim == 3:
+                rt2 = r[o + 2]
+                bn = x[o] - (B[0, 0] * rn + B[0, 1] * r1 + B[0, 2] * rt2)
+                b1 = x[o + 1] - (B[1, 0] * rn + B[1, 1] * r1 + B[1, 2] * rt2)
+                b2 = x[o + 2] - (B[2, 0] * rn + B[2, 1] * r1 + B[2, 2] * rt2)
+                pn, p1, p2 = _contact_3d(B, bn, b1, b2, mu[a], rho_err[a], rn, r1, rt2, scan_c, scan_s)
+            else:
+                rt2 = 0.0
+                bn = x[o] - (B[0, 0] * rn + B[0, 1] * r1)
+                b1 = x[o + 1] - (B[1, 0] * rn + B[1, 1] * r1)
+                pn, p1 = _contact_2d(B, bn, b1, mu[a], rho_err[a], rn, r1)
+                p2 = 0.0
+            if omega != 1.0:
+                pn, p1, p2 = _project(rn + omega * (pn - rn), r1 + omega * (p1 - r1),
+                                      rt2 + omega * (p2 - rt2), mu[a])
+            d0 = pn - rn
+            d1 = p1 - r1
+            d2 = p2 - rt2
+            if d0 != 0.0 or d1 != 0.0 or d2 != 0.0:
+                r[o] = pn
+                r[o + 1] = p1
+                _add_column(Wc, indptr, indices, data, sparse, o, d0, x)
+                _add_column(Wc, indptr, indices, data, sparse, o + 1, d1, x)
+                if dim == 3:
+                    r[o + 2] = p2
+                    _add_column(Wc, indptr, indices, data, sparse, o + 2, d2, x)
+                dr2 += d0 * d0 + d1 * d1 + d2 * d2
+            r2 += pn * pn + p1 * p1 + p2 * p2
+        change = math.sqrt(dr2) / max(math.sqrt(r2), 1e-300)
+        if k % refresh == 0:
+            _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+        err = _error(r, x, mu, rho_err, dim, qnorm)
+        if not (math.isfinite(err) and math.isfinite(change)):
+            return k, err, change, 2
+        if err < tol:
+            _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+            err = _error(r, x, mu, rho_err, dim, qnorm)
+            if err < tol:
+                return k, err, change, 1
+    return max_iter, err, change, 0
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Semismooth Newton on the Alart-Curnier function
+# ----------------------------------------------------------------------------------------------------------
+@numba.njit(cache=True)
+def _alart_curnier(r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho: np.ndarray, dim: int,
+                   F: np.ndarray, M: np.ndarray) -> float:
+    """Alart-Curnier function ``F(r)`` and the blocks ``M`` of one element of its generalized Jacobian.
+
+    Per contact, with ``d_n = r_n - rho_n x_n``, ``d_t = r_t - rho_t x_t`` (``rho[a] = (rho_n, rho_t)``)
+    and ``R = mu max(0, d_n)``::
+
+        F_n = r_n - max(0, d_n),      F_t = r_t - P_{|.| <= R}(d_t)
+
+    and ``dF/dr = (I - M) + M diag(rho) W`` with ``M`` block diagonal: ``M_nn = [d_n > 0]``; sticking
+    (``|d_t| < R``): ``M_tt = I``; sliding: ``M_tt = R/|d_t| (I - u u^T)``, ``M_tn = mu [d_n > 0] u``,
+    ``u = d_t/|d_t|``. An open contact has ``M = 0`` (its Newton step sets ``r`` to 0).
+
+    Returns ``||F||^2 / 2``.
+    """
+    nc = mu.size
+    th = 0.0
+    for a in range(nc):
+        o = a * dim
+        ra, rt = rho[a, 0], rho[a, 1]
+        for i in range(dim):
+            for j in range(dim):
+                M[a, i, j] = 0.0
+        dn = r[o] - ra * x[o]
+        pn = dn if dn > 0.0 else 0.0
+        F[o] = r[o] - pn
+        R = mu[a] * pn
+        z1 = r[o + 1] - rt * x[o + 1]
+        z2 = r[o + 2] - rt * x[o + 2] if dim == 3 else 0.0
+        nz = math.sqrt(z1 * z1 + z2 * z2)
+        if dn > 0.0:
+            M[a, 0, 0] = 1.0
+        if nz <= R:
+            p1, p2 = z1, z2
+            if R > 0.0:
+                for i in range(1, dim):
+                    M[a, i, i] = 1.0
+        else:
+            u1, u2 = z1 / nz, z2 / nz
+            p1, p2 = R * u1, R * u2
+            if dn > 0.0:
+                M[a, 1, 0] = mu[a] * u1
+                if dim == 3:
+                    M[a, 2, 0] = mu[a] * u2
+                    f = R / nz
+                    M[a, 1, 1] = f * (1.0 - u1 * u1)
+                    M[a, 1, 2] = -f * u1 * u2
+                    M[a, 2, 1] = -f * u2 * u1
+                    M[a, 2, 2] = f * (1.0 - u2 * u2)
+        F[o + 1] = r[o + 1] - p1
+        th += F[o] * F[o] + F[o + 1] * F[o + 1]
+        if dim == 3:
+            F[o + 2] = r[o + 2] - p2
+            th += F[o + 2] * F[o + 2]
+    return 0.5 * th
+
+
+@numba.njit(cache=True)
+def _ac_merit(r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho: np.ndarray, dim: int) -> float:
+    """``||F(r)||^2 / 2`` of :func:`_alart_curnier` without the Jacobian."""
+    th = 0.0
+    for a in range(mu.size):
+        o = a * dim
+        ra, rt = rho[a, 0], rho[a, 1]
+        dn = r[o] - ra * x[o]
+        pn = dn if dn > 0.0 else 0.0
+        R = mu[a] * pn
+        z1 = r[o + 1] - rt * x[o + 1]
+        z2 = r[o + 2] - rt * x[o + 2] if dim == 3 else 0.0
+        nz = math.sqrt(z1 * z1 + z2 * z2)
+        if nz > R:
+            z1 *= R / nz
+            z2 *= R / nz
+        th += (r[o] - pn) ** 2 + (r[o + 1] - z1) ** 2
+        if dim == 3:
+            th += (r[o + 2] - z2) ** 2
+    return 0.5 * th
+
+
+# ----------------------------------------------------------------------------------------------------------
 # Python front end
 # ----------------------------------------------------------------------------------------------------------
 def _check_mu_scalar(mu: float) -> float:
@@ -422,43 +835,281 @@ def _check_vector(v, m: int, name: str) -> np.ndarray:
     return v
 
 
+@dataclass
+class _Problem:
+    """Checked problem data shared by the solver drivers."""
+
+    W: np.ndarray | sp.csc_matrix
+    q: np.ndarray
+    mu: np.ndarray
+    dim: int
+    rho_err: np.ndarray
+    Wc: np.ndarray
+    indptr: np.ndarray
+    indices: np.ndarray
+    data: np.ndarray
+    sparse: bool
+    blocks: np.ndarray | None = None
+
+    @property
+    def nc(self) -> int:
+        """Number of contacts."""
+        return self.mu.size
+
+    def x_of(self, r: np.ndarray) -> np.ndarray:
+        """``W r + q`` computed afresh."""
+        x = np.empty(self.q.size)
+        _recompute_x(self.Wc, self.indptr, self.indices, self.data, self.sparse, self.q, r, x)
+        return x
+
+    def error(self, r: np.ndarray, x: np.ndarray) -> float:
+        """:func:`natural_map_error` of ``r`` given its ``x = W r + q``."""
+        return float(_error(r, x, self.mu, self.rho_err, self.dim, _blocked_norm(self.q, self.rho_err,
+                                                                                 self.dim)))
+
+    def nsgs(self, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, omega: float = 1.0
+             ) -> tuple[int, float, float, int]:
+        """Up to ``max_iter`` NSGS sweeps in place (:func:`_nsgs_kernel`): (sweeps, error, change, status)."""
+        if self.blocks is None:
+            self.blocks = np.ascontiguousarray(_diag_blocks(self.W, self.dim))
+        return _nsgs_kernel(self.Wc, self.indptr, self.indices, self.data, self.sparse, self.blocks, self.q,
+                            self.mu, self.rho_err, self.dim, r, x, float(tol), int(max_iter), _REFRESH,
+                            float(omega), _SCAN_COS, _SCAN_SIN)
+
+
+def _newton_direction(P: _Problem, F: np.ndarray, M: np.ndarray, rho: np.ndarray, eta: float
+                      ) -> np.ndarray | None:
+    """Solve ``(J + eta M) d = -F`` with ``J = (I - M) + M rho W`` (see :func:`_alart_curnier`).
+
+    Open contacts (``M_a = 0``) have ``d_a = -F_a``; the system is solved on the others only, by LU
+    (dense) or SuperLU (sparse). ``eta M`` is ``W -> W + (eta / rho_a) I`` on the active rows, a
+    proximal regularization that makes ``J`` invertible when ``W`` is rank-deficient.
+
+    Returns None if the matrix is singular or the step is not finite.
+    """
+    dim, nc = P.dim, P.nc
+    d = -F
+    act = np.flatnonzero(np.any(M.reshape(nc, -1) != 0.0, axis=1))
+    if act.size == 0:
+        return d
+    idx = (act[:, None] * dim + np.arange(dim)).ravel()
+    rc = np.empty((act.size, dim))
+    rc[:, 0] = rho[act, 0]
+    rc[:, 1:] = rho[act, 1:2]
+    RM = M[act] * rc[:, None, :]
+    D = np.eye(dim)[None] - M[act] + eta * M[act]
+    d_open = d.copy()
+    d_open[idx] = 0.0
+    rhs = -F[idx]
+    if np.any(d_open):
+        Wd = (P.W @ d_open)[idx]
+        rhs -= np.einsum("aij,aj->ai", RM, Wd.reshape(-1, dim)).ravel()
+    nA = act.size
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            if P.sparse:
+                Wcc = P.W[idx][:, idx]
+                ptr = np.arange(nA + 1)
+                RMb = sp.bsr_matrix((RM, ptr[:-1], ptr), shape=(idx.size, idx.size))
+                Db = sp.bsr_matrix((D, ptr[:-1], ptr), shape=(idx.size, idx.size))
+                J = (Db + RMb @ Wcc).tocsc()
+                sol = spla.splu(J).solve(rhs)
+            else:
+                Wcc = P.W[np.ix_(idx, idx)]
+                J = np.einsum("aij,ajk->aik", RM, Wcc.reshape(nA, dim, idx.size)).reshape(idx.size, idx.size)
+                Jv = J.reshape(nA, dim, nA, dim)
+                Jv[np.arange(nA), :, np.arange(nA), :] += D
+                lu, piv = sla.lu_factor(J, check_finite=False)
+                u = np.abs(np.diag(lu))
+                if not u.min() > 1e-15 * u.max():
+                    return None
+                sol = sla.lu_solve((lu, piv), rhs, check_finite=False)
+        except (RuntimeError, ValueError, np.linalg.LinAlgError):
+            return None
+    if not np.all(np.isfinite(sol)):
+        return None
+    d[idx] = sol
+    return d
+
+
+@dataclass
+class _Counts:
+    """Work done by a driver: Gauss-Seidel sweeps and Newton steps."""
+
+    sweeps: int = 0
+    steps: int = 0
+    fallbacks: int = 0
+
+    @property
+    def total(self) -> int:
+        return self.sweeps + self.steps
+
+
+# Newton safeguards (see _newton_driver), chosen on the FCLIB problems (benchmarks/results/solver_suite.md).
+_NEWTON_MEMORY = 10         # non-monotone line search: compare with the largest of the last 10 merits
+_NEWTON_STALL = 10          # safeguard when 10 steps in a row do not halve the best error
+_NEWTON_FALLBACK = 10       # first NSGS fallback: 10 sweeps, doubled while Newton makes no progress
+_NEWTON_ETA = (1e-6, 1e-2)  # proximal regularization eta = clip(error, 1e-6, 1e-2)
+
+
+def _ac_rho(P: _Problem, factor: float) -> np.ndarray:
+    """Alart-Curnier parameters ``(rho_n, rho_t)`` per contact: ``factor / ||W_aa||_2`` for both.
+
+    (Separate ``1/W_nn`` and ``1/||W_tt||_2`` were tried: no better on the FCLIB problems, and worse on
+    fc2d_granularflowonwall_02020_00213.)
+    """
+    return np.repeat(P.rho_err[:, None] * factor, 2, axis=1)
+
+
+def _newton_driver(P: _Problem, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int,
+                   rho_factor: float, n: _Counts) -> tuple[float, float, int]:
+    """Semismooth Newton on the Alart-Curnier function, safeguarded, in place on ``r`` and ``x``.
+
+    - Direction: ``(J + eta M) d = -F`` (:func:`_newton_direction`) with ``eta = clip(error, 1e-6, 1e-2)``:
+      a proximal term ``W -> W + (eta/rho_a) I`` that keeps the matrix invertible when ``W`` is
+      rank-deficient or slightly indefinite (multibody problems) and costs little near the solution.
+    - Step: non-monotone Armijo rule (Grippo-Lampariello-Lucidi) on the merit ``||F||^2/2`` against the
+      largest of the last 10 merits, at most 30 halvings. A monotone rule stalls on several FCLIB problems,
+      the active set creeping by one contact per step.
+    - Safeguard, when the direction fails (singular matrix, no acceptable step) or 10 steps in a row do not
+      halve the best natural-map error: from a nonzero start, the first time, Newton starts again from
+      ``r = 0`` (Newton from a warm start far from the solution stalls on some rank-deficient problems where
+      it converges from 0); otherwise NSGS sweeps (10, doubled each time Newton made no progress since the
+      previous fallback, at most 1000), after which Newton resumes with a fresh line-search memory.
+
+    ``x = W r + q`` is recomputed exactly after every step. ``n.total`` (sweeps + steps) is capped by
+    ``max_iter``.
+
+    Returns (error, change, status) with status 1 converged, 0 max_iter, 2 non-finite.
+    """
+    rho = _ac_rho(P, rho_factor)
+    F = np.empty(r.size)
+    M = np.empty((P.nc, P.dim, P.dim))
+    err = P.error(r, x)
+    change = 0.0
+    if err < tol:
+        return err, change, 1
+    fb = _NEWTON_FALLBACK
+    progress = True  # Newton halved the best error since the last fallback
+    restarted = not np.any(r)
+    hist: list[float] = []
+    best_err, since_best = err, 0
+    while n.total < max_iter:
+        th = _alart_curnier(r, x, P.mu, rho, P.dim, F, M)
+        hist = (hist + [th])[-_NEWTON_MEMORY:]
+        eta = min(max(err, _NEWTON_ETA[0]), _NEWTON_ETA[1])
+        d = _newton_direction(P, F, M, rho, eta)
+        accepted = False
+        if d is not None:
+            Wd = P.W @ d
+            ref = max(hist)
+            alpha = 1.0
+            for _ in range(30):
+                r_new = r + alpha * d
+                if _ac_merit(r_new, x + alpha * Wd, P.mu, rho, P.dim) <= ref - 1e-4 * alpha * th:
+                    accepted = True
+                    break
+                alpha *= 0.5
+        n.steps += 1
+        if accepted:
+            change = alpha * np.linalg.norm(d) / max(np.linalg.norm(r_new), 1e-300)
+            r[:] = r_new
+            x[:] = P.x_of(r)
+            err = P.error(r, x)
+            if not (math.isfinite(err) and math.isfinite(change)):
+                return err, change, 2
+            if err < tol:
+                return err, change, 1
+            if err < 0.5 * best_err:
+                best_err, since_best, progress = err, 0, True
+            else:
+                since_best += 1
+        if accepted and since_best < _NEWTON_STALL:
+            continue
+        n.fallbacks += 1
+        hist, since_best = [], 0
+        if not restarted:
+            restarted = True
+            r[:] = 0.0
+            x[:] = P.q
+            err = P.error(r, x)
+            best_err, progress = err, True
+            continue
+        fb = fb if progress else min(2 * fb, 1000)
+        k = min(fb, max_iter - n.total)
+        if k <= 0:
+            break
+        its, err, change, status = P.nsgs(r, x, tol, k)
+        n.sweeps += its
+        if status != 0:
+            return err, change, status
+        progress = False
+        best_err = min(best_err, err)
+    return err, change, 0
+
+
 def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, dim: int,
           method: str = "uzawa", tol: float = 1e-10, max_iter: int = 10000, r0: np.ndarray | None = None,
           rho: float | None = None, raise_on_failure: bool = False) -> LocalResult:
     """Solve the local frictional contact problem ``x = W r + q``, ``r`` and ``x`` satisfying Coulomb's law.
 
-    ``method="uzawa"`` is the paper's Algorithm 1 as a Gauss-Seidel sweep over contacts, with eq. (31)
-    corrected to use the full local ``x^a`` (own term ``W_aa r^a`` included)::
+    Every method stops when :func:`natural_map_error` ``< tol`` (checked on ``x = W r + q`` recomputed
+    exactly), starts from ``r0`` projected on the cones (zero by default), and reports non-convergence in
+    the returned :class:`LocalResult` (``converged=False`` with a message) or by raising.
 
-        r* = r^a - rho_a (x^a + mu |x_t^a| e_n),   r^a <- Proj_K(r*),   x += W[:, a] (r^a_new - r^a_old)
+    Methods:
 
-    ``x`` is updated incrementally, so a sweep costs one column product per contact whose force changed
-    (``O(m^2)`` dense, ``O(nnz)`` sparse), and is recomputed exactly every 200 sweeps and before declaring
-    convergence. The iteration stops when :func:`natural_map_error` ``< tol``.
+    - ``"uzawa"``: the paper's Algorithm 1 as a Gauss-Seidel sweep over contacts, with eq. (31)
+      corrected to use the full local ``x^a`` (own term ``W_aa r^a`` included)::
 
-    A sparse ``W`` is used as CSC (columns are what the update needs); a dense one through its transpose.
+          r* = r^a - rho_a (x^a + mu |x_t^a| e_n),   r^a <- Proj_K(r*),   x += W[:, a] (r^a_new - r^a_old)
+
+      ``x`` is updated incrementally, so a sweep costs one column product per contact whose force changed
+      (``O(m^2)`` dense, ``O(nnz)`` sparse), and is recomputed exactly every 200 sweeps and before declaring
+      convergence. ``iterations`` counts sweeps; ``rho`` multiplies the step ``1/||W_aa||_2``.
+    - ``"nsgs"``: non-smooth Gauss-Seidel (Siconos's NSGS idea): the same sweep, but each contact's force is
+      replaced by the exact solution of its own one-contact problem ``x^a = W_aa r^a + b^a`` with the others
+      fixed (2D: open / stick / slip+ / slip- enumerated; 3D: open, stick, or sliding with the direction
+      found as a root of a trigonometric equation). Same cost per sweep as ``"uzawa"``, no step length, and
+      usually far fewer sweeps, above all when the blocks ``W_aa`` are ill-conditioned. ``iterations``
+      counts sweeps; ``rho`` (in ``(0, 2)``) relaxes the update, ``r^a <- P_K(r^a + rho (r^a_exact -
+      r^a))``.
+    - ``"newton"``: semismooth Newton on the Alart-Curnier function (parameter ``rho_a = 1/||W_aa||_2``,
+      times ``rho``), with a vanishing proximal regularization of the Jacobian (rank-deficient ``W``), a
+      non-monotone Armijo line search on ``||F||^2``, and safeguards when it stalls: one restart from
+      ``r = 0`` if it started elsewhere, then NSGS sweeps (see :func:`_newton_driver`). One dense LU (sparse
+      LU for a sparse ``W``) of the closed contacts' rows per step, ``O(m^3)`` dense: about ``m/8`` sweeps'
+      worth. ``iterations`` counts Newton steps plus fallback sweeps.
+    - ``"auto"`` (recommended): NSGS in windows of 10 sweeps while the error's rate over the last window
+      projects fewer remaining sweeps than ``m`` (the measured cost of about 10 Newton steps), then
+      ``"newton"`` from there. Easy problems (FE contact, most small ones) are solved by NSGS alone; slow
+      ones (rank-deficient multibody ``W``) get Newton. No dense Newton above 6000 unknowns. ``iterations``
+      counts sweeps plus Newton steps; ``rho`` is passed to the Newton phase.
+
+    A sparse ``W`` is used as CSC (columns are what the sweeps need); a dense one through its transpose.
 
     Args:
         W: Delassus matrix ``(m, m)``, ``m = dim * nc``, dense array or scipy sparse matrix.
         q: Free relative displacement, length ``m`` (gaps in the normal rows).
         mu: Friction coefficient, scalar or one per contact, ``>= 0``.
         dim: 2 or 3.
-        method: ``"uzawa"``.
+        method: One of :data:`METHODS`: ``"uzawa"``, ``"nsgs"``, ``"newton"``, ``"auto"``.
         tol: Tolerance on the unit-free natural-map error.
-        max_iter: Maximum number of sweeps.
+        max_iter: Maximum number of iterations (sweeps, Newton steps, or their sum; see the methods).
         r0: Initial guess (warm start), projected on the cones; zero by default.
-        rho: Optional factor multiplying the default per-contact step ``1/||W_aa||_2``.
+        rho: Optional factor: Uzawa step, NSGS relaxation, Alart-Curnier parameter (see the methods).
         raise_on_failure: Raise :class:`LocalSolverError` instead of returning ``converged=False``.
 
     Returns:
         A :class:`LocalResult`. ``converged`` is False (with a message) when ``max_iter`` is reached or a
-        non-finite value appears.
+        non-finite value appears; ``r`` is then the last iterate and ``x = W r + q`` its displacement.
 
     Raises:
         ValueError: invalid argument (the message names it).
         LocalSolverError: no convergence and ``raise_on_failure``.
     """
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
     W, q, mu_arr, dim = _check_problem(W, q, mu, dim)
     m = q.size
@@ -470,13 +1121,14 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     if rho is not None and not (isinstance(rho, (int, float, np.floating)) and math.isfinite(rho)
                                 and rho > 0):
         raise ValueError(f"rho: expected a finite factor > 0, got {rho!r}")
+    if method == "nsgs" and rho is not None and not rho < 2.0:
+        raise ValueError(f"rho: the NSGS relaxation factor must lie in (0, 2), got {rho!r}")
     r = np.zeros(m) if r0 is None else _check_vector(r0, m, "r0")
 
     if nc == 0:
         return LocalResult(np.zeros(0), np.zeros(0), 0, 0.0, True, method, "no contacts", 0.0)
 
     rho_err = block_rho(W, dim)
-    rho_vec = rho_err * (1.0 if rho is None else float(rho))
     if r0 is not None:
         # A warm start from another problem may lie outside the cones.
         _project_all(r, mu_arr, dim)
@@ -495,23 +1147,89 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         sparse = False
     x = np.empty(m)
     _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
-    its, err, change, status = _uzawa_kernel(Wc, indptr, indices, data, sparse, q, mu_arr, rho_vec, rho_err,
-                                              dim, r, x, float(tol), int(max_iter), _REFRESH)
-    converged = status == 1
+    counts = _Counts()
+    if method == "uzawa":
+        rho_vec = rho_err * (1.0 if rho is None else float(rho))
+        its, err, change, status = _uzawa_kernel(Wc, indptr, indices, data, sparse, q, mu_arr, rho_vec,
+                                                  rho_err, dim, r, x, float(tol), int(max_iter), _REFRESH)
+        counts.sweeps = its
+    else:
+        P = _Problem(W, q, mu_arr, dim, rho_err, Wc, indptr, indices, data, sparse)
+        if method == "nsgs":
+            its, err, change, status = P.nsgs(r, x, tol, max_iter, 1.0 if rho is None else float(rho))
+            counts.sweeps = its
+        elif method == "newton":
+            err, change, status = _newton_driver(P, r, x, tol, max_iter, 1.0 if rho is None else float(rho),
+                                                 counts)
+        else:
+            err, change, status = _auto_driver(P, r, x, tol, max_iter, 1.0 if rho is None else float(rho),
+                                               counts)
+        its = counts.total
+        if status != 2 and not _in_cones(r, mu_arr, dim):
+            # Newton iterates may leave the cones by rounding: keep the projection if it is as good.
+            rp = r.copy()
+            _project_all(rp, mu_arr, dim)
+            xp = P.x_of(rp)
+            ep = P.error(rp, xp)
+            if ep < tol or ep <= err:
+                r, x, err = rp, xp, ep
+                status = 1 if ep < tol else status
+    converged = status == 1 and bool(np.all(np.isfinite(r)))
     if status == 0:
         # Report the x of the returned r, not the incrementally updated one.
         _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+    unit = {"uzawa": "sweeps", "nsgs": "sweeps"}.get(method, "iterations")
+    detail = "" if method in ("uzawa", "nsgs") else (f" ({counts.sweeps} NSGS sweeps, {counts.steps} Newton "
+                                                     f"steps)")
     if converged:
-        message = f"converged in {its} sweeps: error {err:.3e} < tol {tol:.1e}"
+        message = f"converged in {its} {unit}{detail}: error {err:.3e} < tol {tol:.1e}"
     elif status == 2:
-        message = (f"non-finite value after {its} sweeps (error {err}, change {change}); "
+        message = (f"non-finite value after {its} {unit}{detail} (error {err}, change {change}); "
                    f"tolerance {tol:.1e} not reached")
     else:
-        message = (f"not converged after max_iter = {its} sweeps: error {err:.3e} >= tol {tol:.1e} "
+        message = (f"not converged after max_iter = {its} {unit}{detail}: error {err:.3e} >= tol {tol:.1e} "
                    f"(last relative change of r {change:.3e})")
     if not converged and raise_on_failure:
         raise LocalSolverError(f"local solver {method!r}: {message}")
-    return LocalResult(r, x, int(its), float(err), converged, method, message, float(change))
+    return LocalResult(r, x, int(its), float(err), converged, method, message, float(change),
+                       int(counts.sweeps), int(counts.steps))
+
+
+def _in_cones(r: np.ndarray, mu: np.ndarray, dim: int) -> bool:
+    R = r.reshape(-1, dim)
+    return bool(np.all(R[:, 0] >= 0.0) and np.all(np.linalg.norm(R[:, 1:], axis=1) <= mu * R[:, 0]))
+
+
+# "auto": NSGS windows of 10 sweeps, Newton once the projected remaining sweeps exceed m (10 Newton steps at
+# about m/8 sweeps each, measured); no dense Newton above 6000 unknowns (an LU costs minutes there).
+_AUTO_WINDOW = 10
+_AUTO_DENSE_MAX = 6000
+
+
+def _auto_driver(P: _Problem, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, rho_factor: float,
+                 n: _Counts) -> tuple[float, float, int]:
+    """NSGS while it is cheaper than Newton, then Newton (see :func:`solve`, ``method="auto"``)."""
+    m = r.size
+    err = P.error(r, x)
+    if err < tol:
+        return err, 0.0, 1
+    newton_ok = P.sparse or m <= _AUTO_DENSE_MAX
+    change = 0.0
+    while n.total < max_iter:
+        prev = err
+        its, err, change, status = P.nsgs(r, x, tol, min(_AUTO_WINDOW, max_iter - n.total))
+        n.sweeps += its
+        if status != 0 or not newton_ok:
+            if status != 0:
+                return err, change, status
+            continue
+        rate = (err / prev) ** (1.0 / its) if prev > 0.0 else 0.0
+        remaining = math.log(tol / err) / math.log(rate) if 0.0 < rate < 1.0 else np.inf
+        if remaining > m:
+            break
+    if n.total >= max_iter:
+        return err, change, 0
+    return _newton_driver(P, r, x, tol, max_iter, rho_factor, n)
 
 
 def contact_states(r: np.ndarray, x: np.ndarray, mu: float | np.ndarray, dim: int,

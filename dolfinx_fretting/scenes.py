@@ -256,7 +256,10 @@ class LoadingSettings(_Section):
 class SolverSettings(_Section):
     """Local (contact) solver and the factorisation behind W."""
 
-    local_method: Literal["uzawa"] = "uzawa"
+    #: Local solver of the per-increment path: the paper's "uzawa", "nsgs" (exact one-contact solves),
+    #: "newton" (semismooth, safeguarded) or "auto" (see local_solvers.solve). The compiled cycle loop is
+    #: Uzawa-based; another method here runs cycles by the per-increment path.
+    local_method: Literal["uzawa", "nsgs", "newton", "auto"] = "uzawa"
     #: Unit-free tolerance of the local solver's error measure.
     local_tol: float = Field(1e-10, gt=0, lt=1)
     local_max_iter: int = Field(20000, ge=1)

@@ -631,8 +631,8 @@ class _Run:
         lo = sc.loading
         N = lo.cycles
         n = lo.increments_per_cycle
-        use_kernel = sc.solver.cycle_kernel and not (lo.normal_force_controlled or lo.tangential_force_controlled
-                                                     or self.model.plastic is not None)
+        use_kernel = sc.solver.cycle_kernel and sc.solver.local_method == "uzawa" and not (
+            lo.normal_force_controlled or lo.tangential_force_controlled or self.model.plastic is not None)
         self.cycle_mode = "compiled" if use_kernel else "python"
         every = sc.output.history_every
         loop_cycles = set(sc.output.loop_cycles)

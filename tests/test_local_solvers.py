@@ -275,7 +275,7 @@ def test_zero_contacts():
         (dict(mu=-0.1), "mu"),
         (dict(mu=np.array([0.1, 0.2, 0.3])), "mu"),
         (dict(dim=4), "dim"),
-        (dict(method="newton"), "method"),
+        (dict(method="bogus"), "method"),
         (dict(tol=0.0), "tol"),
         (dict(max_iter=0), "max_iter"),
         (dict(r0=np.zeros(3)), "r0"),
