@@ -254,6 +254,44 @@ def _add_column(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: n
 
 
 @numba.njit(cache=True)
+def _set_contact(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, sparse: bool, dim: int,
+                 o: int, pn: float, p1: float, p2: float, r: np.ndarray, x: np.ndarray) -> float:
+    """r^a <- (pn, p1[, p2]) keeping x = W r + q up to date; returns |change of r^a|^2."""
+    d0 = pn - r[o]
+    d1 = p1 - r[o + 1]
+    d2 = p2 - (r[o + 2] if dim == 3 else 0.0)
+    if d0 != 0.0 or d1 != 0.0 or d2 != 0.0:
+        r[o] = pn
+        r[o + 1] = p1
+        _add_column(Wc, indptr, indices, data, sparse, o, d0, x)
+        _add_column(Wc, indptr, indices, data, sparse, o + 1, d1, x)
+        if dim == 3:
+            r[o + 2] = p2
+            _add_column(Wc, indptr, indices, data, sparse, o + 2, d2, x)
+        return d0 * d0 + d1 * d1 + d2 * d2
+    return 0.0
+
+
+@numba.njit(cache=True)
+def _end_of_sweep(k: int, refresh: int, Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray,
+                  sparse: bool, q: np.ndarray, r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho_err: np.ndarray,
+                  dim: int, qnorm: float, tol: float, change: float) -> tuple[float, int]:
+    """Error after sweep k and the outcome: 1 converged, 2 non-finite, -1 go on."""
+    if k % refresh == 0:
+        _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+    err = _error(r, x, mu, rho_err, dim, qnorm)
+    if not (math.isfinite(err) and math.isfinite(change)):
+        return err, 2
+    if err < tol:
+        # Confirm on the exact x: the incremental update accumulates rounding.
+        _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+        err = _error(r, x, mu, rho_err, dim, qnorm)
+        if err < tol:
+            return err, 1
+    return err, -1
+
+
+@numba.njit(cache=True)
 def _uzawa_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, sparse: bool,
                   q: np.ndarray, mu: np.ndarray, rho: np.ndarray, rho_err: np.ndarray, dim: int,
                   r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int
@@ -280,31 +318,13 @@ def _uzawa_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data:
             # Predictor on De Saxce's modified displacement with the full local x (own term included).
             pn, p1, p2 = _project(r[o] - ra * (x[o] + mu[a] * nxt), r[o + 1] - ra * x[o + 1],
                                   rt2 - ra * x2, mu[a])
-            d0 = pn - r[o]
-            d1 = p1 - r[o + 1]
-            d2 = p2 - rt2
-            if d0 != 0.0 or d1 != 0.0 or d2 != 0.0:
-                r[o] = pn
-                r[o + 1] = p1
-                _add_column(Wc, indptr, indices, data, sparse, o, d0, x)
-                _add_column(Wc, indptr, indices, data, sparse, o + 1, d1, x)
-                if dim == 3:
-                    r[o + 2] = p2
-                    _add_column(Wc, indptr, indices, data, sparse, o + 2, d2, x)
-                dr2 += d0 * d0 + d1 * d1 + d2 * d2
+            dr2 += _set_contact(Wc, indptr, indices, data, sparse, dim, o, pn, p1, p2, r, x)
             r2 += pn * pn + p1 * p1 + p2 * p2
         change = math.sqrt(dr2) / max(math.sqrt(r2), 1e-300)
-        if k % refresh == 0:
-            _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
-        err = _error(r, x, mu, rho_err, dim, qnorm)
-        if not (math.isfinite(err) and math.isfinite(change)):
-            return k, err, change, 2
-        if err < tol:
-            # Confirm on the exact x: the incremental update accumulates rounding.
-            _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
-            err = _error(r, x, mu, rho_err, dim, qnorm)
-            if err < tol:
-                return k, err, change, 1
+        err, status = _end_of_sweep(k, refresh, Wc, indptr, indices, data, sparse, q, r, x, mu, rho_err, dim, qnorm,
+                                    tol, change)
+        if status >= 0:
+            return k, err, change, status
     return max_iter, err, change, 0
 
 
@@ -598,30 +618,13 @@ def _nsgs_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
             if omega != 1.0:
                 pn, p1, p2 = _project(rn + omega * (pn - rn), r1 + omega * (p1 - r1),
                                       rt2 + omega * (p2 - rt2), mu[a])
-            d0 = pn - rn
-            d1 = p1 - r1
-            d2 = p2 - rt2
-            if d0 != 0.0 or d1 != 0.0 or d2 != 0.0:
-                r[o] = pn
-                r[o + 1] = p1
-                _add_column(Wc, indptr, indices, data, sparse, o, d0, x)
-                _add_column(Wc, indptr, indices, data, sparse, o + 1, d1, x)
-                if dim == 3:
-                    r[o + 2] = p2
-                    _add_column(Wc, indptr, indices, data, sparse, o + 2, d2, x)
-                dr2 += d0 * d0 + d1 * d1 + d2 * d2
+            dr2 += _set_contact(Wc, indptr, indices, data, sparse, dim, o, pn, p1, p2, r, x)
             r2 += pn * pn + p1 * p1 + p2 * p2
         change = math.sqrt(dr2) / max(math.sqrt(r2), 1e-300)
-        if k % refresh == 0:
-            _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
-        err = _error(r, x, mu, rho_err, dim, qnorm)
-        if not (math.isfinite(err) and math.isfinite(change)):
-            return k, err, change, 2
-        if err < tol:
-            _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
-            err = _error(r, x, mu, rho_err, dim, qnorm)
-            if err < tol:
-                return k, err, change, 1
+        err, status = _end_of_sweep(k, refresh, Wc, indptr, indices, data, sparse, q, r, x, mu, rho_err, dim, qnorm,
+                                    tol, change)
+        if status >= 0:
+            return k, err, change, status
     return max_iter, err, change, 0
 
 
