@@ -219,6 +219,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
         V = problem.V
         self.u = fem.Function(V, name="displacement")        # committed
         self._trial = fem.Function(V)
+        self._work = (fem.Function(V), fem.Function(V))  # u_pred and the contact correction, reused
         self._rhs = problem.K.createVecRight()
         self._z = problem.K.createVecRight()
         self._fint = fem.petsc.create_vector(self.state.residual_form)
@@ -317,7 +318,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
             if refresh:
                 refreshed_at = it
             # u_pred = u_i - K^-1 R
-            z = fem.Function(self.problem.V)
+            z = self._work[0]
             self._solve_into(op, R, z)
             u_pred = z
             u_pred.x.array[:] = u_i.x.array - z.x.array
@@ -325,7 +326,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
             # u_new = u_pred + K^-1 H^T r
             self._z.getArray()[:] = self._contact_force(solved.r)
             fem.petsc.set_bc(self._z, self.problem.bcs, scale=0.0)
-            c = fem.Function(self.problem.V)
+            c = self._work[1]
             self._solve_into(op, self._z, c)
             u_new = c
             u_new.x.array[:] = u_pred.x.array + c.x.array
