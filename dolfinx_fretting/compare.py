@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
-from .plots import _length_unit, _mm
+from .plots import _figure, _length_unit, _mm, _save
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -302,20 +302,6 @@ def format_table(rows: list[dict[str, Any]]) -> str:
 
 
 # Pictures: helpers ----------------------------------------------------------------------------------------
-def _figure(figsize: tuple[float, float]) -> Figure:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=figsize)
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    fig.savefig(path, dpi=110)
-    return path
-
-
 def _obstacle_note(runs: Sequence[RunData]) -> str:
     """The obstacle of the runs for a subtitle (one text when all runs agree, else per run)."""
     texts = {r.label: str(r.summary["obstacle"]) for r in runs if r.summary.get("obstacle")}
