@@ -27,10 +27,10 @@ __all__ = ["read_table", "read_profiles", "ContactProfiles", "write_contact_xdmf
            "XDMF_FIELDS", "STATE_NAMES"]
 
 #: Columns of the tables that hold text; every other column is numeric.
-_TEXT_COLUMNS = frozenset({"stage", "regime"})
+_TEXT_COLUMNS = frozenset({"stage", "regime", "jump_bound"})
 #: Numeric columns that hold integers (counts, indices, state codes).
 _INT_COLUMNS = frozenset({"increment", "cycle", "step", "node", "state", "n_open", "n_stick", "n_slip",
-                          "local_iterations", "load_solves"})
+                          "local_iterations", "load_solves", "jump"})
 #: Per-node columns of ``contact_profiles.csv`` after ``position``.
 _PROFILE_VALUES = ("gap", "pressure", "shear", "slip", "relative_tangential", "wear", "state")
 #: Point attributes of ``contact.xdmf`` (``state``: 0 open, 1 stick, 2 slip).
@@ -42,7 +42,7 @@ STATE_NAMES = {0: "open", 1: "stick", 2: "slip"}
 def read_table(path: str | Path) -> dict[str, np.ndarray]:
     """Read one of a run's CSV tables as a dict of columns.
 
-    Text columns (``stage``, ``regime``) are arrays of ``str``, integer columns (``increment``, ``node``,
+    Text columns (``stage``, ``regime``, ``jump_bound``) are arrays of ``str``, integer columns (``increment``, ``node``,
     ``state``, ...) ``int64`` and the others ``float64``. The table may be incomplete: a last line without
     its newline (a write in progress or cut short) and lines with the wrong number of fields are skipped,
     and a value that is not a number reads as NaN (an integer column that holds one stays ``float64``).

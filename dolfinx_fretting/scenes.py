@@ -172,11 +172,33 @@ class WearSettings(_Section):
     k: float = Field(0.0, ge=0)
     #: Physical cycles per simulated cycle (the wear coefficient used is k * acceleration).
     acceleration: float = Field(1.0, ge=1.0)
+    #: Cycle jumping (``dolfinx_fretting.cycle_jump``): simulate a cycle with the real k, extrapolate the
+    #: wear gap over dN cycles chosen under the bounds below and the explicit stability limit, repeat.
+    cycle_jump: bool = False
+    #: Largest wear-gap increase of one jump, as a fraction of the contact element size.
+    jump_wear_fraction: float = Field(0.1, gt=0, le=1)
+    #: Largest predicted pressure change of one jump, as a fraction of the cycle's peak pressure.
+    jump_pressure_change: float = Field(0.05, gt=0, le=1)
+    #: Most cycles one jump may stand for.
+    jump_max: int = Field(1000, ge=1, le=100_000_000)
+    #: A fixed jump (cycles) instead of the automatic choice, for studies: the bounds and the stability
+    #: limit are still computed and reported, not enforced (a jump past the limit makes edge spikes).
+    jump_forced: int | None = Field(None, ge=1, le=100_000_000)
 
     @model_validator(mode="after")
     def _k_given(self) -> WearSettings:
         if self.law == "archard" and self.k <= 0:
             raise _range_error("wear.k", self.k, "k > 0 (1/MPa) with wear.law = 'archard'")
+        if self.cycle_jump and self.law != "archard":
+            raise _range_error("wear.cycle_jump", self.cycle_jump, "false without a wear law (nothing to extrapolate)")
+        if self.cycle_jump and self.acceleration != 1.0:
+            # Both stretch a simulated cycle over several physical ones; the jump does it under error and
+            # stability control, the k-scaling does not, and together they would multiply the step.
+            raise _range_error("wear.acceleration", self.acceleration,
+                               "1 with wear.cycle_jump = true (use one of the two: the jump controls its "
+                               "step, the k-scaling does not)")
+        if self.jump_forced is not None and not self.cycle_jump:
+            raise _range_error("wear.jump_forced", self.jump_forced, "unset unless wear.cycle_jump = true")
         return self
 
     @property
@@ -350,6 +372,15 @@ class Scene(_Section):
         if len(c.plane_normal) != 2:
             raise _range_error("contact.plane_normal", c.plane_normal,
                                "a 2-vector: the geometries built in are two-dimensional (plane strain)")
+        return self
+
+    @model_validator(mode="after")
+    def _jump_elastic(self) -> Scene:
+        # The jump extrapolates the wear gap only; a plastic state still evolving (ratcheting) would not
+        # follow, and the stability limit uses the elastic W.
+        if self.wear.cycle_jump and self.material.model != "elastic":
+            raise _range_error("wear.cycle_jump", True, "false for an elastoplastic body (the jump "
+                               "extrapolates the wear gap, not the plastic state)")
         return self
 
     @model_validator(mode="after")

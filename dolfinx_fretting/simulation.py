@@ -30,6 +30,7 @@ no trace in the wear gap, the tables or the checkpoint.
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 import time
@@ -340,6 +341,12 @@ class _Run:
         self.k = scene.wear.k_effective
         self.k_once = scene.wear.k if scene.wear.law == "archard" else 0.0
         self.snapshots = _snapshot_cycles(scene)
+        # Cycle-jump bookkeeping (scene key wear.cycle_jump): the last simulated cycle's wear rate, the last
+        # jump and the jump its bounds allowed, counts, the accumulated error estimate, the limits.
+        self.jump_state: dict[str, Any] = {
+            "rate": None, "last": 1, "free": 1, "simulated": 0, "jumps": 0, "largest": 1, "error": 0.0,
+            "bound": "none", "stability_limit": math.inf, "monotone_limit": math.inf, "exceeded": 0,
+            "min_stability_limit": math.inf}
         if checkpoint is None:
             self.state = RunState.initial(model)
             sizes, xdmf_started = None, False
@@ -378,6 +385,9 @@ class _Run:
             raise SimulationError("--resume: the checkpoint's contact set does not match the scene's mesh")
         if meta.get("last_targets") is not None:
             self.last_targets = tuple(meta["last_targets"])
+        if meta.get("jump") is not None:
+            self.jump_state.update(meta["jump"])
+            self.jump_state["rate"] = ck["jump_rate"].copy() if ck["jump_rate"].size else None
         body = self.model.plastic
         if body is not None:
             if meta.get("ranks") != self.comm.size:
@@ -411,10 +421,13 @@ class _Run:
                     "energy": st.energy, "local_iterations": st.local_iterations, "sizes": sizes,
                     "xdmf_started": self.writer.xdmf_started, "last_row": st.last_row,
                     "last_cycle_row": st.last_cycle_row, "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
-                    "last_targets": getattr(self, "last_targets", None), "ranks": self.comm.size}
+                    "last_targets": getattr(self, "last_targets", None), "ranks": self.comm.size,
+                    "jump": {k: v for k, v in self.jump_state.items() if k != "rate"}}
+            rate = self.jump_state["rate"]
             tmp = self.out / (CHECKPOINT + ".tmp.npz")
             np.savez(tmp, meta=json.dumps(meta, default=_jsonable), d=st.d, y=st.y, r=st.r, gw=st.gw,
-                     r_warm=st.r_warm if st.r_warm is not None else np.zeros(0), **plastic)
+                     r_warm=st.r_warm if st.r_warm is not None else np.zeros(0),
+                     jump_rate=rate if rate is not None else np.zeros(0), **plastic)
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
             os.replace(tmp, self.out / CHECKPOINT)
@@ -642,17 +655,33 @@ class _Run:
             from tqdm import tqdm
             progress = tqdm(total=N, initial=self.state.cycle, unit="cycle", desc=sc.name, leave=False,
                             mininterval=1.0)
-        for cycle in range(self.state.cycle + 1, N + 1):
+        jumping = sc.wear.cycle_jump
+        # A jump lands on (never skips) the cycles whose outputs are asked for, and on the last one.
+        landings = sorted((self.snapshots | {c for c in loop_cycles if 1 <= c <= N}) | {N})
+        cycle = self.state.cycle + 1
+        while cycle <= N:
             t0 = time.perf_counter()
             keep = cycle in self.snapshots
             write_history = keep or cycle == 1 or cycle % every == 0 or cycle in loop_cycles
+            st = self.state
+            saved = (st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row,
+                     st.r_warm)
             if use_kernel:
-                hists, keeps = self._kernel_cycle(cycle, keep)
+                hists, keeps = self._kernel_cycle(cycle, keep or jumping)
             else:
-                hists, keeps = self._python_cycle(cycle, keep)
+                hists, keeps = self._python_cycle(cycle, keep or jumping)
+            jump = {}
+            if jumping:
+                room = next(c for c in landings if c > cycle) - cycle if cycle < N else 1
+                try:
+                    jump = self._jump(cycle, hists, keeps, saved[4], room)
+                except SimulationError:  # the simulated cycle is not committed either
+                    (st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row,
+                     st.r_warm) = saved
+                    raise
             dt_cycle = time.perf_counter() - t0
-            crow = self._cycle_row(cycle, hists, dt_cycle)
-            self.state.cycle = cycle
+            crow = self._cycle_row(cycle, hists, dt_cycle, jump)
+            self.state.cycle = cycle + jump.get("jump", 1) - 1
             self.state.last_cycle_row = crow
             if write_history:
                 self._write_history(cycle, hists)
@@ -664,7 +693,7 @@ class _Run:
                 self._fields(float(last[0]["increment"]), last[3], last[0]["face_pressure"])
             self.writer.flush()
             if progress is not None:
-                progress.update(1)
+                progress.update(self.state.cycle - cycle + 1)
             now = time.perf_counter()
             due = now - self.last_checkpoint >= sc.output.checkpoint_interval
             if self.comm.size > 1:  # clocks differ between ranks: rank 0 decides for all (collective below)
@@ -675,7 +704,9 @@ class _Run:
                 t_report = now
                 self.say(f"[{sc.name}] cycle {cycle}/{N}: max wear depth {crow['max_wear_depth']:.4g} mm, "
                          f"energy {crow['dissipated_energy']:.4g}, {crow['regime']}, p_max(end) "
-                         f"{crow['max_pressure_end']:.4g} MPa")
+                         f"{crow['max_pressure_end']:.4g} MPa"
+                         + (f", jump {crow['jump']} ({crow['jump_bound']})" if jumping else ""))
+            cycle = self.state.cycle + 1
         if progress is not None:
             progress.close()
 
@@ -687,7 +718,8 @@ class _Run:
                 "newton_delta_2", "cutbacks", "yielded_points"]
         self.writer.history_block(head, np.column_stack([hists[c] for c in cols]), "cycle")
 
-    def _cycle_row(self, cycle: int, h: dict[str, np.ndarray], wall: float) -> dict[str, Any]:
+    def _cycle_row(self, cycle: int, h: dict[str, np.ndarray], wall: float,
+                   jump: dict[str, Any] | None = None) -> dict[str, Any]:
         sc = self.scene
         Q = h["tangential_force"]
         disp = h["tangential_displacement"] if sc.loading.tangential_kind == "displacement" \
@@ -698,7 +730,13 @@ class _Run:
         loaded = (h["n_stick"] + h["n_slip"]) > 0
         min_stick = int(h["n_stick"][loaded].min()) if loaded.any() else 0
         gross = bool(np.any((h["n_stick"] == 0) & (h["n_slip"] > 0)))
-        return {"cycle": cycle, "equivalent_cycles": cycle * sc.wear.acceleration, "dissipated_energy": E,
+        jump = jump or {}
+        n_jump = jump.get("jump", 1)
+        return {"cycle": cycle, "equivalent_cycles": (cycle + n_jump - 1) * sc.wear.acceleration,
+                "jump": n_jump, "jump_bound": jump.get("bound", "none"),
+                "jump_stability_limit": jump.get("stability_limit", 0.0),
+                "jump_error_estimate": jump.get("error", 0.0),
+                "wear_error_estimate": jump.get("error_total", 0.0), "dissipated_energy": E,
                 "wear_area": float(h["wear_area"][-1]), "max_wear_depth": float(h["max_wear_depth"][-1]),
                 "tangential_force_max": float(Q.max()), "tangential_force_min": float(Q.min()),
                 "displacement_max": float(disp.max()), "displacement_min": float(disp.min()),
@@ -803,6 +841,52 @@ class _Run:
                 keeps.append((row, out_x[j], out_y[j], out_r[j], out_gw[j], out_states[j]))
         return h, keeps
 
+    # Cycle jumps -----------------------------------------------------------------------------------
+    def _jump(self, cycle: int, h: dict[str, np.ndarray], keeps: list, gw_start: np.ndarray,
+              room: int) -> dict[str, Any]:
+        """After simulated cycle ``cycle``: the error of the previous jump, the next jump dN and the wear gap
+        extrapolated over its dN - 1 cycles (:mod:`dolfinx_fretting.cycle_jump`). Decided on rank 0,
+        broadcast; raises SimulationError (before anything is committed) if a forced jump would wear more
+        than a contact element."""
+        from .cycle_jump import analyse_cycle, choose_jump, jump_error
+
+        sc, st, cs, js = self.scene, self.state, self.model.contact, self.jump_state
+        w = sc.wear
+        h_e = self.model.body.contact_mesh_size
+        result = None
+        if self.rank0:
+            a = analyse_cycle(self.model.W, cs.dim, cs.tributary, np.array([k[5] for k in keeps]),
+                              np.array([k[1] for k in keeps]), np.array([k[3] for k in keeps]), gw_start, st.gw,
+                              sc.loading.normal_force_controlled)
+            err = jump_error(js["rate"], a.rate, js["last"]) if js["rate"] is not None else 0.0
+            dN, bound, free = choose_jump(a, self.k, h_e, w.jump_wear_fraction, w.jump_pressure_change, w.jump_max,
+                                          js["free"], room)
+            if w.jump_forced is not None:
+                dN, bound, free = min(w.jump_forced, room), "forced", w.jump_forced
+            result = (a.rate, err, dN, bound, free, a.stability_limit(self.k), a.monotone_limit(self.k))
+        if self.comm.size > 1:
+            result = self.comm.bcast(result, root=0)
+        rate, err, dN, bound, free, stab, mono = result
+        added = dN * float(rate.max(initial=0.0))
+        if added > h_e:
+            raise SimulationError(
+                f"cycle {cycle}: a jump of {dN} cycles would wear up to {added:.3g} mm, more than the contact "
+                f"element size {h_e:.3g} mm (the explicit update is unstable there); lower wear.jump_forced "
+                f"(now {w.jump_forced}; stability limit here {stab:.4g} cycles)")
+        if dN > 1:
+            extra = dN - 1
+            st.gw = st.gw + extra * rate
+            st.increment += extra * sc.loading.increments_per_cycle
+            st.energy += extra * float(h["dissipated_energy"].sum())
+        js.update(rate=rate, last=dN, free=free, simulated=js["simulated"] + 1, jumps=js["jumps"] + (dN > 1),
+                  largest=max(js["largest"], dN), error=js["error"] + err, bound=bound,
+                  stability_limit=stab, monotone_limit=mono, exceeded=js["exceeded"] + (dN > stab),
+                  min_stability_limit=min(js["min_stability_limit"], stab))
+        if dN > stab and js["exceeded"] == 1:
+            self.say(f"[{sc.name}] WARNING: cycle {cycle}: forced jump {dN} exceeds the stability limit "
+                     f"{stab:.4g} cycles: expect oscillating edge spikes")
+        return {"jump": dN, "bound": bound, "stability_limit": stab, "error": err, "error_total": js["error"]}
+
     # Summary ----------------------------------------------------------------------------------------
     def summary(self, error: str | None) -> dict[str, Any]:
         sc, model, st = self.scene, self.model, self.state
@@ -829,6 +913,8 @@ class _Run:
                             "tangent_refactorizations": model.plastic.refactorizations})
         if sc.loading.cycles > 0:
             summary["cycle_path"] = getattr(self, "cycle_mode", "python")
+            if sc.wear.cycle_jump:
+                summary["cycle_jump"] = self._jump_summary()
             if hasattr(self, "pattern_cache"):
                 c = self.pattern_cache.counts
                 summary["pattern_solves"] = {"accepted": int(c[0]), "rejected": int(c[1]), "factorizations": int(c[2])}
@@ -850,6 +936,26 @@ class _Run:
             summary["error"] = error
         return summary
 
+    def _jump_summary(self) -> dict[str, Any]:
+        """The jumps taken, the error estimate and the stability limits (``summary.cycle_jump``)."""
+        from .cycle_jump import hertz_jump_limit
+
+        sc, js = self.scene, self.jump_state
+        finite = lambda v: v if math.isfinite(v) else None  # noqa: E731 - JSON has no infinity
+        out = {"simulated_cycles": js["simulated"], "jumps": js["jumps"], "largest_jump": js["largest"],
+               "wear_error_estimate": js["error"], "last_bound": js["bound"],
+               "stability_limit_last": finite(js["stability_limit"]),
+               "monotone_limit_last": finite(js["monotone_limit"]),
+               "stability_limit_min": finite(js["min_stability_limit"]),
+               "jumps_past_stability_limit": js["exceeded"], "forced": sc.wear.jump_forced,
+               "bounds": {"wear_fraction": sc.wear.jump_wear_fraction,
+                          "pressure_change": sc.wear.jump_pressure_change, "max_jump": sc.wear.jump_max}}
+        lo, m = sc.loading, sc.material
+        if sc.geometry.kind == "half_cylinder" and lo.tangential_kind == "displacement" and self.k > 0:
+            out["hertz_estimate_0.37h/(k delta E*)"] = hertz_jump_limit(
+                self.model.body.contact_mesh_size, self.k, abs(lo.tangential_amplitude), m.E / (1 - m.nu**2))
+        return out
+
     def _modelled(self) -> dict[str, str]:
         """What this run assembled and iterated, and what it skipped (the scene decides)."""
         sc, model = self.scene, self.model
@@ -866,6 +972,8 @@ class _Run:
                                                           if plastic is not None else "")),
             "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0)",
             "wear": (f"Archard, k = {sc.wear.k} 1/MPa x acceleration {sc.wear.acceleration}"
+                     + (", cycle jumps (wear gap extrapolated between simulated cycles)" if sc.wear.cycle_jump
+                        else "")
                      if sc.wear.law == "archard" else "none (wear gap stays zero)"),
             "contact": f"{cs.nc} candidate nodes" + (f" within {window} mm of the first contact point"
                                                      if window is not None else " (whole contact face)"),
