@@ -863,6 +863,8 @@ class _Run:
                                           js["free"], room)
             if w.jump_forced is not None:
                 dN, bound, free = min(w.jump_forced, room), "forced", w.jump_forced
+            if cycle == 1:  # it starts from the preload, not from a cycle: its wear is not the cycles' rate
+                dN, bound = 1, "first_cycle"
             result = (a.rate, err, dN, bound, free, a.stability_limit(self.k), a.monotone_limit(self.k))
         if self.comm.size > 1:
             result = self.comm.bcast(result, root=0)

@@ -113,14 +113,18 @@ def test_choose_jump_names_the_binding_bound():
     assert choose_jump(a, 1.0, h, 0.1, 1.0, 1000, 1000, 10**6)[0] == 1
 
 
-def test_error_estimate_is_exact_for_a_linear_rate():
-    """Rate r(N) = a + b N: Euler over dN cycles from N0 misses sum_{i<dN} b i = b dN (dN - 1)/2, which
-    (dN - 1)/2 |r(N0 + dN) - r(N0)| is exactly."""
+def test_error_estimate_bounds_a_monotone_rate():
+    """Rate r(N) = a + b N: Euler over dN cycles from N0 misses sum_{i<dN} b i = b dN (dN - 1)/2, half the
+    estimate (dN - 1) |r(N0 + dN) - r(N0)|; a rate that jumps at once to its end value (the worst monotone
+    case) misses (dN - 1) |r_end - r_start|, the estimate itself."""
     a, b, N0, dN = 2e-6, 3e-9, 40, 25
     rate = lambda N: np.array([a + b * N, 0.5 * (a + b * N)])  # noqa: E731
     exact = sum(rate(N0 + i) for i in range(dN))
     euler = dN * rate(N0)
-    assert jump_error(rate(N0), rate(N0 + dN), dN) == pytest.approx(np.abs(exact - euler).max(), rel=1e-12)
+    assert jump_error(rate(N0), rate(N0 + dN), dN) == pytest.approx(2 * np.abs(exact - euler).max(), rel=1e-12)
+    r0, r1 = rate(N0), rate(N0) + np.array([1e-7, 0.0])
+    worst = r0 + (dN - 1) * r1  # cycle N0 at the start rate, the dN - 1 others already at the end rate
+    assert jump_error(r0, r1, dN) == pytest.approx(np.abs(worst - euler).max(), rel=1e-9)
     assert jump_error(rate(N0), rate(N0 + 1), 1) == 0.0
     assert hertz_jump_limit(0.01, 8.5e-9, 0.03, 130000.0) == pytest.approx(0.37 * 0.01 / (8.5e-9 * 0.03 * 130000))
 
@@ -208,16 +212,18 @@ def test_forced_jump_wearing_more_than_an_element_is_refused_and_leaves_no_trace
     scene = load_scene("cylinder-flat", CYL + ["loading.cycles=5000", "output.snapshot_cycles=[5000]",
                                                "output.loop_cycles=[5000]", "wear.cycle_jump=true",
                                                "wear.jump_forced=4000", "output.contact_profiles=false"])
-    with pytest.raises(SimulationError, match=r"cycle 1: a jump of 4000 cycles would wear up to"):
+    # Cycle 1 is never jumped from (it starts from the preload); cycle 2 would jump 4000 cycles.
+    with pytest.raises(SimulationError, match=r"cycle 2: a jump of 4000 cycles would wear up to"):
         run_scene(scene, tmp_path, quiet=True)
     s = json.loads((tmp_path / "summary.json").read_text())
-    assert s["cycles"] == 0 and s["increments"] == scene.loading.normal_increments
-    assert len(read_table(tmp_path / "cycles.csv")["cycle"]) == 0
+    cyc = read_table(tmp_path / "cycles.csv")
+    assert s["cycles"] == 1 and list(cyc["cycle"]) == [1] and s["increments"] == 4 + 16
     with np.load(tmp_path / CHECKPOINT) as data:
         meta = json.loads(str(data["meta"]))
-        assert meta["cycle"] == 0 and meta["jump"]["simulated"] == 0
-        pre = read_table(tmp_path / "history.csv")
-        assert data["gw"].max() == pytest.approx(pre["max_wear_depth"][-1], rel=1e-12)  # the preload's wear only
+        assert meta["cycle"] == 1 and meta["jump"]["simulated"] == 1
+        # The wear gap is cycle 1's: nothing of cycle 2 (simulated, then refused) is kept.
+        assert data["gw"].max() == pytest.approx(cyc["max_wear_depth"][0], rel=1e-12)
+        assert s["max_wear_depth"] == pytest.approx(cyc["max_wear_depth"][0], rel=1e-12)
 
 
 class _Crash(RuntimeError):
