@@ -159,7 +159,7 @@ def main(argv=None) -> int:
             f"{platform.node()}; 2 cores shared with other jobs while this ran: wall times are noisy, the "
             "speed-ups are ratios of runs made one after the other in one process (numba compiled by a warm-up run).",
             "", "Errors are against the every-cycle run of the same scene (the error of the jump alone). The error "
-            "estimate is the run's own: the sum over its jumps of (dN - 1)/2 max|rate after - rate before|.", ""]
+            "estimate is the run's own: the sum over its jumps of (dN - 1) max|rate after - rate before| (a bound when each contact's rate moves monotonically over a jump).", ""]
     Path(args.out).write_text("\n".join(head + lines) + "\n")
     for v in results.values():
         for r in ([v.get("reference")] + v.get("runs", [])) if isinstance(v, dict) and "runs" in v else []:

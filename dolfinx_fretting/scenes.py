@@ -165,6 +165,13 @@ class WearSettings(_Section):
     the outputs record both (``wear_acceleration``, ``equivalent_cycles``). It is exact when the contact
     state changes little over ``acceleration`` cycles. The preload and a monotonic load happen once and
     wear with ``k`` itself.
+
+    ``cycle_jump`` is the controlled alternative (:mod:`dolfinx_fretting.cycle_jump`): each simulated cycle
+    uses the real ``k`` and the wear gap is extrapolated over a jump of cycles chosen from
+    ``jump_wear_fraction`` (wear per jump / contact element size), ``jump_pressure_change`` (predicted
+    pressure change per jump / peak pressure), ``jump_max`` and the explicit stability limit of the wear
+    update. It refuses ``acceleration != 1``: both stretch a simulated cycle over several physical ones,
+    and a fixed k-scaling inside the jump would multiply its step without the control.
     """
 
     law: Literal["none", "archard"] = "none"

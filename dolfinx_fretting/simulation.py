@@ -21,6 +21,10 @@ Two ways through the increments give the same answer:
 The local problem is solved on rank 0 and its result broadcast, so every rank holds the same contact
 state whatever the partition.
 
+With ``wear.cycle_jump`` a simulated cycle is followed by a jump: the wear gap is extrapolated over the
+cycles :mod:`dolfinx_fretting.cycle_jump` allows (the tables then have one row per simulated cycle, the
+counters count physical cycles and increments).
+
 A cyclic run writes a checkpoint (``checkpoint.npz``) every ``output.checkpoint_interval`` seconds, at
 snapshot cycles and at the end; ``run_scene(..., resume=True)`` continues from it with the same results
 as an uninterrupted run. A failed increment is reported with its cycle and step; the failed cycle leaves
