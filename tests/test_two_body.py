@@ -189,3 +189,41 @@ def test_two_body_scene_errors(override, fragments):
 def test_elastic_flat_needs_a_cylinder():
     with pytest.raises(SceneError, match="contact.obstacle"):
         load_scene("stromberg-block", ["contact.obstacle='elastic_flat'"])
+
+
+def _cycle_end_profiles(folder):
+    """{cycle: (position, pressure, wear, state)} at the last increment of each kept cycle."""
+    d = np.genfromtxt(folder / "contact_profiles.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    out = {}
+    for cycle in sorted(set(d["cycle"].tolist()) - {0}):
+        sel = d[d["cycle"] == cycle]
+        s = sel[sel["increment"] == sel["increment"].max()]
+        out[cycle] = (s["position"], s["pressure"], s["wear"], s["state"])
+    return out
+
+
+@pytest.mark.slow
+def test_partial_slip_wear_final_state(tmp_path):
+    """Force-controlled partial slip (+-Q*, phi = Q*/(mu P) = 0.5) worn to its final state with a large
+    hypothetical k: the slip zone wears until it carries nothing; the stick zone |x| < c keeps its width and
+    carries P with p_inf(x) = (2P/(pi a^2)) sqrt(c^2 - x^2) + (Q*/mu) / (pi sqrt(c^2 - x^2)); the deepest wear
+    is at x = a sqrt(1 - phi/2) (there p * slip, integrated over the approach, is largest)."""
+    h, phi = 0.01, 0.5
+    Q = phi * MU * P
+    s = run_scene(load_scene("hertz", TWO_BODY + [
+        f"loading.tangential_force={Q}", "loading.cycles=80", "loading.increments_per_cycle=16",
+        "wear.law='archard'", "wear.k=3e-5", "output.snapshot_cycles=[40, 80]"]), tmp_path, quiet=True)
+    a, _ = hertz_line_contact(P, R, E_STAR)
+    c = a * np.sqrt(1 - phi)
+    x, p, w, state = _cycle_end_profiles(tmp_path)[80]
+    # The stick zone keeps its width: its nodes span 2c to one element (c = 0.1081 mm, nodes every 10 um).
+    assert abs(s["stick_width"] / 2 - c) <= h
+    # Deepest wear at a sqrt(1 - phi/2) = 0.1324 mm on both sides, to one element (measured 0.130).
+    for side in (x < 0, x > 0):
+        assert abs(abs(x[side][np.argmax(w[side])]) - a * np.sqrt(1 - phi / 2)) <= h
+    # Pressure in the stick zone tends to p_inf: within 5 % away from its integrable edge singularity
+    # (|x| <= c - 2h; measured +1.1 .. +1.6 % after 80 cycles, from -18 % after 10: the approach is
+    # asymptotic, and the discrete stick zone ends at a node, slightly inside c).
+    inner = np.abs(x) <= c - 2 * h
+    p_inf = 2 * P / (np.pi * a**2) * np.sqrt(c**2 - x[inner] ** 2) + (Q / MU) / (np.pi * np.sqrt(c**2 - x[inner] ** 2))
+    assert np.allclose(p[inner], p_inf, rtol=0.05)
