@@ -46,7 +46,7 @@ BOUNDS = [("tight (f_w 0.02, f_p 0.01)", ["wear.jump_wear_fraction=0.02", "wear.
           ("default (f_w 0.1, f_p 0.05)", []),
           ("loose (f_w 0.5, f_p 0.25)", ["wear.jump_wear_fraction=0.5", "wear.jump_pressure_change=0.25"]),
           ("stability only (f_w 1, f_p 1)", ["wear.jump_wear_fraction=1", "wear.jump_pressure_change=1"])]
-LIMIT_SCENE = ["loading.normal_force=none", "loading.normal_displacement=0.0045", "geometry.contact_mesh_size=0.02",
+LIMIT_SCENE = ["contact.obstacle='rigid_plane'", "loading.normal_force=none", "loading.normal_displacement=0.0045", "geometry.contact_mesh_size=0.02",
                "loading.increments_per_cycle=16", "wear.k=8.5e-8"]
 
 

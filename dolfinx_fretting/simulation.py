@@ -48,7 +48,7 @@ from mpi4py import MPI
 from . import local_solvers
 from .analytic import hertz_line_contact
 from .io import _jsonable
-from .contact import ContactSet, RigidPlane, find_candidates
+from .contact import ContactSet, RigidPlane, find_candidates, find_pairs
 from .loading import LoadControlError, LoadStep, cycle_path, find_displacement, monotonic_path, preload_path, waveform
 from .scenes import Scene
 from .wear import ROW, ROW_FIELDS, commit_increment
@@ -83,19 +83,30 @@ class ContactModel:
         self.timings: dict[str, float] = {}
         g = scene.geometry
         t0 = time.perf_counter()
-        if g.kind == "half_cylinder":
+        self.two_body = scene.contact.obstacle == "elastic_flat"
+        if self.two_body:
+            self.body = meshes.cylinder_on_flat(comm, g.radius, g.flat_width, g.flat_height,
+                                                contact_mesh_size=g.contact_mesh_size,
+                                                contact_half_width=g.refined_half_width,
+                                                coarse_mesh_size=g.coarse_mesh_size, quadrilateral=g.quadrilateral)
+        elif g.kind == "half_cylinder":
             self.body = meshes.half_cylinder(comm, g.radius, contact_mesh_size=g.contact_mesh_size,
                                              contact_half_width=g.refined_half_width,
                                              coarse_mesh_size=g.coarse_mesh_size, quadrilateral=g.quadrilateral)
         else:
             self.body = meshes.rectangle(comm, g.width, g.height, g.nx, g.ny, quadrilateral=g.quadrilateral)
-        fixed = ["top"]
+        # Two bodies: the cylinder's top and the flat's bottom are held; the loads move the flat rigidly
+        # (a rigid motion of a body held at one face only is stress-free, so it enters the contact as the
+        # rigid plane's motion does, through q = -G D).
+        fixed = ["top", "flat_bottom"] if self.two_body else ["top"]
         self.timings["mesh_s"] = time.perf_counter() - t0
 
         surface = scene.contact.surface
         if surface not in self.body.tags:
             raise SimulationError(f"contact.surface = {surface!r} is not a boundary of the "
                                   f"{g.kind} mesh; allowed: {', '.join(sorted(self.body.tags))}")
+        # Against an elastic flat this plane is the flat's top (y = 0): its frame gives the directions of the
+        # flat's rigid motion D, so loads and total forces read as against a rigid plane.
         self.obstacle = RigidPlane(np.array(scene.contact.plane_point), np.array(scene.contact.plane_normal))
 
         material = LinearElastic(scene.material.E, scene.material.nu)
@@ -114,8 +125,12 @@ class ContactModel:
         if half_width is None and g.kind == "half_cylinder":
             half_width = g.refined_half_width
         try:
-            self.contact: ContactSet = find_candidates(self.problem.V, facets, self.obstacle, half_width,
-                                                       exclude_nodes=self.problem.fixed_nodes)
+            if self.two_body:
+                self.contact: ContactSet = find_pairs(self.problem.V, facets, self.body.facets("flat_top"),
+                                                      half_width, exclude_nodes=self.problem.fixed_nodes)
+            else:
+                self.contact = find_candidates(self.problem.V, facets, self.obstacle, half_width,
+                                               exclude_nodes=self.problem.fixed_nodes)
         except ValueError as exc:
             raise SimulationError(str(exc)) from None
 
@@ -343,7 +358,10 @@ class _Run:
         self.mu = np.full(cs.nc, scene.contact.mu)
         # The wear acceleration scales cycles only: the preload and a monotonic load happen once.
         self.k = scene.wear.k_effective
-        self.k_once = scene.wear.k if scene.wear.law == "archard" else 0.0
+        self.k_once = scene.wear.k_total if scene.wear.law == "archard" else 0.0
+        #: Largest |mean relative tangential position| of the contacts so far (small-sliding check).
+        self.max_relative_tangential = 0.0
+        self._sliding_warned = False
         self.snapshots = _snapshot_cycles(scene)
         # Cycle-jump bookkeeping (scene key wear.cycle_jump): the last simulated cycle's wear rate, the last
         # jump and the jump its bounds allowed, counts, the accumulated error estimate, the limits.
@@ -604,11 +622,37 @@ class _Run:
         if not self.scene.output.xdmf:
             return
         if self.model.plastic is not None:
-            self.writer.fields(t, self._plastic_fields())
-            return
-        p = self.model.problem
-        p.solve_contact_response(self.model.contact.H, r, self.model.face_load, pressure)
-        self.writer.fields(t, [p.u, p.von_mises()])
+            functions = self._plastic_fields()
+        else:
+            p = self.model.problem
+            p.solve_contact_response(self.model.contact.H, r, self.model.face_load, pressure)
+            functions = [p.u, p.von_mises()]
+        if self.model.two_body:
+            functions[0] = self._two_body_displacement(functions[0])
+        self.writer.fields(t, functions)
+
+    def _two_body_displacement(self, u):
+        """The displacement as the paper loads it: the flat's bottom held, the cylinder moved by -D.
+
+        The solve holds the cylinder's top and moves the flat rigidly by D (the same relative motion);
+        subtracting D on the cylinder's nodes gives the picture of the paper's set-up. A copy: ``u`` may be
+        Newton's state.
+        """
+        from dolfinx import fem
+
+        if not hasattr(self, "_u_display"):
+            V = u.function_space
+            cells = self.model.body.cell_tags.find(self.model.body.regions["cylinder"])
+            self._cylinder_nodes = fem.locate_dofs_topological(V, V.mesh.topology.dim, cells)
+            self._u_display = fem.Function(V, name="displacement")
+        frame = self.model.obstacle.frame
+        D = self.state.d[0] * frame[0] + self.state.d[1] * frame[1]
+        out = self._u_display
+        out.x.array[:] = u.x.array
+        bs = out.function_space.dofmap.index_map_bs
+        values = out.x.array.reshape(-1, bs)
+        values[self._cylinder_nodes, :D.size] -= D
+        return out
 
     def _plastic_fields(self) -> list:
         """Displacement, cell-averaged von Mises stress and equivalent plastic strain (committed state)."""
@@ -637,6 +681,7 @@ class _Run:
             if step.increment <= self.state.increment:
                 continue  # done before the checkpoint
             hist, x, y, states = self._python_increment(step)
+            self._check_small_sliding(np.array([hist["mean_relative_tangential"]]))
             self.writer.rows("history", [hist])
             self._profile(hist, x, y, self.state.r, self.state.gw, states)
             self._fields(float(step.increment), self.state.r, step.pressure)
@@ -685,6 +730,7 @@ class _Run:
                     raise
             dt_cycle = time.perf_counter() - t0
             crow = self._cycle_row(cycle, hists, dt_cycle, jump)
+            self._check_small_sliding(hists["mean_relative_tangential"])
             self.state.cycle = cycle + jump.get("jump", 1) - 1
             self.state.last_cycle_row = crow
             if write_history:
@@ -713,6 +759,37 @@ class _Run:
             cycle = self.state.cycle + 1
         if progress is not None:
             progress.close()
+
+    def write_worn_profiles(self) -> None:
+        """``worn_profiles.csv``: each body's worn depth along the contact (rank 0, at the end of a run).
+
+        Both bodies see the same pressure and slip, so each wears its share ``k_body / k_total`` of the wear
+        gap; the flat's depth is placed at the master point paired with each cylinder node.
+        """
+        import csv
+
+        cs, share = self.model.contact, self.scene.wear.slave_share
+        gw = self.state.gw
+        master_x = cs.master_points[:, 0] if cs.two_body else np.full(cs.nc, np.nan)
+        with open(self.out / "worn_profiles.csv", "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["position", "wear_gap", "cylinder_wear", "flat_position", "flat_wear"])
+            for row in zip(cs.abscissa, gw, share * gw, master_x, (1 - share) * gw):
+                w.writerow([f"{v:.12g}" for v in row])
+
+    def _check_small_sliding(self, relative_tangential: np.ndarray) -> None:
+        """Two bodies: warn once when the relative slip exceeds half a master element (pairing is fixed)."""
+        self.max_relative_tangential = max(self.max_relative_tangential,
+                                           float(np.abs(relative_tangential).max(initial=0.0)))
+        limit = 0.5 * self.scene.geometry.contact_mesh_size
+        if self.model.two_body and not self._sliding_warned and self.max_relative_tangential > limit:
+            self._sliding_warned = True
+            self.say(f"[{self.scene.name}] WARNING: relative slip {self.max_relative_tangential:.3g} mm exceeds half "
+                     f"a contact element ({limit:.3g} mm): the contact pairs are fixed in the reference "
+                     "configuration (small sliding), so the flat's displacement is taken up to "
+                     f"{self.max_relative_tangential / self.scene.geometry.contact_mesh_size:.2g} elements away "
+                     "from the point facing each cylinder node. Pressure and wear stay consistent; the flat's "
+                     "worn profile is attached to the reference pairing.")
 
     def _write_history(self, cycle: int, hists: dict[str, np.ndarray]) -> None:
         n = hists["increment"].size
@@ -902,12 +979,19 @@ class _Run:
             "delassus_method": model.delassus_method, **{k: round(v, 6) for k, v in model.timings.items()},
             "increments": st.increment, "cycles": st.cycle, "converged": error is None,
             "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
-            "wear_law": sc.wear.law, "wear_k": sc.wear.k, "wear_acceleration": sc.wear.acceleration,
+            "wear_law": sc.wear.law, "wear_k": sc.wear.k_total, "wear_acceleration": sc.wear.acceleration,
             "wear_k_effective": self.k, "equivalent_cycles": st.cycle * sc.wear.acceleration,
             "dissipated_energy": st.energy, "material_model": sc.material.model,
-            "obstacle": "rigid plane (the flat is rigid: two deformable bodies are not modelled yet)"
-            if sc.contact.obstacle == "rigid_plane" else sc.contact.obstacle,
+            "obstacle": "rigid plane (the flat is rigid)" if sc.contact.obstacle == "rigid_plane"
+            else "elastic flat (two deformable bodies of the same material, small-sliding pairing)",
         }
+        if model.two_body:
+            share = sc.wear.slave_share
+            summary.update({"wear_k_slave": sc.wear.k_total * share, "wear_k_master": sc.wear.k_total * (1 - share),
+                            "max_wear_depth_slave": share * float(st.gw.max(initial=0.0)),
+                            "max_wear_depth_master": (1 - share) * float(st.gw.max(initial=0.0)),
+                            "max_relative_tangential": self.max_relative_tangential,
+                            "small_sliding_warning": self._sliding_warned})
         if model.plastic is not None:
             ps = model.plastic.state
             local = np.array([ps.p.max(initial=0.0), ps.von_mises().max(initial=0.0)])
@@ -933,9 +1017,10 @@ class _Run:
         if st.last_cycle_row:
             summary["regime"] = st.last_cycle_row["regime"]
         if g.kind == "half_cylinder" and st.last_row:
-            a, p0 = hertz_line_contact(st.last_row["normal_force"], g.radius,
-                                       sc.material.E / (1 - sc.material.nu**2))
-            summary.update({"hertz_reference": "rigid plane, frictionless: E* = E/(1-nu^2)",
+            E_star = sc.material.E / (1 - sc.material.nu**2) / (2.0 if model.two_body else 1.0)
+            a, p0 = hertz_line_contact(st.last_row["normal_force"], g.radius, E_star)
+            summary.update({"hertz_reference": ("two identical elastic bodies: E* = E/(2(1-nu^2))" if model.two_body
+                                                else "rigid plane, frictionless: E* = E/(1-nu^2)"),
                             "hertz_half_width": a, "hertz_max_pressure": p0})
         summary["modelled"] = self._modelled()
         if error is not None:
@@ -958,8 +1043,9 @@ class _Run:
                           "pressure_change": sc.wear.jump_pressure_change, "max_jump": sc.wear.jump_max}}
         lo, m = sc.loading, sc.material
         if sc.geometry.kind == "half_cylinder" and lo.tangential_kind == "displacement" and self.k > 0:
+            E_star = m.E / (1 - m.nu**2) / (2.0 if self.model.two_body else 1.0)
             out["hertz_estimate_0.37h/(k delta E*)"] = hertz_jump_limit(
-                self.model.body.contact_mesh_size, self.k, abs(lo.tangential_amplitude), m.E / (1 - m.nu**2))
+                self.model.body.contact_mesh_size, self.k, abs(lo.tangential_amplitude), E_star)
         return out
 
     def _modelled(self) -> dict[str, str]:
@@ -977,12 +1063,16 @@ class _Run:
             "delassus": ("W of the elastic K built once" + (", W of the tangent rebuilt at each refactorisation"
                                                           if plastic is not None else "")),
             "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0)",
-            "wear": (f"Archard, k = {sc.wear.k} 1/MPa x acceleration {sc.wear.acceleration}"
+            "wear": (f"Archard, k = {sc.wear.k_total} 1/MPa x acceleration {sc.wear.acceleration}"
+                     + (f" (cylinder {sc.wear.slave_share:.3g}, flat {1 - sc.wear.slave_share:.3g} of the wear gap)"
+                        if model.two_body else "")
                      + (", cycle jumps (wear gap extrapolated between simulated cycles)" if sc.wear.cycle_jump
                         else "")
                      if sc.wear.law == "archard" else "none (wear gap stays zero)"),
             "contact": f"{cs.nc} candidate nodes" + (f" within {window} mm of the first contact point"
-                                                     if window is not None else " (whole contact face)"),
+                                                     if window is not None else " (whole contact face)")
+                       + (", each paired with a point of the elastic flat (node-to-segment, fixed pairing)"
+                          if model.two_body else ", against a rigid plane"),
             "loads": (f"{sc.loading.cycles} cycles ({getattr(self, 'cycle_mode', 'python')} path)"
                       if sc.loading.cycles > 0 else "preload and a monotonic tangential load")
                      + ("; face pressure load" if model.face_load is not None else ""),
@@ -1023,6 +1113,8 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
             run.checkpoint()  # the last complete cycle: resume from it with other solver settings
     summary = run.summary(error)
     run.writer.summary(summary)
+    if run.rank0 and scene.wear.law == "archard":
+        run.write_worn_profiles()
     run.writer.close()
     if run.rank0 and scene.output.xdmf and scene.output.contact_profiles:
         from .contact_output import write_contact_xdmf

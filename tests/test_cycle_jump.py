@@ -146,10 +146,10 @@ def test_bad_jump_settings_are_refused(overrides, message):
 
 
 # Runs ------------------------------------------------------------------------------------------------------
-# Elastic cylinder (R = 6 mm) on the rigid flat, displacement controlled (the compiled cycle loop), 20 um
+# Elastic cylinder (R = 6 mm) on a rigid flat, displacement controlled (the compiled cycle loop), 20 um
 # contact elements (35 candidates), gross slip delta = 0.03 mm in 16 increments, k = 10 x the paper's, so that
 # 400 cycles wear ~2 um and the stability limit is a few tens of cycles. ~2 s every cycle, ~0.4 s jumped.
-CYL = ["loading.normal_force=none", "loading.normal_displacement=0.0045", "geometry.contact_mesh_size=0.02",
+CYL = ["contact.obstacle='rigid_plane'", "loading.normal_force=none", "loading.normal_displacement=0.0045", "geometry.contact_mesh_size=0.02",
        "loading.increments_per_cycle=16", "wear.k=8.5e-8", "output.xdmf=false", "output.plots=false"]
 
 
