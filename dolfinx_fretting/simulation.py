@@ -147,10 +147,15 @@ class ContactModel:
 
             m, sv = scene.material, scene.solver
             law = J2Plasticity(m.E, m.nu, m.yield_stress, m.plastic_modulus)
+            elastic_cells = None
+            if self.two_body and m.plastic_body != "both":
+                other = "flat" if m.plastic_body == "cylinder" else "cylinder"
+                elastic_cells = self.body.cell_tags.find(self.body.regions[other])
             self.plastic = ElastoplasticBody(self.problem, law, self.contact.H, self.W, self.face_load,
                                              tangent=sv.newton_tangent, max_iter=sv.newton_max_iter,
                                              delta_1=sv.newton_residual_tol, delta_2=sv.newton_displacement_tol,
-                                             quadrature_degree=self.quadrature_degree)
+                                             quadrature_degree=self.quadrature_degree,
+                                             elastic_cells=elastic_cells)
 
     def automatic_window(self) -> float:
         """Candidate half-width from the Hertz estimate of the contact half-width plus a margin (mm).

@@ -248,3 +248,27 @@ def test_gross_slip_wear_in_asymptote(tmp_path):
     assert np.all(np.abs(depth[late] / asymptote[late] - 1) < 0.10), (depth[late] / asymptote[late])[::20]
     # Each body's share of the flat punch: the flat 2.9/4.8 of it.
     assert s["max_wear_depth_master"] == pytest.approx(depth[-1] * 2.9 / 4.8, rel=1e-9)
+
+
+@pytest.mark.parametrize("plastic_body", ["cylinder", "flat"])
+def test_one_body_plastic_the_other_elastic(plastic_body):
+    """material.plastic_body: a strain far beyond yield everywhere yields exactly the chosen body's points."""
+    from dolfinx import fem
+
+    from dolfinx_fretting.simulation import ContactModel
+
+    scene = load_scene("cylinder-flat", ["contact.obstacle='elastic_flat'", "geometry.contact_mesh_size=0.04",
+                                         "material.model='elastoplastic'", "material.yield_stress=840",
+                                         "material.hardening_modulus=7230", f"material.plastic_body='{plastic_body}'"])
+    model = ContactModel(scene, MPI.COMM_WORLD)
+    state = model.plastic.state
+    u = fem.Function(model.problem.V)
+    u.interpolate(lambda x: np.vstack([0.05 * x[1], 0.0 * x[0]]))  # shear strain 0.025: ~300x yield
+    state.update(u)
+    tags = model.body.cell_tags
+    cells_of = {name: np.isin(state.cells, tags.indices[tags.values == tag]) for name, tag in model.body.regions.items()}
+    chosen = np.repeat(cells_of[plastic_body], state.nq)
+    assert state.trial_p[chosen].min() > 0 and np.all(state.trial_p[~chosen] == 0)
+    assert chosen.any() and (~chosen).any()
+    model.plastic.destroy()
+    model.problem.destroy()
