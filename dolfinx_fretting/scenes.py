@@ -108,12 +108,16 @@ class MaterialSettings(_Section):
     hardening_modulus: float | None = Field(None, ge=0)
     #: Uniaxial tangent modulus E_t (MPa), 0 <= E_t < E, instead of hardening_modulus.
     tangent_modulus: float | None = Field(None, ge=0)
+    #: Two bodies (``contact.obstacle = "elastic_flat"``), elastoplastic: which body may yield; the other
+    #: stays elastic with the same E and nu.
+    plastic_body: Literal["both", "cylinder", "flat"] = "both"
 
     @model_validator(mode="after")
     def _plastic_keys(self) -> MaterialSettings:
         plastic = ("yield_stress", "hardening_modulus", "tangent_modulus")
         if self.model == "elastic":
             given = [k for k in plastic if getattr(self, k) is not None]
+            given += ["plastic_body"] if self.plastic_body != "both" else []
             if given:
                 raise ValueError(f"material.{given[0]} is given but material.model = 'elastic'; set "
                                  "material.model = 'elastoplastic' or remove it")
@@ -435,6 +439,9 @@ class Scene(_Section):
             depth = min(max(g.refined_half_width / 4, 2 * g.contact_mesh_size), g.radius / 2)
             if g.flat_height <= depth:
                 raise _range_error("geometry.flat_height", g.flat_height, f"> the refined depth {depth:g} mm")
+        elif self.material.plastic_body == "flat":
+            raise _range_error("material.plastic_body", "flat",
+                               "'both' or 'cylinder' with contact.obstacle = 'rigid_plane' (there is no flat body)")
         elif self.wear.k_master is not None and self.wear.k_master > 0:
             raise _range_error("wear.k_master", self.wear.k_master,
                                "0 or unset with contact.obstacle = 'rigid_plane' (a rigid plane does not wear)")

@@ -65,6 +65,10 @@ class SimulationError(RuntimeError):
     """An increment could not be solved, or a run cannot be resumed; the message says which, and why."""
 
 
+class _WindowTooSmall(Exception):
+    """The contact reached the candidate window's edge and the window can grow (internal: caught by the run)."""
+
+
 class ContactModel:
     """The discretised scene: body, stiffness, contact set and Delassus matrix. Collective to build.
 
@@ -120,36 +124,24 @@ class ContactModel:
                                       quadrature_degree=self.quadrature_degree)
         self.timings["assemble_s"] = time.perf_counter() - t0
 
-        facets = self.body.facet_tags.find(self.body.tags[surface])
-        half_width = scene.contact.candidate_half_width
-        if half_width is None and g.kind == "half_cylinder":
-            half_width = g.refined_half_width
-        try:
-            if self.two_body:
-                self.contact: ContactSet = find_pairs(self.problem.V, facets, self.body.facets("flat_top"),
-                                                      half_width, exclude_nodes=self.problem.fixed_nodes)
-            else:
-                self.contact = find_candidates(self.problem.V, facets, self.obstacle, half_width,
-                                               exclude_nodes=self.problem.fixed_nodes)
-        except ValueError as exc:
-            raise SimulationError(str(exc)) from None
+        self._contact_facets = self.body.facet_tags.find(self.body.tags[surface])
+        #: Candidate window half-width (mm): the scene's, or automatic (see :meth:`automatic_window`);
+        #: ``window_limit`` is how far it may grow (the refined zone of a half-cylinder).
+        self.window_limit = g.refined_half_width if g.kind == "half_cylinder" else None
+        self.window_automatic = scene.contact.candidate_half_width is None and g.kind == "half_cylinder"
+        self.half_width = self.automatic_window() if self.window_automatic else scene.contact.candidate_half_width
+        self._find_contact()
 
         t0 = time.perf_counter()
         self.problem.delassus.factorize()
         self.timings["factorize_s"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        W = self.problem.delassus.build(self.contact.H)
-        # One copy decides: the local solve must see identical input on every rank.
-        self.W = comm.bcast(W if comm.rank == 0 else None, root=0)
-        self.timings["delassus_s"] = time.perf_counter() - t0
-        self.delassus_method = self.problem.delassus.method
-
-        # A face pressure reaches the contact through q_f = H K^-1 f (one more solve with the same factor).
         self.face_load = None
-        self.q_f = np.zeros(self.contact.nc * self.contact.dim)
         if scene.loading.tangential_kind == "pressure":
             self.face_load = self.problem.face_pressure_load(scene.loading.pressure_face)
-            self.q_f = self.problem.local_response(self.contact.H, self.face_load)  # allreduced: replicated
+        t0 = time.perf_counter()
+        self._contact_operators()
+        self.timings["delassus_s"] = time.perf_counter() - t0
+        self.delassus_method = self.problem.delassus.method
 
         # Elastic-plastic: Newton with the contact inside (plasticity.ElastoplasticBody); nothing plastic is
         # built for an elastic scene.
@@ -160,10 +152,63 @@ class ContactModel:
 
             m, sv = scene.material, scene.solver
             law = J2Plasticity(m.E, m.nu, m.yield_stress, m.plastic_modulus)
+            elastic_cells = None
+            if self.two_body and m.plastic_body != "both":
+                other = "flat" if m.plastic_body == "cylinder" else "cylinder"
+                elastic_cells = self.body.cell_tags.find(self.body.regions[other])
             self.plastic = ElastoplasticBody(self.problem, law, self.contact.H, self.W, self.face_load,
                                              tangent=sv.newton_tangent, max_iter=sv.newton_max_iter,
                                              delta_1=sv.newton_residual_tol, delta_2=sv.newton_displacement_tol,
-                                             quadrature_degree=self.quadrature_degree)
+                                             quadrature_degree=self.quadrature_degree,
+                                             elastic_cells=elastic_cells)
+
+    def automatic_window(self) -> float:
+        """Candidate half-width from the Hertz estimate of the contact half-width plus a margin (mm).
+
+        ``1.5 a + 3 h``, at most the refined zone; a from the normal force (Hertz line contact with the
+        scene's E*: one elastic body on a rigid plane, or two identical bodies) or, under a prescribed
+        approach d, the geometric ``sqrt(2 R d)`` (an overestimate). The run grows the window if the
+        contact reaches its edge (wear widens a scar).
+        """
+        sc, g = self.scene, self.scene.geometry
+        m = sc.material
+        E_star = m.E / (1 - m.nu**2) / (2.0 if self.two_body else 1.0)
+        lo = sc.loading
+        if lo.normal_force is not None:
+            a, _ = hertz_line_contact(lo.normal_force, g.radius, E_star)
+        else:
+            a = float(np.sqrt(2 * g.radius * lo.normal_displacement))
+        return float(min(self.window_limit, 1.5 * a + 3 * g.contact_mesh_size))
+
+    def _find_contact(self) -> None:
+        """Candidates (rigid plane) or slave-master pairs (elastic flat) within ``half_width``. Collective."""
+        try:
+            if self.two_body:
+                self.contact: ContactSet = find_pairs(self.problem.V, self._contact_facets,
+                                                      self.body.facets("flat_top"), self.half_width,
+                                                      exclude_nodes=self.problem.fixed_nodes)
+            else:
+                self.contact = find_candidates(self.problem.V, self._contact_facets, self.obstacle, self.half_width,
+                                               exclude_nodes=self.problem.fixed_nodes)
+        except ValueError as exc:
+            raise SimulationError(str(exc)) from None
+
+    def _contact_operators(self) -> None:
+        """W = H K^-1 H^T (one copy, broadcast: the local solve must see identical input on every rank) and
+        q_f = H K^-1 f of a unit face pressure. Collective; K must be factorised."""
+        W = self.problem.delassus.build(self.contact.H)
+        self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
+        self.q_f = np.zeros(self.contact.nc * self.contact.dim)
+        if self.face_load is not None:
+            self.q_f = self.problem.local_response(self.contact.H, self.face_load)  # allreduced: replicated
+
+    def set_window(self, half_width: float) -> None:
+        """Rebuild the contact set, W and q_f for another candidate window (elastic bodies). Collective."""
+        if self.plastic is not None:
+            raise SimulationError("the candidate window of an elastic-plastic body cannot change during a run")
+        self.half_width = float(half_width)
+        self._find_contact()
+        self._contact_operators()
 
     @property
     def n_dofs(self) -> int:
@@ -362,6 +407,7 @@ class _Run:
         #: Largest |mean relative tangential position| of the contacts so far (small-sliding check).
         self.max_relative_tangential = 0.0
         self._sliding_warned = False
+        self.window_growths: list[dict[str, Any]] = []
         self.snapshots = _snapshot_cycles(scene)
         # Cycle-jump bookkeeping (scene key wear.cycle_jump): the last simulated cycle's wear rate, the last
         # jump and the jump its bounds allowed, counts, the accumulated error estimate, the limits.
@@ -403,6 +449,12 @@ class _Run:
                       ck["gw"].copy(), float(meta["energy"]), int(meta["local_iterations"]),
                       ck["r_warm"].copy() if ck["r_warm"].size else None, meta.get("last_row"),
                       meta.get("last_cycle_row"))
+        window = meta.get("window")
+        if window is not None and window != self.model.half_width:
+            self.model.set_window(window)  # the run had grown its window: the same contact set again
+            self.solver = IncrementSolver(self.model)
+            self.mu = np.full(self.model.contact.nc, self.scene.contact.mu)
+        self.window_growths = list(meta.get("window_growths", []))
         if st.gw.size != self.model.contact.nc:
             raise SimulationError("--resume: the checkpoint's contact set does not match the scene's mesh")
         if meta.get("last_targets") is not None:
@@ -444,6 +496,7 @@ class _Run:
                     "xdmf_started": self.writer.xdmf_started, "last_row": st.last_row,
                     "last_cycle_row": st.last_cycle_row, "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
                     "last_targets": getattr(self, "last_targets", None), "ranks": self.comm.size,
+                    "window": self.model.half_width, "window_growths": self.window_growths,
                     "jump": {k: v for k, v in self.jump_state.items() if k != "rate"}}
             rate = self.jump_state["rate"]
             tmp = self.out / (CHECKPOINT + ".tmp.npz")
@@ -510,8 +563,10 @@ class _Run:
         return self.scene.geometry.kind == "half_cylinder"
 
     def _window_error(self, increment: int, cycle: int, step: int) -> None:
-        cs = self.model.contact
+        cs, model = self.model.contact, self.model
         where = f"increment {increment}" + (f" (cycle {cycle}, step {step})" if cycle else "")
+        if model.plastic is None and model.window_limit is not None and model.half_width < model.window_limit:
+            raise _WindowTooSmall(where)
         raise SimulationError(
             f"{where}: the outermost contact candidates (x = {cs.abscissa[0]:.4g} .. {cs.abscissa[-1]:.4g} mm) "
             "carry load: the contact reaches the edge of the candidate window and would be truncated; widen "
@@ -534,8 +589,15 @@ class _Run:
         if self.model.plastic is not None:
             return self._plastic_increment(step)
         st = self.state
-        solved = self._local(step, st.r)
-        hist, states = self._commit(step, solved)
+        while True:
+            try:
+                solved = self._local(step, st.r)
+                hist, states = self._commit(step, solved)
+                break
+            except _WindowTooSmall as edge:
+                if step.cycle > 0:
+                    raise  # _python_cycle runs the whole cycle again
+                self._grow_window(str(edge))  # nothing of the increment was committed: solve it again
         st.increment += 1
         self.last_targets = (step.normal, step.tangential, step.pressure)
         return hist, solved.x, solved.y, states
@@ -715,6 +777,7 @@ class _Run:
             st = self.state
             saved = (st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row,
                      st.r_warm)
+            growths = len(self.window_growths)
             if use_kernel:
                 hists, keeps = self._kernel_cycle(cycle, keep or jumping)
             else:
@@ -723,7 +786,7 @@ class _Run:
             if jumping:
                 room = next(c for c in landings if c > cycle) - cycle if cycle < N else 1
                 try:
-                    jump = self._jump(cycle, hists, keeps, saved[4], room)
+                    jump = self._jump(cycle, hists, keeps, saved[4], room, len(self.window_growths) > growths)
                 except SimulationError:  # the simulated cycle is not committed either
                     (st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row,
                      st.r_warm) = saved
@@ -777,6 +840,45 @@ class _Run:
             for row in zip(cs.abscissa, gw, share * gw, master_x, (1 - share) * gw):
                 w.writerow([f"{v:.12g}" for v in row])
 
+    def _grow_window(self, where: str) -> None:
+        """Widen the candidate window by half (at least 3 elements, at most the refined zone), rebuild the
+        contact set and W, and carry the state over: new candidates start open and unworn; the relative
+        positions y are recomputed from the forces (elastic: y = W r + q exactly). Collective."""
+        model, st = self.model, self.state
+        old = model.contact
+        h = self.scene.geometry.contact_mesh_size
+        before = model.half_width
+        model.set_window(min(model.window_limit, max(1.5 * before, before + 3 * h)))
+        new = model.contact
+        where_old = {int(g): i for i, g in enumerate(old.global_nodes)}
+        src = np.array([where_old.get(int(g), -1) for g in new.global_nodes])
+        had = src >= 0
+        dim = new.dim
+
+        def carry(values: np.ndarray, per_contact: int) -> np.ndarray:
+            lead = values.shape[:-1]
+            out = np.zeros(lead + (new.nc, per_contact))
+            out[..., had, :] = values.reshape(lead + (old.nc, per_contact))[..., src[had], :]
+            return out.reshape(lead + (new.nc * per_contact,))
+
+        st.gw = carry(st.gw, 1)
+        st.r = carry(st.r, dim)
+        if st.r_warm is not None:
+            st.r_warm = carry(st.r_warm, dim)
+        self.solver = IncrementSolver(model)
+        self.mu = np.full(new.nc, self.scene.contact.mu)
+        for attr in ("_kernel_data", "pattern_cache"):
+            self.__dict__.pop(attr, None)
+        frame = model.obstacle.frame
+        D = st.d[0] * frame[0] + st.d[1] * frame[1]
+        pressure = (getattr(self, "last_targets", None) or (0.0, 0.0, 0.0))[2]
+        _, q_abs = self.solver._q(D, pressure, np.zeros(new.nc * dim), st.gw)
+        st.y = model.W @ st.r + q_abs
+        self.window_growths.append({"at": where, "from": before, "to": model.half_width, "contacts": new.nc})
+        self.say(f"[{self.scene.name}] WARNING: {where}: the contact reached the edge of the candidate window "
+                 f"(half-width {before:.4g} mm); grown to {model.half_width:.4g} mm ({new.nc} candidates) and the "
+                 "increment solved again")
+
     def _check_small_sliding(self, relative_tangential: np.ndarray) -> None:
         """Two bodies: warn once when the relative slip exceeds half a master element (pairing is fixed)."""
         self.max_relative_tangential = max(self.max_relative_tangential,
@@ -827,8 +929,16 @@ class _Run:
                 "local_iterations": int(h["local_iterations"].sum()), "wall_time_s": round(wall, 6)}
 
     def _python_cycle(self, cycle: int, keep: bool):
+        while True:
+            try:
+                return self._python_cycle_once(cycle, keep)
+            except _WindowTooSmall as edge:
+                self._grow_window(str(edge))  # the cycle was rolled back: run it again
+
+    def _python_cycle_once(self, cycle: int, keep: bool):
         saved = (self.state.increment, self.state.d, self.state.y, self.state.r, self.state.gw, self.state.energy,
                  self.state.local_iterations, self.state.last_row)
+        saved_targets = getattr(self, "last_targets", None)
         self._cycle_gw0 = self.state.gw.copy()
         rows, keeps = [], []
         try:
@@ -838,14 +948,22 @@ class _Run:
                 if keep:
                     keeps.append((hist, x, y, self.state.r, self.state.gw, states))
             self._check_wear_step(cycle, saved[4], self.state.gw)
-        except SimulationError:
+        except (SimulationError, _WindowTooSmall):
             st = self.state
             st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row = saved
+            self.last_targets = saved_targets
             raise
         h = {k: np.array([r[k] for r in rows]) for k in rows[0] if k != "stage"}
         return h, keeps
 
     def _kernel_cycle(self, cycle: int, keep: bool):
+        while True:
+            try:
+                return self._kernel_cycle_once(cycle, keep)
+            except _WindowTooSmall as edge:
+                self._grow_window(str(edge))  # the cycle was not committed: run it again
+
+    def _kernel_cycle_once(self, cycle: int, keep: bool):
         from .cycling import N_ROW, run_increments
 
         sc, st, cs = self.scene, self.state, self.model.contact
@@ -924,16 +1042,29 @@ class _Run:
 
     # Cycle jumps -----------------------------------------------------------------------------------
     def _jump(self, cycle: int, h: dict[str, np.ndarray], keeps: list, gw_start: np.ndarray,
-              room: int) -> dict[str, Any]:
+              room: int, regrown: bool = False) -> dict[str, Any]:
         """After simulated cycle ``cycle``: the error of the previous jump, the next jump dN and the wear gap
         extrapolated over its dN - 1 cycles (:mod:`dolfinx_fretting.cycle_jump`). Decided on rank 0,
         broadcast; raises SimulationError (before anything is committed) if a forced jump would wear more
-        than a contact element."""
+        than a contact element. ``regrown``: the candidate window grew during the cycle (new contact set)."""
         from .cycle_jump import analyse_cycle, choose_jump, jump_error
 
         sc, st, cs, js = self.scene, self.state, self.model.contact, self.jump_state
         w = sc.wear
         h_e = self.model.body.contact_mesh_size
+        if regrown:
+            # The contact set changed: no per-contact rate to compare with or to extrapolate from. The previous
+            # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
+            # stands for itself; jumps restart from one.
+            dim = cs.dim
+            wear = [self.k * k[3][0::dim] / cs.tributary * np.abs(k[1][1::dim]) * (k[5] == 2) for k in keeps]
+            new = float(np.sum(wear, axis=0).max(initial=0.0))  # this cycle's Archard wear per contact
+            old = float(js["rate"].max(initial=0.0)) if js["rate"] is not None else 0.0
+            err = (js["last"] - 1) * max(old, new)
+            js.update(rate=None, last=1, free=1, simulated=js["simulated"] + 1, error=js["error"] + err,
+                      bound="window_grown")
+            return {"jump": 1, "bound": "window_grown", "stability_limit": js["stability_limit"], "error": err,
+                    "error_total": js["error"]}
         result = None
         if self.rank0:
             a = analyse_cycle(self.model.W, cs.dim, cs.tributary, np.array([k[5] for k in keeps]),
@@ -1022,6 +1153,8 @@ class _Run:
             summary.update({"hertz_reference": ("two identical elastic bodies: E* = E/(2(1-nu^2))" if model.two_body
                                                 else "rigid plane, frictionless: E* = E/(1-nu^2)"),
                             "hertz_half_width": a, "hertz_max_pressure": p0})
+        summary["contact_window"] = model.half_width
+        summary["window_growths"] = self.window_growths
         summary["modelled"] = self._modelled()
         if error is not None:
             summary["error"] = error
@@ -1053,9 +1186,7 @@ class _Run:
         sc, model = self.scene, self.model
         cs = model.contact
         plastic = model.plastic
-        window = sc.contact.candidate_half_width
-        if window is None and sc.geometry.kind == "half_cylinder":
-            window = sc.geometry.refined_half_width
+        window = model.half_width
         return {
             "material": ("J2 plasticity: Newton with the contact inside each iteration, tangent "
                          f"'{sc.solver.newton_tangent}', {plastic.refactorizations} tangent refactorisations"
@@ -1069,7 +1200,11 @@ class _Run:
                      + (", cycle jumps (wear gap extrapolated between simulated cycles)" if sc.wear.cycle_jump
                         else "")
                      if sc.wear.law == "archard" else "none (wear gap stays zero)"),
-            "contact": f"{cs.nc} candidate nodes" + (f" within {window} mm of the first contact point"
+            "contact": f"{cs.nc} candidate nodes" + (f" within {window:.4g} mm of the first contact point"
+                                                     + (" (automatic: Hertz estimate plus margin"
+                                                        + (f", grown {len(self.window_growths)} time(s)"
+                                                           if self.window_growths else "") + ")"
+                                                        if model.window_automatic else "")
                                                      if window is not None else " (whole contact face)")
                        + (", each paired with a point of the elastic flat (node-to-segment, fixed pairing)"
                           if model.two_body else ", against a rigid plane"),

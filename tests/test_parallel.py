@@ -25,6 +25,9 @@ CASES = {
     "cylinder-flat": ["geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=1",
                       "loading.increments_per_cycle=8", "material.model='elastoplastic'",
                       "material.yield_stress=840", "material.hardening_modulus=7230"],
+    # Two elastic bodies, both wearing; the window grows once (a small one given) on the way.
+    "mccoll": ["geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=2",
+               "loading.increments_per_cycle=8", "contact.candidate_half_width=0.05"],
 }
 KEYS = ("normal_force", "tangential_force", "max_pressure", "max_wear_depth", "wear_area", "dissipated_energy",
         "contact_width", "stick_width")
