@@ -112,6 +112,26 @@ def _check_point(name: str, value: Sequence[float]) -> tuple[float, float]:
     return x, y
 
 
+def _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_size) -> tuple[float, ...]:
+    """Checked radius R, contact size h, refined half-width a and coarse size H (mm), defaults filled in."""
+    R = radius
+    _check("radius", R, _is_real(R) and R > 0, "radius > 0 (mm)")
+    R = float(R)
+    h = contact_mesh_size
+    _check("contact_mesh_size", h, _is_real(h) and 0 < h < R, f"0 < contact_mesh_size < radius = {R} mm")
+    h = float(h)
+    # Default: R/15 or ten elements, capped at R/2 (but never below h) for coarse meshes.
+    a = max(min(max(R / 15.0, 10.0 * h), R / 2.0), h) if contact_half_width is None else contact_half_width
+    _check("contact_half_width", a, _is_real(a) and h <= a < R,
+           f"contact_mesh_size = {h} mm <= contact_half_width < radius = {R} mm")
+    a = float(a)
+    H = max(R / 10.0, h) if coarse_mesh_size is None else coarse_mesh_size
+    _check("coarse_mesh_size", H, _is_real(H) and h <= H < R,
+           f"contact_mesh_size = {h} mm <= coarse_mesh_size < radius = {R} mm")
+    H = float(H)
+    return R, h, a, H
+
+
 # Half-cylinder ---------------------------------------------------------------------------------------------
 def half_cylinder(comm: MPI.Comm, radius: float, contact_mesh_size: float = 0.01,
                   contact_half_width: float | None = None, coarse_mesh_size: float | None = None,
@@ -171,21 +191,7 @@ def half_cylinder(comm: MPI.Comm, radius: float, contact_mesh_size: float = 0.01
             on every rank before any collective call.
         RuntimeError: if gmsh fails (raised on every rank).
     """
-    R = radius
-    _check("radius", R, _is_real(R) and R > 0, "radius > 0 (mm)")
-    R = float(R)
-    h = contact_mesh_size
-    _check("contact_mesh_size", h, _is_real(h) and 0 < h < R, f"0 < contact_mesh_size < radius = {R} mm")
-    h = float(h)
-    # Default: R/15 or ten elements, capped at R/2 (but never below h) for coarse meshes.
-    a = max(min(max(R / 15.0, 10.0 * h), R / 2.0), h) if contact_half_width is None else contact_half_width
-    _check("contact_half_width", a, _is_real(a) and h <= a < R,
-           f"contact_mesh_size = {h} mm <= contact_half_width < radius = {R} mm")
-    a = float(a)
-    H = max(R / 10.0, h) if coarse_mesh_size is None else coarse_mesh_size
-    _check("coarse_mesh_size", H, _is_real(H) and h <= H < R,
-           f"contact_mesh_size = {h} mm <= coarse_mesh_size < radius = {R} mm")
-    H = float(H)
+    R, h, a, H = _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_size)
     t = min(max(a / 4.0, 2.0 * h), R / 2.0) if refined_depth is None else refined_depth
     _check("refined_depth", t, _is_real(t) and 0 < t <= R / 2.0,
            f"0 < refined_depth <= radius / 2 = {R / 2.0} mm")
@@ -247,20 +253,7 @@ def cylinder_on_flat(comm: MPI.Comm, radius: float, flat_width: float, flat_heig
         ValueError: if an argument is out of range (the message names it and the allowed range).
         RuntimeError: if gmsh fails (raised on every rank).
     """
-    R = radius
-    _check("radius", R, _is_real(R) and R > 0, "radius > 0 (mm)")
-    R = float(R)
-    h = contact_mesh_size
-    _check("contact_mesh_size", h, _is_real(h) and 0 < h < R, f"0 < contact_mesh_size < radius = {R} mm")
-    h = float(h)
-    a = max(min(max(R / 15.0, 10.0 * h), R / 2.0), h) if contact_half_width is None else contact_half_width
-    _check("contact_half_width", a, _is_real(a) and h <= a < R,
-           f"contact_mesh_size = {h} mm <= contact_half_width < radius = {R} mm")
-    a = float(a)
-    H = max(R / 10.0, h) if coarse_mesh_size is None else coarse_mesh_size
-    _check("coarse_mesh_size", H, _is_real(H) and h <= H < R,
-           f"contact_mesh_size = {h} mm <= coarse_mesh_size < radius = {R} mm")
-    H = float(H)
+    R, h, a, H = _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_size)
     t = min(max(a / 4.0, 2.0 * h), R / 2.0)
     _check("flat_width", flat_width, _is_real(flat_width) and flat_width > 2 * a,
            f"flat_width > 2 contact_half_width = {2 * a} mm")

@@ -929,11 +929,16 @@ class _Run:
                 "local_iterations": int(h["local_iterations"].sum()), "wall_time_s": round(wall, 6)}
 
     def _python_cycle(self, cycle: int, keep: bool):
+        return self._cycle_growing_window(self._python_cycle_once, cycle, keep)
+
+    def _cycle_growing_window(self, run_cycle, cycle: int, keep: bool):
+        """Run a cycle; if the contact reaches the window's edge, grow it and run the cycle again (a cycle
+        that stopped there was rolled back or not committed)."""
         while True:
             try:
-                return self._python_cycle_once(cycle, keep)
+                return run_cycle(cycle, keep)
             except _WindowTooSmall as edge:
-                self._grow_window(str(edge))  # the cycle was rolled back: run it again
+                self._grow_window(str(edge))
 
     def _python_cycle_once(self, cycle: int, keep: bool):
         saved = (self.state.increment, self.state.d, self.state.y, self.state.r, self.state.gw, self.state.energy,
@@ -957,11 +962,7 @@ class _Run:
         return h, keeps
 
     def _kernel_cycle(self, cycle: int, keep: bool):
-        while True:
-            try:
-                return self._kernel_cycle_once(cycle, keep)
-            except _WindowTooSmall as edge:
-                self._grow_window(str(edge))  # the cycle was not committed: run it again
+        return self._cycle_growing_window(self._kernel_cycle_once, cycle, keep)
 
     def _kernel_cycle_once(self, cycle: int, keep: bool):
         from .cycling import N_ROW, run_increments
