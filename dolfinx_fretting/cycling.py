@@ -7,7 +7,8 @@ When no load is force controlled, an increment's right-hand side is known in adv
 
 with D = dn n + dt t the obstacle's motion, s the face pressure and q_f = H K^-1 f the contact
 displacement per unit face pressure. So a whole cycle (thousands in a run) can run in one compiled call:
-local Uzawa solve (:mod:`dolfinx_fretting.local_solvers`), then :func:`dolfinx_fretting.wear.commit_increment`.
+local Uzawa solve (:mod:`dolfinx_fretting.local_solvers`; on the normal rows alone when ``mu = 0``, with
+the same iterates), then :func:`dolfinx_fretting.wear.commit_increment`.
 Python only sees a cycle's outputs. The result is the same as the per-increment Python path (a test
 checks it); only the warm start may differ: ``warm = 1`` starts each increment from the same increment of
 the previous cycle (the state is nearly periodic, so few sweeps are needed), ``warm = 0`` from the
@@ -33,7 +34,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .local_solvers import _blocked_norm, _error, _recompute_x, _uzawa_kernel
+from .local_solvers import _error, _force_scale, _lcp_kernel, _recompute_x, _uzawa_kernel
 from .wear import ROW_FIELDS, commit_increment
 
 __all__ = ["run_increments", "ActivePatternCache", "N_ROW"]
@@ -208,6 +209,19 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
     empty_f = np.zeros(1)
     nfields = N_ROW - 2
     row = np.empty(nfields)
+    # Frictionless: the Uzawa sweeps run on the normal rows alone (W_nn, transposed like Wc), the iterates
+    # being those of the full sweep with mu = 0 (r_t stays 0; see local_solvers.solve).
+    normal_only = True
+    for a in range(nc):
+        if mu[a] != 0.0:
+            normal_only = False
+    nn = nc if normal_only else 1
+    Wn = np.empty((nn, nn))
+    qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
+    if normal_only:
+        for b in range(nc):
+            for a in range(nc):
+                Wn[b, a] = Wc[b * dim, a * dim]
     for j in range(n):
         for a in range(nc):
             o = a * dim
@@ -236,7 +250,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                 _pattern_rhs(q, pattern[j], r)
                 _lu_solve(lu[j], piv[j], r)
                 _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-                err = _error(r, x, mu, rho, dim, _blocked_norm(q, rho, dim))
+                err = _error(r, x, mu, rho, dim, _force_scale(q, mu, rho, dim))
                 if err < tol:
                     exact = True
                     its = 0
@@ -245,7 +259,21 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                     counts[1] += 1
                     for i in range(m):     # back to the warm start: the pattern was wrong
                         r[i] = xs[i]
-        if not exact:
+        if not exact and normal_only:
+            for a in range(nc):
+                qn[a] = q[a * dim]
+                rn[a] = r[a * dim]
+            _recompute_x(Wn, empty_i, empty_i, empty_f, False, qn, rn, xn)
+            its, err, change, status = _lcp_kernel(Wn, empty_i, empty_i, empty_f, False, qn, rho, False, 1.0, rho,
+                                                   rn, xn, tol, max_iter, refresh)
+            if status != 1:
+                return j, status, err
+            for a in range(nc):
+                r[a * dim] = rn[a]
+                for c in range(1, dim):
+                    r[a * dim + c] = 0.0
+            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)  # the slip rows too
+        elif not exact:
             _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
             its, err, change, status = _uzawa_kernel(Wc, empty_i, empty_i, empty_f, False, q, mu, rho, rho, dim,
                                                      r, x, tol, max_iter, refresh)

@@ -22,7 +22,8 @@ gradient step no longer than the block's curvature allows.
 Besides this ``"uzawa"`` method, :func:`solve` offers ``"nsgs"`` (the same Gauss-Seidel sweep with an exact
 solve of each contact's own problem, Siconos's NSGS), ``"newton"`` (a safeguarded semismooth Newton on the
 Alart-Curnier function) and ``"auto"`` (NSGS, then Newton when NSGS is slow); benchmarks/results/
-solver_suite.md compares them on the FCLIB problems.
+solver_suite.md compares them on the FCLIB problems. A frictionless problem (``mu = 0`` everywhere) is
+solved on its normal rows alone, an LCP on ``W_nn`` (see :func:`solve`).
 
 Convergence is measured by a unit-free natural-map residual (see :func:`natural_map_error`), the same for
 every method, not by the relative change of ``r`` of eq. (34), which can be small while far from the
@@ -189,18 +190,27 @@ def de_saxce_x(x: np.ndarray, mu: float | np.ndarray) -> np.ndarray:
 # Residual and solver kernels
 # ----------------------------------------------------------------------------------------------------------
 @numba.njit(cache=True)
-def _blocked_norm(v: np.ndarray, rho: np.ndarray, dim: int) -> float:
-    """|| (rho_a v^a)_a ||."""
+def _force_scale(q: np.ndarray, mu: np.ndarray, rho: np.ndarray, dim: int) -> float:
+    """Force scale of a problem from its penetrating contacts (see :func:`natural_map_error`).
+
+    ``|| (rho_a (q_n^a, min(mu_a, 1) |q_t^a|))_a ||`` over the contacts with ``q_n^a < 0``; open contacts
+    (``q_n >= 0``) add nothing.
+    """
     s = 0.0
-    for a in range(rho.size):
-        for k in range(dim):
-            s += (rho[a] * v[a * dim + k]) ** 2
+    for a in range(mu.size):
+        o = a * dim
+        if not q[o] < 0.0:
+            continue
+        q2 = q[o + 2] if dim == 3 else 0.0
+        t = min(mu[a], 1.0)
+        s += (rho[a] * q[o]) ** 2 + (rho[a] * t) ** 2 * (q[o + 1] ** 2 + q2 * q2)
     return math.sqrt(s)
 
 
 @numba.njit(cache=True)
-def _error(r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho: np.ndarray, dim: int, qnorm: float) -> float:
-    """Natural-map residual ||r - P_K(r - rho (x + mu|x_t| e_n))|| / max(||rho q||, ||r||)."""
+def _error(r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho: np.ndarray, dim: int, scale: float) -> float:
+    """Natural-map residual ||r - P_K(r - rho (x + mu|x_t| e_n))|| / max(scale, ||r||), scale from
+    :func:`_force_scale`."""
     s = 0.0
     rr = 0.0
     for a in range(mu.size):
@@ -212,9 +222,9 @@ def _error(r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho: np.ndarray, dim: i
         pn, p1, p2 = _project(r[o] - ra * (x[o] + mu[a] * nxt), r[o + 1] - ra * x[o + 1], r2 - ra * x2, mu[a])
         s += (r[o] - pn) ** 2 + (r[o + 1] - p1) ** 2 + (r2 - p2) ** 2
         rr += r[o] ** 2 + r[o + 1] ** 2 + r2 * r2
-    den = max(qnorm, math.sqrt(rr))
+    den = max(scale, math.sqrt(rr))
     if den == 0.0:
-        # q = 0 and r = 0: r = 0 is the exact solution and s = 0.
+        # r = 0 and no contact penetrates (q_n >= 0): r = 0 is the exact solution and s = 0.
         return math.sqrt(s)
     return math.sqrt(s) / den
 
@@ -275,17 +285,17 @@ def _set_contact(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
 @numba.njit(cache=True)
 def _end_of_sweep(k: int, refresh: int, Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray,
                   sparse: bool, q: np.ndarray, r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho_err: np.ndarray,
-                  dim: int, qnorm: float, tol: float, change: float) -> tuple[float, int]:
+                  dim: int, scale: float, tol: float, change: float) -> tuple[float, int]:
     """Error after sweep k and the outcome: 1 converged, 2 non-finite, -1 go on."""
     if k % refresh == 0:
         _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
-    err = _error(r, x, mu, rho_err, dim, qnorm)
+    err = _error(r, x, mu, rho_err, dim, scale)
     if not (math.isfinite(err) and math.isfinite(change)):
         return err, 2
     if err < tol:
         # Confirm on the exact x: the incremental update accumulates rounding.
         _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
-        err = _error(r, x, mu, rho_err, dim, qnorm)
+        err = _error(r, x, mu, rho_err, dim, scale)
         if err < tol:
             return err, 1
     return err, -1
@@ -301,8 +311,8 @@ def _uzawa_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data:
     Returns (sweeps, error, change, status) with status 1 converged, 0 max_iter, 2 non-finite.
     """
     nc = mu.size
-    qnorm = _blocked_norm(q, rho_err, dim)
-    err = _error(r, x, mu, rho_err, dim, qnorm)
+    scale = _force_scale(q, mu, rho_err, dim)
+    err = _error(r, x, mu, rho_err, dim, scale)
     if err < tol:
         return 0, err, 0.0, 1
     change = np.inf
@@ -321,7 +331,7 @@ def _uzawa_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data:
             dr2 += _set_contact(Wc, indptr, indices, data, sparse, dim, o, pn, p1, p2, r, x)
             r2 += pn * pn + p1 * p1 + p2 * p2
         change = math.sqrt(dr2) / max(math.sqrt(r2), 1e-300)
-        err, status = _end_of_sweep(k, refresh, Wc, indptr, indices, data, sparse, q, r, x, mu, rho_err, dim, qnorm,
+        err, status = _end_of_sweep(k, refresh, Wc, indptr, indices, data, sparse, q, r, x, mu, rho_err, dim, scale,
                                     tol, change)
         if status >= 0:
             return k, err, change, status
@@ -590,8 +600,8 @@ def _nsgs_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
     Returns (sweeps, error, change, status) like :func:`_uzawa_kernel`.
     """
     nc = mu.size
-    qnorm = _blocked_norm(q, rho_err, dim)
-    err = _error(r, x, mu, rho_err, dim, qnorm)
+    scale = _force_scale(q, mu, rho_err, dim)
+    err = _error(r, x, mu, rho_err, dim, scale)
     if err < tol:
         return 0, err, 0.0, 1
     change = np.inf
@@ -621,7 +631,7 @@ def _nsgs_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
             dr2 += _set_contact(Wc, indptr, indices, data, sparse, dim, o, pn, p1, p2, r, x)
             r2 += pn * pn + p1 * p1 + p2 * p2
         change = math.sqrt(dr2) / max(math.sqrt(r2), 1e-300)
-        err, status = _end_of_sweep(k, refresh, Wc, indptr, indices, data, sparse, q, r, x, mu, rho_err, dim, qnorm,
+        err, status = _end_of_sweep(k, refresh, Wc, indptr, indices, data, sparse, q, r, x, mu, rho_err, dim, scale,
                                     tol, change)
         if status >= 0:
             return k, err, change, status
@@ -709,6 +719,108 @@ def _ac_merit(r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho: np.ndarray, dim
         if dim == 3:
             th += (r[o + 2] - z2) ** 2
     return 0.5 * th
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Frictionless (mu = 0): the normal problem alone
+# ----------------------------------------------------------------------------------------------------------
+@numba.njit(cache=True)
+def _lcp_scale(q: np.ndarray, rho: np.ndarray) -> float:
+    """:func:`_force_scale` of the normal problem: ``|| (rho_a max(-q_a, 0))_a ||``."""
+    s = 0.0
+    for a in range(q.size):
+        if q[a] < 0.0:
+            s += (rho[a] * q[a]) ** 2
+    return math.sqrt(s)
+
+
+@numba.njit(cache=True)
+def _lcp_error(r: np.ndarray, x: np.ndarray, rho: np.ndarray, scale: float) -> float:
+    """:func:`_error` of the normal problem: ``||r - max(0, r - rho x)|| / max(scale, ||r||)``.
+
+    Term by term the same floating-point operations as :func:`_error` with ``mu = 0`` on ``(r_n, 0)``.
+    """
+    s = 0.0
+    rr = 0.0
+    for a in range(r.size):
+        p = r[a] - rho[a] * x[a]
+        if p <= 0.0:
+            p = 0.0
+        s += (r[a] - p) ** 2
+        rr += r[a] ** 2
+    den = max(scale, math.sqrt(rr))
+    if den == 0.0:
+        return math.sqrt(s)
+    return math.sqrt(s) / den
+
+
+@numba.njit(cache=True)
+def _tangential_x(W: np.ndarray, q: np.ndarray, r: np.ndarray, dim: int, x: np.ndarray) -> None:
+    """Tangential rows of ``x = W r + q`` for an ``r`` with only normal entries (dense ``W``), summed in the
+    order of :func:`_recompute_x` (so bit for bit the full solvers' ``x``)."""
+    m = q.size
+    for i in range(m):
+        if i % dim == 0:
+            continue
+        s = q[i]
+        for j in range(0, m, dim):
+            if r[j] != 0.0:
+                s += W[i, j] * r[j]
+        x[i] = s
+
+
+@numba.njit(cache=True)
+def _lcp_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, sparse: bool,
+                q: np.ndarray, step: np.ndarray, exact: bool, omega: float, rho_err: np.ndarray, r: np.ndarray,
+                x: np.ndarray, tol: float, max_iter: int, refresh: int) -> tuple[int, float, float, int]:
+    """Projected Gauss-Seidel sweeps on the normal problem ``x = W_nn r + q``, ``0 <= r  _|_  x >= 0``.
+
+    Contact ``a``: ``exact`` (PGS, NSGS with ``mu = 0``): ``r_a <- max(0, -b_a / W_aa)`` with
+    ``b_a = x_a - W_aa r_a``, the exact one-contact solution, relaxed by ``omega``; otherwise the Uzawa step
+    ``r_a <- max(0, r_a - step_a x_a)``. ``x = W_nn r + q`` on entry, kept up to date by columns and
+    recomputed every ``refresh`` sweeps and before declaring convergence.
+
+    Returns (sweeps, error, change, status) like :func:`_uzawa_kernel`.
+    """
+    n = r.size
+    scale = _lcp_scale(q, rho_err)
+    err = _lcp_error(r, x, rho_err, scale)
+    if err < tol:
+        return 0, err, 0.0, 1
+    change = np.inf
+    for k in range(1, max_iter + 1):
+        dr2 = 0.0
+        r2 = 0.0
+        for a in range(n):
+            ra = r[a]
+            d = step[a]
+            if exact and d > 0.0:
+                b = x[a] - d * ra
+                p = -b / d if b < 0.0 else 0.0
+                if omega != 1.0:
+                    p = ra + omega * (p - ra)
+            else:
+                p = ra - (rho_err[a] if exact else d) * x[a]
+            if p <= 0.0:  # (a NaN stays, to be reported)
+                p = 0.0
+            dd = p - ra
+            if dd != 0.0:
+                r[a] = p
+                _add_column(Wc, indptr, indices, data, sparse, a, dd, x)
+                dr2 += dd * dd
+            r2 += p * p
+        change = math.sqrt(dr2) / max(math.sqrt(r2), 1e-300)
+        if k % refresh == 0:
+            _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+        err = _lcp_error(r, x, rho_err, scale)
+        if not (math.isfinite(err) and math.isfinite(change)):
+            return k, err, change, 2
+        if err < tol:
+            _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+            err = _lcp_error(r, x, rho_err, scale)
+            if err < tol:
+                return k, err, change, 1
+    return max_iter, err, change, 0
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -804,13 +916,29 @@ def natural_map_error(W: np.ndarray | sp.spmatrix, q: np.ndarray, r: np.ndarray,
 
     With ``x = W r + q``, ``rho_a = 1/||W_aa||_2`` (:func:`block_rho`) and ``P`` the projection on ``K_mu``:
 
-        error = sqrt( sum_a || r^a - P(r^a - rho_a (x^a + mu_a |x_t^a| e_n)) ||^2 ) / max(||rho q||, ||r||)
+        error = sqrt( sum_a || r^a - P(r^a - rho_a (x^a + mu_a |x_t^a| e_n)) ||^2 ) / max(S, ||r||)
 
-    where ``(rho q)^a = rho_a q^a``. It vanishes exactly at solutions (fixed point of the De Saxce projection,
-    paper eqs. 22-23). Numerator and denominator are forces, and under ``W -> s W``, ``q -> c q`` (so
-    ``r -> (c/s) r``) both scale by ``c/s``: the error does not depend on the units of the problem. It is
-    Siconos's fc3d natural-map error with the unit step replaced by ``rho_a`` and ``||q||`` by
-    ``||rho q||``. If ``q = 0`` and ``r = 0`` it is 0.
+    It vanishes exactly at solutions (fixed point of the De Saxce projection, paper eqs. 22-23). The
+    numerator is a force residual; the denominator is the force scale of the problem: the forces ``||r||``
+    themselves, and, so that ``r = 0`` or a poor first iterate is not measured against nothing, the scale
+    ``S`` of the loads on the penetrating contacts::
+
+        S = || (rho_a (q_n^a, min(mu_a, 1) |q_t^a|))_a ||   over the contacts with q_n^a < 0.
+
+    ``rho_a q_n^a`` is the force that would push contact ``a`` back alone; ``rho_a mu_a |q_t^a|`` is the
+    size of the friction term ``rho_a mu_a |x_t|`` of the natural map at ``r = 0``, whose cancellation in
+    the projection limits the accuracy the residual can reach at a sliding contact (capped at ``mu = 1`` so
+    that ``S <= ||rho q||``). Open contacts (``q_n >= 0``) add nothing: their gaps are not loads. The scale
+    used before, ``||rho q||``, counted them, so one loaded node among many open ones (a tiny load, a
+    generous candidate window) was measured against the open gaps and its own force could never be solved
+    to the tolerance. Since ``S <= ||rho q||``, this measure is never looser than that one.
+
+    Numerator and denominator are forces, and under ``W -> s W``, ``q -> c q`` (so ``r -> (c/s) r``) both
+    scale by ``c/s``: the error does not depend on the units of the problem. It is Siconos's fc3d
+    natural-map error with the unit step replaced by ``rho_a`` and ``||q||`` by ``S``. With ``mu = 0`` the
+    tangential terms of the numerator vanish when ``r_t = 0`` and ``S`` only sees ``q_n``, so the error of
+    ``(r_n, 0)`` is that of the normal problem ``(W_nn, q_n)`` with the same ``rho_a``. If no contact
+    penetrates and ``r = 0`` (the exact solution then) it is 0.
 
     Args:
         W: Delassus matrix (dense or scipy sparse).
@@ -826,7 +954,7 @@ def natural_map_error(W: np.ndarray | sp.spmatrix, q: np.ndarray, r: np.ndarray,
     r = _check_vector(r, q.size, "r")
     rho = block_rho(W, dim)
     x = W @ r + q
-    return float(_error(r, np.ascontiguousarray(x), mu_arr, rho, dim, _blocked_norm(q, rho, dim)))
+    return float(_error(r, np.ascontiguousarray(x), mu_arr, rho, dim, _force_scale(q, mu_arr, rho, dim)))
 
 
 def _check_vector(v, m: int, name: str) -> np.ndarray:
@@ -867,8 +995,8 @@ class _Problem:
 
     def error(self, r: np.ndarray, x: np.ndarray) -> float:
         """:func:`natural_map_error` of ``r`` given its ``x = W r + q``."""
-        return float(_error(r, x, self.mu, self.rho_err, self.dim, _blocked_norm(self.q, self.rho_err,
-                                                                                 self.dim)))
+        return float(_error(r, x, self.mu, self.rho_err, self.dim,
+                            _force_scale(self.q, self.mu, self.rho_err, self.dim)))
 
     def nsgs(self, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, omega: float = 1.0
              ) -> tuple[int, float, float, int]:
@@ -1090,6 +1218,20 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
       ones (rank-deficient multibody ``W``) get Newton. No dense Newton above 6000 unknowns. ``iterations``
       counts sweeps plus Newton steps; ``rho`` is passed to the Newton phase.
 
+    Frictionless problems (``mu = 0`` for every contact) are solved on the normal rows only: the cone is then
+    the half-line ``r_t = 0``, ``r_n >= 0``, so ``r_t = 0`` and ``r_n`` solves the LCP ``x_n = W_nn r_n + q_n``,
+    ``0 <= r_n _|_ x_n >= 0`` on the ``nc x nc`` matrix of the normal rows and columns; ``x = W r + q`` is
+    then formed in full (the tangential rows give the slip). The error is the same natural-map error (with
+    ``mu = 0`` it only sees the normal rows). Per method: ``"uzawa"`` does the same sweeps restricted to the
+    normal rows (the iterates, ``r`` and ``x`` are bit for bit those of the full-dimension sweep, at a third
+    to a half of its cost in 2D); ``"nsgs"`` is projected Gauss-Seidel (exact one-contact solves
+    ``r_a = max(0, r_a - x_a / W_aa)``, relaxed by ``rho``); ``"newton"`` and ``"auto"`` are a
+    primal-dual active-set (semismooth) Newton on ``min``-type function ``r - max(0, r - rho x)``, one
+    Cholesky of the active block per step, with an Armijo rule and projected Gauss-Seidel sweeps as the
+    safeguard (see :func:`_lcp_newton`); ``"auto"`` uses the sweeps alone above 6000 dense contacts. On FE
+    contact the Newton needs a handful of steps where the sweeps need hundreds (benchmarks/results/
+    frictionless.md).
+
     A sparse ``W`` is used as CSC (columns are what the sweeps need); a dense one through its transpose.
 
     Args:
@@ -1131,59 +1273,21 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     if nc == 0:
         return LocalResult(np.zeros(0), np.zeros(0), 0, 0.0, True, method, "no contacts", 0.0)
 
-    rho_err = block_rho(W, dim)
-    if r0 is not None:
-        # A warm start from another problem may lie outside the cones.
-        _project_all(r, mu_arr, dim)
-
-    empty_i = np.zeros(1, dtype=np.int64)
-    empty_f = np.zeros(1)
-    if sp.issparse(W):
-        Wc = np.zeros((1, 1))
-        indptr = W.indptr.astype(np.int64)
-        indices = W.indices.astype(np.int64)
-        data = np.ascontiguousarray(W.data)
-        sparse = True
-    else:
-        Wc = np.ascontiguousarray(W.T)
-        indptr, indices, data = empty_i, empty_i, empty_f
-        sparse = False
-    x = np.empty(m)
-    _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
     counts = _Counts()
-    if method == "uzawa":
-        rho_vec = rho_err * (1.0 if rho is None else float(rho))
-        its, err, change, status = _uzawa_kernel(Wc, indptr, indices, data, sparse, q, mu_arr, rho_vec,
-                                                  rho_err, dim, r, x, float(tol), int(max_iter), _REFRESH)
-        counts.sweeps = its
+    rho_factor = 1.0 if rho is None else float(rho)
+    normal_only = not np.any(mu_arr)
+    if normal_only:
+        r, x, err, change, status = _solve_normal(W, q, dim, method, float(tol), int(max_iter), r, rho_factor,
+                                                  counts)
     else:
-        P = _Problem(W, q, mu_arr, dim, rho_err, Wc, indptr, indices, data, sparse)
-        if method == "nsgs":
-            its, err, change, status = P.nsgs(r, x, tol, max_iter, 1.0 if rho is None else float(rho))
-            counts.sweeps = its
-        elif method == "newton":
-            err, change, status = _newton_driver(P, r, x, tol, max_iter, 1.0 if rho is None else float(rho),
-                                                 counts)
-        else:
-            err, change, status = _auto_driver(P, r, x, tol, max_iter, 1.0 if rho is None else float(rho),
-                                               counts)
-        its = counts.total
-        if status != 2 and not _in_cones(r, mu_arr, dim):
-            # Newton iterates may leave the cones by rounding: keep the projection if it is as good.
-            rp = r.copy()
-            _project_all(rp, mu_arr, dim)
-            xp = P.x_of(rp)
-            ep = P.error(rp, xp)
-            if ep < tol or ep <= err:
-                r, x, err = rp, xp, ep
-                status = 1 if ep < tol else status
+        r, x, err, change, status = _solve_full(W, q, mu_arr, dim, method, float(tol), int(max_iter), r,
+                                                r0 is not None, rho_factor, counts)
+    its = counts.total
     converged = status == 1 and bool(np.all(np.isfinite(r)))
-    if status == 0:
-        # Report the x of the returned r, not the incrementally updated one.
-        _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
     unit = {"uzawa": "sweeps", "nsgs": "sweeps"}.get(method, "iterations")
-    detail = "" if method in ("uzawa", "nsgs") else (f" ({counts.sweeps} NSGS sweeps, {counts.steps} Newton "
-                                                     f"steps)")
+    gs = "projected Gauss-Seidel" if normal_only else "NSGS"
+    detail = "" if method in ("uzawa", "nsgs") else f" ({counts.sweeps} {gs} sweeps, {counts.steps} Newton steps)"
+    detail += " on the normal problem (mu = 0)" if normal_only else ""
     if converged:
         message = f"converged in {its} {unit}{detail}: error {err:.3e} < tol {tol:.1e}"
     elif status == 2:
@@ -1196,6 +1300,233 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         raise LocalSolverError(f"local solver {method!r}: {message}")
     return LocalResult(r, x, int(its), float(err), converged, method, message, float(change),
                        int(counts.sweeps), int(counts.steps))
+
+
+def _storage(W: np.ndarray | sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
+    """The kernels' view of W: (W^T dense, C-contiguous, or a dummy; CSC indptr, indices, data; sparse)."""
+    if sp.issparse(W):
+        return (np.zeros((1, 1)), W.indptr.astype(np.int64), W.indices.astype(np.int64),
+                np.ascontiguousarray(W.data), True)
+    empty_i = np.zeros(1, dtype=np.int64)
+    return np.ascontiguousarray(W.T), empty_i, empty_i, np.zeros(1), False
+
+
+def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray, dim: int, method: str, tol: float,
+                max_iter: int, r: np.ndarray, warm: bool, rho_factor: float, counts: _Counts
+                ) -> tuple[np.ndarray, np.ndarray, float, float, int]:
+    """The frictional problem in full dimension: (r, x, error, change, status), see :func:`solve`."""
+    rho_err = block_rho(W, dim)
+    if warm:
+        # A warm start from another problem may lie outside the cones.
+        _project_all(r, mu_arr, dim)
+    Wc, indptr, indices, data, sparse = _storage(W)
+    x = np.empty(q.size)
+    _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+    if method == "uzawa":
+        its, err, change, status = _uzawa_kernel(Wc, indptr, indices, data, sparse, q, mu_arr, rho_err * rho_factor,
+                                                 rho_err, dim, r, x, tol, max_iter, _REFRESH)
+        counts.sweeps = its
+    else:
+        P = _Problem(W, q, mu_arr, dim, rho_err, Wc, indptr, indices, data, sparse)
+        if method == "nsgs":
+            counts.sweeps, err, change, status = P.nsgs(r, x, tol, max_iter, rho_factor)
+        elif method == "newton":
+            err, change, status = _newton_driver(P, r, x, tol, max_iter, rho_factor, counts)
+        else:
+            err, change, status = _auto_driver(P, r, x, tol, max_iter, rho_factor, counts)
+        if status != 2 and not _in_cones(r, mu_arr, dim):
+            # Newton iterates may leave the cones by rounding: keep the projection if it is as good.
+            rp = r.copy()
+            _project_all(rp, mu_arr, dim)
+            xp = P.x_of(rp)
+            ep = P.error(rp, xp)
+            if ep < tol or ep <= err:
+                r, x, err = rp, xp, ep
+                status = 1 if ep < tol else status
+    if status == 0:
+        # Report the x of the returned r, not the incrementally updated one.
+        _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)
+    return r, x, err, change, status
+
+
+def _solve_normal(W: np.ndarray | sp.csc_matrix, q: np.ndarray, dim: int, method: str, tol: float, max_iter: int,
+                  r: np.ndarray, rho_factor: float, counts: _Counts) -> tuple[np.ndarray, np.ndarray, float, float, int]:
+    """The frictionless problem on its normal rows alone: (r, x, error, change, status), see :func:`solve`.
+
+    With ``mu = 0`` the cone is the half-line ``{r_n >= 0, r_t = 0}``, so ``r_t = 0`` and the normal forces
+    solve the LCP ``x_n = W_nn r_n + q_n``, ``0 <= r_n _|_ x_n >= 0`` (``W_nn``: the normal rows and columns
+    of ``W``); the tangential rows only give the slip ``x_t = W_tn r_n + q_t`` afterwards. The error is
+    :func:`natural_map_error` of the full problem (same ``rho_a`` from the full blocks, same scale: the
+    tangential terms vanish with ``mu = 0``).
+    """
+    nc = q.size // dim
+    rows = np.arange(nc) * dim
+    rho_err = block_rho(W, dim)
+    Wn = sp.csc_matrix(W[rows][:, rows]) if sp.issparse(W) else np.ascontiguousarray(W[np.ix_(rows, rows)])
+    N = _NormalProblem(Wn, np.ascontiguousarray(q[rows]), rho_err)
+    rn = np.ascontiguousarray(r[rows])
+    rn[~(rn > 0.0)] = 0.0  # projection on the half-line (a warm start may lie outside)
+    xn = N.x_of(rn)
+    if method == "uzawa":
+        counts.sweeps, err, change, status = N.sweeps(rn, xn, tol, max_iter, rho_err * rho_factor, False, 1.0)
+    elif method == "nsgs" or (method == "auto" and not N.sparse and nc > _AUTO_DENSE_MAX):
+        omega = rho_factor if method == "nsgs" else 1.0
+        counts.sweeps, err, change, status = N.sweeps(rn, xn, tol, max_iter, N.diag, True, omega)
+    else:
+        err, change, status = _lcp_newton(N, rn, xn, tol, max_iter, rho_factor, counts)
+        if status != 2 and np.any(rn < 0.0):
+            rp = np.maximum(rn, 0.0)  # Newton iterates may leave r >= 0 by rounding
+            xp = N.x_of(rp)
+            ep = N.error(rp, xp)
+            if ep < tol or ep <= err:
+                rn, xn, err = rp, xp, ep
+                status = 1 if ep < tol else status
+    if status != 1:
+        xn = N.x_of(rn)  # the x of the returned r, not the incrementally updated one
+    r_full = np.zeros(q.size)
+    r_full[rows] = rn
+    x = np.empty(q.size)
+    if sp.issparse(W):
+        _recompute_x(np.zeros((1, 1)), W.indptr.astype(np.int64), W.indices.astype(np.int64), W.data, True, q, r_full,
+                     x)
+    else:
+        _tangential_x(W, q, r_full, dim, x)
+    x[rows] = xn
+    return r_full, x, err, change, status
+
+
+@dataclass
+class _NormalProblem:
+    """The normal problem ``x = W_nn r + q_n`` of a frictionless local problem (see :func:`_solve_normal`)."""
+
+    W: np.ndarray | sp.csc_matrix
+    q: np.ndarray
+    rho_err: np.ndarray
+
+    def __post_init__(self):
+        self.Wc, self.indptr, self.indices, self.data, self.sparse = _storage(self.W)
+        self.scale = _lcp_scale(self.q, self.rho_err)
+        self.diag = np.ascontiguousarray(self.W.diagonal() if self.sparse else np.diag(self.W))
+
+    def x_of(self, r: np.ndarray) -> np.ndarray:
+        """``W_nn r + q_n`` computed afresh."""
+        x = np.empty(self.q.size)
+        _recompute_x(self.Wc, self.indptr, self.indices, self.data, self.sparse, self.q, r, x)
+        return x
+
+    def error(self, r: np.ndarray, x: np.ndarray) -> float:
+        """The natural-map error (:func:`_lcp_error`)."""
+        return float(_lcp_error(r, x, self.rho_err, self.scale))
+
+    def sweeps(self, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, step: np.ndarray, exact: bool,
+               omega: float) -> tuple[int, float, float, int]:
+        """Up to ``max_iter`` Gauss-Seidel sweeps in place (:func:`_lcp_kernel`)."""
+        return _lcp_kernel(self.Wc, self.indptr, self.indices, self.data, self.sparse, self.q,
+                           np.ascontiguousarray(step, dtype=float), exact, float(omega), self.rho_err, r, x,
+                           float(tol), int(max_iter), _REFRESH)
+
+    def active_solve(self, act: np.ndarray) -> np.ndarray | None:
+        """``r`` with ``r_A`` solving ``W_AA r_A = -q_A`` and 0 elsewhere; None if ``W_AA`` is singular."""
+        r = np.zeros(self.q.size)
+        if not act.any():
+            return r
+        idx = np.flatnonzero(act)
+        rhs = -self.q[idx]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                if self.sparse:
+                    sol = spla.splu(sp.csc_matrix(self.W[idx][:, idx])).solve(rhs)
+                else:
+                    A = self.W[np.ix_(idx, idx)]
+                    try:  # W_AA is SPD for an SPD W: Cholesky
+                        sol = sla.cho_solve(sla.cho_factor(A, check_finite=False), rhs, check_finite=False)
+                    except np.linalg.LinAlgError:
+                        lu, piv = sla.lu_factor(A, check_finite=False)
+                        u = np.abs(np.diag(lu))
+                        if not u.min() > 1e-15 * u.max():
+                            return None
+                        sol = sla.lu_solve((lu, piv), rhs, check_finite=False)
+            except (RuntimeError, ValueError, np.linalg.LinAlgError):
+                return None
+        if not np.all(np.isfinite(sol)):
+            return None
+        r[idx] = sol
+        return r
+
+
+def _lcp_newton(N: _NormalProblem, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, rho_factor: float,
+                n: _Counts) -> tuple[float, float, int]:
+    """Semismooth Newton (primal-dual active set) on ``F(r) = r - max(0, r - rho x)``, safeguarded, in place.
+
+    With the active set ``A = {r - rho x > 0}`` (``rho = rho_factor / ||W_aa||_2``), the Newton iterate is
+    ``r_A`` solving ``W_AA r_A = -q_A``, ``r = 0`` elsewhere (one Cholesky of ``W_AA``). The step is
+    damped by an Armijo rule on ``||F||^2 / 2`` (at most 30 halvings); when no step is acceptable, ``W_AA``
+    is singular, or 10 steps in a row do not halve the best error, projected Gauss-Seidel sweeps follow (10,
+    doubled each time Newton made no progress since the previous fallback, at most 1000) and Newton resumes.
+    PGS converges on its own for an SPD ``W_nn``, so the safeguard makes the whole globally convergent.
+    ``n.total`` (sweeps + steps) is capped by ``max_iter``.
+
+    Returns (error, change, status) with status 1 converged, 0 max_iter, 2 non-finite.
+    """
+    rho = N.rho_err * rho_factor
+    err = N.error(r, x)
+    change = 0.0
+    if err < tol:
+        return err, change, 1
+    fb = _NEWTON_FALLBACK
+    progress = True
+    best_err, since_best = err, 0
+
+    def merit(rv, xv):
+        return 0.5 * float(np.sum((rv - np.maximum(rv - rho * xv, 0.0)) ** 2))
+
+    while n.total < max_iter:
+        th = merit(r, x)
+        r_new = N.active_solve(r - rho * x > 0.0)
+        n.steps += 1
+        accepted = False
+        if r_new is not None:
+            d = r_new - r
+            x_new = N.x_of(r_new)
+            Wd = x_new - x
+            alpha = 1.0
+            for _ in range(30):
+                if merit(r + alpha * d, x + alpha * Wd) <= (1.0 - 1e-4 * alpha) * th:
+                    accepted = True
+                    break
+                alpha *= 0.5
+        if accepted:
+            r_next = r_new if alpha == 1.0 else r + alpha * d
+            change = alpha * np.linalg.norm(d) / max(np.linalg.norm(r_next), 1e-300)
+            r[:] = r_next
+            x[:] = x_new if alpha == 1.0 else N.x_of(r)
+            err = N.error(r, x)
+            if not (math.isfinite(err) and math.isfinite(change)):
+                return err, change, 2
+            if err < tol:
+                return err, change, 1
+            if err < 0.5 * best_err:
+                best_err, since_best, progress = err, 0, True
+            else:
+                since_best += 1
+            if since_best < _NEWTON_STALL:
+                continue
+        n.fallbacks += 1
+        since_best = 0
+        fb = fb if progress else min(2 * fb, 1000)
+        k = min(fb, max_iter - n.total)
+        if k <= 0:
+            break
+        np.maximum(r, 0.0, out=r)  # the sweeps start inside the half-line
+        x[:] = N.x_of(r)
+        its, err, change, status = N.sweeps(r, x, tol, k, N.diag, True, 1.0)
+        n.sweeps += its
+        if status != 0:
+            return err, change, status
+        progress = False
+        best_err = min(best_err, err)
+    return err, change, 0
 
 
 def _in_cones(r: np.ndarray, mu: np.ndarray, dim: int) -> bool:

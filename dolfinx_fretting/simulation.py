@@ -1194,7 +1194,8 @@ class _Run:
                          if plastic is not None else "linear elastic: no Newton loop, no plastic state"),
             "delassus": ("W of the elastic K built once" + (", W of the tangent rebuilt at each refactorisation"
                                                           if plastic is not None else "")),
-            "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0)",
+            "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0): "
+                        "normal-only contact, the local problem solved on the normal rows of W alone",
             "wear": (f"Archard, k = {sc.wear.k_total} 1/MPa x acceleration {sc.wear.acceleration}"
                      + (f" (cylinder {sc.wear.slave_share:.3g}, flat {1 - sc.wear.slave_share:.3g} of the wear gap)"
                         if model.two_body else "")

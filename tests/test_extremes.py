@@ -47,16 +47,21 @@ def test_nearly_incompressible(tmp_path):
 
 
 def test_load_so_small_that_one_node_touches(tmp_path):
-    """P = 1e-6 N/mm: one node carries it all (Hertz half-width 8e-6 mm << h); or a clear stop."""
-    try:
-        s = run_scene(load_scene("hertz", QUIET + ["loading.normal_force=1e-6", "loading.tangential_force=2e-7",
-                                                   "geometry.contact_mesh_size=0.02"]), tmp_path, quiet=True)
-    except SimulationError as exc:
-        assert "loading.normal_force" in str(exc) and "not reached" in str(exc)
-        return
-    assert _finite(s)
-    assert s["normal_force"] == pytest.approx(1e-6, rel=1e-6)
-    assert s["n_stick"] + s["n_slip"] == 1 and s["contact_width"] == 0.0
+    """P = 1e-6 N/mm, Q = 2e-7 N/mm: the Hertz half-width 8e-6 mm is far below h = 20 um, so one node (two if
+    the lowest pair straddles the axis) carries it all, and sticks (Q/P = 0.2 < mu = 0.9). The natural-map
+    error is relative to the loaded contacts' forces, not to the gaps of the 24 open candidates (which once
+    made this force unreachable to the load control's tolerance)."""
+    s = run_scene(load_scene("hertz", QUIET + ["loading.normal_force=1e-6", "loading.tangential_force=2e-7",
+                                               "geometry.contact_mesh_size=0.02"]), tmp_path, quiet=True)
+    assert _finite(s) and s["converged"]
+    # Load control to solver.force_tol = 1e-8 of the load (measured 2e-10): 1e-7 relative.
+    assert s["normal_force"] == pytest.approx(1e-6, rel=1e-7)
+    assert s["tangential_force"] == pytest.approx(2e-7, rel=1e-7)
+    loaded = s["n_stick"] + s["n_slip"]
+    assert loaded in (1, 2) and s["n_open"] == s["contacts"] - loaded
+    assert s["n_slip"] == 0
+    if loaded == 1:
+        assert s["contact_width"] == 0.0
 
 
 def test_contact_window_too_small_grows_to_the_right_answer(tmp_path):
