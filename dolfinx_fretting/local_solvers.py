@@ -1223,13 +1223,15 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     ``0 <= r_n _|_ x_n >= 0`` on the ``nc x nc`` matrix of the normal rows and columns; ``x = W r + q`` is
     then formed in full (the tangential rows give the slip). The error is the same natural-map error (with
     ``mu = 0`` it only sees the normal rows). Per method: ``"uzawa"`` does the same sweeps restricted to the
-    normal rows (the iterates, ``r`` and ``x`` are bit for bit those of the full-dimension sweep, at a third
-    to a half of its cost in 2D); ``"nsgs"`` is projected Gauss-Seidel (exact one-contact solves
-    ``r_a = max(0, r_a - x_a / W_aa)``, relaxed by ``rho``); ``"newton"`` and ``"auto"`` are a
-    primal-dual active-set (semismooth) Newton on ``min``-type function ``r - max(0, r - rho x)``, one
-    Cholesky of the active block per step, with an Armijo rule and projected Gauss-Seidel sweeps as the
-    safeguard (see :func:`_lcp_newton`); ``"auto"`` uses the sweeps alone above 6000 dense contacts. On FE
-    contact the Newton needs a handful of steps where the sweeps need hundreds (benchmarks/results/
+    normal rows (the iterates, ``r`` and ``x`` are bit for bit those of the full-dimension sweep, which
+    touches twice or three times as many entries of ``W``); ``"nsgs"`` is projected Gauss-Seidel (exact
+    one-contact solves ``r_a = max(0, r_a - x_a / W_aa)``, relaxed by ``rho``: the iterates of the
+    full-dimension NSGS with ``mu = 0``); ``"newton"`` is a primal-dual active-set
+    (semismooth) Newton on ``r - max(0, r - rho x)``, one Cholesky of the active block per step, with an
+    Armijo rule and projected Gauss-Seidel sweeps as the safeguard (see :func:`_lcp_newton`); ``"auto"``
+    is projected Gauss-Seidel, then that Newton by the same rule as for the full problem (``nc``
+    unknowns). On FE contact the Newton needs a handful of steps where the sweeps need about a hundred,
+    but below a few hundred contacts a step costs some tens of sweeps (benchmarks/results/
     frictionless.md).
 
     A sparse ``W`` is used as CSC (columns are what the sweeps need); a dense one through its transpose.
@@ -1369,11 +1371,16 @@ def _solve_normal(W: np.ndarray | sp.csc_matrix, q: np.ndarray, dim: int, method
     xn = N.x_of(rn)
     if method == "uzawa":
         counts.sweeps, err, change, status = N.sweeps(rn, xn, tol, max_iter, rho_err * rho_factor, False, 1.0)
-    elif method == "nsgs" or (method == "auto" and not N.sparse and nc > _AUTO_DENSE_MAX):
-        omega = rho_factor if method == "nsgs" else 1.0
-        counts.sweeps, err, change, status = N.sweeps(rn, xn, tol, max_iter, N.diag, True, omega)
+    elif method == "nsgs":
+        counts.sweeps, err, change, status = N.sweeps(rn, xn, tol, max_iter, N.diag, True, rho_factor)
     else:
-        err, change, status = _lcp_newton(N, rn, xn, tol, max_iter, rho_factor, counts)
+        if method == "newton":
+            err, change, status = _lcp_newton(N, rn, xn, tol, max_iter, rho_factor, counts)
+        else:
+            err, change, status = _sweeps_then_newton(
+                lambda k: N.sweeps(rn, xn, tol, k, N.diag, True, 1.0),
+                lambda: _lcp_newton(N, rn, xn, tol, max_iter, rho_factor, counts),
+                N.error(rn, xn), nc, N.sparse, tol, max_iter, counts)
         if status != 2 and np.any(rn < 0.0):
             rp = np.maximum(rn, 0.0)  # Newton iterates may leave r >= 0 by rounding
             xp = N.x_of(rp)
@@ -1543,19 +1550,27 @@ _AUTO_DENSE_MAX = 6000
 def _auto_driver(P: _Problem, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, rho_factor: float,
                  n: _Counts) -> tuple[float, float, int]:
     """NSGS while it is cheaper than Newton, then Newton (see :func:`solve`, ``method="auto"``)."""
-    m = r.size
-    err = P.error(r, x)
+    return _sweeps_then_newton(lambda k: P.nsgs(r, x, tol, k),
+                               lambda: _newton_driver(P, r, x, tol, max_iter, rho_factor, n),
+                               P.error(r, x), r.size, P.sparse, tol, max_iter, n)
+
+
+def _sweeps_then_newton(sweeps, newton, err: float, m: int, sparse: bool, tol: float, max_iter: int, n: _Counts
+                        ) -> tuple[float, float, int]:
+    """The ``"auto"`` policy: ``sweeps(k)`` (in place; returns (sweeps, error, change, status)) in windows
+    of 10 while the error's rate over the last window projects fewer remaining sweeps than ``m`` unknowns,
+    then ``newton()``; sweeps only for a dense problem above 6000 unknowns."""
     if err < tol:
         return err, 0.0, 1
-    newton_ok = P.sparse or m <= _AUTO_DENSE_MAX
+    newton_ok = sparse or m <= _AUTO_DENSE_MAX
     change = 0.0
     while n.total < max_iter:
         prev = err
-        its, err, change, status = P.nsgs(r, x, tol, min(_AUTO_WINDOW, max_iter - n.total))
+        its, err, change, status = sweeps(min(_AUTO_WINDOW, max_iter - n.total))
         n.sweeps += its
-        if status != 0 or not newton_ok:
-            if status != 0:
-                return err, change, status
+        if status != 0:
+            return err, change, status
+        if not newton_ok:
             continue
         rate = (err / prev) ** (1.0 / its) if prev > 0.0 else 0.0
         remaining = math.log(tol / err) / math.log(rate) if 0.0 < rate < 1.0 else np.inf
@@ -1563,7 +1578,7 @@ def _auto_driver(P: _Problem, r: np.ndarray, x: np.ndarray, tol: float, max_iter
             break
     if n.total >= max_iter:
         return err, change, 0
-    return _newton_driver(P, r, x, tol, max_iter, rho_factor, n)
+    return newton()
 
 
 def contact_states(r: np.ndarray, x: np.ndarray, mu: float | np.ndarray, dim: int,
