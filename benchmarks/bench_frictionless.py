@@ -148,7 +148,8 @@ def run_section(repeat):
                              **{k: s[k] for k in ("normal_force", "max_pressure", "contact_width", "n_slip",
                                                   "local_iterations")}, friction=s["modelled"]["friction"])
         a, b = res["normal-only"], res["full-dimension"]
-        rows.append(dict(method=method, **{f"{m}_{k}": v for m, d in (("normal", a), ("full", b)) for k, v in d.items()},
+        both = {f"{m}_{k}": v for m, d in (("normal", a), ("full", b)) for k, v in d.items()}
+        rows.append(dict(method=method, **both,
                          local_speedup=b["local_s"] / a["local_s"], wall_speedup=b["wall_s"] / a["wall_s"],
                          max_pressure_diff=abs(a["max_pressure"] - b["max_pressure"]) / b["max_pressure"]))
         print(method, json.dumps(rows[-1]), flush=True)

@@ -1352,7 +1352,8 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
 
 
 def _solve_normal(W: np.ndarray | sp.csc_matrix, q: np.ndarray, dim: int, method: str, tol: float, max_iter: int,
-                  r: np.ndarray, rho_factor: float, counts: _Counts) -> tuple[np.ndarray, np.ndarray, float, float, int]:
+                  r: np.ndarray, rho_factor: float, counts: _Counts
+                  ) -> tuple[np.ndarray, np.ndarray, float, float, int]:
     """The frictionless problem on its normal rows alone: (r, x, error, change, status), see :func:`solve`.
 
     With ``mu = 0`` the cone is the half-line ``{r_n >= 0, r_t = 0}``, so ``r_t = 0`` and the normal forces

@@ -239,3 +239,25 @@ def test_frictionless_cycles_compiled_equals_python(tmp_path):
     a, b = read_table(tmp_path / "fast" / "history.csv"), read_table(tmp_path / "slow" / "history.csv")
     assert np.array_equal(a["n_slip"], b["n_slip"]) and np.all(a["tangential_force"] == 0.0)
     assert np.allclose(a["normal_force"], b["normal_force"], rtol=1e-8, atol=0)
+
+
+def test_frictionless_hertz_run_same_as_full_dimension(tmp_path, monkeypatch):
+    """The frictionless Hertz run (force-controlled preload): with the normal-only Uzawa, the same run as
+    with every local problem solved in full dimension (the path before), bit for bit, since the sweeps are
+    the same; and the peak pressure is Hertz's (1 % at h = 20 um, as in tests/test_hertz.py)."""
+    from dolfinx_fretting.scenes import load_scene
+    from dolfinx_fretting.simulation import run_scene
+
+    ov = ["output.xdmf=false", "output.plots=false", "contact.mu=0.0", "loading.tangential_force=0.0",
+          "geometry.contact_mesh_size=0.02"]
+    normal = run_scene(load_scene("hertz", ov), tmp_path / "normal", quiet=True)
+
+    def as_full(W, q, dim, method, tol, max_iter, r, rho_factor, counts):
+        return ls._solve_full(W, q, np.zeros(q.size // dim), dim, method, tol, max_iter, r, True, rho_factor,
+                              counts)
+
+    monkeypatch.setattr(ls, "_solve_normal", as_full)
+    full = run_scene(load_scene("hertz", ov), tmp_path / "full", quiet=True)
+    for key in ("normal_force", "max_pressure", "contact_width", "n_slip", "n_open", "local_iterations"):
+        assert normal[key] == full[key], key
+    assert normal["max_pressure"] == pytest.approx(normal["hertz_max_pressure"], rel=0.01)
