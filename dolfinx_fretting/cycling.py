@@ -238,8 +238,19 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         else:
             for i in range(m):
                 r[i] = r_last[i]
-        exact = False
-        if active and pattern[j, 0] >= 0:
+        # No contact penetrates: r = 0 is an exact solution (x = q), as in local_solvers.solve.
+        exact = True
+        for a in range(nc):
+            if q[a * dim] < 0.0:
+                exact = False
+                break
+        if exact:
+            for i in range(m):
+                r[i] = 0.0
+                x[i] = q[i]
+            its = 0
+            err = 0.0
+        elif active and pattern[j, 0] >= 0:
             if not lu_ok[j]:
                 _pattern_matrix(Wc, pattern[j], mu, lu[j])   # Wc = W^T = W
                 lu_ok[j] = _lu_factor(lu[j], piv[j])

@@ -224,8 +224,8 @@ def _error(r: np.ndarray, x: np.ndarray, mu: np.ndarray, rho: np.ndarray, dim: i
         rr += r[o] ** 2 + r[o + 1] ** 2 + r2 * r2
     den = max(scale, math.sqrt(rr))
     if den == 0.0:
-        # r = 0 and no contact penetrates (q_n >= 0): r = 0 is the exact solution and s = 0.
-        return math.sqrt(s)
+        # r = 0 and no contact penetrates (q_n >= 0): r = 0 is an exact solution (s is rounding only).
+        return 0.0
     return math.sqrt(s) / den
 
 
@@ -750,7 +750,7 @@ def _lcp_error(r: np.ndarray, x: np.ndarray, rho: np.ndarray, scale: float) -> f
         rr += r[a] ** 2
     den = max(scale, math.sqrt(rr))
     if den == 0.0:
-        return math.sqrt(s)
+        return 0.0
     return math.sqrt(s) / den
 
 
@@ -938,7 +938,7 @@ def natural_map_error(W: np.ndarray | sp.spmatrix, q: np.ndarray, r: np.ndarray,
     natural-map error with the unit step replaced by ``rho_a`` and ``||q||`` by ``S``. With ``mu = 0`` the
     tangential terms of the numerator vanish when ``r_t = 0`` and ``S`` only sees ``q_n``, so the error of
     ``(r_n, 0)`` is that of the normal problem ``(W_nn, q_n)`` with the same ``rho_a``. If no contact
-    penetrates and ``r = 0`` (the exact solution then) it is 0.
+    penetrates, ``r = 0`` is an exact solution and its error is 0 (:func:`solve` then returns it at once).
 
     Args:
         W: Delassus matrix (dense or scipy sparse).
@@ -1187,7 +1187,8 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
 
     Every method stops when :func:`natural_map_error` ``< tol`` (checked on ``x = W r + q`` recomputed
     exactly), starts from ``r0`` projected on the cones (zero by default), and reports non-convergence in
-    the returned :class:`LocalResult` (``converged=False`` with a message) or by raising.
+    the returned :class:`LocalResult` (``converged=False`` with a message) or by raising. If no contact
+    penetrates (``q_n >= 0`` everywhere) it returns the exact solution ``r = 0`` at once.
 
     Methods:
 
@@ -1274,6 +1275,11 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
 
     if nc == 0:
         return LocalResult(np.zeros(0), np.zeros(0), 0, 0.0, True, method, "no contacts", 0.0)
+    if not np.any(q[::dim] < 0.0):
+        # No contact penetrates: r = 0 is an exact solution (x = q, x_n >= 0), whatever W. From a nonzero warm
+        # start the sweeps would only approach it, with an error relative to ||r|| that need not fall.
+        return LocalResult(np.zeros(m), q.copy(), 0, 0.0, True, method, "no contact penetrates (q_n >= 0): r = 0",
+                           0.0)
 
     counts = _Counts()
     rho_factor = 1.0 if rho is None else float(rho)

@@ -261,3 +261,20 @@ def test_frictionless_hertz_run_same_as_full_dimension(tmp_path, monkeypatch):
     for key in ("normal_force", "max_pressure", "contact_width", "n_slip", "n_open", "local_iterations"):
         assert normal[key] == full[key], key
     assert normal["max_pressure"] == pytest.approx(normal["hertz_max_pressure"], rel=0.01)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("mu", [0.0, 0.5])
+def test_no_penetration_gives_zero_forces_from_any_warm_start(method, mu):
+    """q_n >= 0 everywhere (one gap exactly 0): r = 0 is the exact solution (x = q satisfies the law). From a
+    warm start of the previous, loaded increment the Uzawa sweep only approaches it geometrically at the
+    zero-gap contact, with an error relative to ||r|| that stays ~rho W_aa: the solver must return r = 0."""
+    W, q, _ = random_problem(8, nc=10)
+    q[::2] = np.abs(q[::2]) + 0.1
+    q[4] = 0.0
+    r0 = np.zeros(20)
+    r0[::2] = 1.0
+    res = solve(W, q, mu, 2, method=method, tol=1e-12, r0=r0)
+    assert res.converged and res.iterations == 0 and res.error == 0.0, res.message
+    assert np.all(res.r == 0.0) and np.array_equal(res.x, q)
+    assert natural_map_error(W, q, res.r, mu, 2) == 0.0
