@@ -182,7 +182,7 @@ def sweep_entries(sweep: Sequence[tuple[str, list[str]]]) -> list[Entry]:
 def default_sweep(reference: Scene) -> list[Entry]:
     """The sweep when none is given, around the reference: contact elements 2x and 4x coarser (a
     half-cylinder's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together), a half and a quarter of
-    the increments per cycle (multiples of 4), ``local_tol`` 1e-8 and 1e-6 (with ``force_tol`` 100 times it
+    the increments per cycle (multiples of 4), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it
     under force control) and (cyclic scenes with wear) wear accelerations that divide the physical cycle
     count (up to three of 2, 5, 10, 20, 50, 100, ...)."""
     g, lo = reference.geometry, reference.loading
@@ -198,7 +198,7 @@ def default_sweep(reference: Scene) -> list[Entry]:
         ns = sorted({max(4, 4 * round(lo.increments_per_cycle / f / 4)) for f in (2, 4)}, reverse=True)
         entries += sweep_entries([("loading.increments_per_cycle",
                                    [str(n) for n in ns if n != lo.increments_per_cycle])])
-    for tol in (1e-8, 1e-6):
+    for tol in (1e-10, 1e-8, 1e-6):
         entries.append(("solver.local_tol", f"{tol:g}", _tolerance(tol, reference)))
     if lo.cycles > 0 and reference.wear.law != "none":
         n = int(round(_physical_cycles(reference)))
@@ -540,6 +540,8 @@ def plot_study(rows: Sequence[dict[str, Any]], path: str | Path, title: str = ""
     """Wall time against each relative error (log-log), one panel per error, one colour per swept key,
     each point labelled with its value; the reference's time as a dashed line (its error is zero) and the
     Pareto frontier of the points in grey. Errors below 1e-16 are drawn at 1e-16."""
+    from matplotlib import ticker
+
     from .plots import _figure, _save
 
     keys = list(dict.fromkeys(r["key"] for r in rows if r.get("key") != "reference"))
@@ -547,7 +549,7 @@ def plot_study(rows: Sequence[dict[str, Any]], path: str | Path, title: str = ""
                "tab:olive", "tab:cyan", "tab:gray"]
     markers = ["o", "s", "^", "v", "D", "P", "X", "*", "<", ">"]
     fig = _figure((12.0, 9.6))
-    axes = fig.subplots(2, 2, gridspec_kw=dict(left=0.08, right=0.98, top=0.9, bottom=0.13, wspace=0.22,
+    axes = fig.subplots(2, 2, gridspec_kw=dict(left=0.08, right=0.98, top=0.88, bottom=0.13, wspace=0.22,
                                                hspace=0.3)).ravel()
     pts = [r for r in rows if r.get("key") != "reference"]
     t = np.array([r.get("wall_time_s", math.nan) for r in pts], dtype=float)
@@ -572,6 +574,10 @@ def plot_study(rows: Sequence[dict[str, Any]], path: str | Path, title: str = ""
             ax.axhline(ref_t, color="k", ls="--", lw=1.0, label=f"reference ({ref_t:.1f} s, error 0)")
         ax.set_xscale("log")
         ax.set_yscale("log")
+        # wall times span a decade or two: label the 2x and 5x ticks too
+        ax.yaxis.set_major_locator(ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
+        ax.yaxis.set_minor_formatter(ticker.NullFormatter())
         ax.set_xlabel(f"relative error: {ERROR_NAMES[name]}")
         ax.set_ylabel("wall time (s)")
         ax.grid(alpha=0.3, which="both")
@@ -580,6 +586,9 @@ def plot_study(rows: Sequence[dict[str, Any]], path: str | Path, title: str = ""
                     color="0.4")
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=9, frameon=False)
+    failed = [r["label"] for r in pts if not r.get("converged", True)]
+    if failed:
+        fig.text(0.5, 0.9, "failed (not drawn): " + ", ".join(failed), ha="center", fontsize=8, color="tab:red")
     if title:
         fig.suptitle(title + "\n(grey: Pareto frontier; errors < 1e-16 drawn at 1e-16)", fontsize=11)
     return _save(fig, Path(path))
