@@ -429,8 +429,8 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         failure = ""
         try:
             run_scene(point.scene, folder, comm, quiet=True)
-        except SimulationError as exc:
-            failure = str(exc)
+        except (SimulationError, ValueError) as exc:  # ValueError: checks that need the mesh (no candidate...)
+            failure = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
         wall = time.perf_counter() - t0
         wall = comm.bcast(wall, root=0)  # rank 0's clock decides
         if i == 0:
