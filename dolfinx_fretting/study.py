@@ -182,7 +182,7 @@ def sweep_entries(sweep: Sequence[tuple[str, list[str]]]) -> list[Entry]:
 def default_sweep(reference: Scene) -> list[Entry]:
     """The sweep when none is given, around the reference: contact elements 2x and 4x coarser (a
     half-cylinder's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together), a half and a quarter of
-    the increments per cycle (multiples of 4), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it
+    the increments per cycle (multiples of 4; of the tangential increments for a monotonic load), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it
     under force control) and (cyclic scenes with wear) wear accelerations that divide the physical cycle
     count (up to three of 2, 5, 10, 20, 50, 100, ...)."""
     g, lo = reference.geometry, reference.loading
@@ -198,6 +198,10 @@ def default_sweep(reference: Scene) -> list[Entry]:
         ns = sorted({max(4, 4 * round(lo.increments_per_cycle / f / 4)) for f in (2, 4)}, reverse=True)
         entries += sweep_entries([("loading.increments_per_cycle",
                                    [str(n) for n in ns if n != lo.increments_per_cycle])])
+    elif lo.tangential_increments > 1:  # a monotonic load: its tangential increments
+        ns = sorted({max(1, lo.tangential_increments // f) for f in (2, 4)}, reverse=True)
+        entries += sweep_entries([("loading.tangential_increments",
+                                   [str(n) for n in ns if n != lo.tangential_increments])])
     for tol in (1e-10, 1e-8, 1e-6):
         entries.append(("solver.local_tol", f"{tol:g}", _tolerance(tol, reference)))
     if lo.cycles > 0 and reference.wear.law != "none":
