@@ -20,8 +20,9 @@
 # runs Newton–Raphson on equilibrium with the contact problem $x = W r + q$ solved inside every iteration
 # (paper Fig. 4); the wear gap is updated once the increment has converged.
 #
-# **The flat is rigid here** (node-to-rigid contact): the paper's flat is a second elastic body, so its
-# numbers (830 MPa Hertz peak, 747 MPa elastic–plastic peak) are not ours; the trends are.
+# The flat is a second body of the same material, as in the paper (`contact.obstacle = "elastic_flat"`:
+# the cylinder's contact nodes are paired with points of the flat's top, both bodies deform, and both yield
+# in the elastic–plastic case). Hertz for two identical bodies gives $p_0 = 829.6$ MPa at this load.
 
 # +
 import os

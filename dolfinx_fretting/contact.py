@@ -1,4 +1,5 @@
-"""Node-to-rigid contact: candidate nodes, local frames, the operator H and the initial gap.
+"""Contact: candidate nodes, local frames, the operator H and the initial gap, against a rigid plane
+(:func:`find_candidates`) or a deformable master body (:func:`find_pairs`).
 
 For each candidate node alpha the local relative position is (paper eqs 1, 3)
 
@@ -19,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["RigidPlane", "ContactSet", "find_candidates", "tangent_frame"]
+__all__ = ["RigidPlane", "ContactSet", "find_candidates", "find_pairs", "tangent_frame"]
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
@@ -89,6 +90,16 @@ class ContactSet:
     tributary: np.ndarray
     abscissa: np.ndarray
     H: sp.csr_matrix
+    #: Two deformable bodies (:func:`find_pairs`): the master segment's two global nodes per contact,
+    #: their interpolation weights and the paired master point; None against a rigid obstacle.
+    master_nodes: np.ndarray | None = None
+    master_weights: np.ndarray | None = None
+    master_points: np.ndarray | None = None
+
+    @property
+    def two_body(self) -> bool:
+        """True when the obstacle is a deformable master body."""
+        return self.master_nodes is not None
 
     @property
     def nc(self) -> int:
@@ -207,3 +218,169 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
     return ContactSet(dim=gdim, global_nodes=gnodes, coords=coords, frames=frames, gap0=gaps,
                       tributary=trib, abscissa=in_plane[:, 0].copy(), H=H)
 
+
+
+# Two deformable bodies -------------------------------------------------------------------------------------
+def _boundary_segments(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The owned facets of a 2D boundary as segments of P1 nodes, gathered on every rank. Collective.
+
+    Returns:
+        (global node pairs (n, 2), end coordinates (n, 2, gdim), the centroid of each facet's cell (n, gdim));
+        the cell centroid tells on which side of the segment the body lies.
+    """
+    msh = V.mesh
+    comm = msh.comm
+    tdim, gdim = msh.topology.dim, msh.geometry.dim
+    fdim = tdim - 1
+    msh.topology.create_connectivity(fdim, tdim)
+    msh.topology.create_connectivity(fdim, 0)
+    f_to_c = msh.topology.connectivity(fdim, tdim)
+    f_to_v = msh.topology.connectivity(fdim, 0)
+    c_to_v = msh.topology.connectivity(tdim, 0)
+    n_owned_facets = msh.topology.index_map(fdim).size_local
+    facets = np.asarray(facets, dtype=np.int32)
+    facets = facets[facets < n_owned_facets]  # each facet once across ranks
+    dof_x = V.tabulate_dof_coordinates()[:, :gdim]
+    imap = V.dofmap.index_map
+    pairs, ends, centroids = [], [], []
+    for f in facets:
+        cell = f_to_c.links(f)[0]
+        dofs = V.dofmap.cell_dofs(cell)
+        # P1: a facet's nodes are the cell's dofs sitting at the facet's vertices (matched by position
+        # inside one cell, where positions are distinct; coincident nodes of the other body are elsewhere).
+        vx = msh.geometry.x[_vertex_geometry(msh, f_to_v.links(f)), :gdim]
+        local = [int(dofs[np.argmin(np.linalg.norm(dof_x[dofs] - p, axis=1))]) for p in vx]
+        pairs.append(local)
+        ends.append(dof_x[local])
+        cverts = _vertex_geometry(msh, c_to_v.links(cell))
+        centroids.append(msh.geometry.x[cverts, :gdim].mean(axis=0))
+    pairs = np.asarray(pairs, dtype=np.int32).reshape(-1, 2)
+    gpairs = imap.local_to_global(pairs.ravel()).reshape(-1, 2).astype(np.int64) if pairs.size else \
+        np.zeros((0, 2), dtype=np.int64)
+    gathered = comm.allgather((gpairs, np.asarray(ends).reshape(-1, 2, gdim),
+                               np.asarray(centroids).reshape(-1, gdim)))
+    return tuple(np.concatenate([g[k] for g in gathered]) for k in range(3))
+
+
+def _vertex_geometry(msh, vertices: np.ndarray) -> np.ndarray:
+    """Geometry node index of each topological vertex (first-order mesh)."""
+    # Cached per mesh: the vertex -> geometry node map through the cell -> geometry dofmap.
+    cache = getattr(msh, "_vertex_to_node", None)
+    if cache is None:
+        tdim = msh.topology.dim
+        c_to_v = msh.topology.connectivity(tdim, 0)
+        imap = msh.topology.index_map(0)
+        cache = np.full(imap.size_local + imap.num_ghosts, -1, dtype=np.int64)
+        x_dofmap = msh.geometry.dofmap
+        for c in range(msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts):
+            cache[c_to_v.links(c)] = x_dofmap.links(c)
+        msh._vertex_to_node = cache
+    return cache[vertices]
+
+
+def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
+               exclude_nodes: np.ndarray | None = None) -> ContactSet:
+    """Pair each slave node with a point of the master surface, in the reference configuration. Collective.
+
+    Small sliding: the pairing is made once and kept for the whole run. In fretting the relative slip is
+    micrometres, a fraction of the contact width, so the master point of a slave node moves little; the
+    run warns when the accumulated relative slip exceeds half a master element (then the master's
+    displacement is taken at a point that is no longer the one facing the slave node).
+
+    For slave node s, the master point is the closest point P of the master segments, with weights
+    ``(1 - xi, xi)`` on the segment's end nodes (A, B) and the frame (n, t) of that segment, n the master's
+    outward normal (pointing towards the slave). The local relative displacement is
+
+        x^s = [n; t] (u_s - (1 - xi) u_A - xi u_B) + g0,    g0 = (s - P) . n,
+
+    so H has ``3 dim`` non-zeros per row and ``W = H K^-1 H^T`` and the local solvers are unchanged. A rigid
+    translation D of the master body changes x by ``-[n; t] D``, as for a rigid plane moved by D
+    (:attr:`ContactSet.rigid_modes`). Slave candidates: the owned nodes of ``slave_facets`` within
+    ``half_width`` (along t) of the slave node closest to the master.
+
+    2D only (segments); a 3D master surface would need facet projections.
+
+    Args:
+        V: Vector P1 displacement space on the mesh holding both bodies.
+        slave_facets, master_facets: Local facet indices of the two contact surfaces.
+        half_width: Candidate window half-width (mm), or None for every slave node.
+        exclude_nodes: Local block indices with prescribed displacement (never candidates).
+
+    Returns:
+        The contact set (identical on every rank) with ``master_nodes``, ``master_weights`` and
+        ``master_points`` set.
+
+    Raises:
+        ValueError: on a 3D mesh, or if no slave node or master facet is found.
+    """
+    from dolfinx import fem
+
+    msh = V.mesh
+    comm = msh.comm
+    gdim = msh.geometry.dim
+    fdim = msh.topology.dim - 1
+    if gdim != 2:
+        raise ValueError(f"two-body contact (contact.obstacle = 'elastic_flat') is 2D; the mesh is {gdim}D")
+    bs = V.dofmap.index_map_bs
+    imap = V.dofmap.index_map
+    seg_nodes, seg_x, seg_inside = _boundary_segments(V, master_facets)
+    if seg_nodes.shape[0] == 0:
+        raise ValueError("contact: the master surface has no facet")
+
+    slave_facets = np.asarray(slave_facets, dtype=np.int32)
+    nodes = fem.locate_dofs_topological(V, fdim, slave_facets)
+    nodes = nodes[nodes < imap.size_local]
+    if exclude_nodes is not None and len(exclude_nodes):
+        nodes = np.setdiff1d(nodes, exclude_nodes)
+    measure = _tributary_measure(V, slave_facets, fdim)
+    gathered = comm.allgather((imap.local_to_global(nodes.astype(np.int32)).astype(np.int64),
+                               V.tabulate_dof_coordinates()[nodes, :gdim], measure[nodes]))
+    gnodes = np.concatenate([g[0] for g in gathered])
+    coords = np.concatenate([g[1] for g in gathered]).reshape(-1, gdim)
+    trib = np.concatenate([g[2] for g in gathered])
+    if gnodes.size == 0:
+        raise ValueError("contact: no slave node on the contact surface")
+
+    # Closest point of every master segment to every slave node (dense: nc x n_segments, both small).
+    A, B = seg_x[:, 0], seg_x[:, 1]
+    d = B - A
+    L2 = np.einsum("ij,ij->i", d, d)
+    rel = coords[:, None, :] - A[None, :, :]
+    xi = np.clip(np.einsum("sij,ij->si", rel, d) / L2[None, :], 0.0, 1.0)
+    P = A[None] + xi[..., None] * d[None]
+    dist = np.linalg.norm(coords[:, None, :] - P, axis=2)
+    best = np.argmin(dist, axis=1)
+    rows = np.arange(gnodes.size)
+    xi, P = xi[rows, best], P[rows, best]
+    # Outward normal of the master segment: perpendicular to it, away from its cell's centroid.
+    tang = d[best] / np.sqrt(L2[best])[:, None]
+    normal = np.stack([-tang[:, 1], tang[:, 0]], axis=1)
+    flip = np.einsum("ij,ij->i", seg_inside[best] - A[best], normal) > 0
+    normal[flip] *= -1
+    frames = np.stack([tangent_frame(nv) for nv in normal])
+    gaps = np.einsum("ij,ij->i", coords - P, normal)
+
+    closest = coords[np.argmin(gaps)]
+    abscissa = np.einsum("ij,ij->i", coords, frames[:, 1])  # position along the master's tangent
+    keep = np.ones(gnodes.size, dtype=bool)
+    if half_width is not None:
+        keep = np.abs(np.einsum("ij,ij->i", coords - closest, frames[:, 1])) <= half_width * (1 + 1e-12)
+    order = np.flatnonzero(keep)[np.argsort(abscissa[keep], kind="stable")]
+    gnodes, coords, gaps, trib, frames, xi, P, abscissa = (
+        a[order] for a in (gnodes, coords, gaps, trib, frames, xi, P, abscissa))
+    masters = seg_nodes[best[order]]
+    weights = np.stack([1.0 - xi, xi], axis=1)
+
+    nc = gnodes.size
+    # Rows (n, t) of contact c: frame . (e_slave - w_A e_A - w_B e_B); 3 nodes x gdim columns each.
+    node_cols = np.column_stack([gnodes, masters])                       # (nc, 3)
+    node_coef = np.column_stack([np.ones(nc), -weights])                 # (nc, 3)
+    vals = frames[:, :, None, :] * node_coef[:, None, :, None]           # (nc, dim, 3, dim)
+    cols = bs * node_cols[:, None, :, None] + np.arange(gdim)[None, None, None, :]
+    cols = np.broadcast_to(cols, vals.shape)
+    rws = np.broadcast_to(np.arange(nc * gdim).reshape(nc, gdim, 1, 1), vals.shape)
+    H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nc * gdim, imap.size_global * bs))
+    H.eliminate_zeros()  # weight 0 at a segment end
+    return ContactSet(dim=gdim, global_nodes=gnodes, coords=coords, frames=frames, gap0=gaps,
+                      tributary=trib, abscissa=abscissa, H=H, master_nodes=masters, master_weights=weights,
+                      master_points=P)

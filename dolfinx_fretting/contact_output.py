@@ -27,10 +27,10 @@ __all__ = ["read_table", "read_profiles", "ContactProfiles", "write_contact_xdmf
            "XDMF_FIELDS", "STATE_NAMES"]
 
 #: Columns of the tables that hold text; every other column is numeric.
-_TEXT_COLUMNS = frozenset({"stage", "regime"})
+_TEXT_COLUMNS = frozenset({"stage", "regime", "jump_bound"})
 #: Numeric columns that hold integers (counts, indices, state codes).
 _INT_COLUMNS = frozenset({"increment", "cycle", "step", "node", "state", "n_open", "n_stick", "n_slip",
-                          "local_iterations", "load_solves"})
+                          "local_iterations", "load_solves", "jump"})
 #: Per-node columns of ``contact_profiles.csv`` after ``position``.
 _PROFILE_VALUES = ("gap", "pressure", "shear", "slip", "relative_tangential", "wear", "state")
 #: Point attributes of ``contact.xdmf`` (``state``: 0 open, 1 stick, 2 slip).
@@ -42,7 +42,7 @@ STATE_NAMES = {0: "open", 1: "stick", 2: "slip"}
 def read_table(path: str | Path) -> dict[str, np.ndarray]:
     """Read one of a run's CSV tables as a dict of columns.
 
-    Text columns (``stage``, ``regime``) are arrays of ``str``, integer columns (``increment``, ``node``,
+    Text columns (``stage``, ``regime``, ``jump_bound``) are arrays of ``str``, integer columns (``increment``, ``node``,
     ``state``, ...) ``int64`` and the others ``float64``. The table may be incomplete: a last line without
     its newline (a write in progress or cut short) and lines with the wrong number of fields are skipped,
     and a value that is not a number reads as NaN (an integer column that holds one stays ``float64``).
@@ -133,8 +133,9 @@ class ContactProfiles:
         increments: Kept increment numbers, ascending, shape (m,).
         cycles: Cycle of each kept increment (0: preload or monotonic load), shape (m,).
         steps: Step of each kept increment within its cycle, shape (m,).
-        nodes: Contact node numbers (the CSV's ``node`` column), ascending, shape (n,).
-        position: Node positions along the surface (mm), shape (n,), from the first kept increment.
+        nodes: Column numbers 0..n-1 (the CSV's ``node`` column when the node set never changed), shape (n,).
+        position: Node positions along the surface (mm), ascending, shape (n,): the union over the kept
+            increments.
         values: ``gap``, ``pressure``, ``shear``, ``slip``, ``relative_tangential``, ``wear`` (float) and
             ``state`` (int: 0 open, 1 stick, 2 slip), each of shape (m, n), row i for ``increments[i]``.
     """
@@ -166,9 +167,10 @@ class ContactProfiles:
 def read_profiles(path: str | Path) -> ContactProfiles | None:
     """Read ``contact_profiles.csv`` into a :class:`ContactProfiles`.
 
-    An increment is kept when it has exactly one row for each contact node of the first complete
-    increment (the node set of a run does not change); a partly written increment at the end of an
-    interrupted run, or an increment whose rows appear twice, is dropped.
+    An increment is kept when it has exactly one row for each of its contact nodes 0..n-1; a partly
+    written increment at the end of an interrupted run, or an increment whose rows appear twice, is
+    dropped. When the candidate window grew during the run, the node set grows too: every increment is
+    placed on the union of the positions, with NaN (state -1) for nodes that were not candidates yet.
 
     Args:
         path: ``contact_profiles.csv`` or the output folder holding it.
@@ -192,39 +194,48 @@ def read_profiles(path: str | Path) -> ContactProfiles | None:
     uniq, start, count = np.unique(inc_sorted, return_index=True, return_counts=True)
     if uniq.size == 0:
         return None
-    # the node count of a complete increment: the most frequent count
-    counts, freq = np.unique(count, return_counts=True)
-    n = int(counts[np.argmax(freq)])
+    # An increment is complete when its rows are the nodes 0..n-1 once each. The node set may grow during a
+    # run (the candidate window widens): increments are then placed on the union of the positions, NaN
+    # (state -1) where a node was not yet a candidate. The last increment may be partly written (an
+    # interrupted run): kept only if it has as many rows as the one before.
     node_sorted = node[order]
-    ref_nodes = None
+    pos_all = np.asarray(table["position"][ok], dtype=float)[order]
     keep: list[int] = []
     for k in range(uniq.size):
-        if count[k] != n:
+        nodes_k = node_sorted[start[k]:start[k] + count[k]]
+        if not np.array_equal(nodes_k, np.arange(count[k])):
             continue
-        nodes_k = node_sorted[start[k]:start[k] + n]
-        if ref_nodes is None:
-            ref_nodes = nodes_k
-        elif not np.array_equal(nodes_k, ref_nodes):
+        if k == uniq.size - 1 and k > 0 and count[k] < count[k - 1]:
             continue
         keep.append(k)
     if not keep:
         return None
     keep_arr = np.array(keep)
-    # row indices (into the masked table) of the kept increments, (m, n)
-    rows = order[(start[keep_arr][:, None] + np.arange(n)[None, :])]
+    # Positions are written with 10 significant digits: equal nodes give equal text, hence equal floats.
+    union = np.unique(np.concatenate([pos_all[start[k]:start[k] + count[k]] for k in keep]))
+    m, n = keep_arr.size, union.size
+    rows = np.full((m, n), -1, dtype=np.int64)
+    for i, k in enumerate(keep):
+        cols = np.searchsorted(union, pos_all[start[k]:start[k] + count[k]])
+        rows[i, cols] = order[start[k]:start[k] + count[k]]
+    present = rows >= 0
 
-    def col(name: str) -> np.ndarray:
-        return np.asarray(table[name])[ok][rows]
+    def col(name: str, fill: float = np.nan) -> np.ndarray:
+        data = np.asarray(np.asarray(table[name])[ok], dtype=float)
+        out = np.full((m, n), fill)
+        out[present] = data[rows[present]]
+        return out
 
-    values = {name: np.asarray(col(name), dtype=float) for name in _PROFILE_VALUES}
+    values = {name: col(name) for name in _PROFILE_VALUES}
     state = values["state"]
     values["state"] = np.where(np.isfinite(state), state, -1).astype(np.int64)
+    first_rows = order[start[keep_arr]]
     return ContactProfiles(
         increments=uniq[keep_arr].astype(np.int64),
-        cycles=np.asarray(col("cycle")[:, 0], dtype=np.int64),
-        steps=np.asarray(col("step")[:, 0], dtype=np.int64),
-        nodes=np.asarray(ref_nodes, dtype=np.int64),
-        position=np.asarray(col("position")[0], dtype=float),
+        cycles=np.asarray(np.asarray(table["cycle"])[ok][first_rows], dtype=np.int64),
+        steps=np.asarray(np.asarray(table["step"])[ok][first_rows], dtype=np.int64),
+        nodes=np.arange(n, dtype=np.int64),
+        position=union,
         values=values,
     )
 

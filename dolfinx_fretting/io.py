@@ -27,7 +27,8 @@ HISTORY_FIELDS = ["increment", "cycle", "step", "stage", "normal_displacement", 
                   "face_pressure", *ROW_FIELDS, "local_iterations", "local_error", "load_solves",
                   "newton_iterations", "newton_delta_1", "newton_delta_2", "cutbacks", "yielded_points"]
 #: Columns of ``cycles.csv`` (one row per cycle of a cyclic run).
-CYCLE_FIELDS = ["cycle", "equivalent_cycles", "dissipated_energy", "wear_area", "max_wear_depth",
+CYCLE_FIELDS = ["cycle", "equivalent_cycles", "jump", "jump_bound", "jump_stability_limit", "jump_error_estimate",
+                "wear_error_estimate", "dissipated_energy", "wear_area", "max_wear_depth",
                 "tangential_force_max", "tangential_force_min", "displacement_max", "displacement_min",
                 "energy_ratio", "min_stick", "regime", "max_pressure_end", "local_iterations", "wall_time_s"]
 #: Columns of ``contact_profiles.csv`` (one row per contact node and kept increment).

@@ -30,15 +30,20 @@ if TYPE_CHECKING:
     from dolfinx.cpp.mesh import MeshTags_int32
     from dolfinx.mesh import Mesh
 
-__all__ = ["BodyMesh", "half_cylinder", "rectangle", "boundary_nodes", "facet_dofs",
-           "HALF_CYLINDER_TAGS", "RECTANGLE_TAGS"]
+__all__ = ["BodyMesh", "half_cylinder", "cylinder_on_flat", "rectangle", "boundary_nodes", "facet_dofs",
+           "HALF_CYLINDER_TAGS", "CYLINDER_ON_FLAT_TAGS", "CYLINDER_ON_FLAT_REGIONS", "RECTANGLE_TAGS"]
 
 #: Facet tag values of :func:`half_cylinder` (the flat loading face and the whole curved face).
 HALF_CYLINDER_TAGS: dict[str, int] = {"top": 1, "surface": 2}
 #: Facet tag values of :func:`rectangle`.
 RECTANGLE_TAGS: dict[str, int] = {"bottom": 1, "right": 2, "top": 3, "left": 4}
+#: Facet tag values of :func:`cylinder_on_flat` (the half-cylinder's, then the flat's faces).
+CYLINDER_ON_FLAT_TAGS: dict[str, int] = {"top": 1, "surface": 2, "flat_top": 3, "flat_bottom": 4,
+                                         "flat_sides": 5}
 #: Cell tag value of the (single) body.
 BODY_CELL_TAG = 1
+#: Cell tag values of :func:`cylinder_on_flat`'s two bodies.
+CYLINDER_ON_FLAT_REGIONS: dict[str, int] = {"cylinder": 1, "flat": 2}
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,7 +53,7 @@ class BodyMesh:
     Attributes:
         mesh: The distributed DOLFINx mesh (2D, first order).
         facet_tags: Facet markers; every exterior facet carries exactly one value of ``tags``.
-        cell_tags: Cell markers (all cells carry :data:`BODY_CELL_TAG`).
+        cell_tags: Cell markers, one value per body (see ``regions``).
         tags: Boundary name -> value in ``facet_tags``; these boundaries are disjoint and cover the
             whole boundary.
         contact_mesh_size: Element edge length (mm) along the refined contact boundary (half-cylinder:
@@ -66,6 +71,8 @@ class BodyMesh:
     contact_mesh_size: float
     contact_half_width: float | None = None
     zones: dict[str, np.ndarray] = field(default_factory=dict)
+    #: Body name -> value in ``cell_tags`` (one body: ``{"body": 1}``).
+    regions: dict[str, int] = field(default_factory=lambda: {"body": BODY_CELL_TAG})
 
     @property
     def names(self) -> list[str]:
@@ -103,6 +110,26 @@ def _check_point(name: str, value: Sequence[float]) -> tuple[float, float]:
         raise ValueError(f"{name} = {value!r} is out of range: a pair of finite numbers (x, y)") from None
     _check(name, value, math.isfinite(x) and math.isfinite(y), "a pair of finite numbers (x, y)")
     return x, y
+
+
+def _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_size) -> tuple[float, ...]:
+    """Checked radius R, contact size h, refined half-width a and coarse size H (mm), defaults filled in."""
+    R = radius
+    _check("radius", R, _is_real(R) and R > 0, "radius > 0 (mm)")
+    R = float(R)
+    h = contact_mesh_size
+    _check("contact_mesh_size", h, _is_real(h) and 0 < h < R, f"0 < contact_mesh_size < radius = {R} mm")
+    h = float(h)
+    # Default: R/15 or ten elements, capped at R/2 (but never below h) for coarse meshes.
+    a = max(min(max(R / 15.0, 10.0 * h), R / 2.0), h) if contact_half_width is None else contact_half_width
+    _check("contact_half_width", a, _is_real(a) and h <= a < R,
+           f"contact_mesh_size = {h} mm <= contact_half_width < radius = {R} mm")
+    a = float(a)
+    H = max(R / 10.0, h) if coarse_mesh_size is None else coarse_mesh_size
+    _check("coarse_mesh_size", H, _is_real(H) and h <= H < R,
+           f"contact_mesh_size = {h} mm <= coarse_mesh_size < radius = {R} mm")
+    H = float(H)
+    return R, h, a, H
 
 
 # Half-cylinder ---------------------------------------------------------------------------------------------
@@ -164,21 +191,7 @@ def half_cylinder(comm: MPI.Comm, radius: float, contact_mesh_size: float = 0.01
             on every rank before any collective call.
         RuntimeError: if gmsh fails (raised on every rank).
     """
-    R = radius
-    _check("radius", R, _is_real(R) and R > 0, "radius > 0 (mm)")
-    R = float(R)
-    h = contact_mesh_size
-    _check("contact_mesh_size", h, _is_real(h) and 0 < h < R, f"0 < contact_mesh_size < radius = {R} mm")
-    h = float(h)
-    # Default: R/15 or ten elements, capped at R/2 (but never below h) for coarse meshes.
-    a = max(min(max(R / 15.0, 10.0 * h), R / 2.0), h) if contact_half_width is None else contact_half_width
-    _check("contact_half_width", a, _is_real(a) and h <= a < R,
-           f"contact_mesh_size = {h} mm <= contact_half_width < radius = {R} mm")
-    a = float(a)
-    H = max(R / 10.0, h) if coarse_mesh_size is None else coarse_mesh_size
-    _check("coarse_mesh_size", H, _is_real(H) and h <= H < R,
-           f"contact_mesh_size = {h} mm <= coarse_mesh_size < radius = {R} mm")
-    H = float(H)
+    R, h, a, H = _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_size)
     t = min(max(a / 4.0, 2.0 * h), R / 2.0) if refined_depth is None else refined_depth
     _check("refined_depth", t, _is_real(t) and 0 < t <= R / 2.0,
            f"0 < refined_depth <= radius / 2 = {R / 2.0} mm")
@@ -210,6 +223,88 @@ def half_cylinder(comm: MPI.Comm, radius: float, contact_mesh_size: float = 0.01
                     {"contact_zone": np.sort(contact_zone)})
 
 
+def cylinder_on_flat(comm: MPI.Comm, radius: float, flat_width: float, flat_height: float,
+                     contact_mesh_size: float = 0.01, contact_half_width: float | None = None,
+                     coarse_mesh_size: float | None = None, quadrilateral: bool = True, *,
+                     growth: float = 0.2, verbose: bool = False) -> BodyMesh:
+    """Two bodies in one mesh: the half-cylinder of :func:`half_cylinder` resting on a flat block. Collective.
+
+    The cylinder's lowest point is the origin; the flat is ``[-W/2, W/2] x [-H_f, 0]``. The two bodies
+    touch at the origin but share no node (two gmsh surfaces with their own points, so DOLFINx gets two
+    disconnected pieces and one stiffness matrix K that is block-diagonal between them). Both contact
+    faces are refined to ``contact_mesh_size`` within ``contact_half_width`` of x = 0, over a structured
+    sector of the same depth in each body, and graded to ``coarse_mesh_size`` away from it.
+
+    Args:
+        comm: Communicator over which the mesh is distributed.
+        radius: Cylinder radius R (mm).
+        flat_width: Width W of the flat (mm), > 2 contact_half_width.
+        flat_height: Height H_f of the flat (mm), > the refined depth.
+        contact_mesh_size, contact_half_width, coarse_mesh_size, quadrilateral, growth, verbose: As in
+            :func:`half_cylinder` (the same h, a and sizes are used in both bodies).
+
+    Returns:
+        The bodies with tags :data:`CYLINDER_ON_FLAT_TAGS` (``"top"``, ``"surface"``: the cylinder's loaded
+        face and arc; ``"flat_top"``, ``"flat_bottom"``, ``"flat_sides"``), regions
+        :data:`CYLINDER_ON_FLAT_REGIONS` and zones ``"contact_zone"`` (the refined arc) and
+        ``"flat_contact_zone"`` (the refined segment of the flat's top).
+
+    Raises:
+        ValueError: if an argument is out of range (the message names it and the allowed range).
+        RuntimeError: if gmsh fails (raised on every rank).
+    """
+    R, h, a, H = _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_size)
+    t = min(max(a / 4.0, 2.0 * h), R / 2.0)
+    _check("flat_width", flat_width, _is_real(flat_width) and flat_width > 2 * a,
+           f"flat_width > 2 contact_half_width = {2 * a} mm")
+    _check("flat_height", flat_height, _is_real(flat_height) and flat_height > t,
+           f"flat_height > the refined depth {t} mm")
+    _check("growth", growth, _is_real(growth) and 0 < growth <= 1, "0 < growth <= 1")
+    W, Hf = float(flat_width), float(flat_height)
+
+    def model(gmsh, split: int) -> None:
+        # Two bodies that touch at one point: the geo kernel must not merge their coincident points.
+        gmsh.option.setNumber("Geometry.AutoCoherence", 0)
+        cyl = _half_cylinder_geometry(gmsh, R, h, a, t, 0.0, R, quadrilateral, split)
+        flat = _flat_geometry(gmsh, W, Hf, h, a, t, 0.0, 0.0, quadrilateral, split)
+        # Mesh constraints after the last synchronize (a geo synchronize drops earlier ones).
+        cyl["structure"]()
+        flat["structure"]()
+        _size_field_and_mesh(gmsh, cyl["refined_curves"] + flat["refined_curves"],
+                             [cyl["sector"], flat["sector"]], split * h, split * H, growth, quadrilateral,
+                             split, max(cyl["n_points"], flat["n_points"]))
+        regions = CYLINDER_ON_FLAT_REGIONS
+        gmsh.model.addPhysicalGroup(2, cyl["surfaces"], regions["cylinder"])
+        gmsh.model.addPhysicalGroup(2, flat["surfaces"], regions["flat"])
+        for name, value in regions.items():
+            gmsh.model.setPhysicalName(2, value, name)
+        tags = CYLINDER_ON_FLAT_TAGS
+        for name, curves in (("top", cyl["top"]), ("surface", cyl["surface"]), ("flat_top", flat["top"]),
+                             ("flat_bottom", flat["bottom"]), ("flat_sides", flat["sides"])):
+            gmsh.model.addPhysicalGroup(1, curves, tags[name])
+            gmsh.model.setPhysicalName(1, tags[name], name)
+        gmsh.model.mesh.generate(2)
+
+    def build(gmsh) -> None:
+        model(gmsh, 1)
+        if quadrilateral and _cell_node_counts(gmsh) != {4}:
+            gmsh.model.remove()  # see half_cylinder: subdivide a mesh at twice the sizes instead
+            gmsh.model.add("body")
+            model(gmsh, 2)
+        found = _cell_node_counts(gmsh)
+        if found != {4 if quadrilateral else 3}:
+            raise RuntimeError(f"gmsh produced cells with {sorted(found)} nodes")
+
+    msh, cell_tags, facet_tags = _gmsh_to_dolfinx(comm, build, verbose)
+    zones = {}
+    for zone, tag in (("contact_zone", "surface"), ("flat_contact_zone", "flat_top")):
+        facets = np.asarray(facet_tags.find(CYLINDER_ON_FLAT_TAGS[tag]), dtype=np.int32)
+        mid = _facet_midpoints(msh, facets)
+        zones[zone] = np.sort(facets[np.abs(mid[:, 0]) <= a * (1 + 1e-9)])
+    return BodyMesh(msh, facet_tags, cell_tags, dict(CYLINDER_ON_FLAT_TAGS), h, a, zones,
+                    dict(CYLINDER_ON_FLAT_REGIONS))
+
+
 def _half_cylinder_model(gmsh, R: float, h: float, a: float, H: float, t: float, growth: float, cx: float,
                          cy: float, quadrilateral: bool, split: int) -> None:
     """Build and mesh the half-cylinder in the current (empty) gmsh model.
@@ -218,13 +313,35 @@ def _half_cylinder_model(gmsh, R: float, h: float, a: float, H: float, t: float,
     ``Mesh.SubdivisionAlgorithm = 1``), which halves the sizes back; the curve node counts are chosen so
     that the result has the same spacing rules (an even number of segments per half refined arc).
     """
+    cyl = _half_cylinder_geometry(gmsh, R, h, a, t, cx, cy, quadrilateral, split)
+    cyl["structure"]()
+    _size_field_and_mesh(gmsh, cyl["refined_curves"], [cyl["sector"]], split * h, split * H, growth,
+                         quadrilateral, split, cyl["n_points"])
+    gmsh.model.addPhysicalGroup(2, cyl["surfaces"], BODY_CELL_TAG)
+    gmsh.model.setPhysicalName(2, BODY_CELL_TAG, "body")
+    tags = HALF_CYLINDER_TAGS
+    gmsh.model.addPhysicalGroup(1, cyl["top"], tags["top"])
+    gmsh.model.addPhysicalGroup(1, cyl["surface"], tags["surface"])
+    for name, value in tags.items():
+        gmsh.model.setPhysicalName(1, value, name)
+    gmsh.model.mesh.generate(2)
+
+
+def _half_cylinder_geometry(gmsh, R: float, h: float, a: float, t: float, cx: float, cy: float,
+                            quadrilateral: bool, split: int) -> dict[str, list[int] | int]:
+    """Add the half-cylinder's points, curves and two surfaces (refined sector, rest) to the geo model.
+
+    Returns the entity tags: ``surfaces``, ``sector``, ``top`` and ``surface`` (curve lists) and
+    ``refined_curves`` (the sector's inner boundary, from which the element size grows), and
+    ``structure``, which sets the structured-mesh constraints: call it after the model's last
+    ``geo.synchronize()`` (a synchronize drops them).
+    """
     geo = gmsh.model.geo
     theta = math.asin(a / R)
     r_in = R - t
     # Equal segments along each half of the refined arc (length R theta) and through the depth t.
     n_seg = max(1, round(R * theta / (split * h)))
     n_layers = max(1, round(t / (split * h)))
-    hs, Hs = split * h, split * H
 
     def on_circle(radius: float, angle: float) -> int:
         # Angle measured from the downward vertical, positive towards +x.
@@ -254,22 +371,82 @@ def _half_cylinder_model(gmsh, R: float, h: float, a: float, H: float, t: float,
         [outer_right, top, outer_left, -side_left, -inner_left_arc, -inner_right_arc, -side_right])])
     geo.synchronize()
 
-    mesh = gmsh.model.mesh
-    for curve in (centre_right, centre_left, inner_right_arc, inner_left_arc):
-        mesh.setTransfiniteCurve(curve, n_seg + 1)
-    for curve in (side_right, side_left):
-        mesh.setTransfiniteCurve(curve, n_layers + 1)
-    if quadrilateral:
-        mesh.setTransfiniteSurface(sector, "Left", [left_a, right_a, inner_right, inner_left])
-    # Triangles stay unstructured (frontal) in the sector at size h: on structured triangles
-    # ("Left", "Alternate") the P1 nodal contact forces oscillated by 4-8 % on a Hertz contact.
+    def structure() -> None:
+        mesh = gmsh.model.mesh
+        for curve in (centre_right, centre_left, inner_right_arc, inner_left_arc):
+            mesh.setTransfiniteCurve(curve, n_seg + 1)
+        for curve in (side_right, side_left):
+            mesh.setTransfiniteCurve(curve, n_layers + 1)
+        if quadrilateral:
+            mesh.setTransfiniteSurface(sector, "Left", [left_a, right_a, inner_right, inner_left])
+        # Triangles stay unstructured (frontal) in the sector at size h: on structured triangles
+        # ("Left", "Alternate") the P1 nodal contact forces oscillated by 4-8 % on a Hertz contact.
 
-    # Size: h in the sector; outside, h at the sector growing linearly with the distance up to H.
+    return dict(structure=structure, surfaces=[sector, rest], sector=sector, top=[top], n_points=2 * max(n_seg, n_layers) + 20,
+                surface=[centre_right, outer_right, outer_left, centre_left],
+                refined_curves=[side_right, inner_right_arc, inner_left_arc, side_left])
+
+
+def _flat_geometry(gmsh, width: float, height: float, h: float, a: float, t: float, cx: float, y_top: float,
+                   quadrilateral: bool, split: int) -> dict[str, list[int] | int]:
+    """Add a flat block ``[cx - width/2, cx + width/2] x [y_top - height, y_top]`` to the geo model.
+
+    Its top face is split at ``x = cx +- a``; the refined segment gets ``2 round(a / h)`` equal pieces and a
+    sector of depth t under it has size h (structured quadrilaterals, like the half-cylinder's), so the
+    flat's contact nodes sit under the cylinder's when both use the same h and a.
+
+    Returns the entity tags: ``surfaces``, ``sector``, ``top``, ``bottom``, ``sides`` (curve lists),
+    ``refined_curves`` and ``structure`` (as in :func:`_half_cylinder_geometry`).
+    """
+    geo = gmsh.model.geo
+    n_seg = max(1, round(a / (split * h)))
+    n_layers = max(1, round(t / (split * h)))
+    x0, x1, y0 = cx - width / 2.0, cx + width / 2.0, y_top - height
+    p = {name: geo.addPoint(x, y, 0.0) for name, (x, y) in {
+        "bl": (x0, y0), "br": (x1, y0), "tr": (x1, y_top), "tl": (x0, y_top),
+        "ta_r": (cx + a, y_top), "ta_l": (cx - a, y_top), "tc": (cx, y_top),
+        "ia_r": (cx + a, y_top - t), "ia_l": (cx - a, y_top - t), "ic": (cx, y_top - t)}.items()}
+    bottom = geo.addLine(p["bl"], p["br"])
+    right = geo.addLine(p["br"], p["tr"])
+    top_right = geo.addLine(p["tr"], p["ta_r"])
+    centre_right = geo.addLine(p["ta_r"], p["tc"])
+    centre_left = geo.addLine(p["tc"], p["ta_l"])
+    top_left = geo.addLine(p["ta_l"], p["tl"])
+    left = geo.addLine(p["tl"], p["bl"])
+    side_left = geo.addLine(p["ta_l"], p["ia_l"])
+    inner_left = geo.addLine(p["ia_l"], p["ic"])
+    inner_right = geo.addLine(p["ic"], p["ia_r"])
+    side_right = geo.addLine(p["ia_r"], p["ta_r"])
+    sector = geo.addPlaneSurface([geo.addCurveLoop(
+        [side_left, inner_left, inner_right, side_right, centre_right, centre_left])])
+    rest = geo.addPlaneSurface([geo.addCurveLoop(
+        [bottom, right, top_right, -side_right, -inner_right, -inner_left, -side_left, top_left, left])])
+    geo.synchronize()
+
+    def structure() -> None:
+        mesh = gmsh.model.mesh
+        for curve in (centre_right, centre_left, inner_left, inner_right):
+            mesh.setTransfiniteCurve(curve, n_seg + 1)
+        for curve in (side_left, side_right):
+            mesh.setTransfiniteCurve(curve, n_layers + 1)
+        if quadrilateral:
+            mesh.setTransfiniteSurface(sector, "Left", [p["ta_l"], p["ia_l"], p["ia_r"], p["ta_r"]])
+
+    return dict(structure=structure, surfaces=[sector, rest], sector=sector, bottom=[bottom], sides=[left, right],
+                n_points=2 * max(2 * n_seg, n_layers) + 20,
+                top=[top_right, centre_right, centre_left, top_left],
+                refined_curves=[side_left, inner_left, inner_right, side_right])
+
+
+def _size_field_and_mesh(gmsh, refined_curves: list[int], sectors: list[int], hs: float, Hs: float,
+                         growth: float, quadrilateral: bool, split: int, n_points: int) -> None:
+    """Size h in the sectors; outside, h at the sectors growing linearly with the distance up to H."""
+    mesh = gmsh.model.mesh
     fields = mesh.field
     dist = fields.add("Distance")
-    fields.setNumbers(dist, "CurvesList", [side_right, inner_right_arc, inner_left_arc, side_left])
+    fields.setNumbers(dist, "CurvesList", refined_curves)
     # Distances are measured to sample points: sample finer than h so the size field is smooth.
-    fields.setNumber(dist, "NumPointsPerCurve", 2 * max(n_seg, n_layers) + 20)
+    fields.setNumber(dist, "NumPointsPerCurve", n_points)
     thr = fields.add("Threshold")
     fields.setNumber(thr, "InField", dist)
     fields.setNumber(thr, "SizeMin", hs)
@@ -280,7 +457,7 @@ def _half_cylinder_model(gmsh, R: float, h: float, a: float, H: float, t: float,
     fields.setString(inside, "F", repr(hs))
     in_sector = fields.add("Restrict")
     fields.setNumber(in_sector, "InField", inside)
-    fields.setNumbers(in_sector, "SurfacesList", [sector])
+    fields.setNumbers(in_sector, "SurfacesList", sectors)
     size = fields.add("Min")
     fields.setNumbers(size, "FieldsList", [thr, in_sector])
     fields.setAsBackgroundMesh(size)
@@ -291,15 +468,6 @@ def _half_cylinder_model(gmsh, R: float, h: float, a: float, H: float, t: float,
     gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)  # Blossom; the full-quad variants abort in 4.8
     gmsh.option.setNumber("Mesh.SubdivisionAlgorithm", 1 if split == 2 else 0)
     gmsh.option.setNumber("Mesh.ElementOrder", 1)
-
-    gmsh.model.addPhysicalGroup(2, [sector, rest], BODY_CELL_TAG)
-    gmsh.model.setPhysicalName(2, BODY_CELL_TAG, "body")
-    tags = HALF_CYLINDER_TAGS
-    gmsh.model.addPhysicalGroup(1, [top], tags["top"])
-    gmsh.model.addPhysicalGroup(1, [centre_right, outer_right, outer_left, centre_left], tags["surface"])
-    for name, value in tags.items():
-        gmsh.model.setPhysicalName(1, value, name)
-    mesh.generate(2)
 
 
 def _cell_node_counts(gmsh) -> set[int]:

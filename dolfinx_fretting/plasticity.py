@@ -60,7 +60,8 @@ class PlasticState:
         yielded: Points that yielded in the last update.
     """
 
-    def __init__(self, V: fem.FunctionSpace, law: J2Plasticity, quadrature_degree: int = 2):
+    def __init__(self, V: fem.FunctionSpace, law: J2Plasticity, quadrature_degree: int = 2,
+                 elastic_cells: np.ndarray | None = None):
         import basix
         from dolfinx import cpp
 
@@ -79,6 +80,13 @@ class PlasticState:
         self.cells = np.arange(msh.topology.index_map(tdim).size_local, dtype=np.int32)
         n = self.cells.size * self.nq
         self.n_points = n
+        # Cells of a body that stays elastic (two bodies, one of them plastic): their points use the same
+        # elastic constants and a yield stress that is never reached.
+        self.elastic_points = np.zeros(n, dtype=bool)
+        if elastic_cells is not None and len(elastic_cells):
+            in_elastic = np.isin(self.cells, elastic_cells)
+            self.elastic_points = np.repeat(in_elastic, self.nq)
+        self._elastic_law = J2Plasticity(law.E, law.nu, np.inf, 0.0)
 
         md = {"quadrature_degree": quadrature_degree, "quadrature_scheme": "default"}
         self.dx = ufl.dx(domain=msh, metadata=md)
@@ -122,6 +130,10 @@ class PlasticState:
         functions used by the forms (collective only through the ghost update)."""
         eps = self.strain(u)
         sigma, eps_p, p, C, yielded = return_mapping(self.law, eps, self.eps_p, self.p, tangent=True)
+        if self.elastic_points.any():
+            e = self.elastic_points
+            sigma[e], eps_p[e], p[e], C[e], yielded[e] = return_mapping(self._elastic_law, eps[e], self.eps_p[e],
+                                                                        self.p[e], tangent=True)
         self.trial_sigma, self.trial_eps_p, self.trial_p, self.yielded = sigma, eps_p, p, yielded
         k = len(self.comps)
         stress = self._stress.x.array.reshape(-1, k)
@@ -201,7 +213,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
 
     def __init__(self, problem, law: J2Plasticity, H, W: np.ndarray, face_load: PETSc.Vec | None,
                  tangent: str = "elastic", max_iter: int = 50, delta_1: float = 1e-8, delta_2: float = 1e-8,
-                 quadrature_degree: int = 2):
+                 quadrature_degree: int = 2, elastic_cells: np.ndarray | None = None):
         from mpi4py import MPI
 
         self.MPI = MPI
@@ -215,7 +227,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
         self.max_iter = max_iter
         self.delta_1 = delta_1
         self.delta_2 = delta_2
-        self.state = PlasticState(problem.V, law, quadrature_degree)
+        self.state = PlasticState(problem.V, law, quadrature_degree, elastic_cells)
         V = problem.V
         self.u = fem.Function(V, name="displacement")        # committed
         self._trial = fem.Function(V)

@@ -513,8 +513,10 @@ def _plot_profiles(out: Path, scene: Scene, prof: ContactProfiles, hist: _Histor
     if g.kind == "half_cylinder" and pre_rows.size:
         P = float(hist.t["normal_force"][pre_rows[-1]])
         xs = np.linspace(prof.position.min(), prof.position.max(), 400)
-        reference = ("Hertz, frictionless, end of preload", xs,
-                     hertz_pressure(xs, P, g.radius, scene.material.E / (1 - scene.material.nu**2)))
+        two_bodies = scene.contact.obstacle == "elastic_flat"
+        E_star = scene.material.E / (1 - scene.material.nu**2) / (2.0 if two_bodies else 1.0)
+        reference = ("Hertz" + (", two identical bodies" if two_bodies else ", rigid flat, frictionless")
+                     + ", end of preload", xs, hertz_pressure(xs, P, g.radius, E_star))
     path = out / "profiles.png"
     plot_profiles(path, prof.position, curves, reference, title=f"{scene.name}: contact tractions")
     return path

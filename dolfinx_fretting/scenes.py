@@ -54,6 +54,10 @@ class GeometrySettings(_Section):
     ny: int = Field(40, ge=1)
     #: Quadrilateral (four-node) cells; triangles otherwise.
     quadrilateral: bool = True
+    #: The elastic flat under a half-cylinder (``contact.obstacle = "elastic_flat"``): width and height (mm).
+    #: Its top is y = 0, centred under the cylinder; its bottom is fixed.
+    flat_width: float = Field(20.0, gt=0)
+    flat_height: float = Field(10.0, gt=0)
 
     @model_validator(mode="after")
     def _sizes_fit_the_body(self) -> GeometrySettings:
@@ -104,12 +108,16 @@ class MaterialSettings(_Section):
     hardening_modulus: float | None = Field(None, ge=0)
     #: Uniaxial tangent modulus E_t (MPa), 0 <= E_t < E, instead of hardening_modulus.
     tangent_modulus: float | None = Field(None, ge=0)
+    #: Two bodies (``contact.obstacle = "elastic_flat"``), elastoplastic: which body may yield; the other
+    #: stays elastic with the same E and nu.
+    plastic_body: Literal["both", "cylinder", "flat"] = "both"
 
     @model_validator(mode="after")
     def _plastic_keys(self) -> MaterialSettings:
         plastic = ("yield_stress", "hardening_modulus", "tangent_modulus")
         if self.model == "elastic":
             given = [k for k in plastic if getattr(self, k) is not None]
+            given += ["plastic_body"] if self.plastic_body != "both" else []
             if given:
                 raise ValueError(f"material.{given[0]} is given but material.model = 'elastic'; set "
                                  "material.model = 'elastoplastic' or remove it")
@@ -132,11 +140,18 @@ class MaterialSettings(_Section):
 
 
 class ContactSettings(_Section):
-    """Frictional contact with an obstacle."""
+    """Frictional contact with an obstacle: a rigid plane, or a second, deformable body.
+
+    ``obstacle = "elastic_flat"`` meshes a flat block under the half-cylinder (same material, bottom fixed)
+    and pairs each contact node of the cylinder (the slave surface) with a point of the flat's top (the
+    master surface) once, in the reference configuration (small sliding: fretting slip is micrometres;
+    the run warns when the relative slip exceeds half an element). Loads move the flat rigidly, as they move
+    the rigid plane: relative motions, forces and wear are those of the paper's load on the cylinder's top.
+    """
 
     #: Coulomb friction coefficient.
     mu: float = Field(0.9, ge=0)
-    obstacle: Literal["rigid_plane"] = "rigid_plane"
+    obstacle: Literal["rigid_plane", "elastic_flat"] = "rigid_plane"
     #: A point of the rigid plane (mm) and its unit normal pointing from the plane into the body.
     plane_point: list[float] = Field(default_factory=lambda: [0.0, 0.0], min_length=2, max_length=3)
     plane_normal: list[float] = Field(default_factory=lambda: [0.0, 1.0], min_length=2, max_length=3)
@@ -165,24 +180,80 @@ class WearSettings(_Section):
     the outputs record both (``wear_acceleration``, ``equivalent_cycles``). It is exact when the contact
     state changes little over ``acceleration`` cycles. The preload and a monotonic load happen once and
     wear with ``k`` itself.
+
+    ``cycle_jump`` is the controlled alternative (:mod:`dolfinx_fretting.cycle_jump`): each simulated cycle
+    uses the real ``k`` and the wear gap is extrapolated over a jump of cycles chosen from
+    ``jump_wear_fraction`` (wear per jump / contact element size), ``jump_pressure_change`` (predicted
+    pressure change per jump / peak pressure), ``jump_max`` and the explicit stability limit of the wear
+    update. It refuses ``acceleration != 1``: both stretch a simulated cycle over several physical ones,
+    and a fixed k-scaling inside the jump would multiply its step without the control.
     """
 
     law: Literal["none", "archard"] = "none"
-    #: Archard wear coefficient (1/MPa).
+    #: Archard wear coefficient of the wear gap (1/MPa): the paper's single coefficient.
     k: float = Field(0.0, ge=0)
+    #: Two deformable bodies: each body's own coefficient (1/MPa), given instead of ``k``. Both bodies see
+    #: the same pressure and relative slip, so the wear gap grows with ``k_slave + k_master`` and each
+    #: body's worn depth is its share ``k_body / (k_slave + k_master)`` of it.
+    k_slave: float | None = Field(None, ge=0)
+    k_master: float | None = Field(None, ge=0)
     #: Physical cycles per simulated cycle (the wear coefficient used is k * acceleration).
     acceleration: float = Field(1.0, ge=1.0)
+    #: Cycle jumping (``dolfinx_fretting.cycle_jump``): simulate a cycle with the real k, extrapolate the
+    #: wear gap over dN cycles chosen under the bounds below and the explicit stability limit, repeat.
+    cycle_jump: bool = False
+    #: Largest wear-gap increase of one jump, as a fraction of the contact element size.
+    jump_wear_fraction: float = Field(0.1, gt=0, le=1)
+    #: Largest predicted pressure change of one jump, as a fraction of the cycle's peak pressure.
+    jump_pressure_change: float = Field(0.05, gt=0, le=1)
+    #: Most cycles one jump may stand for.
+    jump_max: int = Field(1000, ge=1, le=100_000_000)
+    #: A fixed jump (cycles) instead of the automatic choice, for studies: the bounds and the stability
+    #: limit are still computed and reported, not enforced (a jump past the limit makes edge spikes).
+    jump_forced: int | None = Field(None, ge=1, le=100_000_000)
 
     @model_validator(mode="after")
     def _k_given(self) -> WearSettings:
-        if self.law == "archard" and self.k <= 0:
-            raise _range_error("wear.k", self.k, "k > 0 (1/MPa) with wear.law = 'archard'")
+        per_body = [self.k_slave is not None, self.k_master is not None]
+        if any(per_body):
+            if not all(per_body):
+                raise ValueError("wear: give both wear.k_slave and wear.k_master (1/MPa, >= 0), or wear.k alone")
+            if "k" in self.model_fields_set:
+                raise ValueError("wear: give either wear.k (one coefficient for the wear gap) or wear.k_slave "
+                                 "and wear.k_master (one per body), not both")
+        if self.law == "archard" and self.k_total <= 0:
+            key = "wear.k_slave + wear.k_master" if any(per_body) else "wear.k"
+            raise _range_error(key, self.k_total, f"{key.removeprefix('wear.')} > 0 (1/MPa) with wear.law = 'archard'")
+        if self.cycle_jump and self.law != "archard":
+            raise _range_error("wear.cycle_jump", self.cycle_jump, "false without a wear law (nothing to extrapolate)")
+        if self.cycle_jump and self.acceleration != 1.0:
+            # Both stretch a simulated cycle over several physical ones; the jump does it under error and
+            # stability control, the k-scaling does not, and together they would multiply the step.
+            raise _range_error("wear.acceleration", self.acceleration,
+                               "1 with wear.cycle_jump = true (use one of the two: the jump controls its "
+                               "step, the k-scaling does not)")
+        if self.jump_forced is not None and not self.cycle_jump:
+            raise _range_error("wear.jump_forced", self.jump_forced, "unset unless wear.cycle_jump = true")
         return self
+
+    @property
+    def k_total(self) -> float:
+        """The wear gap's coefficient (1/MPa): ``k``, or ``k_slave + k_master``."""
+        if self.k_slave is not None and self.k_master is not None:
+            return self.k_slave + self.k_master
+        return self.k
+
+    @property
+    def slave_share(self) -> float:
+        """Fraction of the wear gap worn from the slave body (the cylinder): 1 with a single ``k``."""
+        if self.k_slave is not None and self.k_master is not None and self.k_total > 0:
+            return self.k_slave / self.k_total
+        return 1.0
 
     @property
     def k_effective(self) -> float:
         """The wear coefficient applied per simulated increment (1/MPa): 0 without a wear law."""
-        return self.k * self.acceleration if self.law == "archard" else 0.0
+        return self.k_total * self.acceleration if self.law == "archard" else 0.0
 
 
 class LoadingSettings(_Section):
@@ -350,7 +421,7 @@ def preset_values(scene: Scene) -> dict[str, Any]:
     set in the scene or not); empty without a preset.
 
     Keys: ``geometry.contact_mesh_size`` (a half-cylinder under ``loading.normal_force``: the Hertz
-    half-width against a rigid flat over ``contact_elements_per_half_width``; none under a normal
+    half-width (against the rigid plane or the elastic flat) over ``contact_elements_per_half_width``; none under a normal
     displacement), ``geometry.nx`` and ``geometry.ny`` (a rectangle), ``loading.increments_per_cycle``,
     ``solver.local_tol`` and ``solver.force_tol``. Elastic-plastic scenes keep their tightened tolerances
     (local 1e-12, force 1e-11, see ``Scene._plastic_tolerances``): the presets' tolerances were measured on
@@ -365,7 +436,10 @@ def preset_values(scene: Scene) -> dict[str, Any]:
     g, lo, m = scene.geometry, scene.loading, scene.material
     out: dict[str, Any] = {}
     if g.kind == "half_cylinder" and lo.normal_force is not None:
-        a, _ = hertz_line_contact(lo.normal_force, g.radius, plane_strain_modulus(m.E, m.nu))
+        # against the elastic flat (same material) the contact modulus halves
+        E_star = (plane_strain_modulus(m.E, m.nu, m.E, m.nu) if scene.contact.obstacle == "elastic_flat"
+                  else plane_strain_modulus(m.E, m.nu))
+        a, _ = hertz_line_contact(lo.normal_force, g.radius, E_star)
         out["geometry.contact_mesh_size"] = float(f"{a / p['contact_elements_per_half_width']:.3g}")
     elif g.kind == "rectangle":
         nx = int(p["rectangle_cells"])
@@ -417,6 +491,39 @@ class Scene(_Section):
         if len(c.plane_normal) != 2:
             raise _range_error("contact.plane_normal", c.plane_normal,
                                "a 2-vector: the geometries built in are two-dimensional (plane strain)")
+        if c.obstacle == "elastic_flat":
+            if g.kind != "half_cylinder":
+                raise _range_error("contact.obstacle", c.obstacle,
+                                   "'rigid_plane' with geometry.kind = 'rectangle' ('elastic_flat' needs a "
+                                   "half_cylinder on it)")
+            moved = [k for k, v in (("plane_point", [0, 0]), ("plane_normal", [0, 1]))
+                     if [float(x) for x in getattr(c, k)] != v]
+            if moved:
+                raise ValueError(f"contact.{moved[0]} describes a rigid plane; with contact.obstacle = "
+                                 "'elastic_flat' the flat's top is the plane y = 0 (remove the key)")
+            if c.surface != "surface":
+                raise _range_error("contact.surface", c.surface, "'surface' (the cylinder's arc) with an elastic flat")
+            if g.flat_width <= 2 * g.refined_half_width:
+                raise _range_error("geometry.flat_width", g.flat_width,
+                                   f"> 2 x the refined half-width {g.refined_half_width} mm")
+            depth = min(max(g.refined_half_width / 4, 2 * g.contact_mesh_size), g.radius / 2)
+            if g.flat_height <= depth:
+                raise _range_error("geometry.flat_height", g.flat_height, f"> the refined depth {depth:g} mm")
+        elif self.material.plastic_body == "flat":
+            raise _range_error("material.plastic_body", "flat",
+                               "'both' or 'cylinder' with contact.obstacle = 'rigid_plane' (there is no flat body)")
+        elif self.wear.k_master is not None and self.wear.k_master > 0:
+            raise _range_error("wear.k_master", self.wear.k_master,
+                               "0 or unset with contact.obstacle = 'rigid_plane' (a rigid plane does not wear)")
+        return self
+
+    @model_validator(mode="after")
+    def _jump_elastic(self) -> Scene:
+        # The jump extrapolates the wear gap only; a plastic state still evolving (ratcheting) would not
+        # follow, and the stability limit uses the elastic W.
+        if self.wear.cycle_jump and self.material.model != "elastic":
+            raise _range_error("wear.cycle_jump", True, "false for an elastoplastic body (the jump "
+                               "extrapolates the wear gap, not the plastic state)")
         return self
 
     @model_validator(mode="after")

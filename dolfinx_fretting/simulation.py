@@ -21,6 +21,10 @@ Two ways through the increments give the same answer:
 The local problem is solved on rank 0 and its result broadcast, so every rank holds the same contact
 state whatever the partition.
 
+With ``wear.cycle_jump`` a simulated cycle is followed by a jump: the wear gap is extrapolated over the
+cycles :mod:`dolfinx_fretting.cycle_jump` allows (the tables then have one row per simulated cycle, the
+counters count physical cycles and increments).
+
 A cyclic run writes a checkpoint (``checkpoint.npz``) every ``output.checkpoint_interval`` seconds, at
 snapshot cycles and at the end; ``run_scene(..., resume=True)`` continues from it with the same results
 as an uninterrupted run. A failed increment is reported with its cycle and step; the failed cycle leaves
@@ -30,6 +34,7 @@ no trace in the wear gap, the tables or the checkpoint.
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 import time
@@ -43,7 +48,7 @@ from mpi4py import MPI
 from . import local_solvers
 from .analytic import hertz_line_contact
 from .io import _jsonable
-from .contact import ContactSet, RigidPlane, find_candidates
+from .contact import ContactSet, RigidPlane, find_candidates, find_pairs
 from .loading import LoadControlError, LoadStep, cycle_path, find_displacement, monotonic_path, preload_path, waveform
 from .scenes import Scene
 from .wear import ROW, ROW_FIELDS, commit_increment
@@ -58,6 +63,10 @@ _RESUMABLE_SECTIONS = ("solver", "output")
 
 class SimulationError(RuntimeError):
     """An increment could not be solved, or a run cannot be resumed; the message says which, and why."""
+
+
+class _WindowTooSmall(Exception):
+    """The contact reached the candidate window's edge and the window can grow (internal: caught by the run)."""
 
 
 class ContactModel:
@@ -78,19 +87,30 @@ class ContactModel:
         self.timings: dict[str, float] = {}
         g = scene.geometry
         t0 = time.perf_counter()
-        if g.kind == "half_cylinder":
+        self.two_body = scene.contact.obstacle == "elastic_flat"
+        if self.two_body:
+            self.body = meshes.cylinder_on_flat(comm, g.radius, g.flat_width, g.flat_height,
+                                                contact_mesh_size=g.contact_mesh_size,
+                                                contact_half_width=g.refined_half_width,
+                                                coarse_mesh_size=g.coarse_mesh_size, quadrilateral=g.quadrilateral)
+        elif g.kind == "half_cylinder":
             self.body = meshes.half_cylinder(comm, g.radius, contact_mesh_size=g.contact_mesh_size,
                                              contact_half_width=g.refined_half_width,
                                              coarse_mesh_size=g.coarse_mesh_size, quadrilateral=g.quadrilateral)
         else:
             self.body = meshes.rectangle(comm, g.width, g.height, g.nx, g.ny, quadrilateral=g.quadrilateral)
-        fixed = ["top"]
+        # Two bodies: the cylinder's top and the flat's bottom are held; the loads move the flat rigidly
+        # (a rigid motion of a body held at one face only is stress-free, so it enters the contact as the
+        # rigid plane's motion does, through q = -G D).
+        fixed = ["top", "flat_bottom"] if self.two_body else ["top"]
         self.timings["mesh_s"] = time.perf_counter() - t0
 
         surface = scene.contact.surface
         if surface not in self.body.tags:
             raise SimulationError(f"contact.surface = {surface!r} is not a boundary of the "
                                   f"{g.kind} mesh; allowed: {', '.join(sorted(self.body.tags))}")
+        # Against an elastic flat this plane is the flat's top (y = 0): its frame gives the directions of the
+        # flat's rigid motion D, so loads and total forces read as against a rigid plane.
         self.obstacle = RigidPlane(np.array(scene.contact.plane_point), np.array(scene.contact.plane_normal))
 
         material = LinearElastic(scene.material.E, scene.material.nu)
@@ -104,32 +124,24 @@ class ContactModel:
                                       quadrature_degree=self.quadrature_degree)
         self.timings["assemble_s"] = time.perf_counter() - t0
 
-        facets = self.body.facet_tags.find(self.body.tags[surface])
-        half_width = scene.contact.candidate_half_width
-        if half_width is None and g.kind == "half_cylinder":
-            half_width = g.refined_half_width
-        try:
-            self.contact: ContactSet = find_candidates(self.problem.V, facets, self.obstacle, half_width,
-                                                       exclude_nodes=self.problem.fixed_nodes)
-        except ValueError as exc:
-            raise SimulationError(str(exc)) from None
+        self._contact_facets = self.body.facet_tags.find(self.body.tags[surface])
+        #: Candidate window half-width (mm): the scene's, or automatic (see :meth:`automatic_window`);
+        #: ``window_limit`` is how far it may grow (the refined zone of a half-cylinder).
+        self.window_limit = g.refined_half_width if g.kind == "half_cylinder" else None
+        self.window_automatic = scene.contact.candidate_half_width is None and g.kind == "half_cylinder"
+        self.half_width = self.automatic_window() if self.window_automatic else scene.contact.candidate_half_width
+        self._find_contact()
 
         t0 = time.perf_counter()
         self.problem.delassus.factorize()
         self.timings["factorize_s"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        W = self.problem.delassus.build(self.contact.H)
-        # One copy decides: the local solve must see identical input on every rank.
-        self.W = comm.bcast(W if comm.rank == 0 else None, root=0)
-        self.timings["delassus_s"] = time.perf_counter() - t0
-        self.delassus_method = self.problem.delassus.method
-
-        # A face pressure reaches the contact through q_f = H K^-1 f (one more solve with the same factor).
         self.face_load = None
-        self.q_f = np.zeros(self.contact.nc * self.contact.dim)
         if scene.loading.tangential_kind == "pressure":
             self.face_load = self.problem.face_pressure_load(scene.loading.pressure_face)
-            self.q_f = self.problem.local_response(self.contact.H, self.face_load)  # allreduced: replicated
+        t0 = time.perf_counter()
+        self._contact_operators()
+        self.timings["delassus_s"] = time.perf_counter() - t0
+        self.delassus_method = self.problem.delassus.method
 
         # Elastic-plastic: Newton with the contact inside (plasticity.ElastoplasticBody); nothing plastic is
         # built for an elastic scene.
@@ -140,10 +152,63 @@ class ContactModel:
 
             m, sv = scene.material, scene.solver
             law = J2Plasticity(m.E, m.nu, m.yield_stress, m.plastic_modulus)
+            elastic_cells = None
+            if self.two_body and m.plastic_body != "both":
+                other = "flat" if m.plastic_body == "cylinder" else "cylinder"
+                elastic_cells = self.body.cell_tags.find(self.body.regions[other])
             self.plastic = ElastoplasticBody(self.problem, law, self.contact.H, self.W, self.face_load,
                                              tangent=sv.newton_tangent, max_iter=sv.newton_max_iter,
                                              delta_1=sv.newton_residual_tol, delta_2=sv.newton_displacement_tol,
-                                             quadrature_degree=self.quadrature_degree)
+                                             quadrature_degree=self.quadrature_degree,
+                                             elastic_cells=elastic_cells)
+
+    def automatic_window(self) -> float:
+        """Candidate half-width from the Hertz estimate of the contact half-width plus a margin (mm).
+
+        ``1.5 a + 3 h``, at most the refined zone; a from the normal force (Hertz line contact with the
+        scene's E*: one elastic body on a rigid plane, or two identical bodies) or, under a prescribed
+        approach d, the geometric ``sqrt(2 R d)`` (an overestimate). The run grows the window if the
+        contact reaches its edge (wear widens a scar).
+        """
+        sc, g = self.scene, self.scene.geometry
+        m = sc.material
+        E_star = m.E / (1 - m.nu**2) / (2.0 if self.two_body else 1.0)
+        lo = sc.loading
+        if lo.normal_force is not None:
+            a, _ = hertz_line_contact(lo.normal_force, g.radius, E_star)
+        else:
+            a = float(np.sqrt(2 * g.radius * lo.normal_displacement))
+        return float(min(self.window_limit, 1.5 * a + 3 * g.contact_mesh_size))
+
+    def _find_contact(self) -> None:
+        """Candidates (rigid plane) or slave-master pairs (elastic flat) within ``half_width``. Collective."""
+        try:
+            if self.two_body:
+                self.contact: ContactSet = find_pairs(self.problem.V, self._contact_facets,
+                                                      self.body.facets("flat_top"), self.half_width,
+                                                      exclude_nodes=self.problem.fixed_nodes)
+            else:
+                self.contact = find_candidates(self.problem.V, self._contact_facets, self.obstacle, self.half_width,
+                                               exclude_nodes=self.problem.fixed_nodes)
+        except ValueError as exc:
+            raise SimulationError(str(exc)) from None
+
+    def _contact_operators(self) -> None:
+        """W = H K^-1 H^T (one copy, broadcast: the local solve must see identical input on every rank) and
+        q_f = H K^-1 f of a unit face pressure. Collective; K must be factorised."""
+        W = self.problem.delassus.build(self.contact.H)
+        self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
+        self.q_f = np.zeros(self.contact.nc * self.contact.dim)
+        if self.face_load is not None:
+            self.q_f = self.problem.local_response(self.contact.H, self.face_load)  # allreduced: replicated
+
+    def set_window(self, half_width: float) -> None:
+        """Rebuild the contact set, W and q_f for another candidate window (elastic bodies). Collective."""
+        if self.plastic is not None:
+            raise SimulationError("the candidate window of an elastic-plastic body cannot change during a run")
+        self.half_width = float(half_width)
+        self._find_contact()
+        self._contact_operators()
 
     @property
     def n_dofs(self) -> int:
@@ -338,8 +403,18 @@ class _Run:
         self.mu = np.full(cs.nc, scene.contact.mu)
         # The wear acceleration scales cycles only: the preload and a monotonic load happen once.
         self.k = scene.wear.k_effective
-        self.k_once = scene.wear.k if scene.wear.law == "archard" else 0.0
+        self.k_once = scene.wear.k_total if scene.wear.law == "archard" else 0.0
+        #: Largest |mean relative tangential position| of the contacts so far (small-sliding check).
+        self.max_relative_tangential = 0.0
+        self._sliding_warned = False
+        self.window_growths: list[dict[str, Any]] = []
         self.snapshots = _snapshot_cycles(scene)
+        # Cycle-jump bookkeeping (scene key wear.cycle_jump): the last simulated cycle's wear rate, the last
+        # jump and the jump its bounds allowed, counts, the accumulated error estimate, the limits.
+        self.jump_state: dict[str, Any] = {
+            "rate": None, "last": 1, "free": 1, "simulated": 0, "jumps": 0, "largest": 1, "error": 0.0,
+            "bound": "none", "stability_limit": math.inf, "monotone_limit": math.inf, "exceeded": 0,
+            "min_stability_limit": math.inf}
         if checkpoint is None:
             self.state = RunState.initial(model)
             sizes, xdmf_started = None, False
@@ -374,10 +449,19 @@ class _Run:
                       ck["gw"].copy(), float(meta["energy"]), int(meta["local_iterations"]),
                       ck["r_warm"].copy() if ck["r_warm"].size else None, meta.get("last_row"),
                       meta.get("last_cycle_row"))
+        window = meta.get("window")
+        if window is not None and window != self.model.half_width:
+            self.model.set_window(window)  # the run had grown its window: the same contact set again
+            self.solver = IncrementSolver(self.model)
+            self.mu = np.full(self.model.contact.nc, self.scene.contact.mu)
+        self.window_growths = list(meta.get("window_growths", []))
         if st.gw.size != self.model.contact.nc:
             raise SimulationError("--resume: the checkpoint's contact set does not match the scene's mesh")
         if meta.get("last_targets") is not None:
             self.last_targets = tuple(meta["last_targets"])
+        if meta.get("jump") is not None:
+            self.jump_state.update(meta["jump"])
+            self.jump_state["rate"] = ck["jump_rate"].copy() if ck["jump_rate"].size else None
         body = self.model.plastic
         if body is not None:
             if meta.get("ranks") != self.comm.size:
@@ -411,10 +495,14 @@ class _Run:
                     "energy": st.energy, "local_iterations": st.local_iterations, "sizes": sizes,
                     "xdmf_started": self.writer.xdmf_started, "last_row": st.last_row,
                     "last_cycle_row": st.last_cycle_row, "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
-                    "last_targets": getattr(self, "last_targets", None), "ranks": self.comm.size}
+                    "last_targets": getattr(self, "last_targets", None), "ranks": self.comm.size,
+                    "window": self.model.half_width, "window_growths": self.window_growths,
+                    "jump": {k: v for k, v in self.jump_state.items() if k != "rate"}}
+            rate = self.jump_state["rate"]
             tmp = self.out / (CHECKPOINT + ".tmp.npz")
             np.savez(tmp, meta=json.dumps(meta, default=_jsonable), d=st.d, y=st.y, r=st.r, gw=st.gw,
-                     r_warm=st.r_warm if st.r_warm is not None else np.zeros(0), **plastic)
+                     r_warm=st.r_warm if st.r_warm is not None else np.zeros(0),
+                     jump_rate=rate if rate is not None else np.zeros(0), **plastic)
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
             os.replace(tmp, self.out / CHECKPOINT)
@@ -475,8 +563,10 @@ class _Run:
         return self.scene.geometry.kind == "half_cylinder"
 
     def _window_error(self, increment: int, cycle: int, step: int) -> None:
-        cs = self.model.contact
+        cs, model = self.model.contact, self.model
         where = f"increment {increment}" + (f" (cycle {cycle}, step {step})" if cycle else "")
+        if model.plastic is None and model.window_limit is not None and model.half_width < model.window_limit:
+            raise _WindowTooSmall(where)
         raise SimulationError(
             f"{where}: the outermost contact candidates (x = {cs.abscissa[0]:.4g} .. {cs.abscissa[-1]:.4g} mm) "
             "carry load: the contact reaches the edge of the candidate window and would be truncated; widen "
@@ -499,8 +589,15 @@ class _Run:
         if self.model.plastic is not None:
             return self._plastic_increment(step)
         st = self.state
-        solved = self._local(step, st.r)
-        hist, states = self._commit(step, solved)
+        while True:
+            try:
+                solved = self._local(step, st.r)
+                hist, states = self._commit(step, solved)
+                break
+            except _WindowTooSmall as edge:
+                if step.cycle > 0:
+                    raise  # _python_cycle runs the whole cycle again
+                self._grow_window(str(edge))  # nothing of the increment was committed: solve it again
         st.increment += 1
         self.last_targets = (step.normal, step.tangential, step.pressure)
         return hist, solved.x, solved.y, states
@@ -587,11 +684,37 @@ class _Run:
         if not self.scene.output.xdmf:
             return
         if self.model.plastic is not None:
-            self.writer.fields(t, self._plastic_fields())
-            return
-        p = self.model.problem
-        p.solve_contact_response(self.model.contact.H, r, self.model.face_load, pressure)
-        self.writer.fields(t, [p.u, p.von_mises()])
+            functions = self._plastic_fields()
+        else:
+            p = self.model.problem
+            p.solve_contact_response(self.model.contact.H, r, self.model.face_load, pressure)
+            functions = [p.u, p.von_mises()]
+        if self.model.two_body:
+            functions[0] = self._two_body_displacement(functions[0])
+        self.writer.fields(t, functions)
+
+    def _two_body_displacement(self, u):
+        """The displacement as the paper loads it: the flat's bottom held, the cylinder moved by -D.
+
+        The solve holds the cylinder's top and moves the flat rigidly by D (the same relative motion);
+        subtracting D on the cylinder's nodes gives the picture of the paper's set-up. A copy: ``u`` may be
+        Newton's state.
+        """
+        from dolfinx import fem
+
+        if not hasattr(self, "_u_display"):
+            V = u.function_space
+            cells = self.model.body.cell_tags.find(self.model.body.regions["cylinder"])
+            self._cylinder_nodes = fem.locate_dofs_topological(V, V.mesh.topology.dim, cells)
+            self._u_display = fem.Function(V, name="displacement")
+        frame = self.model.obstacle.frame
+        D = self.state.d[0] * frame[0] + self.state.d[1] * frame[1]
+        out = self._u_display
+        out.x.array[:] = u.x.array
+        bs = out.function_space.dofmap.index_map_bs
+        values = out.x.array.reshape(-1, bs)
+        values[self._cylinder_nodes, :D.size] -= D
+        return out
 
     def _plastic_fields(self) -> list:
         """Displacement, cell-averaged von Mises stress and equivalent plastic strain (committed state)."""
@@ -620,6 +743,7 @@ class _Run:
             if step.increment <= self.state.increment:
                 continue  # done before the checkpoint
             hist, x, y, states = self._python_increment(step)
+            self._check_small_sliding(np.array([hist["mean_relative_tangential"]]))
             self.writer.rows("history", [hist])
             self._profile(hist, x, y, self.state.r, self.state.gw, states)
             self._fields(float(step.increment), self.state.r, step.pressure)
@@ -642,17 +766,35 @@ class _Run:
             from tqdm import tqdm
             progress = tqdm(total=N, initial=self.state.cycle, unit="cycle", desc=sc.name, leave=False,
                             mininterval=1.0)
-        for cycle in range(self.state.cycle + 1, N + 1):
+        jumping = sc.wear.cycle_jump
+        # A jump lands on (never skips) the cycles whose outputs are asked for, and on the last one.
+        landings = sorted((self.snapshots | {c for c in loop_cycles if 1 <= c <= N}) | {N})
+        cycle = self.state.cycle + 1
+        while cycle <= N:
             t0 = time.perf_counter()
             keep = cycle in self.snapshots
             write_history = keep or cycle == 1 or cycle % every == 0 or cycle in loop_cycles
+            st = self.state
+            saved = (st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row,
+                     st.r_warm)
+            growths = len(self.window_growths)
             if use_kernel:
-                hists, keeps = self._kernel_cycle(cycle, keep)
+                hists, keeps = self._kernel_cycle(cycle, keep or jumping)
             else:
-                hists, keeps = self._python_cycle(cycle, keep)
+                hists, keeps = self._python_cycle(cycle, keep or jumping)
+            jump = {}
+            if jumping:
+                room = next(c for c in landings if c > cycle) - cycle if cycle < N else 1
+                try:
+                    jump = self._jump(cycle, hists, keeps, saved[4], room, len(self.window_growths) > growths)
+                except SimulationError:  # the simulated cycle is not committed either
+                    (st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row,
+                     st.r_warm) = saved
+                    raise
             dt_cycle = time.perf_counter() - t0
-            crow = self._cycle_row(cycle, hists, dt_cycle)
-            self.state.cycle = cycle
+            crow = self._cycle_row(cycle, hists, dt_cycle, jump)
+            self._check_small_sliding(hists["mean_relative_tangential"])
+            self.state.cycle = cycle + jump.get("jump", 1) - 1
             self.state.last_cycle_row = crow
             if write_history:
                 self._write_history(cycle, hists)
@@ -664,7 +806,7 @@ class _Run:
                 self._fields(float(last[0]["increment"]), last[3], last[0]["face_pressure"])
             self.writer.flush()
             if progress is not None:
-                progress.update(1)
+                progress.update(self.state.cycle - cycle + 1)
             now = time.perf_counter()
             due = now - self.last_checkpoint >= sc.output.checkpoint_interval
             if self.comm.size > 1:  # clocks differ between ranks: rank 0 decides for all (collective below)
@@ -675,9 +817,81 @@ class _Run:
                 t_report = now
                 self.say(f"[{sc.name}] cycle {cycle}/{N}: max wear depth {crow['max_wear_depth']:.4g} mm, "
                          f"energy {crow['dissipated_energy']:.4g}, {crow['regime']}, p_max(end) "
-                         f"{crow['max_pressure_end']:.4g} MPa")
+                         f"{crow['max_pressure_end']:.4g} MPa"
+                         + (f", jump {crow['jump']} ({crow['jump_bound']})" if jumping else ""))
+            cycle = self.state.cycle + 1
         if progress is not None:
             progress.close()
+
+    def write_worn_profiles(self) -> None:
+        """``worn_profiles.csv``: each body's worn depth along the contact (rank 0, at the end of a run).
+
+        Both bodies see the same pressure and slip, so each wears its share ``k_body / k_total`` of the wear
+        gap; the flat's depth is placed at the master point paired with each cylinder node.
+        """
+        import csv
+
+        cs, share = self.model.contact, self.scene.wear.slave_share
+        gw = self.state.gw
+        master_x = cs.master_points[:, 0] if cs.two_body else np.full(cs.nc, np.nan)
+        with open(self.out / "worn_profiles.csv", "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["position", "wear_gap", "cylinder_wear", "flat_position", "flat_wear"])
+            for row in zip(cs.abscissa, gw, share * gw, master_x, (1 - share) * gw):
+                w.writerow([f"{v:.12g}" for v in row])
+
+    def _grow_window(self, where: str) -> None:
+        """Widen the candidate window by half (at least 3 elements, at most the refined zone), rebuild the
+        contact set and W, and carry the state over: new candidates start open and unworn; the relative
+        positions y are recomputed from the forces (elastic: y = W r + q exactly). Collective."""
+        model, st = self.model, self.state
+        old = model.contact
+        h = self.scene.geometry.contact_mesh_size
+        before = model.half_width
+        model.set_window(min(model.window_limit, max(1.5 * before, before + 3 * h)))
+        new = model.contact
+        where_old = {int(g): i for i, g in enumerate(old.global_nodes)}
+        src = np.array([where_old.get(int(g), -1) for g in new.global_nodes])
+        had = src >= 0
+        dim = new.dim
+
+        def carry(values: np.ndarray, per_contact: int) -> np.ndarray:
+            lead = values.shape[:-1]
+            out = np.zeros(lead + (new.nc, per_contact))
+            out[..., had, :] = values.reshape(lead + (old.nc, per_contact))[..., src[had], :]
+            return out.reshape(lead + (new.nc * per_contact,))
+
+        st.gw = carry(st.gw, 1)
+        st.r = carry(st.r, dim)
+        if st.r_warm is not None:
+            st.r_warm = carry(st.r_warm, dim)
+        self.solver = IncrementSolver(model)
+        self.mu = np.full(new.nc, self.scene.contact.mu)
+        for attr in ("_kernel_data", "pattern_cache"):
+            self.__dict__.pop(attr, None)
+        frame = model.obstacle.frame
+        D = st.d[0] * frame[0] + st.d[1] * frame[1]
+        pressure = (getattr(self, "last_targets", None) or (0.0, 0.0, 0.0))[2]
+        _, q_abs = self.solver._q(D, pressure, np.zeros(new.nc * dim), st.gw)
+        st.y = model.W @ st.r + q_abs
+        self.window_growths.append({"at": where, "from": before, "to": model.half_width, "contacts": new.nc})
+        self.say(f"[{self.scene.name}] WARNING: {where}: the contact reached the edge of the candidate window "
+                 f"(half-width {before:.4g} mm); grown to {model.half_width:.4g} mm ({new.nc} candidates) and the "
+                 "increment solved again")
+
+    def _check_small_sliding(self, relative_tangential: np.ndarray) -> None:
+        """Two bodies: warn once when the relative slip exceeds half a master element (pairing is fixed)."""
+        self.max_relative_tangential = max(self.max_relative_tangential,
+                                           float(np.abs(relative_tangential).max(initial=0.0)))
+        limit = 0.5 * self.scene.geometry.contact_mesh_size
+        if self.model.two_body and not self._sliding_warned and self.max_relative_tangential > limit:
+            self._sliding_warned = True
+            self.say(f"[{self.scene.name}] WARNING: relative slip {self.max_relative_tangential:.3g} mm exceeds half "
+                     f"a contact element ({limit:.3g} mm): the contact pairs are fixed in the reference "
+                     "configuration (small sliding), so the flat's displacement is taken up to "
+                     f"{self.max_relative_tangential / self.scene.geometry.contact_mesh_size:.2g} elements away "
+                     "from the point facing each cylinder node. Pressure and wear stay consistent; the flat's "
+                     "worn profile is attached to the reference pairing.")
 
     def _write_history(self, cycle: int, hists: dict[str, np.ndarray]) -> None:
         n = hists["increment"].size
@@ -687,7 +901,8 @@ class _Run:
                 "newton_delta_2", "cutbacks", "yielded_points"]
         self.writer.history_block(head, np.column_stack([hists[c] for c in cols]), "cycle")
 
-    def _cycle_row(self, cycle: int, h: dict[str, np.ndarray], wall: float) -> dict[str, Any]:
+    def _cycle_row(self, cycle: int, h: dict[str, np.ndarray], wall: float,
+                   jump: dict[str, Any] | None = None) -> dict[str, Any]:
         sc = self.scene
         Q = h["tangential_force"]
         disp = h["tangential_displacement"] if sc.loading.tangential_kind == "displacement" \
@@ -698,7 +913,13 @@ class _Run:
         loaded = (h["n_stick"] + h["n_slip"]) > 0
         min_stick = int(h["n_stick"][loaded].min()) if loaded.any() else 0
         gross = bool(np.any((h["n_stick"] == 0) & (h["n_slip"] > 0)))
-        return {"cycle": cycle, "equivalent_cycles": cycle * sc.wear.acceleration, "dissipated_energy": E,
+        jump = jump or {}
+        n_jump = jump.get("jump", 1)
+        return {"cycle": cycle, "equivalent_cycles": (cycle + n_jump - 1) * sc.wear.acceleration,
+                "jump": n_jump, "jump_bound": jump.get("bound", "none"),
+                "jump_stability_limit": jump.get("stability_limit", 0.0),
+                "jump_error_estimate": jump.get("error", 0.0),
+                "wear_error_estimate": jump.get("error_total", 0.0), "dissipated_energy": E,
                 "wear_area": float(h["wear_area"][-1]), "max_wear_depth": float(h["max_wear_depth"][-1]),
                 "tangential_force_max": float(Q.max()), "tangential_force_min": float(Q.min()),
                 "displacement_max": float(disp.max()), "displacement_min": float(disp.min()),
@@ -708,8 +929,21 @@ class _Run:
                 "local_iterations": int(h["local_iterations"].sum()), "wall_time_s": round(wall, 6)}
 
     def _python_cycle(self, cycle: int, keep: bool):
+        return self._cycle_growing_window(self._python_cycle_once, cycle, keep)
+
+    def _cycle_growing_window(self, run_cycle, cycle: int, keep: bool):
+        """Run a cycle; if the contact reaches the window's edge, grow it and run the cycle again (a cycle
+        that stopped there was rolled back or not committed)."""
+        while True:
+            try:
+                return run_cycle(cycle, keep)
+            except _WindowTooSmall as edge:
+                self._grow_window(str(edge))
+
+    def _python_cycle_once(self, cycle: int, keep: bool):
         saved = (self.state.increment, self.state.d, self.state.y, self.state.r, self.state.gw, self.state.energy,
                  self.state.local_iterations, self.state.last_row)
+        saved_targets = getattr(self, "last_targets", None)
         self._cycle_gw0 = self.state.gw.copy()
         rows, keeps = [], []
         try:
@@ -719,14 +953,18 @@ class _Run:
                 if keep:
                     keeps.append((hist, x, y, self.state.r, self.state.gw, states))
             self._check_wear_step(cycle, saved[4], self.state.gw)
-        except SimulationError:
+        except (SimulationError, _WindowTooSmall):
             st = self.state
             st.increment, st.d, st.y, st.r, st.gw, st.energy, st.local_iterations, st.last_row = saved
+            self.last_targets = saved_targets
             raise
         h = {k: np.array([r[k] for r in rows]) for k in rows[0] if k != "stage"}
         return h, keeps
 
     def _kernel_cycle(self, cycle: int, keep: bool):
+        return self._cycle_growing_window(self._kernel_cycle_once, cycle, keep)
+
+    def _kernel_cycle_once(self, cycle: int, keep: bool):
         from .cycling import N_ROW, run_increments
 
         sc, st, cs = self.scene, self.state, self.model.contact
@@ -803,6 +1041,67 @@ class _Run:
                 keeps.append((row, out_x[j], out_y[j], out_r[j], out_gw[j], out_states[j]))
         return h, keeps
 
+    # Cycle jumps -----------------------------------------------------------------------------------
+    def _jump(self, cycle: int, h: dict[str, np.ndarray], keeps: list, gw_start: np.ndarray,
+              room: int, regrown: bool = False) -> dict[str, Any]:
+        """After simulated cycle ``cycle``: the error of the previous jump, the next jump dN and the wear gap
+        extrapolated over its dN - 1 cycles (:mod:`dolfinx_fretting.cycle_jump`). Decided on rank 0,
+        broadcast; raises SimulationError (before anything is committed) if a forced jump would wear more
+        than a contact element. ``regrown``: the candidate window grew during the cycle (new contact set)."""
+        from .cycle_jump import analyse_cycle, choose_jump, jump_error
+
+        sc, st, cs, js = self.scene, self.state, self.model.contact, self.jump_state
+        w = sc.wear
+        h_e = self.model.body.contact_mesh_size
+        if regrown:
+            # The contact set changed: no per-contact rate to compare with or to extrapolate from. The previous
+            # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
+            # stands for itself; jumps restart from one.
+            dim = cs.dim
+            wear = [self.k * k[3][0::dim] / cs.tributary * np.abs(k[1][1::dim]) * (k[5] == 2) for k in keeps]
+            new = float(np.sum(wear, axis=0).max(initial=0.0))  # this cycle's Archard wear per contact
+            old = float(js["rate"].max(initial=0.0)) if js["rate"] is not None else 0.0
+            err = (js["last"] - 1) * max(old, new)
+            js.update(rate=None, last=1, free=1, simulated=js["simulated"] + 1, error=js["error"] + err,
+                      bound="window_grown")
+            return {"jump": 1, "bound": "window_grown", "stability_limit": js["stability_limit"], "error": err,
+                    "error_total": js["error"]}
+        result = None
+        if self.rank0:
+            a = analyse_cycle(self.model.W, cs.dim, cs.tributary, np.array([k[5] for k in keeps]),
+                              np.array([k[1] for k in keeps]), np.array([k[3] for k in keeps]), gw_start, st.gw,
+                              sc.loading.normal_force_controlled)
+            err = jump_error(js["rate"], a.rate, js["last"]) if js["rate"] is not None else 0.0
+            dN, bound, free = choose_jump(a, self.k, h_e, w.jump_wear_fraction, w.jump_pressure_change, w.jump_max,
+                                          js["free"], room)
+            if w.jump_forced is not None:
+                dN, bound, free = min(w.jump_forced, room), "forced", w.jump_forced
+            if cycle == 1:  # it starts from the preload, not from a cycle: its wear is not the cycles' rate
+                dN, bound = 1, "first_cycle"
+            result = (a.rate, err, dN, bound, free, a.stability_limit(self.k), a.monotone_limit(self.k))
+        if self.comm.size > 1:
+            result = self.comm.bcast(result, root=0)
+        rate, err, dN, bound, free, stab, mono = result
+        added = dN * float(rate.max(initial=0.0))
+        if added > h_e:
+            raise SimulationError(
+                f"cycle {cycle}: a jump of {dN} cycles would wear up to {added:.3g} mm, more than the contact "
+                f"element size {h_e:.3g} mm (the explicit update is unstable there); lower wear.jump_forced "
+                f"(now {w.jump_forced}; stability limit here {stab:.4g} cycles)")
+        if dN > 1:
+            extra = dN - 1
+            st.gw = st.gw + extra * rate
+            st.increment += extra * sc.loading.increments_per_cycle
+            st.energy += extra * float(h["dissipated_energy"].sum())
+        js.update(rate=rate, last=dN, free=free, simulated=js["simulated"] + 1, jumps=js["jumps"] + (dN > 1),
+                  largest=max(js["largest"], dN), error=js["error"] + err, bound=bound,
+                  stability_limit=stab, monotone_limit=mono, exceeded=js["exceeded"] + (dN > stab),
+                  min_stability_limit=min(js["min_stability_limit"], stab))
+        if dN > stab and js["exceeded"] == 1:
+            self.say(f"[{sc.name}] WARNING: cycle {cycle}: forced jump {dN} exceeds the stability limit "
+                     f"{stab:.4g} cycles: expect oscillating edge spikes")
+        return {"jump": dN, "bound": bound, "stability_limit": stab, "error": err, "error_total": js["error"]}
+
     # Summary ----------------------------------------------------------------------------------------
     def summary(self, error: str | None) -> dict[str, Any]:
         sc, model, st = self.scene, self.model, self.state
@@ -812,12 +1111,19 @@ class _Run:
             "delassus_method": model.delassus_method, **{k: round(v, 6) for k, v in model.timings.items()},
             "increments": st.increment, "cycles": st.cycle, "converged": error is None,
             "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
-            "wear_law": sc.wear.law, "wear_k": sc.wear.k, "wear_acceleration": sc.wear.acceleration,
+            "wear_law": sc.wear.law, "wear_k": sc.wear.k_total, "wear_acceleration": sc.wear.acceleration,
             "wear_k_effective": self.k, "equivalent_cycles": st.cycle * sc.wear.acceleration,
             "dissipated_energy": st.energy, "material_model": sc.material.model,
-            "obstacle": "rigid plane (the flat is rigid: two deformable bodies are not modelled yet)"
-            if sc.contact.obstacle == "rigid_plane" else sc.contact.obstacle,
+            "obstacle": "rigid plane (the flat is rigid)" if sc.contact.obstacle == "rigid_plane"
+            else "elastic flat (two deformable bodies of the same material, small-sliding pairing)",
         }
+        if model.two_body:
+            share = sc.wear.slave_share
+            summary.update({"wear_k_slave": sc.wear.k_total * share, "wear_k_master": sc.wear.k_total * (1 - share),
+                            "max_wear_depth_slave": share * float(st.gw.max(initial=0.0)),
+                            "max_wear_depth_master": (1 - share) * float(st.gw.max(initial=0.0)),
+                            "max_relative_tangential": self.max_relative_tangential,
+                            "small_sliding_warning": self._sliding_warned})
         if model.plastic is not None:
             ps = model.plastic.state
             local = np.array([ps.p.max(initial=0.0), ps.von_mises().max(initial=0.0)])
@@ -829,6 +1135,8 @@ class _Run:
                             "tangent_refactorizations": model.plastic.refactorizations})
         if sc.loading.cycles > 0:
             summary["cycle_path"] = getattr(self, "cycle_mode", "python")
+            if sc.wear.cycle_jump:
+                summary["cycle_jump"] = self._jump_summary()
             if hasattr(self, "pattern_cache"):
                 c = self.pattern_cache.counts
                 summary["pattern_solves"] = {"accepted": int(c[0]), "rejected": int(c[1]), "factorizations": int(c[2])}
@@ -841,23 +1149,45 @@ class _Run:
         if st.last_cycle_row:
             summary["regime"] = st.last_cycle_row["regime"]
         if g.kind == "half_cylinder" and st.last_row:
-            a, p0 = hertz_line_contact(st.last_row["normal_force"], g.radius,
-                                       sc.material.E / (1 - sc.material.nu**2))
-            summary.update({"hertz_reference": "rigid plane, frictionless: E* = E/(1-nu^2)",
+            E_star = sc.material.E / (1 - sc.material.nu**2) / (2.0 if model.two_body else 1.0)
+            a, p0 = hertz_line_contact(st.last_row["normal_force"], g.radius, E_star)
+            summary.update({"hertz_reference": ("two identical elastic bodies: E* = E/(2(1-nu^2))" if model.two_body
+                                                else "rigid plane, frictionless: E* = E/(1-nu^2)"),
                             "hertz_half_width": a, "hertz_max_pressure": p0})
+        summary["contact_window"] = model.half_width
+        summary["window_growths"] = self.window_growths
         summary["modelled"] = self._modelled()
         if error is not None:
             summary["error"] = error
         return summary
+
+    def _jump_summary(self) -> dict[str, Any]:
+        """The jumps taken, the error estimate and the stability limits (``summary.cycle_jump``)."""
+        from .cycle_jump import hertz_jump_limit
+
+        sc, js = self.scene, self.jump_state
+        finite = lambda v: v if math.isfinite(v) else None  # noqa: E731 - JSON has no infinity
+        out = {"simulated_cycles": js["simulated"], "jumps": js["jumps"], "largest_jump": js["largest"],
+               "wear_error_estimate": js["error"], "last_bound": js["bound"],
+               "stability_limit_last": finite(js["stability_limit"]),
+               "monotone_limit_last": finite(js["monotone_limit"]),
+               "stability_limit_min": finite(js["min_stability_limit"]),
+               "jumps_past_stability_limit": js["exceeded"], "forced": sc.wear.jump_forced,
+               "bounds": {"wear_fraction": sc.wear.jump_wear_fraction,
+                          "pressure_change": sc.wear.jump_pressure_change, "max_jump": sc.wear.jump_max}}
+        lo, m = sc.loading, sc.material
+        if sc.geometry.kind == "half_cylinder" and lo.tangential_kind == "displacement" and self.k > 0:
+            E_star = m.E / (1 - m.nu**2) / (2.0 if self.model.two_body else 1.0)
+            out["hertz_estimate_0.37h/(k delta E*)"] = hertz_jump_limit(
+                self.model.body.contact_mesh_size, self.k, abs(lo.tangential_amplitude), E_star)
+        return out
 
     def _modelled(self) -> dict[str, str]:
         """What this run assembled and iterated, and what it skipped (the scene decides)."""
         sc, model = self.scene, self.model
         cs = model.contact
         plastic = model.plastic
-        window = sc.contact.candidate_half_width
-        if window is None and sc.geometry.kind == "half_cylinder":
-            window = sc.geometry.refined_half_width
+        window = model.half_width
         return {
             "material": ("J2 plasticity: Newton with the contact inside each iteration, tangent "
                          f"'{sc.solver.newton_tangent}', {plastic.refactorizations} tangent refactorisations"
@@ -865,10 +1195,20 @@ class _Run:
             "delassus": ("W of the elastic K built once" + (", W of the tangent rebuilt at each refactorisation"
                                                           if plastic is not None else "")),
             "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0)",
-            "wear": (f"Archard, k = {sc.wear.k} 1/MPa x acceleration {sc.wear.acceleration}"
+            "wear": (f"Archard, k = {sc.wear.k_total} 1/MPa x acceleration {sc.wear.acceleration}"
+                     + (f" (cylinder {sc.wear.slave_share:.3g}, flat {1 - sc.wear.slave_share:.3g} of the wear gap)"
+                        if model.two_body else "")
+                     + (", cycle jumps (wear gap extrapolated between simulated cycles)" if sc.wear.cycle_jump
+                        else "")
                      if sc.wear.law == "archard" else "none (wear gap stays zero)"),
-            "contact": f"{cs.nc} candidate nodes" + (f" within {window} mm of the first contact point"
-                                                     if window is not None else " (whole contact face)"),
+            "contact": f"{cs.nc} candidate nodes" + (f" within {window:.4g} mm of the first contact point"
+                                                     + (" (automatic: Hertz estimate plus margin"
+                                                        + (f", grown {len(self.window_growths)} time(s)"
+                                                           if self.window_growths else "") + ")"
+                                                        if model.window_automatic else "")
+                                                     if window is not None else " (whole contact face)")
+                       + (", each paired with a point of the elastic flat (node-to-segment, fixed pairing)"
+                          if model.two_body else ", against a rigid plane"),
             "loads": (f"{sc.loading.cycles} cycles ({getattr(self, 'cycle_mode', 'python')} path)"
                       if sc.loading.cycles > 0 else "preload and a monotonic tangential load")
                      + ("; face pressure load" if model.face_load is not None else ""),
@@ -909,6 +1249,8 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
             run.checkpoint()  # the last complete cycle: resume from it with other solver settings
     summary = run.summary(error)
     run.writer.summary(summary)
+    if run.rank0 and scene.wear.law == "archard":
+        run.write_worn_profiles()
     run.writer.close()
     if run.rank0 and scene.output.xdmf and scene.output.contact_profiles:
         from .contact_output import write_contact_xdmf

@@ -336,13 +336,17 @@ def _outcome(folder: Path) -> _Outcome:
     run = load_run(folder)
     s = run.summary
     acc = _number(s.get("wear_acceleration")) or 1.0
-    cycles = int(_number(s.get("cycles")) or 0)
+    # simulated cycles: the rows of cycles.csv (a cycle-jump run's summary counts the jumped ones too)
+    cyc_col = run.cycles.get("cycle")
+    cycles = int(cyc_col.size) if cyc_col is not None else int(_number(s.get("cycles")) or 0)
     total = _number(s.get("dissipated_energy"))
     energy = total
     cyc_e = run.cycles.get("dissipated_energy")
     if total is not None and cyc_e is not None and cyc_e.size:
         in_cycles = float(np.sum(cyc_e))
-        energy = (total - in_cycles) + acc * in_cycles  # preload once, each simulated cycle acc times
+        # preload once, each simulated cycle acc times; a cycle-jump run's total already holds its jumped
+        # cycles (and its acceleration is 1), so the same formula gives it back unchanged
+        energy = (total - in_cycles) + acc * in_cycles
     position = wear = None
     peak = None
     prof = run.profiles

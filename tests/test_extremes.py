@@ -59,10 +59,27 @@ def test_load_so_small_that_one_node_touches(tmp_path):
     assert s["n_stick"] + s["n_slip"] == 1 and s["contact_width"] == 0.0
 
 
-def test_contact_window_too_small_stops(tmp_path):
+def test_contact_window_too_small_grows_to_the_right_answer(tmp_path):
+    """A window 10x too small (0.025 mm for a 0.25 mm one): the contact reaches its edge, the window grows
+    (with a warning, recorded in the summary) and the run ends with the answer of the wide window."""
+    common = QUIET + ["loading.normal_increments=2", "loading.tangential_increments=3"]
+    wide = run_scene(load_scene("hertz", common), tmp_path / "wide", quiet=True)
+    grown = run_scene(load_scene("hertz", common + ["contact.candidate_half_width=0.025"]), tmp_path / "grown",
+                      quiet=True)
+    assert len(grown["window_growths"]) >= 3 and grown["contact_window"] > 0.108  # past the Hertz half-width
+    # The extra open candidates of the wide window carry nothing: the same solution to the local tolerance.
+    for key in ("normal_force", "tangential_force", "max_pressure", "contact_width", "stick_width"):
+        assert grown[key] == pytest.approx(wide[key], rel=1e-7, abs=1e-9), key
+    assert (grown["n_stick"], grown["n_slip"]) == (wide["n_stick"], wide["n_slip"])
+
+
+def test_contact_window_stops_at_the_refined_zone(tmp_path):
+    """The window may grow up to the refined zone only (coarse elements beyond it): a contact wider than
+    that stops the run with the message naming both keys."""
     with pytest.raises(SimulationError, match="reaches the edge of the candidate window"):
-        run_scene(load_scene("hertz", QUIET + ["contact.candidate_half_width=0.011", "contact.mu=0.0",
-                                               "loading.tangential_force=0.0"]), tmp_path, quiet=True)
+        run_scene(load_scene("hertz", QUIET + ["geometry.contact_half_width=0.05", "contact.candidate_half_width=0.02",
+                                               "contact.mu=0.0", "loading.tangential_force=0.0"]),
+                  tmp_path, quiet=True)
 
 
 @pytest.mark.slow
@@ -136,3 +153,19 @@ def test_wear_larger_than_an_element_per_cycle_is_refused(tmp_path):
                                                        "loading.increments_per_cycle=8", "wear.acceleration=1e5"]),
                   tmp_path, quiet=True)
     assert len(read_table(tmp_path / "cycles.csv")["cycle"]) == 0
+
+
+def test_window_growth_during_worn_cycles_and_resume(tmp_path):
+    """Wear widens the scar past a small window mid-cycle (force-controlled preload: the per-increment
+    path rolls the cycle back and runs it again); a resumed run rebuilds the grown window from its
+    checkpoint. Both equal the run with the wide window (to the local tolerance; measured 5e-11)."""
+    base = QUIET + ["geometry.contact_mesh_size=0.02", "loading.increments_per_cycle=16", "wear.acceleration=100"]
+    wide = run_scene(load_scene("cylinder-flat", base + ["loading.cycles=3"]), tmp_path / "wide", quiet=True)
+    small = base + ["contact.candidate_half_width=0.1"]
+    run_scene(load_scene("cylinder-flat", small + ["loading.cycles=2"]), tmp_path / "g", quiet=True)
+    grown = run_scene(load_scene("cylinder-flat", small + ["loading.cycles=3"]), tmp_path / "g", quiet=True,
+                      resume=True)
+    assert [g["to"] for g in grown["window_growths"]] == [0.16, 0.24]
+    assert any("cycle 1" in g["at"] for g in grown["window_growths"])
+    for key in ("max_wear_depth", "max_pressure", "dissipated_energy", "wear_area"):
+        assert grown[key] == pytest.approx(wide[key], rel=1e-8), key

@@ -1,0 +1,284 @@
+"""Cycle jumping (dolfinx_fretting.cycle_jump): the stability limit, the step choice, the error estimate, and
+jumped runs against every-cycle runs."""
+
+import json
+
+import numpy as np
+import pytest
+
+from dolfinx_fretting.contact_output import read_table
+from dolfinx_fretting.cycle_jump import CycleAnalysis, analyse_cycle, choose_jump, hertz_jump_limit, jump_error
+from dolfinx_fretting.scenes import SceneError, load_scene
+from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, run_scene
+
+
+# Pure NumPy -------------------------------------------------------------------------------------------------
+def _cycle(W, dim, states, slip, r_n):
+    """Per-increment arrays of a synthetic cycle: the given states, slip and normal force at every contact."""
+    n, nc = states.shape
+    x = np.zeros((n, nc * dim))
+    r = np.zeros((n, nc * dim))
+    x[:, 1::dim] = slip
+    r[:, 0::dim] = r_n
+    return x, r
+
+
+def test_spectral_radius_of_a_diagonal_compliance():
+    """W_nn = c I, every contact sliding s per increment over n increments: L = n s / (T c) I exactly, and
+    the pressure change a wear rate drives is -rate / (T c) per increment."""
+    nc, dim, n, c, s, T = 7, 2, 4, 2e-5, 3e-3, 0.5
+    W = np.zeros((nc * dim, nc * dim))
+    W[0::dim, 0::dim] = c * np.eye(nc)
+    W[1::dim, 1::dim] = 3 * c * np.eye(nc)  # the tangential block does not enter
+    states = np.full((n, nc), 2, dtype=np.int8)
+    x, r = _cycle(W, dim, states, s, 1.0)
+    rate = np.linspace(1e-6, 2e-6, nc)
+    a = analyse_cycle(W, dim, np.full(nc, T), states, x, r, np.zeros(nc), rate)
+    assert a.rho == pytest.approx(n * s / (T * c), rel=1e-12)
+    assert a.pressure_rate == pytest.approx(rate.max() / (T * c), rel=1e-12)
+    assert a.peak_pressure == pytest.approx(1.0 / T)
+    k = 1e-5
+    assert a.stability_limit(k) == pytest.approx(2 * T * c / (k * n * s), rel=1e-12)
+    assert a.monotone_limit(k) == pytest.approx(a.stability_limit(k) / 2, rel=1e-15)
+    # Open contacts and sticking ones do not wear: only the sliding ones make L.
+    states2 = states.copy()
+    states2[:, 0] = 0
+    states2[:, 1] = 1
+    a2 = analyse_cycle(W, dim, np.full(nc, T), states2, x, r, np.zeros(nc), rate)
+    assert a2.rho == pytest.approx(a.rho, rel=1e-12)  # the others still slide
+    states2[:, 2:] = 1
+    a3 = analyse_cycle(W, dim, np.full(nc, T), states2, x, r, np.zeros(nc), rate)
+    assert a3.rho == 0.0 and a3.stability_limit(k) == np.inf
+
+
+def test_force_control_removes_the_uniform_mode():
+    """Under normal force control a uniform wear gap moves the obstacle, not the pressure: the projected
+    compliance inverse has e in its kernel, so a uniform rate drives no pressure change."""
+    rng = np.random.default_rng(3)
+    nc, dim = 6, 2
+    A = rng.normal(size=(nc * dim, nc * dim))
+    W = A @ A.T + nc * dim * np.eye(nc * dim)
+    states = np.full((3, nc), 2, dtype=np.int8)
+    x, r = _cycle(W, dim, states, 1e-3, 1.0)
+    rate = np.full(nc, 1e-6)
+    free = analyse_cycle(W, dim, np.ones(nc), states, x, r, np.zeros(nc), rate, normal_force_controlled=True)
+    fixed = analyse_cycle(W, dim, np.ones(nc), states, x, r, np.zeros(nc), rate)
+    assert free.pressure_rate < 1e-12 * fixed.pressure_rate
+    # Removing a mode cannot raise the largest eigenvalue of the (similar-to-SPD) map.
+    assert free.rho <= fixed.rho * (1 + 1e-12)
+
+
+def test_the_limit_is_the_edge_of_stability_of_the_jump_map():
+    """A linear cycle map g -> g + k (b - L g) with a non-symmetric L (positive diagonal times SPD, as from
+    the contact): jumps just below 2 / (k rho) converge to the fixed point L^-1 b, just above they blow up."""
+    rng = np.random.default_rng(0)
+    nc, dim, n = 9, 2, 5
+    A = rng.normal(size=(nc * dim, nc * dim))
+    W = A @ A.T / (nc * dim) + 0.1 * np.eye(nc * dim)
+    states = np.full((n, nc), 2, dtype=np.int8)
+    slip = rng.uniform(0.5e-3, 2e-3, size=(n, nc))
+    x, r = _cycle(W, dim, states, slip, 1.0)
+    T = rng.uniform(0.5, 1.5, nc)
+    a = analyse_cycle(W, dim, T, states, x, r, np.zeros(nc), np.zeros(nc))
+    # The same L built independently: sum_j diag(s_j / T) W_nn^-1.
+    L = sum(np.diag(slip[j] / T) for j in range(n)) @ np.linalg.inv(W[0::dim, 0::dim])
+    assert a.rho == pytest.approx(np.abs(np.linalg.eigvals(L)).max(), rel=1e-10)
+    k = 1e-2
+    b = rng.uniform(1, 2, nc)
+    g_star = np.linalg.solve(L, b)
+
+    def distance_after(jump, jumps=400):
+        g = np.zeros(nc)
+        for _ in range(jumps):
+            g = g + jump * k * (b - L @ g)
+        return np.abs(g - g_star).max() / np.abs(g_star).max()
+
+    lim = a.stability_limit(k)
+    assert distance_after(0.97 * lim) < 1e-3
+    assert distance_after(1.03 * lim) > 1e3
+
+
+def test_choose_jump_names_the_binding_bound():
+    a = CycleAnalysis(rate=np.array([1e-6, 4e-6]), rho=1e3, pressure_rate=0.5, peak_pressure=100.0)
+    k, h = 1e-5, 1e-2
+    # Bounds: wear 0.1 h / 4e-6 = 250; pressure 0.05 * 100 / 0.5 = 10; monotone 1 / (k rho) = 100.
+    assert choose_jump(a, k, h, 0.1, 0.05, 1000, 100, 10**6) == (10, "pressure", 10)
+    assert choose_jump(a, k, h, 0.1, 1.0, 1000, 1000, 10**6) == (100, "stability", 100)
+    assert choose_jump(a, k, h, 0.01, 1.0, 1000, 1000, 10**6) == (25, "wear", 25)
+    assert choose_jump(a, k, h, 0.1, 1.0, 1000, 3, 10**6) == (6, "growth", 6)
+    assert choose_jump(a, k, h, 0.1, 1.0, 7, 1000, 10**6) == (7, "max_jump", 7)
+    # Landing on a cycle to simulate shortens the jump but not the growth allowance.
+    assert choose_jump(a, k, h, 0.1, 1.0, 1000, 1000, 4) == (4, "landing", 100)
+    # Never below one cycle.
+    assert choose_jump(a, 1.0, h, 0.1, 1.0, 1000, 1000, 10**6)[0] == 1
+
+
+def test_error_estimate_bounds_a_monotone_rate():
+    """Rate r(N) = a + b N: Euler over dN cycles from N0 misses sum_{i<dN} b i = b dN (dN - 1)/2, half the
+    estimate (dN - 1) |r(N0 + dN) - r(N0)|; a rate that jumps at once to its end value (the worst monotone
+    case) misses (dN - 1) |r_end - r_start|, the estimate itself."""
+    a, b, N0, dN = 2e-6, 3e-9, 40, 25
+    rate = lambda N: np.array([a + b * N, 0.5 * (a + b * N)])  # noqa: E731
+    exact = sum(rate(N0 + i) for i in range(dN))
+    euler = dN * rate(N0)
+    assert jump_error(rate(N0), rate(N0 + dN), dN) == pytest.approx(2 * np.abs(exact - euler).max(), rel=1e-12)
+    r0, r1 = rate(N0), rate(N0) + np.array([1e-7, 0.0])
+    worst = r0 + (dN - 1) * r1  # cycle N0 at the start rate, the dN - 1 others already at the end rate
+    assert jump_error(r0, r1, dN) == pytest.approx(np.abs(worst - euler).max(), rel=1e-9)
+    assert jump_error(rate(N0), rate(N0 + 1), 1) == 0.0
+    assert hertz_jump_limit(0.01, 8.5e-9, 0.03, 130000.0) == pytest.approx(0.37 * 0.01 / (8.5e-9 * 0.03 * 130000))
+
+
+# Scene keys ------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("overrides, message", [
+    (["wear.cycle_jump=true", "wear.acceleration=10"], "wear.acceleration = 10.0 is out of range"),
+    (["wear.cycle_jump=true", "wear.law='none'"], "wear.cycle_jump = True is out of range"),
+    (["wear.jump_forced=5"], "wear.jump_forced = 5 is out of range"),
+    (["wear.cycle_jump=true", "wear.jump_wear_fraction=1.5"], "wear.jump_wear_fraction = 1.5"),
+    (["wear.cycle_jump=true", "wear.jump_pressure_change=0"], "wear.jump_pressure_change = 0"),
+    (["wear.cycle_jump=true", "wear.jump_max=0"], "wear.jump_max = 0"),
+    (["wear.cycle_jump=true", "material.model='elastoplastic'", "material.yield_stress=840",
+      "material.hardening_modulus=7230"], "false for an elastoplastic body"),
+])
+def test_bad_jump_settings_are_refused(overrides, message):
+    with pytest.raises(SceneError, match=message.replace(".", r"\.").replace("(", r"\(")):
+        load_scene("cylinder-flat", overrides)
+
+
+# Runs ------------------------------------------------------------------------------------------------------
+# Elastic cylinder (R = 6 mm) on a rigid flat, displacement controlled (the compiled cycle loop), 20 um
+# contact elements (35 candidates), gross slip delta = 0.03 mm in 16 increments, k = 10 x the paper's, so that
+# 400 cycles wear ~2 um and the stability limit is a few tens of cycles. ~2 s every cycle, ~0.4 s jumped.
+CYL = ["contact.obstacle='rigid_plane'", "loading.normal_force=none", "loading.normal_displacement=0.0045", "geometry.contact_mesh_size=0.02",
+       "loading.increments_per_cycle=16", "wear.k=8.5e-8", "output.xdmf=false", "output.plots=false"]
+
+
+def _cylinder(tmp_path, name, cycles, extra=()):
+    scene = load_scene("cylinder-flat", CYL + [f"loading.cycles={cycles}", f"output.snapshot_cycles=[{cycles}]",
+                                               f"output.loop_cycles=[{cycles}]", *extra])
+    s = run_scene(scene, tmp_path / name, quiet=True)
+    prof = read_table(tmp_path / name / "contact_profiles.csv")
+    last = prof["cycle"] == cycles
+    n = prof["step"][last].max()
+    wear = prof["wear"][last & (prof["step"] == n)]
+    rate = wear - prof["wear"][last & (prof["step"] == 1)]  # the last cycle's wear, but for its first step
+    return s, wear, rate, read_table(tmp_path / name / "cycles.csv")
+
+
+def _extrema(v):
+    """Local extrema of a profile (sign changes of its slope, ignoring steps below 1e-3 of its maximum)."""
+    d = np.diff(v)
+    d = d[np.abs(d) > 1e-3 * np.abs(v).max()]
+    return int(np.sum(np.sign(d[1:]) != np.sign(d[:-1])))
+
+
+def test_jumped_run_matches_every_cycle_within_its_error_estimate(tmp_path):
+    every, w_every, rate_every, _ = _cylinder(tmp_path, "every", 400)
+    jump, w_jump, _, cyc = _cylinder(tmp_path, "jump", 400, ["wear.cycle_jump=true"])
+    info = jump["cycle_jump"]
+    assert jump["cycles"] == 400 and jump["increments"] == every["increments"]
+    assert info["simulated_cycles"] == len(cyc["cycle"]) and info["simulated_cycles"] < 400 / 5
+    assert cyc["jump"].sum() == 400 and cyc["cycle"][-1] == 400 and cyc["jump"][-1] == 1
+    # The automatic jump never passes the monotone limit, half the stability limit reported with it.
+    assert np.all(cyc["jump"] <= cyc["jump_stability_limit"] / 2 * (1 + 1e-12))
+    assert info["stability_limit_min"] > 1 and info["jumps_past_stability_limit"] == 0
+    # The accumulated estimate bounds the actual error in the maximum wear depth and in every node's wear;
+    # that error is below 1 % of the depth (the 0.1 h wear and 5 % pressure bounds; measured 0.35 %).
+    err = abs(jump["max_wear_depth"] - every["max_wear_depth"])
+    assert err <= info["wear_error_estimate"]
+    assert np.abs(w_jump - w_every).max() <= info["wear_error_estimate"]
+    assert err <= 0.01 * every["max_wear_depth"]
+    assert np.linalg.norm(w_jump - w_every) <= 0.01 * np.linalg.norm(w_every)
+    # The jumped energy stands for every cycle: the wear-energy identity holds for the extrapolated totals.
+    assert jump["wear_area"] == pytest.approx(8.5e-8 / 0.9 * jump["dissipated_energy"], rel=1e-8)
+
+
+def test_a_jump_past_the_stability_limit_makes_edge_spikes(tmp_path):
+    """Forced jumps: 3/4 of the computed stability limit keep the smooth profile of the every-cycle run (one
+    extremum of the cycle's wear: its peak); twice the limit makes the zigzag the analysis predicts."""
+    probe, _, _, _ = _cylinder(tmp_path, "probe", 40, ["wear.cycle_jump=true"])
+    limit = probe["cycle_jump"]["stability_limit_min"]
+    below, _, rate_below, _ = _cylinder(tmp_path, "below", 400, ["wear.cycle_jump=true",
+                                                                 f"wear.jump_forced={int(0.75 * limit)}"])
+    above, _, rate_above, _ = _cylinder(tmp_path, "above", 400, ["wear.cycle_jump=true",
+                                                                 f"wear.jump_forced={int(2 * limit)}"])
+    assert below["cycle_jump"]["jumps_past_stability_limit"] == 0
+    assert above["cycle_jump"]["jumps_past_stability_limit"] > 0
+    assert _extrema(rate_below) <= 1
+    assert _extrema(rate_above) >= 8
+
+
+def test_forced_jump_wearing_more_than_an_element_is_refused_and_leaves_no_trace(tmp_path):
+    scene = load_scene("cylinder-flat", CYL + ["loading.cycles=5000", "output.snapshot_cycles=[5000]",
+                                               "output.loop_cycles=[5000]", "wear.cycle_jump=true",
+                                               "wear.jump_forced=4000", "output.contact_profiles=false"])
+    # Cycle 1 is never jumped from (it starts from the preload); cycle 2 would jump 4000 cycles.
+    with pytest.raises(SimulationError, match=r"cycle 2: a jump of 4000 cycles would wear up to"):
+        run_scene(scene, tmp_path, quiet=True)
+    s = json.loads((tmp_path / "summary.json").read_text())
+    cyc = read_table(tmp_path / "cycles.csv")
+    assert s["cycles"] == 1 and list(cyc["cycle"]) == [1] and s["increments"] == 4 + 16
+    with np.load(tmp_path / CHECKPOINT) as data:
+        meta = json.loads(str(data["meta"]))
+        assert meta["cycle"] == 1 and meta["jump"]["simulated"] == 1
+        # The wear gap is cycle 1's: nothing of cycle 2 (simulated, then refused) is kept.
+        assert data["gw"].max() == pytest.approx(cyc["max_wear_depth"][0], rel=1e-12)
+        assert s["max_wear_depth"] == pytest.approx(cyc["max_wear_depth"][0], rel=1e-12)
+
+
+class _Crash(RuntimeError):
+    pass
+
+
+def test_resume_carries_the_jump_state(tmp_path, monkeypatch):
+    """A jumped run that dies right after its checkpoint at the snapshot cycle 200, resumed, takes the jumps of
+    the uninterrupted run: the growth allowance, the last rate and the error estimate survive the checkpoint."""
+    from dolfinx_fretting import simulation
+
+    scene = load_scene("cylinder-flat", CYL + ["output.snapshot_cycles=[200, 400]", "output.loop_cycles=[200, 400]",
+                                               "wear.cycle_jump=true", "output.contact_profiles=false",
+                                               "loading.cycles=400"])
+    straight = run_scene(scene, tmp_path / "s", quiet=True)
+    original = simulation._Run.checkpoint
+
+    def checkpoint_then_die(self):
+        original(self)
+        if self.state.cycle >= 200:
+            raise _Crash("killed after the checkpoint")
+
+    monkeypatch.setattr(simulation._Run, "checkpoint", checkpoint_then_die)
+    with pytest.raises(_Crash):
+        run_scene(scene, tmp_path / "r", quiet=True)
+    monkeypatch.setattr(simulation._Run, "checkpoint", original)
+    with np.load(tmp_path / "r" / CHECKPOINT) as data:
+        meta = json.loads(str(data["meta"]))
+        assert meta["cycle"] > 200 and meta["jump"]["last"] > 1  # inside a jump that started at 200
+    resumed = run_scene(scene, tmp_path / "r", quiet=True, resume=True)
+    a, b = read_table(tmp_path / "s" / "cycles.csv"), read_table(tmp_path / "r" / "cycles.csv")
+    assert np.array_equal(a["cycle"], b["cycle"]) and np.array_equal(a["jump"], b["jump"])
+    # The compiled loop's pattern cache restarts on resume: equal to the local tolerance, not bit for bit.
+    assert resumed["max_wear_depth"] == pytest.approx(straight["max_wear_depth"], rel=1e-8)
+    for key in ("simulated_cycles", "jumps", "largest_jump"):
+        assert resumed["cycle_jump"][key] == straight["cycle_jump"][key], key
+    assert resumed["cycle_jump"]["wear_error_estimate"] == pytest.approx(
+        straight["cycle_jump"]["wear_error_estimate"], rel=1e-6)
+
+
+def test_window_growth_inside_a_jumped_run(tmp_path):
+    """The paper's two bodies, k = 100 x the paper's, a candidate window of 0.12 mm that the widening scar
+    outgrows after a jump (cycle 12): the cycle is run again on the grown window, stands for itself (no
+    per-contact rate to extrapolate across contact sets), and the run ends as the wide-window run does (the
+    same jumps; wear to the local tolerance)."""
+    base = ["output.xdmf=false", "output.plots=false", "geometry.contact_mesh_size=0.02",
+            "loading.increments_per_cycle=16", "wear.k=8.5e-7", "loading.cycles=40", "wear.cycle_jump=true",
+            "output.contact_profiles=false", "output.snapshot_cycles=[40]", "output.loop_cycles=[40]"]
+    wide = run_scene(load_scene("cylinder-flat", base), tmp_path / "wide", quiet=True)
+    small = run_scene(load_scene("cylinder-flat", base + ["contact.candidate_half_width=0.12"]), tmp_path / "small",
+                      quiet=True)
+    assert wide["window_growths"] == [] and len(small["window_growths"]) >= 1
+    bounds = read_table(tmp_path / "small" / "cycles.csv")["jump_bound"]
+    assert "window_grown" in list(bounds)
+    # The wide run's jumps around the growth were one cycle too (pressure bound), so both take the same path.
+    assert small["max_wear_depth"] == pytest.approx(wide["max_wear_depth"], rel=1e-8)
+    # The growth's cycle bounds the previous jump's error by its larger rate: never below the wide run's.
+    assert small["cycle_jump"]["wear_error_estimate"] >= wide["cycle_jump"]["wear_error_estimate"]
