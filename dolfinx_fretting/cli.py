@@ -1,5 +1,6 @@
-"""Command line: ``dolfinx-fretting scenes``, ``dolfinx-fretting run SCENE --out DIR [--set k=v ...]`` and
-``dolfinx-fretting compare DIR [DIR ...] --out OUT [--labels a,b] [--cycles 1,10,100] [--node 0.0]``."""
+"""Command line: ``dolfinx-fretting scenes``, ``dolfinx-fretting run SCENE --out DIR [--set k=v ...]``,
+``dolfinx-fretting compare DIR [DIR ...] --out OUT [--labels a,b] [--cycles 1,10,100] [--node 0.0]`` and
+``dolfinx-fretting study SCENE --out DIR [--sweep k=v1,v2 ...] [--reference k=v ...] [--point "k=v k=v"]``."""
 
 from __future__ import annotations
 
@@ -38,7 +39,49 @@ def _parser() -> argparse.ArgumentParser:
                      help="cycles of compare_cycles.png (default: the snapshot cycles the runs share)")
     cmp.add_argument("--node", type=_node_position, default=0.0, metavar="X",
                      help="position (mm) of the node of compare_node_history.png, or 'centre' (default 0.0)")
+    st = sub.add_parser("study", help="speed-vs-accuracy trade study: a fine reference run and a sweep of "
+                                      "numerics, with errors against the reference (study.csv, .md, .png)")
+    st.add_argument("scene", help="built-in scene name or path to a scene TOML file")
+    st.add_argument("--out", required=True, help="output folder (the runs go to DIR/runs/)")
+    st.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                    help="override a scene value for every run, reference included (e.g. loading.cycles=20)")
+    st.add_argument("--reference", action="append", default=None, metavar="SECTION.KEY=VALUE",
+                    help="the reference's overrides; repeatable (default: contact elements halved, twice the "
+                         "increments, local_tol 1e-12, no wear acceleration)")
+    st.add_argument("--sweep", action="append", default=None, metavar="SECTION.KEY=V1,V2,...",
+                    help="a key and its values, swept one at a time around the reference; repeatable (default: "
+                         "contact element size, increments per cycle, local_tol, wear acceleration)")
+    st.add_argument("--point", action="append", default=[], metavar='"K=V K=V"',
+                    help="a combination of overrides on top of the reference's, run as one point; repeatable")
+    st.add_argument("--no-warm-up", dest="warm_up", action="store_false",
+                    help="skip the untimed one-cycle run that loads the compiled kernels first")
+    st.add_argument("--quiet", action="store_true", help="print only the final table")
     return p
+
+
+def _study(args: argparse.Namespace) -> int:
+    """``dolfinx-fretting study``: the trade study; 2 for bad input, 1 if the reference run fails."""
+    from mpi4py import MPI
+
+    from .study import format_markdown, parse_point, parse_sweep, plan_study, run_study
+
+    try:
+        sweep = parse_sweep(args.sweep) if args.sweep is not None else None
+        points = [parse_point(p) for p in args.point]
+        plan = plan_study(args.scene, args.overrides, args.reference, sweep, points)
+    except SceneError as exc:
+        print(f"dolfinx-fretting study: {exc}", file=sys.stderr)
+        return 2
+    try:
+        rows = run_study(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet, warm_up=args.warm_up)
+    except RuntimeError as exc:
+        if MPI.COMM_WORLD.rank == 0:
+            print(f"dolfinx-fretting study: {exc}", file=sys.stderr)
+        return 1
+    if MPI.COMM_WORLD.rank == 0:
+        print(format_markdown(rows))
+        print(f"wrote {args.out}/study.csv, study.md, study.png")
+    return 0
 
 
 def _csv_list(text: str) -> list[str]:
@@ -102,6 +145,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.command == "compare":
         return _compare(args)
+    if args.command == "study":
+        return _study(args)
     try:
         scene = load_scene(args.scene, args.overrides)
     except SceneError as exc:

@@ -20,7 +20,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-__all__ = ["Scene", "SceneError", "builtin_scenes", "load_scene", "apply_overrides"]
+__all__ = ["Scene", "SceneError", "builtin_scenes", "load_scene", "apply_overrides", "PRESETS", "preset_values"]
 
 
 class SceneError(ValueError):
@@ -327,6 +327,10 @@ class LoadingSettings(_Section):
 class SolverSettings(_Section):
     """Local (contact) solver and the factorisation behind W."""
 
+    #: Numerics preset (see :data:`PRESETS`): values for the numerics keys the scene does not set itself;
+    #: ``None``: the scene as written.
+    preset: Literal["fast", "balanced", "accurate"] | None = None
+
     #: Local solver of the per-increment path: the paper's "uzawa", "nsgs" (exact one-contact solves),
     #: "newton" (semismooth, safeguarded) or "auto" (see local_solvers.solve). The compiled cycle loop is
     #: Uzawa-based; another method here runs cycles by the per-increment path.
@@ -389,6 +393,72 @@ class OutputSettings(_Section):
     checkpoint_interval: float = Field(60.0, gt=0)
     #: A progress bar over the cycles when the terminal is interactive.
     progress: bool = True
+
+
+# Numerics presets (solver.preset) --------------------------------------------------------------------------
+#: What each ``solver.preset`` supplies, chosen from the measured speed-vs-accuracy frontier
+#: (``docs/study.md``, ``benchmarks/results/study_*.md``). ``contact_elements_per_half_width``: the contact
+#: element size of a half-cylinder under a prescribed normal force is the Hertz half-width (rigid flat) over
+#: this number; ``rectangle_cells``: ``geometry.nx`` of a rectangle (``ny`` in proportion to its height);
+#: ``force_tol`` is ``force_tol_factor`` times ``local_tol`` (the force control cannot meet a tighter one).
+PRESETS: dict[str, dict[str, float]] = {
+    # the studies' references: 2x finer contact elements and increments than the scenes, tolerance 1e-12
+    # (a rectangle keeps 50 cells: at 100 the compiled loop's Uzawa stalls on Example 1)
+    "accurate": {"contact_elements_per_half_width": 20.0, "rectangle_cells": 50,
+                 "increments_per_cycle": 160, "local_tol": 1e-12, "force_tol_factor": 100.0},
+    # the built-in scenes' own numerics (10 um elements on Example 2 = 10.8 per half-width)
+    "balanced": {"contact_elements_per_half_width": 10.0, "rectangle_cells": 50,
+                 "increments_per_cycle": 80, "local_tol": 1e-10, "force_tol_factor": 100.0},
+    # 2x coarser elements and half the increments; the tolerance stays at 1e-10: looser ones bought no
+    # time on Example 1 (pattern solves are exact) and broke the force control of Example 2
+    "fast": {"contact_elements_per_half_width": 5.0, "rectangle_cells": 25,
+             "increments_per_cycle": 40, "local_tol": 1e-10, "force_tol_factor": 100.0},
+}
+
+
+def preset_values(scene: Scene) -> dict[str, Any]:
+    """The ``section.key`` values ``scene.solver.preset`` would give to its numerics keys (all of them,
+    set in the scene or not); empty without a preset.
+
+    Keys: ``geometry.contact_mesh_size`` (a half-cylinder under ``loading.normal_force``: the Hertz
+    half-width (against the rigid plane or the elastic flat) over ``contact_elements_per_half_width``; none under a normal
+    displacement), ``geometry.nx`` and ``geometry.ny`` (a rectangle), ``loading.increments_per_cycle``,
+    ``solver.local_tol`` and ``solver.force_tol``. Elastic-plastic scenes keep their tightened tolerances
+    (local 1e-12, force 1e-11, see ``Scene._plastic_tolerances``): the presets' tolerances were measured on
+    elastic scenes.
+    """
+    from .analytic import hertz_line_contact, plane_strain_modulus
+
+    name = scene.solver.preset
+    if name is None:
+        return {}
+    p = PRESETS[name]
+    g, lo, m = scene.geometry, scene.loading, scene.material
+    out: dict[str, Any] = {}
+    if g.kind == "half_cylinder" and lo.normal_force is not None:
+        # against the elastic flat (same material) the contact modulus halves
+        E_star = (plane_strain_modulus(m.E, m.nu, m.E, m.nu) if scene.contact.obstacle == "elastic_flat"
+                  else plane_strain_modulus(m.E, m.nu))
+        a, _ = hertz_line_contact(lo.normal_force, g.radius, E_star)
+        out["geometry.contact_mesh_size"] = float(f"{a / p['contact_elements_per_half_width']:.3g}")
+    elif g.kind == "rectangle":
+        nx = int(p["rectangle_cells"])
+        out["geometry.nx"] = nx
+        out["geometry.ny"] = max(1, round(nx * g.height / g.width))
+    out["loading.increments_per_cycle"] = int(p["increments_per_cycle"])
+    if m.model == "elastic":
+        out["solver.local_tol"] = p["local_tol"]
+        out["solver.force_tol"] = min(p["local_tol"] * p["force_tol_factor"], 0.1)
+    return out
+
+
+def _apply_preset(scene: Scene) -> None:
+    """Give the preset's values to the numerics keys the scene did not set (explicit keys win)."""
+    for key, value in preset_values(scene).items():
+        section, name = key.split(".")
+        target = getattr(scene, section)
+        if name not in target.model_fields_set:
+            setattr(target, name, value)  # validated on assignment (e.g. against geometry.radius)
 
 
 class Scene(_Section):
@@ -468,6 +538,12 @@ class Scene(_Section):
                 sv.force_tol = 1e-11
             if "local_tol" not in sv.model_fields_set:
                 sv.local_tol = 1e-12
+        return self
+
+    @model_validator(mode="after")
+    def _preset(self) -> Scene:
+        # after _plastic_tolerances: its tightened tolerances count as set and the preset leaves them
+        _apply_preset(self)
         return self
 
     @property
