@@ -12,6 +12,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 
@@ -63,3 +64,28 @@ def test_parallel_run_matches_serial(shared_dir, name):
         assert on_disk["increments"] == parallel["increments"]
         rows = (shared_dir / "par" / "history.csv").read_text().strip().splitlines()
         assert len(rows) == 1 + parallel["increments"]
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_delassus_routes_agree_in_parallel():
+    from dolfinx_fretting.simulation import ContactModel
+
+    model = ContactModel(load_scene("hertz", ["geometry.contact_mesh_size=0.04", "output.xdmf=false",
+                                              "output.plots=false"]), COMM)
+    d, H = model.problem.delassus, model.contact.H
+    assert d.method == "owned"  # the default under MPI (benchmarks/results/delassus_owned_np2.md)
+    W = {r: d.build(H, method=r) for r in ("block", "selected_inverse", "owned")}
+    scale = np.abs(W["block"]).max()
+    for r in W:
+        # distributed and per-rank MUMPS factors of the same K (condition ~1e5): 1e-10 of max|W|
+        assert np.abs(W[r] - W["block"]).max() <= 1e-10 * scale, r
+        gathered = COMM.allgather(W[r])  # every rank holds the same W, bit for bit
+        assert all(np.array_equal(g, gathered[0]) for g in gathered), r
+    # K's values change (K -> 2K) and are refactorised: the owned copy follows (W -> W/2).
+    model.problem.K.scale(2.0)
+    d.refactorize()
+    W2 = d.build(H)
+    model.problem.K.scale(0.5)
+    d.refactorize()
+    assert np.abs(W2 - 0.5 * W["owned"]).max() <= 1e-10 * scale
+    model.problem.destroy()
