@@ -62,8 +62,8 @@ def tmax(t: float) -> float:
 
 def scene_for(case: str):
     kind, _, size = case.partition("=")
-    if kind == "hertz":
-        return load_scene("hertz", [f"geometry.contact_mesh_size={size}", "output.xdmf=false", "output.plots=false"])
+    if kind in ("hertz", "cylinder-flat"):
+        return load_scene(kind, [f"geometry.contact_mesh_size={size}", "output.xdmf=false", "output.plots=false"])
     nx, ny = (int(v) for v in size.split("x"))
     return load_scene({"name": f"rectangle_{nx}x{ny}",
                        "geometry": {"kind": "rectangle", "width": 50.0, "height": 50.0, "nx": nx, "ny": ny},
@@ -184,17 +184,45 @@ def run_case(case: str, repeat: int) -> dict:
     return rec
 
 
+def run_rebuilds(case: str, repeat: int) -> dict:
+    """W rebuilt after a numeric refactorisation of the same K (what a Newton loop with the consistent
+    tangent does every iteration), by the package's routes ``selected_inverse`` (shared) and ``owned``
+    (each rank refreshes and refactorises its own copy): the time of build() after refactorize()."""
+    model = ContactModel(scene_for(case), COMM)
+    d, H = model.problem.delassus, model.contact.H
+    rec = {"case": case, "dofs": model.n_dofs, "contacts": model.contact.nc}
+    times: dict[str, list[float]] = {"selected_inverse": [], "owned": []}
+    for r in times:  # warm-up: the owned copy is gathered and factorised here
+        d.build(H, method=r)
+    for _ in range(repeat):
+        for r in times:
+            d.refactorize()
+            COMM.barrier()
+            t0 = time.perf_counter()
+            d.build(H, method=r)
+            times[r].append(tmax(time.perf_counter() - t0))
+    rec["rebuild_s"] = times
+    rec["median_rebuild_s"] = {r: float(np.median(v)) for r, v in times.items()}
+    say(f"{case}: {rec['dofs']} dofs, {rec['contacts']} contacts; W after refactorize, median s: "
+        + ", ".join(f"{r} {v:.4f}" for r, v in rec["median_rebuild_s"].items()))
+    model.problem.destroy()
+    return rec
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rect", nargs="*", default=["320x80"], metavar="NXxNY")
     ap.add_argument("--hertz", type=float, nargs="*", default=[0.0025], metavar="H")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--rebuild", nargs="*", default=[], metavar="KIND=H",
+                    help="also time W rebuilt after refactorize (Newton iterations), e.g. cylinder-flat=0.02")
     ap.add_argument("--out", type=Path, default=HERE / "results" / "delassus_owned")
     args = ap.parse_args(argv)
     info = machine_info()
     t0 = time.perf_counter()
     cases = [f"rect={r}" for r in args.rect] + [f"hertz={h}" for h in args.hertz]
     records = [run_case(c, args.repeat) for c in cases]
+    rebuilds = [run_rebuilds(c, 5 * args.repeat) for c in args.rebuild]
     info["load_average_end"] = list(os.getloadavg())
     if not RANK0:
         return 0
@@ -202,7 +230,8 @@ def main(argv=None) -> int:
            + shlex.join(sys.argv[1:]))
     args.out.parent.mkdir(parents=True, exist_ok=True)
     data = {"command": cmd, "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-            "machine": info, "wall_s": time.perf_counter() - t0, "cases": records}
+            "machine": info, "wall_s": time.perf_counter() - t0, "cases": records,
+            "rebuilds": rebuilds}
     args.out.with_suffix(".json").write_text(json.dumps(data, indent=1) + "\n")
     names = [f"{a} {r}" for a, r in WAYS]
     lines = [f"# W under MPI ({COMM.size} ranks): shared solves vs each rank its own columns", "",
@@ -226,6 +255,14 @@ def main(argv=None) -> int:
     for r in records:
         for n, v in r["times"].items():
             lines.append(f"- {r['case']} {n}: " + ", ".join(f"{p} {np.median([t[p] for t in v]):.3f}" for p in v[0]))
+    if rebuilds:
+        lines += ["", "W rebuilt after a numeric refactorisation of K (each Newton iteration of an elastic-plastic "
+                  f"run), median of {5 * args.repeat}, routes interleaved:", "",
+                  "| mesh | dofs | contacts | shared selected_inverse | owned | ratio |", "|---|---:|---:|---:|---:|---:|"]
+        for r in rebuilds:
+            m = r["median_rebuild_s"]
+            lines.append(f"| {r['case']} | {r['dofs']} | {r['contacts']} | {m['selected_inverse']:.4f} s | "
+                         f"{m['owned']:.4f} s | {m['selected_inverse'] / m['owned']:.2f} |")
     args.out.with_suffix(".md").write_text("\n".join(lines) + "\n")
     print("wrote", args.out.with_suffix(".md"))
     return 0

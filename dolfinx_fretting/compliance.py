@@ -307,7 +307,7 @@ class DelassusOperator:
         """
         self._require_factor()
         t0 = time.perf_counter()
-        self._drop_own_factor()  # K's values changed: the "owned" route refactorises its copy when used
+        self._own_stale = True  # K's values changed: the "owned" route refreshes its copy when next used
         pc = self.ksp.getPC()
         # Reuse is on so that solves never refactorise behind the caller's back; lift it for this call.
         # KSPSetUp alone returns at once on a set-up KSP: setOperators marks the operator changed, and
@@ -561,22 +561,35 @@ class DelassusOperator:
             Bt.destroy()
 
     def _own_factor(self) -> DelassusOperator:
-        """This rank's sequential factor of the whole K (gathered and factorised once per K). Collective."""
+        """This rank's sequential factor of the whole K. Collective.
+
+        Gathered and factorised (symbolic + numeric) after :meth:`factorize`; after :meth:`refactorize` the
+        copy's values are refreshed in place and refactorised numerically only.
+        """
         own = getattr(self, "_own", None)
         error = None
-        if own is None:
-            try:
-                N = self.K.getSize()[0]
-                rows = PETSc.IS().createStride(N, 0, 1, comm=PETSc.COMM_SELF)
-                Kseq = self.K.createSubMatrices(rows)[0] if self.comm.size > 1 else self.K
-                rows.destroy()
+        try:
+            N = self.K.getSize()[0]
+            rows = PETSc.IS().createStride(N, 0, 1, comm=PETSc.COMM_SELF) if self.comm.size > 1 else None
+            if own is None:
+                Kseq = self.K.createSubMatrices(rows)[0] if rows is not None else self.K
                 own = DelassusOperator(Kseq, MPI.COMM_SELF, method="selected_inverse",
                                        petsc_options=self.petsc_options, options_prefix=self.options_prefix,
                                        spd=self.spd, symmetrize=False)
                 own.factorize()
                 self._own = own
-            except Exception as exc:  # noqa: BLE001 - re-raised below on every rank together
-                error = f"{type(exc).__name__}: {exc}"
+            elif getattr(self, "_own_stale", False):
+                if rows is not None:
+                    self.K.createSubMatrices(rows, submats=[own.K])  # same pattern: values only
+                    # The values are copied in place without a new object state: PCSetUp would see an
+                    # unchanged matrix and keep the old factor (measured: W unchanged after K -> 2K).
+                    own.K.stateIncrease()
+                own.refactorize()
+            self._own_stale = False
+            if rows is not None:
+                rows.destroy()
+        except Exception as exc:  # noqa: BLE001 - re-raised below on every rank together
+            error = f"{type(exc).__name__}: {exc}"
         errors = self.comm.allgather(error)
         if any(errors):
             self._drop_own_factor()

@@ -305,7 +305,8 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
         sel = nodes[loaded] if loaded.any() else nodes
         pts = xdef[sel, :2]
         s = pts @ t1
-        spacing = float(np.median(np.diff(np.sort(f.points[nodes, :2] @ t1)))) if nodes.size > 1 else size / 50
+        along = np.sort(f.points[nodes, :2] @ t1)
+        spacing = float(np.median(np.diff(along))) if nodes.size > 1 else size / 50
         half = max(0.5 * float(s.max() - s.min()), 3 * spacing) * 1.3
         c_s = 0.5 * (s.max() + s.min())
         c_h = float((pts @ n).min())
@@ -319,8 +320,8 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
                     window_size=list(_WINDOW), border=False)
     pl.set_background("white")
     pl.subplot(0, 0)
-    pl.add_text(f"Deformed shape coloured by von Mises stress, increment {f.time:g} (displacement x {scale:g} "
-                "on the left)",
+    pl.add_text(f"Deformed shape coloured by von Mises stress, increment {f.time:g} "
+                f"(displacement x {scale:g} on the left)",
                 position="upper_edge", font_size=13, color="black")
     undeformed = _grid(pv, f, f.points).extract_feature_edges(boundary_edges=True, feature_edges=False,
                                                               manifold_edges=False, non_manifold_edges=False)
@@ -348,8 +349,8 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
         if col == 1:
             pl.subplot(1, 0)
             margin = 0.03 * size  # the frame: what the zoom shows, within the body's box plus a margin
-            pl.add_mesh(_outline(pv, np.maximum(shown[0], lo[:2] - margin), np.minimum(shown[1], hi[:2] + margin)),
-                        color="red", line_width=2)
+            frame = _outline(pv, np.maximum(shown[0], lo[:2] - margin), np.minimum(shown[1], hi[:2] + margin))
+            pl.add_mesh(frame, color="red", line_width=2)
     return pl, {"clim": clim, "scale": scale, "zoom": (zlo, zhi), "time": f.time, "fields": f}
 
 
@@ -399,8 +400,9 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None):
     worn = pv.lines_from_points(pts[k:])
     pl.add_mesh(orig, color="black", line_width=3)
     pl.add_mesh(worn, color="#d62728", line_width=3)
-    pl.add_text("black: original surface", position=(20, _WINDOW[1] - 80), font_size=11, color="black")
-    pl.add_text(f"red: worn surface (wear x {mag:g})", position=(20, _WINDOW[1] - 110), font_size=11,
+    # Key in the free band between the profile and the colour bar (the profile sits above 40 % of the height).
+    pl.add_text("black: original surface", position=(40, int(0.3 * _WINDOW[1])), font_size=11, color="black")
+    pl.add_text(f"red: worn surface (wear x {mag:g})", position=(40, int(0.25 * _WINDOW[1])), font_size=11,
                 color="#d62728")
     cycle = f"cycle {info['cycle']}" if info["cycle"] > 0 else "the monotonic load"
     pl.add_text(f"Worn profile after {cycle} (increment {info['increment']}): wear x {mag:g}, "
@@ -413,8 +415,8 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None):
     # The undeformed mesh around the contact for scale, below the title (top 12 % of the view).
     top = hi[1] - 0.12 * (hi[1] - lo[1])
     body = _grid(pv, f, f.points)
-    near = body.extract_cells(np.flatnonzero(np.all((body.cell_centers().points[:, :2] > lo)
-                                                    & (body.cell_centers().points[:, :2] < [hi[0], top]), axis=1)))
+    centres = body.cell_centers().points[:, :2]
+    near = body.extract_cells(np.flatnonzero(np.all((centres > lo) & (centres < [hi[0], top]), axis=1)))
     if near.n_cells:
         pl.add_mesh(near, style="wireframe", color="#c8c8c8", line_width=1)
     info.update(magnification=mag)
@@ -494,7 +496,8 @@ def draw_in_subprocess(folder: str | Path, plane_point, plane_normal, timeout: f
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m dolfinx_fretting.pictures DIR [--plane PX,PY,NX,NY]``: 0 drawn, 1 skipped or failed."""
-    ap = argparse.ArgumentParser(prog="python -m dolfinx_fretting.pictures", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m dolfinx_fretting.pictures",
+                                 description=__doc__.split("\n")[0])
     ap.add_argument("folder", type=Path, help="a run's output folder")
     ap.add_argument("--plane", default=None, metavar="PX,PY,NX,NY",
                     help="the rigid plane's point and normal (default: from the folder's checkpoint)")

@@ -7,8 +7,8 @@ import h5py
 import numpy as np
 import pytest
 
-from dolfinx_fretting.pictures import (PICTURES, contact_surface, deformed_plotter, draw_in_subprocess, nice_factor,
-                                       read_fields, worn_plotter)
+from dolfinx_fretting.pictures import (PICTURES, contact_surface, deformed_plotter, draw_in_subprocess,
+                                       nice_factor, read_fields, worn_plotter)
 from dolfinx_fretting.scenes import load_scene
 from dolfinx_fretting.simulation import run_scene
 
@@ -41,7 +41,8 @@ def test_run_writes_non_blank_pictures(tiny_run):
         assert img.shape == (720, 1600, 3)
         # A blank (single-colour) picture has zero variance; ours are mostly white with coloured meshes.
         assert img.std() > 20, name
-        assert (np.abs(img - 255).sum(axis=2) > 30).mean() > 0.05, f"{name}: less than 5 % of the pixels drawn"
+        drawn = (np.abs(img - 255).sum(axis=2) > 30).mean()
+        assert drawn > 0.05, f"{name}: only {drawn:.1%} of the pixels drawn"
 
 
 def test_colour_scale_and_colours_are_the_fields_von_mises(tiny_run):
@@ -68,8 +69,8 @@ def test_colour_scale_and_colours_are_the_fields_von_mises(tiny_run):
         # median over 7 x 7 pixels: the quad's diagonal through its centre is blended by anti-aliasing
         colour = np.median(img[row - 3:row + 4, px - 3:px + 4].reshape(-1, 3).astype(float), axis=0)
         expected = np.array(colormaps["viridis"](value)[:3]) * 255
-        # Unlit flat colours: the pixel at the hottest (coldest) cell's centre is the colour map's top (bottom)
-        # colour, to 8-bit rounding and one colour-table bin (256 bins of viridis differ by <= 3 per channel).
+        # Unlit flat colours: the pixels at the hottest (coldest) cell's centre are the colour map's top
+        # (bottom) colour, to 8-bit rounding and one colour-table bin (256 bins of viridis: <= 3 a channel).
         assert np.abs(colour - expected).max() <= 4, (cell, colour, expected)
     pl.close()
 
@@ -101,7 +102,8 @@ def test_contact_nodes_found_in_the_mesh(tiny_run):
 
 
 def test_nice_factor():
-    assert [nice_factor(t) for t in (1.0, 1.9, 2.0, 4.99, 5.0, 9.9, 0.03, 7.3e5)] == [1, 1, 2, 2, 5, 5, 0.02, 5e5]
+    targets = (1.0, 1.9, 2.0, 4.99, 5.0, 9.9, 0.03, 7.3e5)
+    assert [nice_factor(t) for t in targets] == [1, 1, 2, 2, 5, 5, 0.02, 5e5]
     assert nice_factor(0.0) == 1.0 and nice_factor(float("inf")) == 1.0
 
 
@@ -115,8 +117,8 @@ def test_run_succeeds_and_says_so_without_pyvista(tmp_path, monkeypatch, capsys)
                                                                   "loading.increments_per_cycle=8"]), out)
     assert summary["converged"]
     said = capsys.readouterr().out
-    assert re.search(r"pictures skipped: pyvista not importable \(ImportError: pyvista removed for this test\)",
-                     said), said
+    assert re.search(r"pictures skipped: pyvista not importable "
+                     r"\(ImportError: pyvista removed for this test\)", said), said
     assert not any((out / name).exists() for name in PICTURES)
     assert (out / "profiles.png").is_file()  # the matplotlib plots are unaffected
 
