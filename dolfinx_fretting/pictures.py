@@ -387,6 +387,8 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None):
     k = x0.shape[0]
     pts = np.zeros((2 * k, 3))
     pts[:k, :2], pts[k:, :2] = x0, x1
+    # Above the mesh drawn for scale (z towards the camera), the surfaces' lines above the band.
+    pts[:, 2] = 1e-3 * width
     quads = np.array([[4, i, i + 1, k + i + 1, k + i] for i in range(k - 1)]).ravel()
     band = pv.PolyData(pts, faces=quads)
     band.point_data[WEAR_TITLE] = np.concatenate([wear, wear])
@@ -396,8 +398,8 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None):
     actor = pl.add_mesh(band, scalars=WEAR_TITLE, cmap=CMAP, clim=(0.0, float(wear.max())), lighting=False,
                         show_scalar_bar=False)
     _scalar_bar(pl, WEAR_TITLE, actor.mapper)
-    orig = pv.lines_from_points(pts[:k])
-    worn = pv.lines_from_points(pts[k:])
+    orig = pv.lines_from_points(pts[:k] + [0.0, 0.0, 1e-3 * width])
+    worn = pv.lines_from_points(pts[k:] + [0.0, 0.0, 1e-3 * width])
     pl.add_mesh(orig, color="black", line_width=3)
     pl.add_mesh(worn, color="#d62728", line_width=3)
     # Key in the free band between the profile and the colour bar (the profile sits above 40 % of the height).
