@@ -44,7 +44,7 @@ import numpy as np
 
 from .contact_output import read_profiles
 
-__all__ = ["Fields", "read_fields", "contact_surface", "nice_factor", "deformed_plotter", "worn_plotter",
+__all__ = ["Fields", "read_fields", "field_times", "contact_surface", "nice_factor", "deformed_plotter", "worn_plotter",
            "write_pictures", "draw_in_subprocess", "PICTURES", "VM_TITLE", "main"]
 
 #: Files written by :func:`write_pictures`.
@@ -97,6 +97,12 @@ def _series(domain: ET.Element, name: str) -> dict[float, ET.Element]:
                 if t is not None and att is not None and att.find("DataItem") is not None:
                     out[float(t.get("Value"))] = att.find("DataItem")
     return out
+
+
+def field_times(folder: str | Path) -> list[float]:
+    """Times of ``folder/fields.xdmf`` that hold both the displacement and the von Mises stress."""
+    domain = ET.parse(Path(folder) / "fields.xdmf").getroot().find("Domain")
+    return sorted(set(_series(domain, "displacement")) & set(_series(domain, "von_mises")))
 
 
 def read_fields(folder: str | Path, time: float | None = None) -> Fields:
@@ -296,12 +302,14 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
     if clim[1] <= clim[0]:
         clim = (clim[0], clim[0] + 1.0)
 
-    # The contact zone: the loaded contact nodes at the last kept increment (all of them when none is).
+    # The contact zone: the loaded contact nodes at the fields' increment, else at the last kept one (all
+    # of them when none is loaded).
     prof = read_profiles(folder)
     zlo, zhi = lo[:2], hi[:2]
     if prof is not None:
         nodes = contact_surface(f.points, prof.position, n)
-        loaded = prof.values["pressure"][-1] > 0
+        row = prof.index(int(round(f.time)))  # the fields' increment (time = increment number)
+        loaded = prof.values["pressure"][-1 if row is None else row] > 0
         sel = nodes[loaded] if loaded.any() else nodes
         pts = xdef[sel, :2]
         s = pts @ t1
@@ -458,6 +466,18 @@ def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> l
     if plane_point is None:
         plane_point = [0.0, 0.0]
     f = read_fields(folder)
+    if not f.displacement.any() and not f.von_mises.any():
+        # e.g. Example 1 after 9000 cycles: the preload is worn away and q = 0 at the end of a cycle
+        loaded = None
+        for t in reversed(field_times(folder)[:-1]):
+            g = read_fields(folder, t)
+            if g.von_mises.any():
+                loaded = g
+                break
+        notes.append(f"the last field time (increment {f.time:g}) carries no load"
+                     + (f": the deformed picture shows increment {loaded.time:g}, the last loaded one"
+                        if loaded is not None else ""))
+        f = loaded if loaded is not None else f
     pl, info = deformed_plotter(folder, plane_point, plane_normal, f)
     pl.screenshot(str(folder / PICTURES[0]))
     pl.close()

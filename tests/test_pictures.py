@@ -126,3 +126,21 @@ def test_run_succeeds_and_says_so_without_pyvista(tmp_path, monkeypatch, capsys)
 def test_subprocess_reports_a_folder_without_fields(tmp_path):
     msg = draw_in_subprocess(tmp_path, [0, 0], [0, 1])
     assert msg.startswith("pictures skipped: FileNotFoundError") and "fields.xdmf" in msg
+
+
+def test_unloaded_last_time_draws_the_last_loaded_one(tiny_run, tmp_path):
+    import shutil
+
+    from dolfinx_fretting.pictures import field_times, write_pictures
+
+    out, _ = tiny_run
+    folder = tmp_path / "copy"
+    shutil.copytree(out, folder)
+    times = field_times(folder)
+    with h5py.File(folder / "fields.h5", "r+") as f:  # the last time unloaded, as after Example 1's 9000 cycles
+        for name in ("displacement", "von_mises"):
+            f[f"Function/{name}/{times[-1]:g}"][...] = 0.0
+    notes = write_pictures(folder, [0.0, 0.0], [0.0, 1.0])
+    assert notes[0] == (f"the last field time (increment {times[-1]:g}) carries no load: the deformed picture "
+                        f"shows increment {times[-2]:g}, the last loaded one")
+    assert (folder / PICTURES[0]).is_file()
