@@ -4,8 +4,9 @@ Two PNG files, from ``fields.xdmf``/``fields.h5`` (the body's mesh, displacement
 the last time written) and ``contact_profiles.csv`` (positions, pressure and wear gap of the contact
 nodes at the last kept increment):
 
-* ``deformed_von_mises.png``: the deformed body (displacement magnified, the factor in the title)
-  coloured by the cell-wise von Mises stress, whole body on the left and the contact zone zoomed on the
+* ``deformed_von_mises.png``: the deformed body at the last field time (or the last loaded one when the
+  last carries no load, said so: e.g. Example 1 after 9000 cycles), displacement magnified (the factor in
+  the title), coloured by the cell-wise von Mises stress, whole body on the left and the contact zone zoomed on the
   right (the zoomed region framed in red on the left), with the rigid plane drawn; one colour scale,
   from the minimum to the maximum von Mises stress of the fields file.
 * ``worn_profile.png``: the original contact surface and the worn one (wear gap magnified along the
@@ -44,8 +45,8 @@ import numpy as np
 
 from .contact_output import read_profiles
 
-__all__ = ["Fields", "read_fields", "field_times", "contact_surface", "nice_factor", "deformed_plotter", "worn_plotter",
-           "write_pictures", "draw_in_subprocess", "PICTURES", "VM_TITLE", "main"]
+__all__ = ["Fields", "read_fields", "field_times", "contact_surface", "nice_factor", "deformed_plotter",
+           "worn_plotter", "write_pictures", "draw_in_subprocess", "PICTURES", "VM_TITLE", "main"]
 
 #: Files written by :func:`write_pictures`.
 PICTURES = ("deformed_von_mises.png", "worn_profile.png")
