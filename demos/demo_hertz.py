@@ -23,6 +23,7 @@ import os
 from pathlib import Path
 
 import numpy as np
+from mpi4py import MPI
 
 from dolfinx_fretting.analytic import hertz_line_contact
 from dolfinx_fretting.scenes import load_scene
@@ -36,6 +37,7 @@ h = 0.01               # contact element size
 if "CI" in os.environ:  # CI-sized run
     h = 0.02
 out = Path("results/demo_hertz")
+rank0 = MPI.COMM_WORLD.rank == 0  # under mpirun every rank runs the scene; rank 0 prints
 # -
 
 # Run the built-in `hertz` scene with these values.
@@ -48,6 +50,7 @@ summary = run_scene(scene, out)
 # only; the test suite checks the frictionless case to 1 %).
 
 a, p0 = hertz_line_contact(P, scene.geometry.radius, scene.material.E / (1 - scene.material.nu**2))
-print(f"Hertz: a = {a:.4f} mm, p0 = {p0:.1f} MPa; computed: half-width = {summary['contact_width'] / 2:.4f} mm, "
-      f"p_max = {summary['max_pressure']:.1f} MPa, stick width = {summary['stick_width']:.4f} mm")
-print(f"pictures: {out / 'profiles.png'}; fields for ParaView: {out / 'fields.xdmf'}")
+if rank0:
+    print(f"Hertz: a = {a:.4f} mm, p0 = {p0:.1f} MPa; computed: "
+          f"half-width = {summary['contact_width'] / 2:.4f} mm, p_max = {summary['max_pressure']:.1f} MPa, stick width = {summary['stick_width']:.4f} mm")
+    print(f"pictures: {out / 'profiles.png'}; fields for ParaView: {out / 'fields.xdmf'}")

@@ -15,7 +15,15 @@ solves ``K x = b`` and the construction of the small dense W by one of three rou
     petsc4py 3.18 does not wrap and which is therefore called through ctypes), and
     ``W = H[:, S] (K^-1)_{SS} H[:, S]^T``. Fastest by far (see ``benchmarks/results/delassus.md``).
 
-``"auto"`` picks ``"selected_inverse"`` (serial and parallel; measured fastest in both).
+``"owned"``
+    For MPI: every rank gathers the whole K (``MatCreateSubMatrices``), factorises it alone (MUMPS on
+    COMM_SELF, all ranks at once) and computes by entries of the inverse only the columns
+    W[:, J] = H_S (K^-1)_{S, S_J} H_J^T of its share J of the rows of H; the columns are all-gathered.
+    No solve is shared between ranks; each rank holds a whole factor of K (memory x ranks). The
+    distributed factor is still the one used for the displacement solves.
+
+``"auto"`` picks ``"selected_inverse"`` serially and ``"owned"`` under MPI (measured fastest in each:
+``benchmarks/results/delassus.md``, ``benchmarks/results/delassus_owned_np2.md``).
 
 Dirichlet conditions: DOLFINx assembles K with the constrained rows and columns zeroed and 1 on the
 diagonal, so (K^-1)_{dd} = 1 at a constrained dof d, in the wrong units and unrelated to the mechanics.
@@ -43,15 +51,16 @@ from petsc4py import PETSc
 __all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs", "ROUTES", "METHODS"]
 
 #: Routes that build W.
-ROUTES = ("columns", "block", "selected_inverse")
+ROUTES = ("columns", "block", "selected_inverse", "owned")
 #: Accepted values of ``method``.
 METHODS = ROUTES + ("auto",)
 
 # Route chosen by "auto", from benchmarks/results/delassus.md: the selected inverse beats the block
-# solve by 1.3-14x and the column solves by 8-81x in serial (1.5-7x and 5-29x under mpirun -n 2), on
-# meshes of 1k-206k dofs; it stays fastest under mpirun -n 2.
+# solve by 1.3-14x and the column solves by 8-81x in serial, on meshes of 1k-206k dofs. Under mpirun -n 2
+# (benchmarks/results/delassus_owned_np2.md) each rank factorising K alone for its own columns beats the
+# shared distributed selected inverse, even counting its extra factorisation.
 _AUTO_SERIAL = "selected_inverse"
-_AUTO_PARALLEL = "selected_inverse"
+_AUTO_PARALLEL = "owned"
 
 # MUMPS INFOG(1) codes worth a sentence of their own.
 _MUMPS_HINTS = {
@@ -257,6 +266,7 @@ class DelassusOperator:
     def factorize(self) -> None:
         """Symbolic and numeric factorisation of K (a fresh KSP; any previous factor is dropped)."""
         t0 = time.perf_counter()
+        self._drop_own_factor()
         if self.ksp is not None:
             self.ksp.destroy()
         ksp = PETSc.KSP().create(self.K.getComm())
@@ -297,6 +307,7 @@ class DelassusOperator:
         """
         self._require_factor()
         t0 = time.perf_counter()
+        self._own_stale = True  # K's values changed: the "owned" route refreshes its copy when next used
         pc = self.ksp.getPC()
         # Reuse is on so that solves never refactorise behind the caller's back; lift it for this call.
         # KSPSetUp alone returns at once on a set-up KSP: setOperators marks the operator changed, and
@@ -384,6 +395,8 @@ class DelassusOperator:
             HS = H[:, S].tocsr()
             if route == "selected_inverse":
                 W = self._build_selected_inverse(HS, S)
+            elif route == "owned":
+                W = self._build_owned(H, HS, S)
             else:
                 Y = self._solve_columns(H, S) if route == "columns" else self._solve_block(H, S)
                 W = HS @ Y if self.comm.rank == 0 else None
@@ -479,7 +492,15 @@ class DelassusOperator:
         return self._gather_rows(S, pos, Yloc)
 
     def _build_selected_inverse(self, HS: sp.csr_matrix, S: np.ndarray) -> np.ndarray | None:
-        """W = H_S (K^-1)_{SS} H_S^T with (K^-1)_{SS} from MUMPS entries of the inverse (ICNTL(30)).
+        """W = H_S (K^-1)_{SS} H_S^T with (K^-1)_{SS} from MUMPS entries of the inverse (ICNTL(30))."""
+        inv = self._inverse_entries(S, S)
+        if inv is None:
+            return None
+        self.stats["selected_entries"] = int(inv.size)
+        return HS @ (HS @ inv.T).T  # H_S Kinv_SS H_S^T with sparse H_S
+
+    def _inverse_entries(self, S: np.ndarray, C: np.ndarray) -> np.ndarray | None:
+        """(K^-1)_{S, C}, transposed (shape (|C|, |S|)), on rank 0 (``None`` elsewhere). Collective.
 
         PETSc 3.18's MatMumpsGetInverse takes the requested pattern (and returns the values) in the
         diagonal block of rank 0 only, and in parallel leaves ICNTL(21) = 0 (centralised solution)
@@ -491,18 +512,18 @@ class DelassusOperator:
         comm_p = self.K.getComm()
         rank0 = self.comm.rank == 0
         N = self.K.getSize()[0]
-        s = S.size
-        # Bt (N x N): row j lists the rows i of column j of K^-1 wanted; rows S with columns S.
+        s, c = S.size, C.size
+        # Bt (N x N): row j lists the rows i of column j of K^-1 wanted; rows C with columns S.
         if rank0:
-            # The request pattern depends on S only: built once and reused by every later build.
-            key = (N, S.tobytes())
+            # The request pattern depends on S and C only: built once and reused by every later build.
+            key = (N, S.tobytes(), C.tobytes())
             if getattr(self, "_pattern_key", None) != key:
                 indptr = np.zeros(N + 1, dtype=PETSc.IntType)
-                indptr[S + 1] = s
-                self._pattern = (np.cumsum(indptr, dtype=PETSc.IntType), np.tile(S.astype(PETSc.IntType), s))
+                indptr[C + 1] = s
+                self._pattern = (np.cumsum(indptr, dtype=PETSc.IntType), np.tile(S.astype(PETSc.IntType), c))
                 self._pattern_key = key
             indptr, indices = self._pattern
-            values = np.zeros(s * s, dtype=PETSc.ScalarType)
+            values = np.zeros(s * c, dtype=PETSc.ScalarType)
             nrows = N
         else:
             indptr = np.zeros(1, dtype=PETSc.IntType)
@@ -530,20 +551,92 @@ class DelassusOperator:
             if not rank0:
                 return None
             ai, aj, av = Bt.getValuesCSR()
-            # Rows S of Bt hold, in order, the s entries of columns S (PETSc keeps the sorted pattern we
-            # gave): the s x s block is the values array itself.
-            if av.size != s * s or not np.array_equal(aj[ai[S[0]]:ai[S[0]] + s], S):
+            # Rows C of Bt hold, in order, the s entries of columns S (PETSc keeps the sorted pattern we
+            # gave): the c x s block is the values array itself.
+            if av.size != s * c or not np.array_equal(aj[ai[C[0]]:ai[C[0]] + s], S):
                 raise DelassusError("MatMumpsGetInverse returned an unexpected sparsity pattern")
-            inv = av.reshape(s, s)
-            self.stats["selected_entries"] = int(s * s)
-            return HS @ (HS @ inv.T).T  # H_S Kinv_SS H_S^T with sparse H_S
+            return av.reshape(c, s)
         finally:
             spRHS.destroy()
             Bt.destroy()
 
+    def _own_factor(self) -> DelassusOperator:
+        """This rank's sequential factor of the whole K. Collective.
+
+        Gathered and factorised (symbolic + numeric) after :meth:`factorize`; after :meth:`refactorize` the
+        copy's values are refreshed in place and refactorised numerically only.
+        """
+        own = getattr(self, "_own", None)
+        error = None
+        try:
+            N = self.K.getSize()[0]
+            rows = PETSc.IS().createStride(N, 0, 1, comm=PETSc.COMM_SELF) if self.comm.size > 1 else None
+            if own is None:
+                Kseq = self.K.createSubMatrices(rows)[0] if rows is not None else self.K
+                own = DelassusOperator(Kseq, MPI.COMM_SELF, method="selected_inverse",
+                                       petsc_options=self.petsc_options, options_prefix=self.options_prefix,
+                                       spd=self.spd, symmetrize=False)
+                own.factorize()
+                self._own = own
+            elif getattr(self, "_own_stale", False):
+                if rows is not None:
+                    self.K.createSubMatrices(rows, submats=[own.K])  # same pattern: values only
+                    # The values are copied in place without a new object state: PCSetUp would see an
+                    # unchanged matrix and keep the old factor (measured: W unchanged after K -> 2K).
+                    own.K.stateIncrease()
+                own.refactorize()
+            self._own_stale = False
+            if rows is not None:
+                rows.destroy()
+        except Exception as exc:  # noqa: BLE001 - re-raised below on every rank together
+            error = f"{type(exc).__name__}: {exc}"
+        errors = self.comm.allgather(error)
+        if any(errors):
+            self._drop_own_factor()
+            raise DelassusError("own factorisation of K for the 'owned' route failed on rank(s) "
+                                f"{[i for i, e in enumerate(errors) if e]}: {next(e for e in errors if e)}")
+        return self._own
+
+    def _drop_own_factor(self) -> None:
+        own = getattr(self, "_own", None)
+        if own is not None:
+            Kseq = own.K
+            own.destroy()
+            if Kseq is not self.K:
+                Kseq.destroy()
+        self._own = None
+
+    def _build_owned(self, H: sp.csr_matrix, HS: sp.csr_matrix, S: np.ndarray) -> np.ndarray:
+        """W from each rank's columns W[:, J] = H_S (K^-1)_{S, S_J} H_J^T on its own factor, all-gathered."""
+        m = H.shape[0]
+        size, rank = self.comm.size, self.comm.rank
+        lo, hi = (m * rank) // size, (m * (rank + 1)) // size
+        t0 = time.perf_counter()
+        own = self._own_factor()
+        self.stats["own_factorize_time"] = time.perf_counter() - t0
+        WJ = np.zeros((m, 0))
+        error = None
+        if hi > lo:
+            try:
+                HJ = H[lo:hi].tocsr()
+                C = np.unique(HJ.indices).astype(np.int64)
+                inv = own._inverse_entries(S, C)  # (|C|, |S|) = ((K^-1)_{S, C})^T
+                WJ = HS @ (HJ[:, C] @ inv).T
+            except Exception as exc:  # noqa: BLE001 - re-raised below on every rank together
+                error = f"{type(exc).__name__}: {exc}"
+        errors = self.comm.allgather(error)
+        if any(errors):
+            raise DelassusError(f"'owned' route failed: {next(e for e in errors if e)}")
+        # Column blocks in rank order: all-gather them as rows of W^T.
+        counts = np.array([((m * (r + 1)) // size - (m * r) // size) * m for r in range(size)])
+        WT = np.empty(m * m)
+        self.comm.Allgatherv(np.ascontiguousarray(np.asarray(WJ).T).ravel(), [WT, counts])
+        return WT.reshape(m, m).T if rank == 0 else None
+
     # ------------------------------------------------------------------------------------------------
     def destroy(self) -> None:
         """Free the KSP and the factor (K belongs to the caller)."""
+        self._drop_own_factor()
         if self.ksp is not None:
             self.ksp.destroy()
             self.ksp = None

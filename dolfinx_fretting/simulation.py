@@ -1265,6 +1265,10 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
             plot_run(out, scene)
         except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
             run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
+        if scene.output.xdmf:  # pyvista pictures, in a child process: a VTK failure costs only them
+            from .pictures import draw_in_subprocess
+            pictures = draw_in_subprocess(out, scene.contact.plane_point, scene.contact.plane_normal)
+            run.say(f"[{scene.name}] {pictures}")
     run.say(f"[{scene.name}] {'done' if error is None else 'FAILED'}: {summary['increments']} increments, "
             f"{summary['cycles']} cycles, P = {summary.get('normal_force', 0):.6g} N/mm, "
             f"Q = {summary.get('tangential_force', 0):.6g} N/mm, p_max = {summary.get('max_pressure', 0):.6g} MPa, "

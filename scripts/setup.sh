@@ -1,20 +1,23 @@
 #!/usr/bin/env bash
 # Set up everything dolfinx_fretting needs on Debian bookworm (run as root), idempotently.
 #
-#   * Debian packages: DOLFINx 0.5.2 (python3-dolfinx), gmsh, h5py, OpenBLAS.
+#   * Debian packages: DOLFINx 0.5.2 (python3-dolfinx), gmsh, h5py, OpenBLAS; libegl1 and libgl1-mesa-dri,
+#     with which VTK's wheel renders the pyvista pictures off screen (EGL, Mesa's software rasteriser).
 #   * A venv (.venv) made from /usr/bin/python3 with --system-site-packages, so it sees DOLFINx.
-#   * The package in editable mode with its extras, numpy pinned to Debian's build (constraints.txt):
-#     pip would otherwise pull numpy 2.x into the venv and shadow the numpy DOLFINx is compiled against.
+#   * The package in editable mode with its extras (default: test,pictures), numpy pinned to Debian's build
+#     (constraints.txt): pip would otherwise pull numpy 2.x into the venv and shadow the numpy DOLFINx is
+#     compiled against. The pictures extra (pyvista, vtk) adds ~690 MB to the venv (vtk: 565 MB) and
+#     took 10-17 s to install here from a warm package cache.
 #
 # Quick when everything is already there: each step checks first. Used by ./tasks.sh, .ci/run and the
 # Dockerfile, so there is one copy of the install steps.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$here"
-extras=${DOLFINX_FRETTING_EXTRAS:-test}
+extras=${DOLFINX_FRETTING_EXTRAS:-test,pictures}
 
 apt_pkgs=(python3-dolfinx python3-gmsh python3-h5py python3-venv python3-pip python3-scipy libopenblas0-pthread
-          openmpi-bin git)
+          openmpi-bin git libegl1 libgl1-mesa-dri)
 missing=()
 for p in "${apt_pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -43,7 +43,7 @@ def test_routes_match_independent_solve(model):
     Y = spla.splu(Kd).solve(H.T.toarray())
     W_ref = H @ Y
     scale = np.abs(W_ref).max()
-    for route in ("columns", "block", "selected_inverse"):
+    for route in ("columns", "block", "selected_inverse", "owned"):
         W = model.problem.delassus.build(H, method=route)
         # Two direct solvers on a K with condition number ~1e5-1e7: agreement to ~1e-10 of max|W|.
         assert np.abs(W - W_ref).max() <= 1e-9 * scale, route

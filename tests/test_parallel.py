@@ -12,6 +12,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 
@@ -85,3 +86,27 @@ def test_parallel_cycle_jumps_match_serial(shared_dir):
         assert parallel[key] == pytest.approx(serial[key], rel=1e-8), key
     assert parallel["cycle_jump"]["wear_error_estimate"] == pytest.approx(serial["cycle_jump"]["wear_error_estimate"],
                                                                           rel=1e-6)
+
+
+def test_delassus_routes_agree_in_parallel():
+    from dolfinx_fretting.simulation import ContactModel
+
+    model = ContactModel(load_scene("hertz", ["geometry.contact_mesh_size=0.04", "output.xdmf=false",
+                                              "output.plots=false"]), COMM)
+    d, H = model.problem.delassus, model.contact.H
+    assert d.method == "owned"  # the default under MPI (benchmarks/results/delassus_owned_np2.md)
+    W = {r: d.build(H, method=r) for r in ("block", "selected_inverse", "owned")}
+    scale = np.abs(W["block"]).max()
+    for r in W:
+        # distributed and per-rank MUMPS factors of the same K (condition ~1e5): 1e-10 of max|W|
+        assert np.abs(W[r] - W["block"]).max() <= 1e-10 * scale, r
+        gathered = COMM.allgather(W[r])  # every rank holds the same W, bit for bit
+        assert all(np.array_equal(g, gathered[0]) for g in gathered), r
+    # K's values change (K -> 2K) and are refactorised: the owned copy follows (W -> W/2).
+    model.problem.K.scale(2.0)
+    d.refactorize()
+    W2 = d.build(H)
+    model.problem.K.scale(0.5)
+    d.refactorize()
+    assert np.abs(W2 - 0.5 * W["owned"]).max() <= 1e-10 * scale
+    model.problem.destroy()
