@@ -161,13 +161,16 @@ def read_fields(folder: str | Path, time: float | None = None) -> Fields:
                   von_mises=vm, time=t)
 
 
-def contact_surface(points: np.ndarray, position: np.ndarray, normal: np.ndarray) -> np.ndarray:
+def contact_surface(points: np.ndarray, position: np.ndarray, normal: np.ndarray,
+                    plane_point: np.ndarray | None = None) -> np.ndarray:
     """Mesh node of each contact node: the node at ``position`` along t1 nearest the plane.
 
     Args:
         points: Mesh node coordinates (N, 3).
         position: Contact node positions along the surface (the t1 coordinate; written to 10 digits).
         normal: The plane's normal (2 components), pointing into the body.
+        plane_point: A point of the plane: only nodes on the body's side of it are taken (needed when a
+            second body lies under the plane).
 
     Returns:
         Node indices, shape (len(position),).
@@ -181,6 +184,7 @@ def contact_surface(points: np.ndarray, position: np.ndarray, normal: np.ndarray
     t1 = np.array([n[1], -n[0]])
     s = points[:, :2] @ t1
     h = points[:, :2] @ n
+    p0_h = None if plane_point is None else float(np.asarray(plane_point, dtype=float)[:2] @ n)
     size = float(np.ptp(points[:, :2], axis=0).max()) or 1.0
     tol = 1e-7 * size  # positions are written with 10 significant digits
     order = np.argsort(s)
@@ -191,6 +195,10 @@ def contact_surface(points: np.ndarray, position: np.ndarray, normal: np.ndarray
         if cand.size == 0:
             raise ValueError(f"no mesh node at contact position {p:.10g} mm (along t1 = {t1.tolist()}): "
                              "the plane normal or the folder's files do not match")
+        # On the body's side of the plane: with an elastic flat under it, the flat's nodes below the plane
+        # share the positions (the flat's bottom is the lowest node there).
+        above = cand[h[cand] >= float(p0_h) - tol] if p0_h is not None else cand
+        cand = above if above.size else cand
         nodes[i] = cand[np.argmin(h[cand])]
     return nodes
 
@@ -268,17 +276,19 @@ def _scalar_bar(pl, title: str, mapper) -> None:
     """
     pl.add_scalar_bar(title=title, mapper=mapper, vertical=False, position_x=0.2, position_y=0.02,
                             width=0.6, height=0.11, title_font_size=18, label_font_size=15, n_labels=5,
-                            fmt="%.4g", color="black")
+                            fmt="%.4g", color="black", background_color="white")
     pl.scalar_bars[title].SetTextPositionToPrecedeScalarBar()
 
 
-def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | None = None):
+def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | None = None,
+                     draw_plane: bool = True):
     """The deformed-mesh picture as an off-screen pyvista Plotter (not yet rendered).
 
     Returns:
         (plotter, info): ``info`` holds ``clim`` (the colour range: min and max von Mises stress of the
         fields), ``scale`` (displacement magnification), ``zoom`` (lower and upper corners of the zoomed
-        region, deformed coordinates) and ``time``.
+        region, deformed coordinates) and ``time``. ``draw_plane``: draw the rigid plane (not when the obstacle
+        is a second, meshed body).
     """
     pv = _pyvista()
     f = read_fields(folder) if f is None else f
@@ -308,7 +318,7 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
     prof = read_profiles(folder)
     zlo, zhi = lo[:2], hi[:2]
     if prof is not None:
-        nodes = contact_surface(f.points, prof.position, n)
+        nodes = contact_surface(f.points, prof.position, n, p0)
         row = prof.index(int(round(f.time)))  # the fields' increment (time = increment number)
         loaded = prof.values["pressure"][-1 if row is None else row] > 0
         sel = nodes[loaded] if loaded.any() else nodes
@@ -344,7 +354,8 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
         actor = pl.add_mesh(grids[col], show_edges=col == 1 or not many, edge_color="#404040", line_width=0.5,
                             **mesh_kw)
         pl.add_mesh(undeformed, color="#9a9a9a", line_width=1)
-        pl.add_mesh(plane, color="black", line_width=3)
+        if draw_plane:
+            pl.add_mesh(plane, color="black", line_width=3)
         label = pl.add_text(title, position="upper_left", font_size=10, color="black")
         label.GetTextProperty().SetBackgroundColor(1.0, 1.0, 1.0)
         label.GetTextProperty().SetBackgroundOpacity(0.85)
@@ -363,7 +374,7 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
     return pl, {"clim": clim, "scale": scale, "zoom": (zlo, zhi), "time": f.time, "fields": f}
 
 
-def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None):
+def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None, plane_point=None):
     """The worn-profile picture as an off-screen pyvista Plotter, or ``None`` when nothing wore.
 
     Returns:
@@ -381,7 +392,7 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None):
             "max_wear": float(wear.max()) if wear.size else 0.0}
     if not wear.size or wear.max() <= 0:
         return None, info
-    nodes = contact_surface(f.points, prof.position, n)
+    nodes = contact_surface(f.points, prof.position, n, plane_point)
     order = np.argsort(prof.position)
     nodes, wear = nodes[order], wear[order]
     x0 = f.points[nodes, :2]
@@ -392,36 +403,44 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None):
     width = max(s_hi - s_lo, 4 * spacing) * 1.25
     # Magnify the wear so the deepest point shows as ~20 % of the worn zone's width.
     mag = nice_factor(0.2 * width / wear.max())
-    x1 = x0 + mag * wear[:, None] * n[None, :]
-    k = x0.shape[0]
-    pts = np.zeros((2 * k, 3))
-    pts[:k, :2], pts[k:, :2] = x0, x1
-    # Above the mesh drawn for scale (z towards the camera), the surfaces' lines above the band.
-    pts[:, 2] = 1e-3 * width
-    quads = np.array([[4, i, i + 1, k + i + 1, k + i] for i in range(k - 1)]).ravel()
-    band = pv.PolyData(pts, faces=quads)
-    band.point_data[WEAR_TITLE] = np.concatenate([wear, wear])
-
+    # One body: the wear gap is removed from it. Two bodies (the obstacle is a meshed flat): each loses its
+    # share k_body / (k_slave + k_master) of the gap, the cylinder upwards, the flat downwards from the
+    # plane, at the point paired with each cylinder node.
+    share = _slave_share(Path(folder)) if plane_point is not None else None
+    layers = [(x0, wear if share is None else share * wear, 1.0)]
+    if share is not None and share < 1.0:
+        p0_h = float(np.asarray(plane_point, dtype=float)[:2] @ n)
+        flat0 = x0 - ((x0 @ n) - p0_h)[:, None] * n[None, :]
+        layers.append((flat0, (1.0 - share) * wear, -1.0))
     pl = pv.Plotter(off_screen=True, window_size=[_WINDOW[0], _WINDOW[1]])
     pl.set_background("white")
-    actor = pl.add_mesh(band, scalars=WEAR_TITLE, cmap=CMAP, clim=(0.0, float(wear.max())), lighting=False,
-                        show_scalar_bar=False)
+    k = x0.shape[0]
+    quads = np.array([[4, i, i + 1, k + i + 1, k + i] for i in range(k - 1)]).ravel()
+    for surface, removed, sign in layers:
+        pts = np.zeros((2 * k, 3))
+        pts[:k, :2], pts[k:, :2] = surface, surface + sign * mag * removed[:, None] * n[None, :]
+        # Above the mesh drawn for scale (z towards the camera), the surfaces' lines above the band.
+        pts[:, 2] = 1e-3 * width
+        band = pv.PolyData(pts, faces=quads)
+        band.point_data[WEAR_TITLE] = np.concatenate([removed, removed])
+        actor = pl.add_mesh(band, scalars=WEAR_TITLE, cmap=CMAP, clim=(0.0, float(wear.max())), lighting=False,
+                            show_scalar_bar=False)
+        pl.add_mesh(pv.lines_from_points(pts[:k] + [0.0, 0.0, 1e-3 * width]), color="black", line_width=3)
+        pl.add_mesh(pv.lines_from_points(pts[k:] + [0.0, 0.0, 1e-3 * width]), color="#d62728", line_width=3)
     _scalar_bar(pl, WEAR_TITLE, actor.mapper)
-    orig = pv.lines_from_points(pts[:k] + [0.0, 0.0, 1e-3 * width])
-    worn = pv.lines_from_points(pts[k:] + [0.0, 0.0, 1e-3 * width])
-    pl.add_mesh(orig, color="black", line_width=3)
-    pl.add_mesh(worn, color="#d62728", line_width=3)
     # Key in the free band between the profile and the colour bar (the profile sits above 40 % of the height).
     pl.add_text("black: original surface", position=(40, int(0.3 * _WINDOW[1])), font_size=11, color="black")
     pl.add_text(f"red: worn surface (wear x {mag:g})", position=(40, int(0.25 * _WINDOW[1])), font_size=11,
                 color="#d62728")
     cycle = f"cycle {info['cycle']}" if info["cycle"] > 0 else "the monotonic load"
+    bodies = "" if len(layers) == 1 else (f"\nthe wear gap shared: cylinder {100 * share:.0f} % (above), "
+                                          f"flat {100 * (1 - share):.0f} % (below)")
     pl.add_text(f"Worn profile after {cycle} (increment {info['increment']}): wear x {mag:g}, "
-                f"max depth {wear.max():.3g} mm", position="upper_edge", font_size=12, color="black")
+                f"max wear gap {wear.max():.3g} mm{bodies}", position="upper_edge", font_size=12, color="black")
     c_s = 0.5 * (s_lo + s_hi)
     h0 = float((x0 @ n)[worn_zone].min())
     depth = mag * float(wear.max())
-    centre = c_s * t1 + (h0 + 0.5 * depth) * n
+    centre = c_s * t1 + (h0 + 0.5 * depth * (1.0 if len(layers) == 1 else share - (1 - share))) * n
     lo, hi = _view_2d(pl.renderer, centre, 0.5 * width, 0.9 * depth, _WINDOW[0] / _WINDOW[1])
     # The undeformed mesh around the contact for scale, below the title (top 12 % of the view).
     top = hi[1] - 0.12 * (hi[1] - lo[1])
@@ -443,6 +462,25 @@ def _plane_from_checkpoint(folder: Path) -> tuple[list[float], list[float]] | No
         return list(contact["plane_point"]), list(contact["plane_normal"])
     except Exception:  # noqa: BLE001 - no checkpoint, or one of another format: the caller says so
         return None
+
+
+def _slave_share(folder: Path) -> float | None:
+    """The cylinder's share of the wear gap when the obstacle is a meshed body (``summary.json``), else None."""
+    try:
+        summary = json.loads((folder / "summary.json").read_text())
+    except (OSError, ValueError):
+        return None
+    if not str(summary.get("obstacle", "")).startswith("elastic flat") or not summary.get("wear_k"):
+        return None
+    return float(summary.get("wear_k_slave", summary["wear_k"])) / float(summary["wear_k"])
+
+
+def _obstacle_is_a_body(folder: Path) -> bool:
+    """Whether the run's obstacle is a meshed body (``summary.json``'s ``obstacle``: an elastic flat)."""
+    try:
+        return str(json.loads((folder / "summary.json").read_text()).get("obstacle", "")).startswith("elastic flat")
+    except (OSError, ValueError):
+        return False
 
 
 def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> list[str]:
@@ -479,12 +517,13 @@ def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> l
                      + (f": the deformed picture shows increment {loaded.time:g}, the last loaded one"
                         if loaded is not None else ""))
         f = loaded if loaded is not None else f
-    pl, info = deformed_plotter(folder, plane_point, plane_normal, f)
+    two_bodies = _obstacle_is_a_body(folder)
+    pl, info = deformed_plotter(folder, plane_point, plane_normal, f, draw_plane=not two_bodies)
     pl.screenshot(str(folder / PICTURES[0]))
     pl.close()
     notes.append(f"wrote {folder / PICTURES[0]} (displacement x {info['scale']:g}, von Mises "
                  f"{info['clim'][0]:.4g}..{info['clim'][1]:.4g} MPa)")
-    pl, winfo = worn_plotter(folder, plane_normal, f)
+    pl, winfo = worn_plotter(folder, plane_normal, f, plane_point)
     if pl is None:
         notes.append(f"{PICTURES[1]} not drawn: no wear")
     else:
