@@ -35,6 +35,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from mpi4py import MPI
 
 from dolfinx_fretting.scenes import load_scene
 from dolfinx_fretting.simulation import run_scene
@@ -48,6 +49,7 @@ published_test = (2.9e-3, (0.55, 0.60))                                         
 if "CI" in os.environ:       # CI-sized: a coarse contact mesh and 100 physical cycles
     cycles, contact_mesh_size = 4, 0.02
 snapshots = sorted({c for c in (40, 200, 400, cycles) if c <= cycles})
+rank0 = MPI.COMM_WORLD.rank == 0  # under mpirun every rank runs the scene; rank 0 reads, prints and draws
 # -
 
 # Run the scene (its inputs are in `dolfinx_fretting/builtin_scenes/mccoll.toml`).
@@ -57,20 +59,13 @@ scene = load_scene("mccoll", [f"loading.cycles={cycles}", f"wear.acceleration={a
                               f"output.snapshot_cycles={snapshots}", "output.progress=false"])
 summary = run_scene(scene, out, quiet=True)
 share = summary["wear_k_master"] / summary["wear_k"]          # the flat's part of the wear gap
-print(f"{summary['cycles']} simulated cycles = {summary['equivalent_cycles']:.0f} physical, "
-      f"{summary['wall_time_s']:.0f} s; flat's max wear depth {summary['max_wear_depth_master'] * 1e3:.3f} um")
+if rank0:
+    print(f"{summary['cycles']} simulated cycles = {summary['equivalent_cycles']:.0f} physical, "
+          f"{summary['wall_time_s']:.0f} s; flat's max wear depth {summary['max_wear_depth_master'] * 1e3:.3f} um")
 
 # The flat's worn profile at each snapshot: the last increment of the cycle in `contact_profiles.csv`
 # (the wear gap, of which the flat has its share). The scar's width is where the flat has lost more than
-# 2 % of its maximum depth.
-
-with open(out / "contact_profiles.csv") as f:
-    rows = list(csv.DictReader(f))
-profiles = {}
-for c in snapshots:
-    last = max(int(r["increment"]) for r in rows if int(r["cycle"]) == c)
-    sel = [r for r in rows if int(r["increment"]) == last]
-    profiles[c] = (np.array([float(r["position"]) for r in sel]), share * np.array([float(r["wear"]) for r in sel]))
+# 2 % of its maximum depth. Rank 0 reads the finished run's files and reports.
 
 
 def scar_width(x, depth):
@@ -78,41 +73,62 @@ def scar_width(x, depth):
     return float(worn.max() - worn.min()) if worn.size else 0.0
 
 
+def flat_profiles():
+    """{snapshot cycle: (position, the flat's worn depth)} at the last increment of each snapshot cycle."""
+    with open(out / "contact_profiles.csv") as f:
+        rows = list(csv.DictReader(f))
+    profiles = {}
+    for c in snapshots:
+        last = max(int(r["increment"]) for r in rows if int(r["cycle"]) == c)
+        sel = [r for r in rows if int(r["increment"]) == last]
+        profiles[c] = (np.array([float(r["position"]) for r in sel]),
+                       share * np.array([float(r["wear"]) for r in sel]))
+    return profiles
+
+
 k, P, delta, R = summary["wear_k"], 18.5, 0.025, 6.0
-table = ["| physical cycles | flat depth here (µm) | McColl FE (µm) | wear-in asymptote, flat (µm) | scar width here (mm) |",
-         "| --- | --- | --- | --- | --- |"]
-for c in snapshots:
-    N = c * acceleration
-    x, depth = profiles[c]
-    asym = share * (3 * k * delta * P * N / np.sqrt(2 * R)) ** (2 / 3)
-    fe = f"{published_fe[N] * 1e3:.2f}" if N in published_fe else "–"
-    table.append(f"| {N} | {depth.max() * 1e3:.3f} | {fe} | {asym * 1e3:.3f} | "
-                 f"{scar_width(x, depth):.3f} |")
-table.append(f"| test (18 000) | measured {published_test[0] * 1e3:.1f} µm deep, {published_test[1][0]}–"
-             f"{published_test[1][1]} mm wide | | | |")
-print("\n".join(table))
-(out / "mccoll_table.md").write_text("\n".join(table) + "\n")
+
+
+def asymptote(N):
+    return share * (3 * k * delta * P * np.asarray(N, dtype=float) / np.sqrt(2 * R)) ** (2 / 3)
+
+
+if rank0:
+    profiles = flat_profiles()
+    table = ["| physical cycles | flat depth here (µm) | McColl FE (µm) | wear-in asymptote, flat (µm) | "
+             "scar width here (mm) |", "| --- | --- | --- | --- | --- |"]
+    for c in snapshots:
+        N = c * acceleration
+        x, depth = profiles[c]
+        fe = f"{published_fe[N] * 1e3:.2f}" if N in published_fe else "–"
+        table.append(f"| {N} | {depth.max() * 1e3:.3f} | {fe} | {asymptote(N) * 1e3:.3f} | "
+                     f"{scar_width(x, depth):.3f} |")
+    table.append(f"| test (18 000) | measured {published_test[0] * 1e3:.1f} µm deep, {published_test[1][0]}–"
+                 f"{published_test[1][1]} mm wide | | | |")
+    print("\n".join(table))
+    (out / "mccoll_table.md").write_text("\n".join(table) + "\n")
 
 # Two pictures: the flat's worn profile at the snapshots, and its depth against the number of cycles beside
 # the published values and the asymptote.
 
 # +
-fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
-for c in snapshots:
-    x, depth = profiles[c]
-    ax1.plot(x, -depth * 1e3, label=f"{c * acceleration} cycles")
-ax1.set(xlabel="x (mm)", ylabel="flat surface (µm)", title="Flat's worn profile")
-ax1.legend()
-with open(out / "cycles.csv") as f:
-    cyc = list(csv.DictReader(f))
-N = np.array([float(r["equivalent_cycles"]) for r in cyc])
-ax2.plot(N, share * np.array([float(r["max_wear_depth"]) for r in cyc]) * 1e3, label="here")
-ax2.plot(N, share * (3 * k * delta * P * N / np.sqrt(2 * R)) ** (2 / 3) * 1e3, "--", label="wear-in asymptote")
-ax2.plot(list(published_fe), [v * 1e3 for v in published_fe.values()], "s", label="McColl et al. FE")
-ax2.plot([18000], [published_test[0] * 1e3], "k*", markersize=10, label="McColl et al. test")
-ax2.set(xlabel="cycles", ylabel="flat's max wear depth (µm)", title="Wear growth")
-ax2.legend()
-fig.tight_layout()
-fig.savefig(out / "mccoll.png", dpi=120)
-print("wrote", out / "mccoll.png")
+if rank0:
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+    for c in snapshots:
+        x, depth = profiles[c]
+        ax1.plot(x, -depth * 1e3, label=f"{c * acceleration} cycles")
+    ax1.set(xlabel="x (mm)", ylabel="flat surface (µm)", title="Flat's worn profile")
+    ax1.legend()
+    with open(out / "cycles.csv") as f:
+        cyc = list(csv.DictReader(f))
+    N = np.array([float(r["equivalent_cycles"]) for r in cyc])
+    ax2.plot(N, share * np.array([float(r["max_wear_depth"]) for r in cyc]) * 1e3, label="here")
+    ax2.plot(N, asymptote(N) * 1e3, "--", label="wear-in asymptote")
+    ax2.plot(list(published_fe), [v * 1e3 for v in published_fe.values()], "s", label="McColl et al. FE")
+    ax2.plot([18000], [published_test[0] * 1e3], "k*", markersize=10, label="McColl et al. test")
+    ax2.set(xlabel="cycles", ylabel="flat's max wear depth (µm)", title="Wear growth")
+    ax2.legend()
+    fig.tight_layout()
+    fig.savefig(out / "mccoll.png", dpi=120)
+    print("wrote", out / "mccoll.png")
 # -
