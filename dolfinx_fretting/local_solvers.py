@@ -1051,17 +1051,24 @@ def _newton_direction(P: _Problem, F: np.ndarray, M: np.ndarray, rho: np.ndarray
                 J = np.einsum("aij,ajk->aik", RM, Wcc.reshape(nA, dim, idx.size)).reshape(idx.size, idx.size)
                 Jv = J.reshape(nA, dim, nA, dim)
                 Jv[np.arange(nA), :, np.arange(nA), :] += D
-                lu, piv = sla.lu_factor(J, check_finite=False)
-                u = np.abs(np.diag(lu))
-                if not u.min() > 1e-15 * u.max():
+                sol = _dense_lu_solve(J, rhs)
+                if sol is None:
                     return None
-                sol = sla.lu_solve((lu, piv), rhs, check_finite=False)
         except (RuntimeError, ValueError, np.linalg.LinAlgError):
             return None
     if not np.all(np.isfinite(sol)):
         return None
     d[idx] = sol
     return d
+
+
+def _dense_lu_solve(A: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
+    """LU solve of a dense system, or None when a pivot is below 1e-15 of the largest (numerically singular)."""
+    lu, piv = sla.lu_factor(A, check_finite=False)
+    u = np.abs(np.diag(lu))
+    if not u.min() > 1e-15 * u.max():
+        return None
+    return sla.lu_solve((lu, piv), rhs, check_finite=False)
 
 
 @dataclass
@@ -1456,11 +1463,9 @@ class _NormalProblem:
                     try:  # W_AA is SPD for an SPD W: Cholesky
                         sol = sla.cho_solve(sla.cho_factor(A, check_finite=False), rhs, check_finite=False)
                     except np.linalg.LinAlgError:
-                        lu, piv = sla.lu_factor(A, check_finite=False)
-                        u = np.abs(np.diag(lu))
-                        if not u.min() > 1e-15 * u.max():
+                        sol = _dense_lu_solve(A, rhs)
+                        if sol is None:
                             return None
-                        sol = sla.lu_solve((lu, piv), rhs, check_finite=False)
             except (RuntimeError, ValueError, np.linalg.LinAlgError):
                 return None
         if not np.all(np.isfinite(sol)):
