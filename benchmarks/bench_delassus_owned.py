@@ -42,22 +42,10 @@ sys.path.insert(0, str(HERE.parent))
 from mpi4py import MPI  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
-from bench_delassus import machine_info  # noqa: E402
+from bench_delassus import COMM, RANK0, machine_info, say, tmax  # noqa: E402,F401
 from dolfinx_fretting.compliance import DelassusOperator, _petsc_c_api  # noqa: E402
 from dolfinx_fretting.scenes import load_scene  # noqa: E402
 from dolfinx_fretting.simulation import ContactModel  # noqa: E402
-
-COMM = MPI.COMM_WORLD
-RANK0 = COMM.rank == 0
-
-
-def say(*args) -> None:
-    if RANK0:
-        print(*args, flush=True)
-
-
-def tmax(t: float) -> float:
-    return float(COMM.allreduce(t, op=MPI.MAX))
 
 
 def scene_for(case: str):
