@@ -371,16 +371,11 @@ def _half_cylinder_geometry(gmsh, R: float, h: float, a: float, t: float, cx: fl
         [outer_right, top, outer_left, -side_left, -inner_left_arc, -inner_right_arc, -side_right])])
     geo.synchronize()
 
-    def structure() -> None:
-        mesh = gmsh.model.mesh
-        for curve in (centre_right, centre_left, inner_right_arc, inner_left_arc):
-            mesh.setTransfiniteCurve(curve, n_seg + 1)
-        for curve in (side_right, side_left):
-            mesh.setTransfiniteCurve(curve, n_layers + 1)
-        if quadrilateral:
-            mesh.setTransfiniteSurface(sector, "Left", [left_a, right_a, inner_right, inner_left])
-        # Triangles stay unstructured (frontal) in the sector at size h: on structured triangles
-        # ("Left", "Alternate") the P1 nodal contact forces oscillated by 4-8 % on a Hertz contact.
+    # Triangles stay unstructured (frontal) in the sector at size h: on structured triangles
+    # ("Left", "Alternate") the P1 nodal contact forces oscillated by 4-8 % on a Hertz contact.
+    structure = _structured_sector(gmsh, (centre_right, centre_left, inner_right_arc, inner_left_arc), n_seg,
+                                   (side_right, side_left), n_layers, sector,
+                                   [left_a, right_a, inner_right, inner_left], quadrilateral)
 
     return dict(structure=structure, surfaces=[sector, rest], sector=sector, top=[top], n_points=2 * max(n_seg, n_layers) + 20,
                 surface=[centre_right, outer_right, outer_left, centre_left],
@@ -423,19 +418,30 @@ def _flat_geometry(gmsh, width: float, height: float, h: float, a: float, t: flo
         [bottom, right, top_right, -side_right, -inner_right, -inner_left, -side_left, top_left, left])])
     geo.synchronize()
 
-    def structure() -> None:
-        mesh = gmsh.model.mesh
-        for curve in (centre_right, centre_left, inner_left, inner_right):
-            mesh.setTransfiniteCurve(curve, n_seg + 1)
-        for curve in (side_left, side_right):
-            mesh.setTransfiniteCurve(curve, n_layers + 1)
-        if quadrilateral:
-            mesh.setTransfiniteSurface(sector, "Left", [p["ta_l"], p["ia_l"], p["ia_r"], p["ta_r"]])
+    structure = _structured_sector(gmsh, (centre_right, centre_left, inner_left, inner_right), n_seg,
+                                   (side_left, side_right), n_layers, sector,
+                                   [p["ta_l"], p["ia_l"], p["ia_r"], p["ta_r"]], quadrilateral)
 
     return dict(structure=structure, surfaces=[sector, rest], sector=sector, bottom=[bottom], sides=[left, right],
                 n_points=2 * max(2 * n_seg, n_layers) + 20,
                 top=[top_right, centre_right, centre_left, top_left],
                 refined_curves=[side_left, inner_left, inner_right, side_right])
+
+
+def _structured_sector(gmsh, along: Sequence[int], n_seg: int, across: Sequence[int], n_layers: int, sector: int,
+                       corners: list[int], quadrilateral: bool) -> Callable[[], None]:
+    """The structured-mesh constraints of a refined sector, to apply after the model's last synchronize:
+    ``n_seg`` equal segments on the curves ``along`` the surface, ``n_layers`` on those ``across`` it, and
+    a transfinite (structured) quadrilateral sector."""
+    def structure() -> None:
+        mesh = gmsh.model.mesh
+        for curve in along:
+            mesh.setTransfiniteCurve(curve, n_seg + 1)
+        for curve in across:
+            mesh.setTransfiniteCurve(curve, n_layers + 1)
+        if quadrilateral:
+            mesh.setTransfiniteSurface(sector, "Left", corners)
+    return structure
 
 
 def _size_field_and_mesh(gmsh, refined_curves: list[int], sectors: list[int], hs: float, Hs: float,
