@@ -7,29 +7,57 @@ with De Saxce's bipotential projection onto the Coulomb cone; the Archard law up
 import hashlib
 import os
 import sys
+import tempfile
+import warnings
 from pathlib import Path
 
 __version__ = "0.1.0"
 
+#: The modules with numba-compiled functions (the cycle loop calls into the wear and solver modules).
+_COMPILED = ("cycling.py", "local_solvers.py", "materials.py", "plasticity.py", "wear.py")
+
 
 def _numba_cache_dir() -> str:
-    """A numba cache folder keyed by the source of every compiled module of the package.
+    """A writable numba cache folder keyed by the source of every compiled module of the package.
 
     Numba revalidates a cached function against its own file only: a compiled function that calls one of
     another module (the cycle loop calls the wear update and the contact kernels) keeps its stale machine
     code when only the callee's file changes, and silently computes with the old callee. Keying the whole
-    cache on the sources of all the compiled modules makes any change start a fresh cache.
+    cache on the sources of all the compiled modules makes any change start a fresh cache. The base is the
+    user's ``NUMBA_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME`` or ``~/.cache``; an unwritable base falls
+    back to the temporary folder (numba itself would silently fall back to the unkeyed ``__pycache__``).
     """
     here = Path(__file__).resolve().parent
-    digest = hashlib.sha256()
-    for name in ("cycling.py", "local_solvers.py", "materials.py", "plasticity.py", "wear.py"):
-        digest.update((here / name).read_bytes())
-    base = os.environ.get("DOLFINX_FRETTING_NUMBA_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "dolfinx_fretting", "numba")
-    return os.path.join(base, digest.hexdigest()[:16])
+    digest = hashlib.sha256(__version__.encode())
+    for name in _COMPILED:
+        try:
+            digest.update((here / name).read_bytes())
+        except OSError:  # a trimmed install: hash what exists
+            digest.update(name.encode())
+    key = digest.hexdigest()[:16]
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "dolfinx_fretting",
+        "numba")
+    if os.path.basename(os.path.normpath(base)) == key:  # inherited from a parent process that set it
+        base = os.path.dirname(os.path.normpath(base))
+    for folder in (os.path.join(base, key),
+                   os.path.join(tempfile.gettempdir(), f"dolfinx_fretting-numba-{os.getuid()}", key)):
+        try:
+            os.makedirs(folder, exist_ok=True)
+            if os.access(folder, os.W_OK):
+                if not folder.startswith(base):
+                    warnings.warn(f"numba cache: {base} is not writable; using {folder}", RuntimeWarning,
+                                  stacklevel=3)
+                return folder
+        except OSError:
+            continue
+    return os.path.join(base, key)  # numba will say what it does with an unwritable folder
 
 
-# Before any compiled module is imported (numba reads the setting when it decorates a function).
-os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
+# Before any compiled module is imported (numba reads the setting when it decorates a function). If numba
+# is already imported, change its config only: a new NUMBA_* variable would make numba re-read all of its
+# settings from the environment and undo what the host program set in code.
 if "numba" in sys.modules:
-    sys.modules["numba"].config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+    sys.modules["numba"].config.CACHE_DIR = _numba_cache_dir()
+else:
+    os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()

@@ -179,11 +179,13 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
     coords = V.tabulate_dof_coordinates()[nodes, :gdim]
     gaps = obstacle.gap(coords)
 
-    # Point of the surface closest to the obstacle (the first point of contact), on every rank.
-    local_min = (gaps.min(), *coords[np.argmin(gaps)]) if nodes.size else (np.inf,) + (0.0,) * gdim
-    all_min = comm.allgather(local_min)
-    closest = np.array(min(all_min, key=lambda t: t[0])[1:])
+    # Point of the surface closest to the obstacle (the first point of contact), on every rank. Ties (equal
+    # gaps) go to the node nearest the plane point's foot along the plane, then the smallest coordinates, so
+    # that the window does not depend on the partition.
     frame = obstacle.frame
+    keys = [(g, float(np.linalg.norm((c - obstacle.point) @ frame[1:].T)), *c) for g, c in zip(gaps, coords)]
+    local_min = min(keys) if keys else (np.inf, np.inf) + (0.0,) * gdim
+    closest = np.array(min(comm.allgather(local_min))[2:])
     if half_width is not None:
         in_plane = (coords - closest) @ frame[1:].T
         keep = np.linalg.norm(in_plane, axis=1) <= half_width * (1 + 1e-12)
@@ -360,8 +362,8 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     frames = np.stack([tangent_frame(nv) for nv in normal])
     gaps = np.einsum("ij,ij->i", coords - P, normal)
 
-    closest = coords[np.argmin(gaps)]
     abscissa = np.einsum("ij,ij->i", coords, frames[:, 1])  # position along the master's tangent
+    closest = coords[np.lexsort((coords[:, 0], np.abs(abscissa), gaps))[0]]  # ties: nearest x = 0 (partition-free)
     keep = np.ones(gnodes.size, dtype=bool)
     if half_width is not None:
         keep = np.abs(np.einsum("ij,ij->i", coords - closest, frames[:, 1])) <= half_width * (1 + 1e-12)

@@ -154,7 +154,9 @@ def find_displacement(force: Callable[[float], float], target: float, d0: float,
                 f"{name}: prescribed value {target:.6g} cannot be reached: the contact force saturates at "
                 f"{fb + target:.6g} (for a tangential force: it must stay below mu times the normal force)")
         if evals >= max_eval:
-            break
+            raise LoadControlError(
+                f"{name}: prescribed value {target:.6g} not bracketed in {max_eval} local solves: the force "
+                f"moved from {f0 + target:.6g} to {fb + target:.6g} without crossing it")
         step *= 2.0
         a, fa = b, fb
         b = b + step

@@ -387,8 +387,9 @@ def _flat_geometry(gmsh, width: float, height: float, h: float, a: float, t: flo
     """Add a flat block ``[cx - width/2, cx + width/2] x [y_top - height, y_top]`` to the geo model.
 
     Its top face is split at ``x = cx +- a``; the refined segment gets ``2 round(a / h)`` equal pieces and a
-    sector of depth t under it has size h (structured quadrilaterals, like the half-cylinder's), so the
-    flat's contact nodes sit under the cylinder's when both use the same h and a.
+    sector of depth t under it has size h (structured quadrilaterals, like the half-cylinder's). The
+    cylinder's arc is divided by arc length, so the two bodies' contact nodes are about, not exactly, one
+    above the other (the node-to-segment pairing does not need them to match).
 
     Returns the entity tags: ``surfaces``, ``sector``, ``top``, ``bottom``, ``sides`` (curve lists),
     ``refined_curves`` and ``structure`` (as in :func:`_half_cylinder_geometry`).

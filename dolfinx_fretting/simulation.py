@@ -128,8 +128,13 @@ class ContactModel:
         #: Candidate window half-width (mm): the scene's, or automatic (see :meth:`automatic_window`);
         #: ``window_limit`` is how far it may grow (the refined zone of a half-cylinder).
         self.window_limit = g.refined_half_width if g.kind == "half_cylinder" else None
-        self.window_automatic = scene.contact.candidate_half_width is None and g.kind == "half_cylinder"
-        self.half_width = self.automatic_window() if self.window_automatic else scene.contact.candidate_half_width
+        # Elastic bodies only: an elastic-plastic body cannot grow its window (its W is not rebuilt), and
+        # plasticity widens the contact beyond the elastic Hertz estimate, so it keeps the refined zone.
+        self.window_automatic = (scene.contact.candidate_half_width is None and g.kind == "half_cylinder"
+                                 and scene.material.model == "elastic")
+        self.half_width = (self.automatic_window() if self.window_automatic else
+                           scene.contact.candidate_half_width if scene.contact.candidate_half_width is not None
+                           else self.window_limit)
         self._find_contact()
 
         t0 = time.perf_counter()
@@ -203,12 +208,20 @@ class ContactModel:
             self.q_f = self.problem.local_response(self.contact.H, self.face_load)  # allreduced: replicated
 
     def set_window(self, half_width: float) -> None:
-        """Rebuild the contact set, W and q_f for another candidate window (elastic bodies). Collective."""
+        """Rebuild the contact set, W and q_f for another candidate window (elastic bodies). Collective.
+
+        All or nothing: if the rebuild fails, the model keeps its window, contact set and W.
+        """
         if self.plastic is not None:
             raise SimulationError("the candidate window of an elastic-plastic body cannot change during a run")
+        saved = (self.half_width, self.contact, self.W, self.q_f)
         self.half_width = float(half_width)
-        self._find_contact()
-        self._contact_operators()
+        try:
+            self._find_contact()
+            self._contact_operators()
+        except Exception:
+            self.half_width, self.contact, self.W, self.q_f = saved
+            raise
 
     @property
     def n_dofs(self) -> int:
@@ -570,7 +583,7 @@ class _Run:
         raise SimulationError(
             f"{where}: the outermost contact candidates (x = {cs.abscissa[0]:.4g} .. {cs.abscissa[-1]:.4g} mm) "
             "carry load: the contact reaches the edge of the candidate window and would be truncated; widen "
-            f"contact.candidate_half_width (now {self.scene.contact.candidate_half_width} mm) and "
+            f"contact.candidate_half_width (now {model.half_width:.4g} mm) and "
             f"geometry.contact_half_width (the refined zone, now {self.scene.geometry.refined_half_width} mm)")
 
     def _check_wear_step(self, cycle: int, gw_old: np.ndarray, gw_new: np.ndarray) -> None:
@@ -975,7 +988,7 @@ class _Run:
         dn = np.full(n, lo.normal_displacement)
         dt = wave if lo.tangential_kind == "displacement" else np.zeros(n)
         s = wave if lo.tangential_kind == "pressure" else np.zeros(n)
-        result = None
+        result, new_warm = None, None
         if self.rank0:
             if not hasattr(self, "_kernel_data"):
                 from .cycling import ActivePatternCache
@@ -1005,19 +1018,23 @@ class _Run:
                           f"error {err:.3e} >= tol {sc.solver.local_tol:.1e} after {sc.solver.local_max_iter} "
                           "sweeps); raise solver.local_max_iter or loosen solver.local_tol, then resume")
             else:
-                st.r_warm = r_warm
                 result = ("ok", hist, gw, y, r_last, (out_r, out_x, out_y, out_gw, out_states) if keep else None)
+                new_warm = r_warm  # kept only once the cycle is accepted (below)
         if self.comm.size > 1:  # (a serial bcast would still pickle every array)
             result = self.comm.bcast(result, root=0)
         if result[0] == "fail":
             raise SimulationError(result[1])
         _, hist, gw, y, r_last, outs = result
         first = st.increment + 1
-        self._check_wear_step(cycle, st.gw, gw)
+        # The window's edge first (a truncated contact concentrates load and wear at the end node: grow the
+        # window rather than refuse the wear), then the wear step, as on the per-increment path.
         edge = hist[:, ROW["edge_loaded"]] > 0
         if self._window_edges_matter and edge.any():
             j = int(np.flatnonzero(edge)[0])
             self._window_error(first + j, cycle, j + 1)
+        self._check_wear_step(cycle, st.gw, gw)
+        if self.rank0:
+            st.r_warm = new_warm
         st.increment += n
         st.gw, st.y, st.r = gw, y, r_last
         st.d = np.array([dn[-1], dt[-1]])
