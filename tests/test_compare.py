@@ -21,10 +21,10 @@ import pytest
 from dolfinx_fretting.compare import (COMPARE_PICTURES, SUMMARY_FIELDS, compare_runs, default_label, load_run,
                                       read_summary_csv)
 from dolfinx_fretting.io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS
+from test_plots import assert_png as _assert_png
 
 N_NODES, N_STEPS = 15, 8
 POSITIONS = np.linspace(-0.3, 0.3, N_NODES)
-PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 OBSTACLE = "rigid plane (the flat is rigid: two deformable bodies are not modelled yet)"
 
 
@@ -101,16 +101,6 @@ def write_run(out: Path, model: str = "elastic", p0: float = 1200.0, half: float
     if with_summary:
         (out / "summary.json").write_text(json.dumps(data, indent=2))
     return data
-
-
-def _assert_png(path: Path) -> None:
-    import matplotlib.image
-
-    assert path.is_file(), path
-    assert path.read_bytes()[:8] == PNG_MAGIC, path
-    img = matplotlib.image.imread(path)
-    assert img.shape[0] > 300 and img.shape[1] > 500, (path, img.shape)
-    assert float(img[..., :3].std()) > 0.01, f"{path.name} is blank"
 
 
 def _csv(path: Path) -> list[dict[str, str]]:

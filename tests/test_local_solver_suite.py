@@ -7,13 +7,10 @@ open/stick/slip assignment, De Saxce's conditions checked directly on (r, W r + 
 solutions shipped with the shared FCLIB problems.
 """
 
-import json
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from test_fclib import FCLIB_DIR, INDEX, needs_fclib  # noqa: F401 - one place finds the FCLIB folder
 from test_local_solvers import check_complementarity, enumerate_2d, random_problem
 
 from dolfinx_fretting import fclib
@@ -24,12 +21,6 @@ NEW = ("nsgs", "newton", "auto")
 TOL = 1e-12
 SOL = dict(rtol=1e-9, atol=1e-9)  # as in test_local_solvers.py: cond(W) <= ~20, error < 1e-12
 
-FCLIB_DIR = Path(os.environ.get("DOLFINX_FRETTING_FCLIB",
-                                Path(__file__).resolve().parents[1].parent / "shared" / "fclib"))
-HAVE_FCLIB = (FCLIB_DIR / "index.json").is_file()
-needs_fclib = pytest.mark.skipif(not HAVE_FCLIB, reason=f"FCLIB problems not found in {FCLIB_DIR} "
-                                 "(set DOLFINX_FRETTING_FCLIB to the folder holding index.json)")
-INDEX = {e["name"]: e for e in json.loads((FCLIB_DIR / "index.json").read_text())} if HAVE_FCLIB else {}
 FE = sorted(n for n, e in INDEX.items() if e["kind"] == "FE-condensed")
 
 

@@ -106,7 +106,8 @@ def _csv_rows(path: Path, increment: int) -> list[dict[str, str]]:
                       key=lambda r: int(r["node"]))
 
 
-def _assert_png(path: Path) -> None:
+def assert_png(path: Path) -> None:
+    """A readable, non-blank PNG of at least 500 x 300 pixels (shared with test_compare)."""
     import matplotlib.image
 
     assert path.is_file(), path
@@ -125,7 +126,7 @@ def test_plot_run_cyclic_writes_every_picture(tmp_path, cyclic_scene):
     assert not problems, problems
     assert sorted(p.name for p in written) == sorted(["profiles.png", *CYCLIC_PICTURES])
     for name in ["profiles.png", *CYCLIC_PICTURES]:
-        _assert_png(tmp_path / name)
+        assert_png(tmp_path / name)
 
 
 def test_plot_run_monotonic_writes_only_profiles(tmp_path):
@@ -148,7 +149,7 @@ def test_plot_run_monotonic_writes_only_profiles(tmp_path):
     _write_csv(out / "cycles.csv", CYCLE_FIELDS, [])
     written = plot_run(out, scene)
     assert [p.name for p in written] == ["profiles.png"]
-    _assert_png(out / "profiles.png")
+    assert_png(out / "profiles.png")
     assert not any((out / name).exists() for name in CYCLIC_PICTURES)
 
 
@@ -183,7 +184,7 @@ def test_plot_run_never_raises_on_a_partial_folder(tmp_path, cyclic_scene, damag
             f.write("999,9,9,0,abc\n")
     written = plot_run(tmp_path, cyclic_scene)  # must not raise
     for p in written:
-        _assert_png(p)
+        assert_png(p)
     names = {p.name for p in written}
     if damage in ("empty_folder", "headers_only"):
         assert not names
