@@ -61,3 +61,8 @@ if "numba" in sys.modules:
     sys.modules["numba"].config.CACHE_DIR = _numba_cache_dir()
 else:
     os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
+
+# On the DOLFINx wheel (0.11) DOLFINx and PETSc find their MPI library only once mpi4py has loaded it
+# ("libmpi.so.12: cannot open shared object file" otherwise): load it before anything can import dolfinx, so
+# that `import dolfinx_fretting` followed by `import dolfinx` works on every stack.
+from mpi4py import MPI as _MPI  # noqa: E402,F401

@@ -122,11 +122,13 @@ class ContactSet:
 def _tributary_measure(V, facets: np.ndarray, fdim: int) -> np.ndarray:
     """Lumped boundary measure per node: assemble the integral of each P1 hat function over ``facets``."""
     import ufl
-    from dolfinx import fem, mesh as dmesh
+    from dolfinx import mesh as dmesh
     from petsc4py import PETSc
 
+    from ._dolfinx import fem, scalar_space
+
     msh = V.mesh
-    Q = fem.FunctionSpace(msh, ("Lagrange", 1))
+    Q = scalar_space(msh, "Lagrange", 1)
     tags = dmesh.meshtags(msh, fdim, facets, np.ones(facets.size, dtype=np.int32))
     ds = ufl.Measure("ds", domain=msh, subdomain_data=tags)
     b = fem.petsc.assemble_vector(fem.form(ufl.TestFunction(Q) * ds(1)))
@@ -146,7 +148,7 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
     point closest to the obstacle; with ``half_width=None`` every node of ``facets``.
 
     Args:
-        V: Vector P1 displacement space (DOLFINx 0.5 ``VectorFunctionSpace``).
+        V: Vector P1 displacement space (:func:`~dolfinx_fretting._dolfinx.vector_space`).
         facets: Local indices of the boundary facets that may touch the obstacle (sorted, unique).
         obstacle: The rigid plane.
         half_width: Window half-width (mm) around the closest point, or None.
@@ -266,6 +268,8 @@ def _boundary_segments(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
 
 def _vertex_geometry(msh, vertices: np.ndarray) -> np.ndarray:
     """Geometry node index of each topological vertex (first-order mesh)."""
+    from ._dolfinx import geometry_dofmap
+
     # Cached per mesh: the vertex -> geometry node map through the cell -> geometry dofmap.
     cache = getattr(msh, "_vertex_to_node", None)
     if cache is None:
@@ -273,9 +277,9 @@ def _vertex_geometry(msh, vertices: np.ndarray) -> np.ndarray:
         c_to_v = msh.topology.connectivity(tdim, 0)
         imap = msh.topology.index_map(0)
         cache = np.full(imap.size_local + imap.num_ghosts, -1, dtype=np.int64)
-        x_dofmap = msh.geometry.dofmap
+        x_dofmap = geometry_dofmap(msh)
         for c in range(msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts):
-            cache[c_to_v.links(c)] = x_dofmap.links(c)
+            cache[c_to_v.links(c)] = x_dofmap[c]
         msh._vertex_to_node = cache
     return cache[vertices]
 

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 import ufl
-from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from . import _dolfinx as dfx
+from ._dolfinx import fem
 from .compliance import DelassusOperator
 from .materials import LinearElastic
 from .meshes import BodyMesh
@@ -45,7 +46,7 @@ class ElasticProblem:
         self.mesh = msh
         self.comm = msh.comm
         self.gdim = msh.geometry.dim
-        self.V = fem.VectorFunctionSpace(msh, ("Lagrange", 1))
+        self.V = dfx.vector_space(msh, 1)
         fdim = msh.topology.dim - 1
 
         zero = np.zeros(self.gdim, dtype=PETSc.ScalarType)
@@ -109,7 +110,7 @@ class ElasticProblem:
         f = fem.petsc.assemble_vector(form)
         fem.petsc.apply_lifting(f, [self._a], bcs=[self.bcs])
         f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fem.petsc.set_bc(f, self.bcs)
+        dfx.set_bc(f, self.bcs)
         self._loads.append(f)
         return f
 
@@ -137,19 +138,19 @@ class ElasticProblem:
         self._rhs.set(0.0)
         self._rhs.setValues(owned, R[rstart:rend])
         self._rhs.assemble()
-        fem.petsc.set_bc(self._rhs, self.bcs)
+        dfx.set_bc(self._rhs, self.bcs)
         if load is not None and load_factor != 0.0:
             self._rhs.axpy(load_factor, load)
-        self.delassus.solve(self._rhs, self.u.vector)
+        self.delassus.solve(self._rhs, dfx.petsc_vec(self.u))
         self.u.x.scatter_forward()
         return self.u
 
     def von_mises(self) -> fem.Function:
         """Cell-wise (DG0) von Mises stress of the current displacement."""
         if not hasattr(self, "_vm"):
-            W0 = fem.FunctionSpace(self.mesh, ("DG", 0))
+            W0 = dfx.scalar_space(self.mesh, "DG", 0)
             self._vm = fem.Function(W0, name="von_mises")
-            self._vm_expr = fem.Expression(self.von_mises_expression(self.u), W0.element.interpolation_points())
+            self._vm_expr = dfx.expression(self.von_mises_expression(self.u), dfx.interpolation_points(W0))
         self._vm.interpolate(self._vm_expr)
         return self._vm
 

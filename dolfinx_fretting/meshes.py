@@ -9,7 +9,7 @@ Both builders are collective over ``comm``. The gmsh model exists on rank 0 only
 ``gmshio.model_to_mesh`` distributes the cells, so every rank gets its part of one and the same mesh
 whatever the number of ranks.
 
-Index conventions (DOLFINx 0.5.2): facet and cell indices are process-local and include ghosts;
+Index conventions (DOLFINx 0.5.2 and 0.11): facet and cell indices are process-local and include ghosts;
 geometry nodes (``mesh.geometry.x``) and the nodes (blocks) of a P1 vector space are numbered
 differently, so use :func:`boundary_nodes` for coordinates and :func:`facet_dofs` for boundary
 conditions and contact operators. In both, the owned entries come first: a local index ``i`` is owned
@@ -490,7 +490,8 @@ def _gmsh_to_dolfinx(comm: MPI.Comm, build: Callable, verbose: bool):
     own). A failure on rank 0 is broadcast before ``model_to_mesh`` so that no rank is left waiting.
     """
     import gmsh
-    from dolfinx.io import gmshio
+
+    from ._dolfinx import model_to_mesh
 
     root = 0
     error = None
@@ -511,7 +512,7 @@ def _gmsh_to_dolfinx(comm: MPI.Comm, build: Callable, verbose: bool):
     if error is not None:
         raise RuntimeError(f"mesh generation failed: {error}")
     try:
-        msh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, root, gdim=2)
+        msh, cell_tags, facet_tags = model_to_mesh(gmsh.model, comm, root, gdim=2)
     finally:
         if comm.rank == root:
             gmsh.finalize()
@@ -609,7 +610,7 @@ def boundary_nodes(body: BodyMesh, tag_name: str, owned_only: bool = False) -> n
     Returns:
         Sorted unique int32 indices.
     """
-    from dolfinx.cpp.mesh import entities_to_geometry
+    from ._dolfinx import entities_to_geometry
 
     msh = body.mesh
     fdim = msh.topology.dim - 1
@@ -617,7 +618,7 @@ def boundary_nodes(body: BodyMesh, tag_name: str, owned_only: bool = False) -> n
     msh.topology.create_connectivity(fdim, msh.topology.dim)
     if facets.size == 0:
         return np.zeros(0, dtype=np.int32)
-    nodes = np.unique(entities_to_geometry(msh._mesh, fdim, facets, False)).astype(np.int32)
+    nodes = np.unique(entities_to_geometry(msh, fdim, facets)).astype(np.int32)
     if owned_only:
         nodes = nodes[nodes < msh.geometry.index_map().size_local]
     return nodes

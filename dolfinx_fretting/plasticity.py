@@ -4,7 +4,7 @@ The constitutive update itself is :func:`dolfinx_fretting.materials.return_mappi
 this module only moves data between DOLFINx and it:
 
 1. the total strain of the current displacement is evaluated at the quadrature points with a
-   ``fem.Expression`` (DOLFINx 0.5.2 cannot interpolate into quadrature spaces);
+   ``fem.Expression`` (DOLFINx 0.5.2 cannot interpolate into quadrature spaces; 0.11 uses the same path);
 2. the return mapping runs from the *committed* state (plastic strain, cumulative plastic strain) and
    writes the trial stress and consistent tangent into quadrature functions;
 3. the residual ``F(u) = int sigma : eps(v) dx - f_ext`` and the tangent ``int eps(du) : C : eps(v) dx``
@@ -23,9 +23,10 @@ import math
 
 import numpy as np
 import ufl
-from dolfinx import fem
 from petsc4py import PETSc
 
+from . import _dolfinx as dfx
+from ._dolfinx import fem
 from .materials import J2Plasticity, return_mapping
 
 __all__ = ["PlasticState", "mandel_strain"]
@@ -63,7 +64,6 @@ class PlasticState:
     def __init__(self, V: fem.FunctionSpace, law: J2Plasticity, quadrature_degree: int = 2,
                  elastic_cells: np.ndarray | None = None):
         import basix
-        from dolfinx import cpp
 
         self.V = V
         self.law = law
@@ -72,9 +72,7 @@ class PlasticState:
         self.gdim = gdim = msh.geometry.dim
         self.comps = _in_plane(gdim)
         k = len(self.comps)
-        cell = msh.ufl_cell()
-        basix_cell = basix.cell.string_to_type(cpp.mesh.to_string(msh.topology.cell_type))
-        points, _ = basix.make_quadrature(basix_cell, quadrature_degree)
+        points, _ = basix.make_quadrature(dfx.basix_cell(msh), quadrature_degree)
         self.nq = points.shape[0]
         tdim = msh.topology.dim
         self.cells = np.arange(msh.topology.index_map(tdim).size_local, dtype=np.int32)
@@ -90,19 +88,16 @@ class PlasticState:
 
         md = {"quadrature_degree": quadrature_degree, "quadrature_scheme": "default"}
         self.dx = ufl.dx(domain=msh, metadata=md)
-        S = fem.FunctionSpace(msh, ufl.VectorElement("Quadrature", cell, degree=quadrature_degree, dim=k,
-                                                     quad_scheme="default"))
-        T = fem.FunctionSpace(msh, ufl.TensorElement("Quadrature", cell, degree=quadrature_degree, shape=(k, k),
-                                                     quad_scheme="default"))
+        S = dfx.quadrature_space(msh, quadrature_degree, (k,))
+        T = dfx.quadrature_space(msh, quadrature_degree, (k, k))
         self._stress = fem.Function(S)      # trial stress, form components
         self._tangent = fem.Function(T)     # consistent tangent, form components
         # Quadrature dofs of the owned cells, in (cell, point) order: where point j of cell c lives.
-        dm = S.dofmap.list
-        self._blocks = np.concatenate([dm.links(c) for c in self.cells]) if self.cells.size else np.zeros(0, int)
+        self._blocks = dfx.cell_dofmap(S)[self.cells].ravel()
 
         u_, v = ufl.TrialFunction(V), ufl.TestFunction(V)
         self._u = fem.Function(V)
-        self._strain_expr = fem.Expression(mandel_strain(self._u, gdim), points)
+        self._strain_expr = dfx.expression(mandel_strain(self._u, gdim), points)
         self.residual_form = fem.form(ufl.inner(self._stress, mandel_strain(v, gdim)) * self.dx)
         self.tangent_form = fem.form(ufl.inner(ufl.dot(self._tangent, mandel_strain(u_, gdim)),
                                                mandel_strain(v, gdim)) * self.dx)
@@ -120,7 +115,7 @@ class PlasticState:
     def strain(self, u: fem.Function) -> np.ndarray:
         """Total strain (n, 6) Mandel at the quadrature points of the owned cells."""
         self._u.x.array[:] = u.x.array
-        vals = self._strain_expr.eval(self.cells).reshape(-1, len(self.comps))
+        vals = dfx.eval_expression(self._strain_expr, self.mesh, self.cells).reshape(-1, len(self.comps))
         eps = np.zeros((vals.shape[0], 6))
         eps[:, self.comps] = vals
         return eps
@@ -154,7 +149,7 @@ class PlasticState:
             loc.set(0.0)
         fem.petsc.assemble_vector(b, self.residual_form)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fem.petsc.set_bc(b, bcs, scale=0.0)
+        dfx.set_bc(b, bcs, scale=0.0)
 
     def assemble_tangent(self, A: PETSc.Mat, bcs: list) -> None:
         """A <- consistent tangent of the last update (identity on Dirichlet rows). Collective."""
@@ -234,7 +229,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
         self._work = (fem.Function(V), fem.Function(V))  # u_pred and the contact correction, reused
         self._rhs = problem.K.createVecRight()
         self._z = problem.K.createVecRight()
-        self._fint = fem.petsc.create_vector(self.state.residual_form)
+        self._fint = dfx.vector_for_form(self.state.residual_form)
         self.rstart, self.rend = self._rhs.getOwnershipRange()
         self._HS = self.H[:, self.rstart:self.rend].tocsr()
         self._tangent_op = None
@@ -251,7 +246,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
         return self.comm.allreduce(self._HS @ u.x.array[:n], op=self.MPI.SUM)
 
     def _solve_into(self, op, b: PETSc.Vec, out: fem.Function) -> None:
-        op.solve(b, out.vector)
+        op.solve(b, dfx.petsc_vec(out))
         out.x.scatter_forward()
 
     def _residual(self, u: fem.Function, pressure: float) -> PETSc.Vec:
@@ -337,7 +332,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
             solved = local_solve(self._H_dot(u_pred), W)
             # u_new = u_pred + K^-1 H^T r
             self._z.getArray()[:] = self._contact_force(solved.r)
-            fem.petsc.set_bc(self._z, self.problem.bcs, scale=0.0)
+            dfx.set_bc(self._z, self.problem.bcs, scale=0.0)
             c = self._work[1]
             self._solve_into(op, self._z, c)
             u_new = c

@@ -733,9 +733,11 @@ class _Run:
         """Displacement, cell-averaged von Mises stress and equivalent plastic strain (committed state)."""
         from dolfinx import fem
 
+        from ._dolfinx import scalar_space
+
         body = self.model.plastic
         if not hasattr(self, "_dg0"):
-            Q = fem.FunctionSpace(self.model.problem.mesh, ("DG", 0))
+            Q = scalar_space(self.model.problem.mesh, "DG", 0)
             self._dg0 = (fem.Function(Q, name="von_mises"), fem.Function(Q, name="equivalent_plastic_strain"))
         vm, peq = self._dg0
         ps = body.state

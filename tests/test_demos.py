@@ -3,12 +3,13 @@
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from dolfinx_fretting._dolfinx import mpiexec
 
 DEMOS = sorted((Path(__file__).resolve().parents[1] / "demos").glob("demo_*.py"))
 ENV = dict(os.environ, CI="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
@@ -44,12 +45,11 @@ def test_demo_runs(tmp_path_factory, demo):
 
 
 @pytest.mark.mpi
-@pytest.mark.skipif(shutil.which("mpirun") is None, reason="mpirun not installed")
 @pytest.mark.parametrize("demo", DEMOS, ids=[d.stem for d in DEMOS])
 def test_demo_under_mpi_matches_serial(tmp_path_factory, demo):
     serial = _serial_run(demo, tmp_path_factory)
     folder = tmp_path_factory.mktemp(demo.stem + "_np2")
-    stdout = _run(["mpirun", "-n", "2", "--oversubscribe", sys.executable, "-m", "mpi4py", str(demo)], folder)
+    stdout = _run([*mpiexec(2), sys.executable, "-m", "mpi4py", str(demo)], folder)
     summaries = sorted(p.relative_to(serial) for p in serial.rglob("summary.json"))
     assert summaries
     for rel in summaries:

@@ -7,7 +7,6 @@ over owned entities only so that the same code gives global values under MPI.
 import json
 import math
 import os
-import shutil
 import subprocess
 import sys
 import textwrap
@@ -16,6 +15,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from dolfinx_fretting import _dolfinx as dfx
 from dolfinx_fretting import meshes
 
 R = 6.0
@@ -26,7 +26,7 @@ def _cell_polygons(msh) -> np.ndarray:
     """(owned cells, k, 2) vertex coordinates of first-order cells in boundary order."""
     tdim = msh.topology.dim
     n = msh.topology.index_map(tdim).size_local
-    dofmap = msh.geometry.dofmap.array.reshape(-1, len(msh.geometry.dofmap.links(0)))[:n]
+    dofmap = dfx.geometry_dofmap(msh)[:n]
     if dofmap.shape[1] == 4:  # DOLFINx quadrilaterals are tensor-ordered: 0 1 / 2 3
         dofmap = dofmap[:, [0, 1, 3, 2]]
     return msh.geometry.x[dofmap][:, :, :2]
@@ -44,8 +44,6 @@ def _area(msh) -> float:
 
 def _facet_segments(body, name, owned_only=True) -> np.ndarray:
     """(n, 2, 2) end points of the facets of a tag or zone (owned facets only by default)."""
-    from dolfinx.cpp.mesh import entities_to_geometry
-
     msh = body.mesh
     fdim = msh.topology.dim - 1
     facets = body.facets(name)
@@ -53,7 +51,7 @@ def _facet_segments(body, name, owned_only=True) -> np.ndarray:
         facets = facets[facets < msh.topology.index_map(fdim).size_local]
     if facets.size == 0:
         return np.zeros((0, 2, 2))
-    nodes = entities_to_geometry(msh._mesh, fdim, facets, False)
+    nodes = dfx.entities_to_geometry(msh, fdim, facets)
     return msh.geometry.x[nodes][:, :, :2]
 
 
@@ -84,7 +82,7 @@ def test_cell_type(cylinder):
     quad = cylinder.mesh.topology.cell_type == CellType.quadrilateral
     tri = cylinder.mesh.topology.cell_type == CellType.triangle
     assert quad or tri
-    assert len(cylinder.mesh.geometry.dofmap.links(0)) == (4 if quad else 3)  # first order
+    assert dfx.geometry_dofmap(cylinder.mesh).shape[1] == (4 if quad else 3)  # first order
 
 
 def test_area_is_the_inscribed_polygon(cylinder):
@@ -201,9 +199,7 @@ def test_quadrilaterals_for_awkward_sizes(args):
 
 
 def test_node_sets_agree(cylinder_fine):
-    from dolfinx import fem
-
-    V = fem.VectorFunctionSpace(cylinder_fine.mesh, ("Lagrange", 1))
+    V = dfx.vector_space(cylinder_fine.mesh, 1)
     for name in ("top", "surface", "contact_zone"):
         geo = cylinder_fine.mesh.geometry.x[meshes.boundary_nodes(cylinder_fine, name)]
         blocks = meshes.facet_dofs(V, cylinder_fine, name)
@@ -273,13 +269,12 @@ _MPI_SCRIPT = textwrap.dedent("""
     import json, sys
     sys.path.insert(0, {tests!r})
     from mpi4py import MPI
-    from dolfinx import fem
-    from dolfinx_fretting import meshes
+    from dolfinx_fretting import _dolfinx as dfx, meshes
     import test_meshes as t
 
     comm = MPI.COMM_WORLD
     body = meshes.half_cylinder(comm, 6.0, contact_mesh_size=0.02)
-    V = fem.VectorFunctionSpace(body.mesh, ("Lagrange", 1))
+    V = dfx.vector_space(body.mesh, 1)
     x = body.mesh.geometry.x
     out = dict(
         size=comm.size,
@@ -298,13 +293,12 @@ _MPI_SCRIPT = textwrap.dedent("""
 
 
 @pytest.mark.mpi
-@pytest.mark.skipif(shutil.which("mpirun") is None, reason="mpirun not installed")
 def test_half_cylinder_under_mpi(tmp_path):
     script = tmp_path / "mesh_mpi.py"
     script.write_text(_MPI_SCRIPT.format(tests=os.path.dirname(os.path.abspath(__file__))))
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OPENBLAS_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1")
-    proc = subprocess.run(["mpirun", "-n", "2", sys.executable, "-m", "mpi4py", str(script)],
+    proc = subprocess.run([*dfx.mpiexec(2), sys.executable, "-m", "mpi4py", str(script)],
                           capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     line = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]

@@ -2,12 +2,12 @@
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 
 import pytest
 
+from dolfinx_fretting._dolfinx import mpiexec
 from dolfinx_fretting.scenes import load_scene
 from dolfinx_fretting.simulation import run_scene
 
@@ -27,14 +27,13 @@ CASES = {
 
 
 @pytest.mark.mpi
-@pytest.mark.skipif(shutil.which("mpirun") is None, reason="mpirun not installed")
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_mpi_matches_serial(tmp_path, name):
     overrides = CASES[name]
     serial = run_scene(load_scene(name, overrides), tmp_path / "serial", quiet=True)
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OPENBLAS_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1")
-    cmd = ["mpirun", "-n", "2", sys.executable, "-m", "mpi4py", "-m", "dolfinx_fretting", "run", name,
+    cmd = [*mpiexec(2), sys.executable, "-m", "mpi4py", "-m", "dolfinx_fretting", "run", name,
            "--out", str(tmp_path / "mpi"), "--quiet"]
     for o in overrides:
         cmd += ["--set", o]

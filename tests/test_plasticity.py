@@ -11,13 +11,15 @@ import math
 
 import numpy as np
 import pytest
-import ufl
-from dolfinx import fem, mesh
-from mpi4py import MPI
-from petsc4py import PETSc
+from mpi4py import MPI  # before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs
 
+import ufl  # noqa: E402
+from dolfinx import fem, mesh  # noqa: E402
+from petsc4py import PETSc  # noqa: E402
+
+from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 from dolfinx_fretting.materials import J2Plasticity
-from dolfinx_fretting.plasticity import PlasticState
+from dolfinx_fretting.plasticity import PlasticState  # noqa: E402
 
 A_IN, B_OUT, E, NU, SY = 1.0, 1.3, 70e3, 0.3, 250.0
 P_E = 58.39
@@ -33,7 +35,7 @@ class Cylinder:
         x = msh.geometry.x
         r, t = x[:, 0].copy(), x[:, 1].copy()
         x[:, 0], x[:, 1] = r * np.cos(t), r * np.sin(t)
-        self.V = V = fem.VectorFunctionSpace(msh, ("Lagrange", 2))
+        self.V = V = dfx.vector_space(msh, 2)
         fdim = msh.topology.dim - 1
         tol = 1e-10
         bottom = mesh.locate_entities_boundary(msh, fdim, lambda p: np.abs(p[1]) < tol)
@@ -47,11 +49,11 @@ class Cylinder:
         v = ufl.TestFunction(V)
         f = fem.petsc.assemble_vector(fem.form(-ufl.dot(ufl.FacetNormal(msh), v) * ds(1)))
         f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fem.petsc.set_bc(f, self.bcs, scale=0.0)
+        dfx.set_bc(f, self.bcs, scale=0.0)
         self.f = f  # unit internal pressure
         self.state = PlasticState(V, law, quadrature_degree=2)
         self.u = fem.Function(V)
-        self.b = fem.petsc.create_vector(self.state.residual_form)
+        self.b = dfx.vector_for_form(self.state.residual_form)
         self.du = fem.Function(V)
         self.state.update(self.u)
         self.A = self.state.create_tangent(self.bcs)
@@ -76,7 +78,7 @@ class Cylinder:
             self.state.assemble_tangent(self.A, self.bcs)
             self.ksp.setOperators(self.A)
             self.b.scale(-1.0)
-            self.ksp.solve(self.b, self.du.vector)
+            self.ksp.solve(self.b, dfx.petsc_vec(self.du))
             self.du.x.scatter_forward()
             self.u.x.array[:] += self.du.x.array
         return -1

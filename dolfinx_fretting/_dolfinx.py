@@ -1,0 +1,226 @@
+"""The one module that knows which DOLFINx it runs on.
+
+Two stacks are tested (``./tasks.sh test``):
+
+* DOLFINx 0.5.2 from Debian bookworm (``python3-dolfinx``: petsc4py 3.18, ufl 2022.2, basix 0.5, Open MPI,
+  numpy 1.24) — the *legacy* API;
+* the current release, DOLFINx 0.11 (the ``dolfinx-solver-real`` wheel, conda-forge ``fenics-dolfinx``, the
+  DOLFINx Docker images: petsc4py 3.25, ufl 2026.1, basix 0.11, numpy 2) — the *current* API (0.10 and later
+  use the same calls; 0.6-0.9 are not tested).
+
+Every call whose spelling differs between the two goes through a function here, so the rest of the package
+never tests versions. Import order: on the wheel, ``dolfinx`` finds its MPI library only once mpi4py has
+loaded it, so this module (and the package's ``__init__``) imports ``mpi4py.MPI`` first.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+from typing import Any, Sequence
+
+import numpy as np
+from mpi4py import MPI  # first: loads libmpi for DOLFINx and PETSc (the wheel's libmpi.so.12)
+
+import basix  # noqa: E402
+import dolfinx  # noqa: E402
+import dolfinx.fem.petsc  # noqa: E402,F401  (0.11 does not import it with dolfinx.fem)
+import ufl  # noqa: E402
+from dolfinx import fem  # noqa: E402
+from dolfinx import mesh as dmesh  # noqa: E402
+from petsc4py import PETSc  # noqa: E402
+
+__all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API", "versions",
+           "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
+           "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh",
+           "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec"]
+
+#: (major, minor) of the DOLFINx in use.
+DOLFINX_VERSION: tuple[int, int] = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])  # type: ignore[assignment]
+#: True on the 0.5 API (Debian bookworm), False on 0.10 and later.
+LEGACY_API: bool = DOLFINX_VERSION < (0, 10)
+if (0, 5) < DOLFINX_VERSION < (0, 10):
+    import warnings
+
+    warnings.warn(f"DOLFINx {dolfinx.__version__} is not tested by dolfinx_fretting (tested: 0.5.2 and 0.11)",
+                  RuntimeWarning, stacklevel=2)
+
+
+def versions() -> dict[str, str]:
+    """Versions of the numerical stack in use (for run summaries and benchmark records)."""
+    return {
+        "dolfinx": dolfinx.__version__,
+        "basix": basix.__version__,
+        "ufl": ufl.__version__,
+        "petsc": ".".join(str(v) for v in PETSc.Sys.getVersion()),
+        "numpy": np.__version__,
+        "mpi": MPI.Get_library_version().strip("\x00 \n").splitlines()[0].strip(),
+        "python": sys.version.split()[0],
+    }
+
+
+# Spaces ------------------------------------------------------------------------------------------------------
+def vector_space(msh, degree: int = 1, family: str = "Lagrange") -> fem.FunctionSpace:
+    """Vector-valued space with ``gdim`` components (the displacement space).
+
+    Its dofmap is blocked (block size gdim): dof ``bs * node + component``.
+    """
+    if LEGACY_API:
+        return fem.VectorFunctionSpace(msh, (family, degree))
+    return fem.functionspace(msh, (family, degree, (msh.geometry.dim,)))
+
+
+def scalar_space(msh, family: str = "Lagrange", degree: int = 1) -> fem.FunctionSpace:
+    """Scalar space, e.g. ``("Lagrange", 1)`` or ``("DG", 0)``."""
+    if LEGACY_API:
+        return fem.FunctionSpace(msh, (family, degree))
+    return fem.functionspace(msh, (family, degree))
+
+
+def basix_cell(msh) -> "basix.CellType":
+    """The basix cell type of a (single cell type) mesh."""
+    if LEGACY_API:
+        return basix.cell.string_to_type(dolfinx.cpp.mesh.to_string(msh.topology.cell_type))
+    return msh.basix_cell()
+
+
+def quadrature_space(msh, degree: int, shape: Sequence[int]) -> fem.FunctionSpace:
+    """Quadrature space of values of ``shape`` (``(k,)`` or ``(k, k)``) at the points of the default
+    rule of ``degree`` (those of ``basix.make_quadrature(basix_cell(msh), degree)``, in that order per cell).
+
+    Forms that use its functions must integrate with ``metadata={"quadrature_degree": degree,
+    "quadrature_scheme": "default"}``. Its dofmap is blocked: block ``cell_dofmap(S)[c, j]`` holds the
+    ``prod(shape)`` values (row-major) at point j of cell c.
+    """
+    shape = tuple(int(s) for s in shape)
+    if LEGACY_API:
+        cell = msh.ufl_cell()
+        if len(shape) == 1:
+            element = ufl.VectorElement("Quadrature", cell, degree=degree, dim=shape[0], quad_scheme="default")
+        else:
+            element = ufl.TensorElement("Quadrature", cell, degree=degree, shape=shape, quad_scheme="default")
+        return fem.FunctionSpace(msh, element)
+    import basix.ufl
+
+    element = basix.ufl.quadrature_element(msh.basix_cell(), value_shape=shape, scheme="default",
+                                           degree=degree)
+    return fem.functionspace(msh, element)
+
+
+def cell_dofmap(V) -> np.ndarray:
+    """(num_cells, dofs per cell) block indices of a space's dofmap, ghost cells included."""
+    dm = V.dofmap.list
+    if LEGACY_API:  # an AdjacencyList with a constant number of links
+        n = dm.num_nodes
+        return dm.array.reshape(n, -1) if n else np.zeros((0, 0), dtype=np.int32)
+    return dm
+
+
+def geometry_dofmap(msh) -> np.ndarray:
+    """(num_cells, nodes per cell) rows of ``msh.geometry.x`` of each cell, ghost cells included."""
+    dm = msh.geometry.dofmap
+    if LEGACY_API:
+        n = dm.num_nodes
+        return dm.array.reshape(n, -1) if n else np.zeros((0, 0), dtype=np.int32)
+    return dm
+
+
+def entities_to_geometry(msh, dim: int, entities: np.ndarray) -> np.ndarray:
+    """(n, nodes per entity) geometry nodes (rows of ``msh.geometry.x``) of local mesh entities."""
+    entities = np.asarray(entities, dtype=np.int32)
+    msh.topology.create_connectivity(dim, msh.topology.dim)  # 0.11 needs it (a local operation)
+    if LEGACY_API:
+        return dolfinx.cpp.mesh.entities_to_geometry(msh._mesh, dim, entities, False)
+    return dmesh.entities_to_geometry(msh, dim, entities, False)
+
+
+# Vectors and boundary conditions ---------------------------------------------------------------------------
+def petsc_vec(u: fem.Function) -> PETSc.Vec:
+    """The PETSc vector that shares ``u``'s values (ghosted)."""
+    return u.vector if LEGACY_API else u.x.petsc_vec
+
+
+def vector_for_form(L) -> PETSc.Vec:
+    """A new (ghosted) PETSc vector laid out for the compiled linear form ``L``."""
+    if LEGACY_API:
+        return fem.petsc.create_vector(L)
+    return fem.petsc.create_vector(L.function_spaces[0])
+
+
+def set_bc(b: PETSc.Vec, bcs: list, scale: float = 1.0) -> None:
+    """Owned constrained entries of ``b`` <- ``scale`` x the boundary values."""
+    if LEGACY_API:
+        fem.petsc.set_bc(b, bcs, scale=scale)
+    else:
+        fem.petsc.set_bc(b, bcs, alpha=scale)
+
+
+# Expressions -------------------------------------------------------------------------------------------------
+def interpolation_points(V) -> np.ndarray:
+    """Reference points at which an expression is evaluated to interpolate it into ``V``."""
+    points = V.element.interpolation_points
+    return points() if callable(points) else points
+
+
+def expression(expr, points: np.ndarray) -> fem.Expression:
+    """A compiled UFL expression to evaluate at reference ``points`` (num_points, tdim)."""
+    return fem.Expression(expr, np.asarray(points))
+
+
+def eval_expression(compiled: fem.Expression, msh, cells: np.ndarray) -> np.ndarray:
+    """Values of a compiled expression in ``cells``: shape (num_cells, num_points * value_size), each row
+    point by point, value components row-major."""
+    cells = np.asarray(cells, dtype=np.int32)
+    values = compiled.eval(cells) if LEGACY_API else compiled.eval(msh, cells)
+    return values.reshape(cells.size, -1)
+
+
+# Meshes --------------------------------------------------------------------------------------------------------
+def model_to_mesh(model, comm: MPI.Comm, rank: int, gdim: int) -> tuple[Any, Any, Any]:
+    """``(mesh, cell_tags, facet_tags)`` from the gmsh model that lives on ``rank``. Collective."""
+    if LEGACY_API:
+        from dolfinx.io import gmshio
+
+        msh, cell_tags, facet_tags = gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+        return msh, cell_tags, facet_tags
+    from dolfinx.io import gmsh as dgmsh
+
+    data = dgmsh.model_to_mesh(model, comm, rank, gdim=gdim)
+    return data.mesh, data.cell_tags, data.facet_tags
+
+
+def vtk_mesh(msh, dim: int | None = None, entities: np.ndarray | None = None):
+    """(topology, cell types, points) of mesh entities for VTK/pyvista."""
+    from dolfinx import plot
+
+    if LEGACY_API:
+        return plot.create_vtk_mesh(msh, dim, entities)
+    return plot.vtk_mesh(msh, dim, entities)
+
+
+# MPI launcher ------------------------------------------------------------------------------------------------
+def mpiexec(n: int) -> list[str]:
+    """The command that starts ``n`` ranks of this Python's MPI, e.g. ``mpiexec(2) + [sys.executable, ...]``.
+
+    Open MPI (Debian's): ``mpirun -n N --oversubscribe`` (run as root it also needs
+    ``OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1`` in the environment). MPICH (the wheel's,
+    conda-forge's): the ``mpiexec`` next to this Python if there is one, else the first on ``PATH``.
+    ``DOLFINX_FRETTING_MPIEXEC`` overrides the program.
+
+    Raises:
+        FileNotFoundError: if the launcher is not found.
+    """
+    library = MPI.Get_library_version()
+    program = os.environ.get("DOLFINX_FRETTING_MPIEXEC")
+    if program is None:
+        beside = os.path.join(os.path.dirname(sys.executable), "mpiexec")
+        if "Open MPI" not in library and os.access(beside, os.X_OK):
+            program = beside
+        else:
+            program = shutil.which("mpirun" if "Open MPI" in library else "mpiexec")
+    if program is None:
+        raise FileNotFoundError(f"no MPI launcher found for {library.splitlines()[0]!r}; "
+                                "set DOLFINX_FRETTING_MPIEXEC")
+    extra = ["--oversubscribe"] if "Open MPI" in library else []
+    return [program, "-n", str(int(n)), *extra]
