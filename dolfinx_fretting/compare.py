@@ -242,7 +242,7 @@ def _cell(value: Any) -> str:
     if value is None:
         return ""
     if isinstance(value, float):
-        return repr(value)
+        return repr(float(value))  # a numpy 2 float64's repr is "np.float64(...)"
     return str(value)
 
 

@@ -295,6 +295,11 @@ def _rel(value: float | None, ref: float | None) -> float:
     return abs(value - ref) / abs(ref)
 
 
+def _trapezoid(y: np.ndarray, x: np.ndarray) -> float:
+    """Trapezoid rule (numpy 2 renamed ``trapz`` to ``trapezoid``; numpy 1.24 has only the old name)."""
+    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(x)))
+
+
 def profile_l2_error(x: np.ndarray, w: np.ndarray, x_ref: np.ndarray, w_ref: np.ndarray) -> float:
     """Relative L2 distance of two profiles sampled at different nodes.
 
@@ -307,8 +312,8 @@ def profile_l2_error(x: np.ndarray, w: np.ndarray, x_ref: np.ndarray, w_ref: np.
     grid = np.union1d(x, x_ref)
     a = np.interp(grid, x[o], w[o], left=0.0, right=0.0)
     b = np.interp(grid, x_ref[oref], w_ref[oref], left=0.0, right=0.0)
-    den = math.sqrt(np.trapz(b * b, grid))
-    num = math.sqrt(np.trapz((a - b) ** 2, grid))
+    den = math.sqrt(_trapezoid(b * b, grid))
+    num = math.sqrt(_trapezoid((a - b) ** 2, grid))
     if den == 0.0:
         return 0.0 if num == 0.0 else math.nan
     return num / den
