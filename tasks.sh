@@ -1,27 +1,80 @@
 #!/usr/bin/env bash
 # The README's two commands:  ./tasks.sh run   (main job)   and   ./tasks.sh test   (test suite).
 # Each first runs scripts/setup.sh, which installs whatever is missing and is quick otherwise.
+#
+# Two stacks: Debian's DOLFINx 0.5.2 (.venv, the default) and today's DOLFINx 0.11 from the
+# dolfinx-solver-real wheel (.venv-current). `test` runs the suite on both and fails if the second stack
+# cannot be set up; `run` and `bench` use DOLFINX_FRETTING_STACK (debian by default, or current).
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 cd "$here"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OPENBLAS_NUM_THREADS=1
+stack=${DOLFINX_FRETTING_STACK:-debian}
+case "$stack" in
+  debian|default) venv=.venv ;;
+  current) venv=.venv-current ;;
+  *) echo "DOLFINX_FRETTING_STACK=$stack: allowed debian, current" >&2; exit 2 ;;
+esac
 cmd=${1:-}
 [ $# -gt 0 ] && shift
+
+loud() {  # a message nobody can miss in a CI log
+  local line="################################################################################"
+  printf '\n%s\n# %s\n%s\n\n' "$line" "$*" "$line" >&2
+}
+
+# run_suite NAME PYTHON LAUNCHER... -- [pytest options]: the default suite, then the collective tests on 2 and 3
+# ranks (python -m mpi4py: an error on one rank aborts them all). Returns non-zero if any part failed.
+run_suite() {
+  local name=$1 python=$2 launcher=() status=0 t0=$SECONDS n
+  shift 2
+  while [ "$1" != "--" ]; do launcher+=("$1"); shift; done
+  shift
+  echo "[test] $name stack: $("$python" -c 'from mpi4py import MPI; import dolfinx; print("DOLFINx", dolfinx.__version__)' \
+    2>/dev/null || echo 'DOLFINx not importable')"
+  "$python" -m pytest -q -m "not slow" tests "$@" || status=1
+  for n in 2 3; do
+    echo "[test] $name stack, ${launcher[0]##*/} -n $n: tests/test_parallel.py"
+    "${launcher[@]}" -n "$n" "$python" -m mpi4py -m pytest -q -p no:cacheprovider tests/test_parallel.py || status=1
+  done
+  times+=("$name: $((SECONDS - t0)) s ($([ $status = 0 ] && echo passed || echo FAILED))")
+  return $status
+}
+
 case "$cmd" in
   run)
-    scripts/setup.sh
-    exec .venv/bin/dolfinx-fretting run stromberg-block --out results/stromberg-block "$@" ;;
+    scripts/setup.sh "$stack"
+    exec "$venv/bin/dolfinx-fretting" run stromberg-block --out results/stromberg-block "$@" ;;
   test)
-    scripts/setup.sh
-    .venv/bin/python -m pytest -q -m "not slow" tests "$@"
-    # The collective tests on 2 and 3 ranks (python -m mpi4py: an error on one rank aborts them all).
-    for n in 2 3; do
-      echo "[test] mpirun -n $n: tests/test_parallel.py"
-      mpirun -n "$n" --oversubscribe .venv/bin/python -m mpi4py -m pytest -q -p no:cacheprovider tests/test_parallel.py
-    done ;;
+    scripts/setup.sh debian
+    current_ready=1
+    if ! scripts/setup.sh current; then
+      current_ready=0
+      loud "The second stack (DOLFINx 0.11, .venv-current) could not be set up: its tests do NOT run." \
+           "See the [setup] messages above. This test run FAILS."
+    fi
+    # tests/test_stacks.py runs the scenes on both stacks itself: it must fail, not skip, without the second.
+    export DOLFINX_FRETTING_BOTH_STACKS=1
+    times=()
+    status=0
+    run_suite debian .venv/bin/python mpirun --oversubscribe -- "$@" || status=1
+    if [ $current_ready = 1 ]; then
+      # test_stacks.py ran above (it starts both stacks in subprocesses): not twice.
+      run_suite current .venv-current/bin/python .venv-current/bin/mpiexec -- --ignore=tests/test_stacks.py "$@" \
+        || status=1
+    else
+      times+=("current: NOT RUN (set-up failed)")
+      status=1
+    fi
+    echo "[test] wall time per stack: ${times[*]/%/;}"
+    if [ $status != 0 ]; then
+      loud "./tasks.sh test FAILED: ${times[*]/%/;}"
+    fi
+    exit $status ;;
   bench)
-    scripts/setup.sh
-    exec .venv/bin/python -m pytest -q -m slow tests "$@" ;;
+    scripts/setup.sh "$stack"
+    exec "$venv/bin/python" -m pytest -q -m slow tests "$@" ;;
   *)
-    echo "usage: ./tasks.sh run [run options] | test [pytest options] | bench" >&2; exit 2 ;;
+    echo "usage: [DOLFINX_FRETTING_STACK=debian|current] ./tasks.sh run [run options] | test [pytest options] | bench" >&2
+    exit 2 ;;
 esac
