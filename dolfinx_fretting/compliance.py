@@ -22,6 +22,15 @@ solves ``K x = b`` and the construction of the small dense W by one of three rou
     No solve is shared between ranks; each rank holds a whole factor of K (memory x ranks). The
     distributed factor is still the one used for the displacement solves.
 
+``"schur"``
+    Serial only. A second MUMPS factorisation of K, told to keep the dofs S for last (PETSc's
+    ``MatFactorSetSchurIS``, MUMPS ICNTL(19); not wrapped by petsc4py 3.18 or 3.25, so through ctypes), returns
+    the dense Schur complement S_K = K_SS - K_SR K_RR^-1 K_RS; since (K^-1)_SS = S_K^-1,
+    ``W = H_S S_K^-1 H_S^T`` by a dense Cholesky of S_K. The factorisation is kept for later builds with the
+    same S (numeric refactorisation after :meth:`refactorize`). PETSc has no distributed Schur complement for
+    MUMPS: under MPI the route is refused when the operator is made. Measured against the selected inverse
+    in ``benchmarks/results/schur.md``.
+
 ``"auto"`` picks ``"selected_inverse"`` serially and ``"owned"`` under MPI (measured fastest in each:
 ``benchmarks/results/delassus.md``, ``benchmarks/results/delassus_owned_np2.md``).
 
@@ -51,7 +60,7 @@ from petsc4py import PETSc
 __all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs", "ROUTES", "METHODS"]
 
 #: Routes that build W.
-ROUTES = ("columns", "block", "selected_inverse", "owned")
+ROUTES = ("columns", "block", "selected_inverse", "owned", "schur")
 #: Accepted values of ``method``.
 METHODS = ROUTES + ("auto",)
 
@@ -76,6 +85,14 @@ _MUMPS_HINTS = {
 
 class DelassusError(RuntimeError):
     """A PETSc or MUMPS failure while factorising K or building W."""
+
+
+def _check_route_fits(route: str, comm: MPI.Comm) -> None:
+    """Refuse, before any work, a route that cannot run on ``comm``."""
+    if route == "schur" and comm.size > 1:
+        raise ValueError(f"delassus_method = 'schur' runs serially only (this run has {comm.size} MPI ranks): "
+                         "PETSc's MUMPS interface computes no distributed Schur complement; use 'owned', "
+                         "'selected_inverse' or 'auto' under MPI")
 
 
 def check_no_constrained_dofs(H: sp.spmatrix, bc_dofs_global: np.ndarray) -> None:
@@ -159,10 +176,28 @@ def _petsc_c_api() -> ctypes.CDLL:
         if hasattr(lib, "MatMumpsGetInverse"):
             lib.MatMumpsGetInverse.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
             lib.MatMumpsGetInverse.restype = ctypes.c_int
+            # The Schur complement route (PetscInt is 32-bit in both tested PETSc builds: checked below).
+            pint = ctypes.POINTER(_PETSC_INT)
+            for name, args in (("MatFactorSetSchurIS", [ctypes.c_void_p, ctypes.c_void_p]),
+                               ("MatFactorCreateSchurComplement",
+                                [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_int)]),
+                               ("MatGetSize", [ctypes.c_void_p, pint, pint]),
+                               ("MatDenseGetLDA", [ctypes.c_void_p, pint]),
+                               ("MatDenseGetArrayRead", [ctypes.c_void_p, ctypes.POINTER(ctypes.POINTER(ctypes.c_double))]),
+                               ("MatDenseRestoreArrayRead",
+                                [ctypes.c_void_p, ctypes.POINTER(ctypes.POINTER(ctypes.c_double))]),
+                               ("MatDestroy", [ctypes.POINTER(ctypes.c_void_p)])):
+                if hasattr(lib, name):
+                    getattr(lib, name).argtypes = args
+                    getattr(lib, name).restype = ctypes.c_int
             return lib
         tried.append(f"{path} (no MatMumpsGetInverse)")
     raise DelassusError("cannot find MatMumpsGetInverse in the PETSc library used by petsc4py; tried: "
                         + "; ".join(tried))
+
+
+#: PETSc's PetscInt as a ctypes type (32 or 64 bits, as petsc4py was built).
+_PETSC_INT = ctypes.c_int64 if np.dtype(PETSc.IntType).itemsize == 8 else ctypes.c_int32
 
 
 def _petsc_error_text(ierr: int) -> str:
@@ -187,8 +222,8 @@ class DelassusOperator:
     Args:
         K: Assembled stiffness matrix (symmetric; SPD once Dirichlet conditions are applied).
         comm: Communicator of K (default: K's).
-        method: Route for :meth:`build`: ``"columns"``, ``"block"``, ``"selected_inverse"`` or
-            ``"auto"``.
+        method: Route for :meth:`build`: ``"columns"``, ``"block"``, ``"selected_inverse"``, ``"owned"``,
+            ``"schur"`` (serial only) or ``"auto"``.
         petsc_options: Options for the KSP/PC/MUMPS (without the prefix).
         options_prefix: Options prefix of the KSP.
         spd: Declare K SPD so that Cholesky uses MUMPS SYM=1 (set False for a symmetric indefinite K:
@@ -216,6 +251,7 @@ class DelassusOperator:
         if self.comm.size != K.getComm().getSize():
             raise ValueError("comm must be the communicator of K")
         self.requested_method = method
+        _check_route_fits(method, self.comm)
         if method == "auto":
             method = _AUTO_SERIAL if self.comm.size == 1 else _AUTO_PARALLEL
         self.method: str = method
@@ -226,6 +262,8 @@ class DelassusOperator:
         self.symmetrize = symmetrize
         self.factorization: str | None = None
         self.ksp: PETSc.KSP | None = None
+        #: Dofs kept for last in the factorisation (the "schur" route's own operator), else None.
+        self._schur_dofs: np.ndarray | None = None
         self.last_build_time = 0.0
         self.last_factorize_time = 0.0
         self.stats: dict[str, float | int | str] = {
@@ -290,6 +328,8 @@ class DelassusOperator:
                 # MUMPS reads the flag when the factor is created: SYM=1 (no pivoting) instead of SYM=2.
                 self.K.setOption(PETSc.Mat.Option.SPD, True)
             pc.setFactorSetUpSolverType()  # creates F so that MUMPS reads the prefixed options
+            if self._schur_dofs is not None:
+                self._set_schur_dofs(pc.getFactorMatrix())
             # A failed factorisation must not leave a PC that silently returns Inf.
             pc.setReusePreconditioner(True)
             self.ksp = ksp
@@ -308,6 +348,7 @@ class DelassusOperator:
         self._require_factor()
         t0 = time.perf_counter()
         self._own_stale = True  # K's values changed: the "owned" route refreshes its copy when next used
+        self._schur_stale = True  # and so does the "schur" route its factor
         pc = self.ksp.getPC()
         # Reuse is on so that solves never refactorise behind the caller's back; lift it for this call.
         # KSPSetUp alone returns at once on a set-up KSP: setOperators marks the operator changed, and
@@ -381,6 +422,7 @@ class DelassusOperator:
             route = _AUTO_SERIAL if self.comm.size == 1 else _AUTO_PARALLEL
         if route not in ROUTES:
             raise ValueError(f"unknown Delassus route {route!r}; choose one of {', '.join(ROUTES)}")
+        _check_route_fits(route, self.comm)
         H = sp.csr_matrix(H, dtype=np.float64)
         N = self.K.getSize()[1]
         if H.shape[1] != N:
@@ -397,6 +439,8 @@ class DelassusOperator:
                 W = self._build_selected_inverse(HS, S)
             elif route == "owned":
                 W = self._build_owned(H, HS, S)
+            elif route == "schur":
+                W = self._build_schur(HS, S)
             else:
                 Y = self._solve_columns(H, S) if route == "columns" else self._solve_block(H, S)
                 W = HS @ Y if self.comm.rank == 0 else None
@@ -633,9 +677,90 @@ class DelassusOperator:
         self.comm.Allgatherv(np.ascontiguousarray(np.asarray(WJ).T).ravel(), [WT, counts])
         return WT.reshape(m, m).T if rank == 0 else None
 
+    # Schur complement route ----------------------------------------------------------------------------
+    def _set_schur_dofs(self, F: PETSc.Mat) -> None:
+        """Tell the (not yet factorised) MUMPS factor F to keep ``self._schur_dofs`` for last."""
+        lib = _petsc_c_api()
+        if not hasattr(lib, "MatFactorSetSchurIS"):
+            raise DelassusError("this PETSc has no MatFactorSetSchurIS: the 'schur' route is not available")
+        iset = PETSc.IS().createGeneral(self._schur_dofs.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        try:
+            ierr = int(lib.MatFactorSetSchurIS(ctypes.c_void_p(F.handle), ctypes.c_void_p(iset.handle)))
+        finally:
+            iset.destroy()
+        if ierr:
+            raise DelassusError(f"MatFactorSetSchurIS failed ({_petsc_error_text(ierr)})")
+
+    def _schur_complement(self) -> np.ndarray:
+        """The dense Schur complement K_SS - K_SR K_RR^-1 K_RS of the last factorisation (a copy)."""
+        lib = _petsc_c_api()
+        F = self.factor
+        Smat = ctypes.c_void_p()
+        status = ctypes.c_int()
+        ierr = int(lib.MatFactorCreateSchurComplement(ctypes.c_void_p(F.handle), ctypes.byref(Smat),
+                                                      ctypes.byref(status)))
+        if ierr:
+            raise DelassusError(f"MatFactorCreateSchurComplement failed ({_petsc_error_text(ierr)}); "
+                                f"{self._mumps_status()}")
+        try:
+            rows, cols, lda = _PETSC_INT(), _PETSC_INT(), _PETSC_INT()
+            lib.MatGetSize(Smat, ctypes.byref(rows), ctypes.byref(cols))
+            lib.MatDenseGetLDA(Smat, ctypes.byref(lda))
+            n = int(rows.value)
+            if n != self._schur_dofs.size or int(cols.value) != n:
+                raise DelassusError(f"MUMPS returned a {n} x {cols.value} Schur complement for "
+                                    f"{self._schur_dofs.size} dofs")
+            data = ctypes.POINTER(ctypes.c_double)()
+            lib.MatDenseGetArrayRead(Smat, ctypes.byref(data))
+            try:
+                # Column-major with leading dimension lda: row j of this view is column j.
+                columns = np.ctypeslib.as_array(data, shape=(n, int(lda.value)))[:, :n].copy() if n else \
+                    np.zeros((0, 0))
+            finally:
+                lib.MatDenseRestoreArrayRead(Smat, ctypes.byref(data))
+        finally:
+            lib.MatDestroy(ctypes.byref(Smat))
+        return columns.T
+
+    def _schur_factor(self, S: np.ndarray) -> DelassusOperator:
+        """A factorisation of K with the dofs S kept for last: made for a new S, refreshed numerically
+        after :meth:`refactorize`, else reused."""
+        op = getattr(self, "_schur", None)
+        if op is not None and not np.array_equal(op._schur_dofs, S):
+            op.destroy()
+            op = self._schur = None
+        if op is None:
+            op = DelassusOperator(self.K, self.comm, method="selected_inverse", petsc_options=self.petsc_options,
+                                  options_prefix=self.options_prefix, spd=self.spd, symmetrize=False)
+            op._schur_dofs = np.asarray(S, dtype=np.int64).copy()
+            op.factorize()
+            self._schur = op
+        elif getattr(self, "_schur_stale", False):
+            op.refactorize()
+        self._schur_stale = False
+        self.stats["schur_factorize_time"] = op.last_factorize_time
+        return op
+
+    def _build_schur(self, HS: sp.csr_matrix, S: np.ndarray) -> np.ndarray:
+        """W = H_S S_K^-1 H_S^T, S_K the Schur complement of K on the dofs S (serial)."""
+        import scipy.linalg as sla
+
+        SK = self._schur_factor(S)._schur_complement()
+        self.stats["schur_size"] = int(SK.shape[0])
+        try:
+            cho = sla.cho_factor(0.5 * (SK + SK.T), lower=True)
+        except np.linalg.LinAlgError as exc:
+            raise DelassusError(f"the Schur complement of K on the {S.size} contact dofs is not positive "
+                                f"definite ({exc}): is K constrained against rigid-body motion?") from exc
+        return HS @ sla.cho_solve(cho, HS.T.toarray())
+
     # ------------------------------------------------------------------------------------------------
     def destroy(self) -> None:
         """Free the KSP and the factor (K belongs to the caller)."""
+        schur = getattr(self, "_schur", None)
+        if schur is not None:
+            schur.destroy()
+            self._schur = None
         self._drop_own_factor()
         if self.ksp is not None:
             self.ksp.destroy()

@@ -341,7 +341,7 @@ class SolverSettings(_Section):
     #: Relative tolerance on a prescribed force (force-controlled loads).
     force_tol: float = Field(1e-8, gt=0, lt=1)
     #: How W = H K^-1 H^T is built from the MUMPS factorisation.
-    delassus_method: Literal["auto", "columns", "block", "selected_inverse", "owned"] = "auto"
+    delassus_method: Literal["auto", "columns", "block", "selected_inverse", "owned", "schur"] = "auto"
     #: Run displacement- and pressure-controlled cycles in the compiled loop (``dolfinx_fretting.cycling``);
     #: false: the per-increment Python path (same results, slower; force control always uses it).
     cycle_kernel: bool = True

@@ -1,4 +1,4 @@
-"""The Delassus matrix W = H K^-1 H^T: the three MUMPS routes against an independent SciPy solve.
+"""The Delassus matrix W = H K^-1 H^T: the MUMPS routes against an independent SciPy solve.
 
 Reference: K is copied out of PETSc into SciPy and factorised by SuperLU (a different direct solver),
 and W_ref = H K^-1 H^T is formed from its solves. W must be symmetric positive definite (K is SPD once the
@@ -43,7 +43,7 @@ def test_routes_match_independent_solve(model):
     Y = spla.splu(Kd).solve(H.T.toarray())
     W_ref = H @ Y
     scale = np.abs(W_ref).max()
-    for route in ("columns", "block", "selected_inverse", "owned"):
+    for route in ("columns", "block", "selected_inverse", "owned", "schur"):
         W = model.problem.delassus.build(H, method=route)
         # Two direct solvers on a K with condition number ~1e5-1e7: agreement to ~1e-10 of max|W|.
         assert np.abs(W - W_ref).max() <= 1e-9 * scale, route
@@ -117,3 +117,28 @@ def test_refactorize_follows_new_values(model):
         op.destroy()
         for v in (b, x1, x2):
             v.destroy()
+
+
+@serial_only
+def test_schur_route_reuses_its_factor_and_follows_refactorize(model):
+    """The "schur" route keeps its own factorisation for the same contact dofs and refreshes it after K's
+    values change: W(2K) = W(K)/2 to rounding (exact arithmetic; the factor is refactorised, not rebuilt)."""
+    p = model.problem
+    H = model.contact.H
+    op = DelassusOperator(p.K, method="schur")
+    op.factorize()
+    try:
+        W1 = op.build(H)
+        own = op._schur
+        assert np.abs(op.build(H) - W1).max() == 0.0 and op._schur is own  # reused, not refactorised
+        assert own.stats["factorizations"] == 1 and own.stats["refactorizations"] == 0
+        assert op.stats["schur_size"] == np.unique(H.indices).size
+        p.K.scale(2.0)
+        op.refactorize()
+        W2 = op.build(H)
+        assert op._schur is own and own.stats["refactorizations"] == 1
+        # Two factorisations of the same K up to a factor 2: agreement to rounding of max|W|.
+        assert np.abs(W2 - 0.5 * W1).max() <= 1e-12 * np.abs(W1).max()
+    finally:
+        p.K.scale(0.5)
+        op.destroy()

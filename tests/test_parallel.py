@@ -111,3 +111,13 @@ def test_delassus_routes_agree_in_parallel():
     d.refactorize()
     assert np.abs(W2 - 0.5 * W["owned"]).max() <= 1e-10 * scale
     model.problem.destroy()
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_schur_route_is_refused_under_mpi():
+    """PETSc has no distributed MUMPS Schur complement: the route says so on every rank before any work."""
+    from dolfinx_fretting.simulation import ContactModel
+
+    scene = load_scene("stromberg-block", ["geometry.nx=4", "geometry.ny=4", "solver.delassus_method='schur'"])
+    with pytest.raises(ValueError, match=r"'schur' runs serially only \(this run has \d+ MPI ranks\)"):
+        ContactModel(scene, COMM)
