@@ -703,6 +703,11 @@ class DelassusOperator:
             raise DelassusError(f"MatFactorCreateSchurComplement failed ({_petsc_error_text(ierr)}); "
                                 f"{self._mumps_status()}")
         try:
+            # PETSc factorises (1) or inverts (2) the Schur block in place for a solve through this factor;
+            # only the unfactored block (0) is S_K. This operator never solves, so anything else is a bug.
+            if status.value != 0:
+                raise DelassusError(f"the Schur complement is no longer S_K (PETSc status {status.value}: "
+                                    "factored or inverted by a solve through the factor)")
             rows, cols, lda = _PETSC_INT(), _PETSC_INT(), _PETSC_INT()
             lib.MatGetSize(Smat, ctypes.byref(rows), ctypes.byref(cols))
             lib.MatDenseGetLDA(Smat, ctypes.byref(lda))
