@@ -56,13 +56,13 @@ find_python312() {
       echo "$cand"; return 0
     fi
   done
-  if command -v pyenv >/dev/null 2>&1; then
-    for cand in $(ls -d "$(pyenv root)"/versions/3.12*/bin/python3.12 2>/dev/null | sort -V -r); do
-      if "$cand" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 12))' >/dev/null 2>&1; then
-        echo "$cand"; return 0
-      fi
-    done
-  fi
+  local root
+  root=$(pyenv root 2>/dev/null || echo "${PYENV_ROOT:-$HOME/.pyenv}")  # pyenv's folder, on PATH or not
+  for cand in $(ls -d "$root"/versions/3.12*/bin/python3.12 2>/dev/null | sort -V -r); do
+    if "$cand" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 12))' >/dev/null 2>&1; then
+      echo "$cand"; return 0
+    fi
+  done
   return 1
 }
 
@@ -73,7 +73,7 @@ setup_current() {
     local py
     if ! py=$(find_python312); then
       echo "[setup] current stack: no Python 3.12 found (tried \$DOLFINX_FRETTING_PYTHON312, python3.12 on PATH," \
-           "pyenv's versions); the dolfinx-solver-real wheel needs Python >= 3.12" >&2
+           "pyenv's versions 3.12*); the dolfinx-solver-real wheel needs Python >= 3.12" >&2
       return 1
     fi
     echo "[setup] creating $venv from $py"
