@@ -193,7 +193,11 @@ def model_to_mesh(model, comm: MPI.Comm, rank: int, gdim: int) -> tuple[Any, Any
 
 
 def vtk_mesh(msh, dim: int | None = None, entities: np.ndarray | None = None):
-    """(topology, cell types, points) of mesh entities for VTK/pyvista."""
+    """(topology, cell types, points) of mesh entities for VTK/pyvista.
+
+    The cell types are VTK's linear ones on 0.5 (5 triangle, 9 quadrilateral) and its Lagrange cells on 0.11
+    (69, 70); pyvista draws both, with the same first-order node order.
+    """
     from dolfinx import plot
 
     if LEGACY_API:
