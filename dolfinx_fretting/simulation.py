@@ -1006,8 +1006,11 @@ class _Run:
             out_gw = np.zeros((n, cs.nc) if keep else (1, 1))
             out_states = np.zeros((n, cs.nc) if keep else (1, 1), dtype=np.int8)
             hist = np.zeros((n, N_ROW))
+            frame = self.model.obstacle.frame
+            D = np.ascontiguousarray(dn[:, None] * frame[0] + dt[:, None] * frame[1])
             done, status, err = run_increments(
-                Wc, rho, self.mu, cs.dim, cs.gap0, gw, self.model.q_f, cs.tributary, cs.abscissa, dn, dt, s, y,
+                Wc, rho, self.mu, cs.dim, cs.gap0, gw, np.ascontiguousarray(cs.rigid_modes), D,
+                self.model.q_f[None, :].copy(), s[:, None].copy(), cs.tributary, cs.abscissa, y,
                 r_last, r_warm, warm, self.k, sc.solver.local_tol, sc.solver.local_max_iter,
                 local_solvers._REFRESH, keep, out_r, out_x, out_y, out_gw, out_states, hist, active, pc.pattern,
                 pc.lu, pc.piv, pc.lu_ok, pc.counts)
