@@ -129,7 +129,9 @@ class PlasticState:
         """Return mapping from the committed state at the strain of ``u``; fills the stress and tangent
         functions used by the forms (collective only through the ghost update)."""
         eps = self.strain(u)
-        sigma, eps_p, p, C, yielded = return_mapping(self.law, eps, self.eps_p, self.p, tangent=True)
+        # The law's own update (the constitutive hook of problem.Plasticity; J2Plasticity.update is the radial
+        # return); points of a body that stays elastic use a J2 law that never yields.
+        sigma, eps_p, p, C, yielded = self.law.update(eps, self.eps_p, self.p)
         if self.elastic_points.any():
             e = self.elastic_points
             sigma[e], eps_p[e], p[e], C[e], yielded[e] = return_mapping(self._elastic_law, eps[e], self.eps_p[e],
