@@ -61,3 +61,23 @@ if "numba" in sys.modules:
     sys.modules["numba"].config.CACHE_DIR = _numba_cache_dir()
 else:
     os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
+
+
+# The public API (docs/api.md), imported on first use so that the pure NumPy/numba modules (local solvers,
+# wear, cycling) stay usable without importing DOLFINx.
+_API = {
+    "RigidPlane": "contact", "ElasticBody": "contact", "Contact": "contact",
+    "FrettingProblem": "problem", "ContactState": "problem", "IncrementResult": "problem",
+    "CyclePath": "problem", "CycleResult": "problem", "Archard": "problem", "Displacement": "problem",
+    "Force": "problem", "LocalSolver": "problem", "Plasticity": "problem", "ConvergenceError": "problem",
+    "J2Plasticity": "materials",
+}
+__all__ = sorted(_API)
+
+
+def __getattr__(name: str):
+    if name in _API:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_API[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

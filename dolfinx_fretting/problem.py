@@ -226,7 +226,9 @@ class ContactState:
         wear_gap: Wear gap per contact (length).
         obstacle: Obstacle displacement in the obstacle frame (approach along n, then t1[, t2]).
         targets: The last increment's prescribed values per obstacle component (the displacement, or the force
-            where it was force controlled): where a cut increment's sub-steps start from.
+            where it was force controlled): what a component not given to :meth:`FrettingProblem.solve` keeps,
+            and where a cut increment's sub-steps start from.
+        force_controlled: Which components of ``targets`` are forces.
         load_factors: Factor of each named load and Dirichlet data set (:attr:`FrettingProblem.load_names`).
         increment: Increments committed.
         dissipated_energy: Frictional energy dissipated so far.
@@ -245,6 +247,7 @@ class ContactState:
     obstacle: np.ndarray
     load_factors: np.ndarray
     targets: np.ndarray | None = None
+    force_controlled: np.ndarray | None = None
     increment: int = 0
     dissipated_energy: float = 0.0
     local_iterations: int = 0
@@ -266,6 +269,7 @@ class IncrementResult:
     in_cycle: bool
     iterations: int
     targets: np.ndarray
+    force_controlled: np.ndarray
     error: float
     local_solves: int
     newton: dict[str, Any] | None = None
@@ -555,7 +559,7 @@ class FrettingProblem:
             plastic = PlasticHistory(np.zeros_like(self.body.u.x.array), np.zeros_like(st.sigma),
                                      np.zeros_like(st.eps_p), np.zeros_like(st.p))
         return ContactState(np.zeros(m), y, np.zeros(m), np.zeros(cs.nc), np.zeros(cs.dim), factors,
-                            targets=np.zeros(cs.dim), plastic=plastic)
+                            targets=np.zeros(cs.dim), force_controlled=np.zeros(cs.dim, dtype=bool), plastic=plastic)
 
     def _q(self, d: np.ndarray, factors: np.ndarray, y_prev: np.ndarray, gw: np.ndarray,
            q_body: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -585,9 +589,10 @@ class FrettingProblem:
         Args:
             state: The committed state to start from.
             normal: Obstacle approach along n (a float or :class:`Displacement`), or :class:`Force` on the body
-                along n; None keeps the state's approach.
+                along n; None keeps the state's prescribed value (the approach, or the force if the last
+                increment prescribed one).
             tangential: Obstacle motion along t1 (2D) or (t1, t2) (3D), or :class:`Force` components; None
-                keeps the state's position.
+                keeps the state's prescribed values likewise.
             loads: Factors of named loads and prescribed Dirichlet data; names not given keep their factors.
             in_cycle: The increment belongs to a load cycle (the wear law's acceleration applies at commit).
 
@@ -606,8 +611,9 @@ class FrettingProblem:
 
     def _targets(self, state: ContactState, normal, tangential) -> tuple[np.ndarray, np.ndarray]:
         dim = self.dim
-        targets = state.obstacle.astype(float).copy()
-        controlled = np.zeros(dim, dtype=bool)
+        targets = (state.targets if state.targets is not None else state.obstacle).astype(float).copy()
+        controlled = (state.force_controlled.copy() if state.force_controlled is not None
+                      else np.zeros(dim, dtype=bool))
 
         def parse(item, comps: list[int], name: str):
             if item is None:
@@ -698,7 +704,7 @@ class FrettingProblem:
         res = last["res"]
         y = Wm @ res.r + last["q_abs"]
         return IncrementResult(res.r.copy(), res.x.copy(), y, last["d"].copy(), factors.copy(), False,
-                               count["iterations"], targets.copy(), res.error, count["solves"])
+                               count["iterations"], targets.copy(), controlled.copy(), res.error, count["solves"])
 
     def _plastic_solve(self, state: ContactState, targets: np.ndarray, controlled: np.ndarray,
                        factors: np.ndarray, in_cycle: bool) -> IncrementResult:
@@ -789,7 +795,7 @@ class FrettingProblem:
                        obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
                        dissipated_energy=state.dissipated_energy + row[ROW["dissipated_energy"]],
                        local_iterations=state.local_iterations + result.iterations, record=record, status=states,
-                       targets=result.targets,
+                       targets=result.targets, force_controlled=result.force_controlled,
                        plastic=result.plastic if result.plastic is not None else state.plastic)
 
     def _k(self, in_cycle: bool) -> float:
@@ -896,8 +902,11 @@ class FrettingProblem:
         """
         n = path.increments
         dim = self.dim
-        obstacle = np.tile(state.obstacle.astype(float), (n, 1))
-        forced = np.zeros(dim, dtype=bool)
+        # Components the path does not give keep the state's prescribed values (displacements or forces).
+        held = state.targets if state.targets is not None else state.obstacle
+        obstacle = np.tile(held.astype(float), (n, 1))
+        forced = (state.force_controlled.copy() if state.force_controlled is not None
+                  else np.zeros(dim, dtype=bool))
         for item, comps in ((path.normal, [0]), (path.tangential, list(range(1, dim)))):
             if item is None:
                 continue
@@ -1013,7 +1022,8 @@ class FrettingProblem:
                        yielded_points=np.zeros(n, dtype=int))
         slip, status = (outs[1][-1].copy(), outs[4][-1].copy()) if keep else (outs[0][-1].copy(), outs[1][-1].copy())
         final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=gw, obstacle=obstacle[-1].copy(),
-                        targets=obstacle[-1].copy(), load_factors=factors[-1].copy(), increment=state.increment + n,
+                        targets=obstacle[-1].copy(), force_controlled=np.zeros(dim, dtype=bool),
+                        load_factors=factors[-1].copy(), increment=state.increment + n,
                         dissipated_energy=state.dissipated_energy + float(hist[:, ROW["dissipated_energy"]].sum()),
                         local_iterations=state.local_iterations + int(hist[:, nf].sum()),
                         record={k: float(records[k][-1]) for k in ROW_FIELDS},
@@ -1137,6 +1147,9 @@ class FrettingProblem:
             arrays = {k: getattr(state, k) for k in self._ARRAYS}
             arrays["status"] = state.status if state.status is not None else np.zeros(0, np.int8)
             arrays["warm"] = state.warm if state.warm is not None else np.zeros(0)
+            arrays["targets"] = state.targets if state.targets is not None else state.obstacle
+            arrays["force_controlled"] = (state.force_controlled if state.force_controlled is not None
+                                          else np.zeros(self.dim, dtype=bool))
             for i, parts in enumerate(plastic or []):
                 for name, a in zip(("u", "sigma", "eps_p", "p"), parts):
                     arrays[f"plastic_{name}_{i}"] = a
@@ -1179,6 +1192,7 @@ class FrettingProblem:
                              dissipated_energy=float(info["dissipated_energy"]),
                              local_iterations=int(info["local_iterations"]), record=info["record"],
                              status=data["status"].copy() if data["status"].size else None, warm=warm,
+                             targets=data["targets"].copy(), force_controlled=data["force_controlled"].copy(),
                              plastic=plastic)
         return state, info["meta"]
 
