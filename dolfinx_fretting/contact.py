@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from mpi4py import MPI
 
 __all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "find_candidates", "find_pairs", "tangent_frame",
            "constrained_dofs"]
@@ -180,11 +181,15 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
     coords = V.tabulate_dof_coordinates()[nodes, :gdim]
     gaps = obstacle.gap(coords)
 
-    # Point of the surface closest to the obstacle (the first point of contact), on every rank. Ties (equal
-    # gaps) go to the node nearest the plane point's foot along the plane, then the smallest coordinates, so
-    # that the window does not depend on the partition.
+    # Point of the surface closest to the obstacle (the first point of contact), on every rank. Ties go to
+    # the node nearest the plane point's foot along the plane, then the smallest coordinates, so that the
+    # window does not depend on the partition. Gaps within rounding of the smallest (1e-9 of the surface's
+    # extent: a flat face meshed by a generator is flat to ~1e-16 only) are ties.
     frame = obstacle.frame
-    keys = [(g, float(np.linalg.norm((c - obstacle.point) @ frame[1:].T)), *c) for g, c in zip(gaps, coords)]
+    extent = np.ptp(np.concatenate(comm.allgather(coords)), axis=0).max(initial=0.0)
+    g_min = comm.allreduce(gaps.min(initial=np.inf), op=MPI.MIN)
+    keys = [(g if g > g_min + 1e-9 * extent else g_min, float(np.linalg.norm((c - obstacle.point) @ frame[1:].T)),
+             *c) for g, c in zip(gaps, coords)]
     local_min = min(keys) if keys else (np.inf, np.inf) + (0.0,) * gdim
     closest = np.array(min(comm.allgather(local_min))[2:])
     if half_width is not None:
