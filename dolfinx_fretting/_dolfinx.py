@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["element_degree", "element_family", "value_size", "petsc_vec"]
+__all__ = ["element_degree", "element_family", "value_size", "petsc_vec", "vector_space", "scalar_space"]
 
 
 def element_degree(V) -> int:
@@ -23,3 +23,17 @@ def value_size(V) -> int:
 def petsc_vec(u):
     """The PETSc vector of a ``fem.Function``."""
     return u.vector
+
+
+def vector_space(msh, degree: int = 1):
+    """The vector Lagrange space of ``msh`` (one component per geometric dimension)."""
+    from dolfinx import fem
+
+    return fem.VectorFunctionSpace(msh, ("Lagrange", degree))
+
+
+def scalar_space(msh, family: str = "Lagrange", degree: int = 1):
+    """A scalar space of ``msh`` (``("DG", 0)`` for cell values)."""
+    from dolfinx import fem
+
+    return fem.FunctionSpace(msh, (family, degree))

@@ -17,15 +17,14 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from .wear import ROW_FIELDS
+from .problem import INCREMENT_COLUMNS
 
 __all__ = ["ResultWriter", "write_json_atomic", "HISTORY_FIELDS", "CYCLE_FIELDS", "PROFILE_FIELDS",
            "plot_profiles"]
 
 #: Columns of ``history.csv`` (one row per increment).
 HISTORY_FIELDS = ["increment", "cycle", "step", "stage", "normal_displacement", "tangential_displacement",
-                  "face_pressure", *ROW_FIELDS, "local_iterations", "local_error", "load_solves",
-                  "newton_iterations", "newton_delta_1", "newton_delta_2", "cutbacks", "yielded_points"]
+                  "face_pressure", *INCREMENT_COLUMNS]
 #: Columns of ``cycles.csv`` (one row per cycle of a cyclic run).
 CYCLE_FIELDS = ["cycle", "equivalent_cycles", "jump", "jump_bound", "jump_stability_limit", "jump_error_estimate",
                 "wear_error_estimate", "dissipated_energy", "wear_area", "max_wear_depth",

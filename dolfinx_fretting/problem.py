@@ -58,13 +58,21 @@ STATUS_NAMES = {0: "open", 1: "stick", 2: "slip"}
 #: Per-increment columns of a cycle's records (:attr:`CycleResult.records`) and of the info of
 #: :meth:`FrettingProblem.advance`: the totals of :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then the solver's
 #: counters (one declaration: the scene runner's history table reads its columns from here).
-SOLVER_COLUMNS = ("local_iterations", "local_error", "local_solves", "newton_iterations", "newton_delta_1",
+SOLVER_COLUMNS = ("local_iterations", "local_error", "load_solves", "newton_iterations", "newton_delta_1",
                   "newton_delta_2", "cutbacks", "yielded_points")
 INCREMENT_COLUMNS = ROW_FIELDS + SOLVER_COLUMNS
 
 
 class ConvergenceError(RuntimeError):
-    """An increment or cycle could not be solved; nothing of it was committed. The message says why."""
+    """An increment or cycle could not be solved; nothing of it was committed. The message says why.
+
+    Attributes:
+        step: In a cycle, the 1-based increment of the cycle that failed (None otherwise).
+    """
+
+    def __init__(self, message: str, step: int | None = None):
+        super().__init__(message)
+        self.step = step
 
 
 # Settings -------------------------------------------------------------------------------------------------
@@ -409,6 +417,11 @@ class FrettingProblem:
         if plasticity is not None and self.prescribed:
             raise ValueError("FrettingProblem: prescribed Dirichlet data are not supported with plasticity "
                              "(the Newton loop holds Dirichlet dofs at zero)")
+        import time
+
+        t0 = time.perf_counter()
+        #: Wall times (s) of the assembly, the factorisation and W (with the load responses).
+        self.timings: dict[str, float] = {}
         FrettingProblem._count += 1
         prefix = options_prefix or f"dolfinx_fretting_{FrettingProblem._count}_"
         self._form = None
@@ -423,9 +436,12 @@ class FrettingProblem:
             self.K.assemble()
             self._own_K = True
         self.all_bcs = all_bcs
+        self.timings["assemble_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
         self.delassus = DelassusOperator(self.K, self.comm, method=delassus_method,
                                          petsc_options=dict(petsc_options or {}), options_prefix=prefix)
         self.delassus.factorize()
+        self.timings["factorize_s"] = time.perf_counter() - t0
         self._vectors: list = []   # PETSc vectors of the loads (owned by this problem)
         self.load_names: list[str] = []
         base = self._dirichlet_vector(self.bcs) if self._form is not None else None
@@ -441,7 +457,9 @@ class FrettingProblem:
         #: Loads always applied at factor 1 (the values of ``bcs``), by index in :attr:`load_names`.
         self._fixed_factor = [i for i, n in enumerate(self.load_names) if n == "dirichlet values"]
         self.body = None
+        t0 = time.perf_counter()
         self._build_contact_operators()
+        self.timings["delassus_s"] = time.perf_counter() - t0
         self._u = None
         self._kernel = None
         if plasticity is not None:
@@ -669,8 +687,7 @@ class FrettingProblem:
             count["solves"] += 1
             count["iterations"] += res.iterations
             if not res.converged:
-                raise ConvergenceError(f"local solver did not converge: {res.message}; raise the local solver's "
-                                       "max_iter or loosen its tol")
+                raise ConvergenceError(f"local solver did not converge: {res.message}")
             warm[0] = res.r
             F = cs.total_force(res.r)
             last.update(res=res, d=dd.copy(), q_abs=q_abs, F=np.array([F @ frame[k] for k in range(dim)]))
@@ -872,7 +889,7 @@ class FrettingProblem:
             # The sub-increments count as one increment of the caller's path.
             new = replace(committed, record=record, increment=state.increment + 1,
                           local_iterations=state.local_iterations + local_its)
-            info = {"local_iterations": local_its, "local_error": result.error, "local_solves": result.local_solves,
+            info = {"local_iterations": local_its, "local_error": result.error, "load_solves": result.local_solves,
                     "newton_iterations": newton if result.newton is not None else 1,
                     "newton_delta_1": (result.newton or {}).get("delta_1", 0.0),
                     "newton_delta_2": (result.newton or {}).get("delta_2", 0.0), "cutbacks": cuts,
@@ -944,7 +961,7 @@ class FrettingProblem:
             try:
                 current, info = self.advance(current, normal, tangential, loads, in_cycle=True, check=check)
             except ConvergenceError as exc:
-                raise ConvergenceError(f"cycle step {j + 1}: {exc}") from None
+                raise ConvergenceError(str(exc), step=j + 1) from None
             rows.append({**current.record, **info})
             obstacle[j] = current.obstacle
             if keep:
@@ -1001,10 +1018,9 @@ class FrettingProblem:
                 out_y, out_gw, out_states, hist, active, cache.pattern, cache.lu, cache.piv, cache.lu_ok,
                 cache.counts)
             if done < n:
-                result = ("fail", f"cycle step {done + 1}: local solver did not converge "
-                          f"({'non-finite values' if status == 2 else 'max_iter reached'}, error {err:.3e} >= tol "
-                          f"{sv.tol:.1e} after {sv.max_iter} sweeps); raise the local solver's max_iter or loosen "
-                          "its tol")
+                why = "non-finite values" if status == 2 else "max_iter reached"
+                result = ("fail", f"local solver did not converge ({why}, error {err:.3e} >= tol {sv.tol:.1e} after "
+                          f"{sv.max_iter} sweeps)", done + 1)
             else:
                 outs = (out_r, out_x, out_y, out_gw, out_states) if keep else (out_x[-1:], out_states[-1:])
                 result = ("ok", hist, gw, y, r_last, outs)
@@ -1012,12 +1028,12 @@ class FrettingProblem:
         if self.comm.size > 1:  # (a serial bcast would still pickle every array)
             result = self.comm.bcast(result, root=0)
         if result[0] == "fail":
-            raise ConvergenceError(result[1])
+            raise ConvergenceError(result[1], step=result[2])
         hist, gw, y, r_last, outs = result[1:6]
         nf = len(ROW_FIELDS)
         records = {name: hist[:, i] for i, name in enumerate(ROW_FIELDS)}
         records.update(local_iterations=hist[:, nf].astype(int), local_error=hist[:, nf + 1],
-                       local_solves=np.ones(n, dtype=int), newton_iterations=np.ones(n, dtype=int),
+                       load_solves=np.ones(n, dtype=int), newton_iterations=np.ones(n, dtype=int),
                        newton_delta_1=np.zeros(n), newton_delta_2=np.zeros(n), cutbacks=np.zeros(n, dtype=int),
                        yielded_points=np.zeros(n, dtype=int))
         slip, status = (outs[1][-1].copy(), outs[4][-1].copy()) if keep else (outs[0][-1].copy(), outs[1][-1].copy())
