@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-__all__ = ["element_degree", "element_family", "value_size", "petsc_vec", "vector_space", "scalar_space"]
+__all__ = ["element_degree", "element_family", "value_size", "petsc_vec", "vector_space", "scalar_space",
+           "model_to_mesh", "entities_to_geometry"]
 
 
 def element_degree(V) -> int:
@@ -37,3 +38,18 @@ def scalar_space(msh, family: str = "Lagrange", degree: int = 1):
     from dolfinx import fem
 
     return fem.FunctionSpace(msh, (family, degree))
+
+
+def model_to_mesh(model, comm, rank: int, gdim: int):
+    """A gmsh model (on ``rank``) as ``(mesh, cell_tags, facet_tags)``. Collective."""
+    from dolfinx.io import gmshio
+
+    return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+
+
+def entities_to_geometry(msh, dim: int, entities):
+    """Geometry node indices of each entity (rows), first-order meshes."""
+    import numpy as np
+    from dolfinx import cpp
+
+    return cpp.mesh.entities_to_geometry(msh._mesh, dim, np.asarray(entities, dtype=np.int32), False)

@@ -19,10 +19,14 @@ from .contact import ElasticBody, RigidPlane
 from .meshes import BodyMesh
 from .scenes import Scene
 
-__all__ = ["SceneModel", "build_scene_model", "PRESSURE_LOAD"]
+__all__ = ["SceneModel", "build_scene_model", "read_msh", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT",
+           "BOUNDARY_PRESSURE"]
 
 #: Name of the face-pressure load of a scene (``loading.tangential_pressure``), factor in MPa.
 PRESSURE_LOAD = "face_pressure"
+#: Names of the ``[boundary]`` loads of a mesh file's scene (ramped with the preload, then held).
+BOUNDARY_DISPLACEMENT = "boundary_displacement"
+BOUNDARY_PRESSURE = "boundary_pressure"
 
 
 @dataclass
@@ -50,6 +54,8 @@ class SceneModel:
         contact_text: How the contact is modelled, for the summary's ``modelled``.
         von_mises: UFL von Mises stress of a displacement (plane strain: with sigma_zz).
         timings: Wall times of the mesh.
+        prescribed: Named sets of Dirichlet conditions with non-zero values (see ``FrettingProblem``).
+        ramped: Loads and prescribed sets whose factor ramps from 0 to 1 with the normal preload, then stays 1.
     """
 
     body: BodyMesh
@@ -71,6 +77,8 @@ class SceneModel:
     contact_text: str
     von_mises: Callable
     timings: dict[str, float] = field(default_factory=dict)
+    prescribed: dict[str, list] = field(default_factory=dict)
+    ramped: list[str] = field(default_factory=list)
 
 
 def _elasticity(scene: Scene, V, quadrature_degree: int | None):
@@ -223,6 +231,127 @@ def _plane(scene: Scene, body: BodyMesh) -> RigidPlane:
     return RigidPlane(np.array(scene.contact.plane_point), np.array(scene.contact.plane_normal))
 
 
+def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[str, int]]:
+    """A gmsh ``.msh`` file as a :class:`BodyMesh` (facet tags = its physical curves in 2D). Collective.
+
+    The file is read on rank 0; the physical names (not carried by DOLFINx's reader) are read there too and
+    broadcast. Returns the body (facet names in ``tags``) and the names of the cell groups.
+    """
+    from . import _dolfinx as dfx
+
+    import gmsh
+
+    names = failure = None
+    if comm.rank == 0:
+        gmsh.initialize()
+        gmsh.option.setNumber("General.Terminal", 0)
+        try:
+            gmsh.open(path)
+            groups = gmsh.model.getPhysicalGroups()
+            names = {dim: {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag for d, tag in groups if d == dim}
+                     for dim in (gdim - 1, gdim)}
+        except Exception as exc:  # noqa: BLE001 - gmsh raises plain Exceptions with its log
+            failure = f"geometry.path = {path!r}: gmsh cannot read it ({exc})"
+            gmsh.finalize()
+    names, failure = comm.bcast((names, failure), root=0)
+    if failure is not None:
+        raise ValueError(failure)
+    try:
+        msh, cell_tags, facet_tags = dfx.model_to_mesh(gmsh.model, comm, 0, gdim)
+    finally:
+        if comm.rank == 0:
+            gmsh.finalize()
+    if msh.geometry.dim != gdim:
+        raise ValueError(f"geometry.path = {path!r}: a {msh.geometry.dim}D mesh; the scene runner takes 2D meshes "
+                         "(3D models run through the Python API, dolfinx_fretting.FrettingProblem)")
+    body = BodyMesh(msh, facet_tags, cell_tags, dict(names[gdim - 1]), 0.0, None, {}, dict(names[gdim]))
+    return body, names[gdim]
+
+
+def _check_names(scene: Scene, facet_names: dict[str, int]) -> None:
+    """Every boundary name the scene uses must be a physical group of the file (before any work)."""
+    used = [("contact.surface", scene.contact.surface), *scene.boundary.names]
+    if scene.loading.tangential_kind == "pressure":
+        used.append(("loading.pressure_face", scene.loading.pressure_face))
+    for key, name in used:
+        if name not in facet_names:
+            raise ValueError(f"{key} = {name!r} is not a physical group of {scene.geometry.path}; the file's "
+                             f"boundary groups: {', '.join(sorted(facet_names)) or 'none'}")
+
+
+def _facet_length(V, facets: np.ndarray) -> float:
+    """Median length of the owned facets of a 2D boundary (the contact element size of a user's mesh)."""
+    msh = V.mesh
+    fdim = msh.topology.dim - 1
+    msh.topology.create_connectivity(fdim, 0)
+    owned = facets[facets < msh.topology.index_map(fdim).size_local]
+    from . import _dolfinx as dfx
+
+    nodes = dfx.entities_to_geometry(msh, fdim, owned)
+    x = msh.geometry.x
+    lengths = np.linalg.norm(x[nodes[:, 1]] - x[nodes[:, 0]], axis=1) if owned.size else np.zeros(0)
+    everything = np.concatenate(msh.comm.allgather(lengths))
+    return float(np.median(everything))
+
+
+def _file(scene: Scene, comm: MPI.Comm) -> SceneModel:
+    """The user's mesh file with boundary conditions by physical name."""
+    import ufl
+    from dolfinx import fem
+
+    g, bd = scene.geometry, scene.boundary
+    t0 = time.perf_counter()
+    body, _ = read_msh(g.path, comm)
+    _check_names(scene, body.tags)
+    mesh_s = time.perf_counter() - t0
+    V, form, von_mises, bcs, loads = _model(scene, body, list(bd.fixed))
+    gdim = body.mesh.geometry.dim
+    fdim = gdim - 1
+    for name in bd.symmetry:  # zero normal displacement on a plane face normal to a coordinate axis
+        axis = _axis_normal(V, body.facets(name), name)
+        Vi, _ = V.sub(axis).collapse()
+        dofs = fem.locate_dofs_topological((V.sub(axis), Vi), fdim, body.facets(name))
+        bcs.append(fem.dirichletbc(fem.Function(Vi), dofs, V.sub(axis)))
+    prescribed = {}
+    if bd.displacement:
+        conditions = []
+        for name, vector in bd.displacement.items():
+            value = fem.Function(V)
+            value.x.array.reshape(-1, V.dofmap.index_map_bs)[:, :gdim] = np.asarray(vector, dtype=float)
+            conditions.append(fem.dirichletbc(value, fem.locate_dofs_topological(V, fdim, body.facets(name))))
+        prescribed[BOUNDARY_DISPLACEMENT] = conditions
+    if bd.pressure:
+        ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=body.facet_tags)
+        n, v = ufl.FacetNormal(V.mesh), ufl.TestFunction(V)
+        loads[BOUNDARY_PRESSURE] = sum(-value * ufl.dot(n, v) * ds(body.tags[name]) for name, value in bd.pressure.items())
+    surface = _surface(scene, body)
+    h = _facet_length(V, body.facets(scene.contact.surface))
+    body = BodyMesh(body.mesh, body.facet_tags, body.cell_tags, body.tags, h, None, {}, body.regions)
+    return SceneModel(body, V, form, bcs, surface, _plane(scene, body), loads, h, scene.contact.candidate_half_width,
+                      None, False, False, None, None, None, False, ", against a rigid plane", von_mises,
+                      {"mesh_s": mesh_s}, prescribed, [n for n in (BOUNDARY_DISPLACEMENT, BOUNDARY_PRESSURE)
+                                                       if n in prescribed or n in loads])
+
+
+def _axis_normal(V, facets: np.ndarray, name: str) -> int:
+    """The coordinate axis normal to a plane boundary (for a roller condition on one component)."""
+    msh = V.mesh
+    fdim = msh.topology.dim - 1
+    from . import _dolfinx as dfx
+
+    owned = facets[facets < msh.topology.index_map(fdim).size_local]
+    x = msh.geometry.x[dfx.entities_to_geometry(msh, fdim, owned).ravel(), :msh.geometry.dim] if owned.size else \
+        np.zeros((0, msh.geometry.dim))
+    points = np.concatenate(msh.comm.allgather(x))
+    spread = np.ptp(points, axis=0) if points.size else np.zeros(msh.geometry.dim)
+    scale = max(spread.max(initial=0.0), 1e-300)
+    flat = np.flatnonzero(spread <= 1e-9 * scale)
+    if flat.size != 1:
+        raise ValueError(f"boundary.symmetry = {name!r}: the face is not a plane normal to a coordinate axis (its "
+                         f"extents are {spread.tolist()}); a roller on an oblique face is not supported")
+    return int(flat[0])
+
+
 _BUILDERS: dict[str, Callable[[Scene, MPI.Comm], SceneModel]] = {
-    "half_cylinder": _half_cylinder, "rectangle": _rectangle,
+    "half_cylinder": _half_cylinder, "rectangle": _rectangle, "file": _file,
 }

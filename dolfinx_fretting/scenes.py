@@ -38,7 +38,10 @@ def _range_error(key: str, value: Any, allowed: str) -> ValueError:
 class GeometrySettings(_Section):
     """Body and mesh (mm)."""
 
-    kind: Literal["half_cylinder", "rectangle"] = "half_cylinder"
+    kind: Literal["half_cylinder", "rectangle", "file"] = "half_cylinder"
+    #: ``kind = "file"``: the user's mesh, a gmsh ``.msh`` file with physical groups (names), 2D; a relative path
+    #: is taken from the scene file's folder. Boundaries are named in the ``[boundary]`` section.
+    path: str | None = None
     #: Half-cylinder radius (mm).
     radius: float = Field(6.0, gt=0)
     #: Element size in the refined contact zone (mm); the paper uses 10 µm.
@@ -61,6 +64,14 @@ class GeometrySettings(_Section):
 
     @model_validator(mode="after")
     def _sizes_fit_the_body(self) -> GeometrySettings:
+        if self.kind == "file":
+            if self.path is None:
+                raise ValueError("geometry.path (a gmsh .msh file) is required with geometry.kind = 'file'")
+            if not self.path.endswith(".msh"):
+                raise _range_error("geometry.path", self.path, "a gmsh .msh file (with physical groups)")
+        elif self.path is not None:
+            raise _range_error("geometry.path", self.path, f"unset with geometry.kind = {self.kind!r} (the mesh is "
+                               "built in); set geometry.kind = 'file' to read it")
         if self.kind == "half_cylinder":
             if self.contact_mesh_size >= self.radius:
                 raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
@@ -75,7 +86,7 @@ class GeometrySettings(_Section):
             if self.coarse_mesh_size is not None and self.coarse_mesh_size >= self.radius:
                 raise _range_error("geometry.coarse_mesh_size", self.coarse_mesh_size,
                                    f"0 < coarse_mesh_size < geometry.radius = {self.radius} mm")
-        else:
+        elif self.kind == "rectangle":
             hx, hy = self.width / self.nx, self.height / self.ny
             if min(hx, hy) <= 0 or hx > self.width or hy > self.height:  # pragma: no cover - Field bounds
                 raise _range_error("geometry.nx", self.nx, "nx, ny >= 1")
@@ -461,12 +472,34 @@ def _apply_preset(scene: Scene) -> None:
             setattr(target, name, value)  # validated on assignment (e.g. against geometry.radius)
 
 
+class BoundarySettings(_Section):
+    """Boundary conditions by physical name of the mesh file (``geometry.kind = "file"`` only).
+
+    ``fixed``: every displacement component zero; ``symmetry``: zero normal displacement on a plane face normal
+    to a coordinate axis (a roller); ``displacement``: prescribed displacement vectors (mm) and ``pressure``:
+    pressures (MPa, pushing into the body), both ramped with the normal preload and held after it.
+    """
+
+    fixed: list[str] = Field(default_factory=list)
+    symmetry: list[str] = Field(default_factory=list)
+    displacement: dict[str, list[float]] = Field(default_factory=dict)
+    pressure: dict[str, float] = Field(default_factory=dict)
+
+    @property
+    def names(self) -> list[tuple[str, str]]:
+        """(key, physical name) of every condition."""
+        return ([("boundary.fixed", n) for n in self.fixed] + [("boundary.symmetry", n) for n in self.symmetry]
+                + [("boundary.displacement", n) for n in self.displacement]
+                + [("boundary.pressure", n) for n in self.pressure])
+
+
 class Scene(_Section):
     """A whole scene; see the README for every key with its unit."""
 
     name: str = "scene"
     description: str = ""
     geometry: GeometrySettings = Field(default_factory=GeometrySettings)
+    boundary: BoundarySettings = Field(default_factory=BoundarySettings)
     material: MaterialSettings = Field(default_factory=MaterialSettings)
     contact: ContactSettings = Field(default_factory=ContactSettings)
     wear: WearSettings = Field(default_factory=WearSettings)
@@ -477,7 +510,21 @@ class Scene(_Section):
     @model_validator(mode="after")
     def _window_fits(self) -> Scene:
         g, c, lo = self.geometry, self.contact, self.loading
-        if lo.tangential_kind == "pressure":
+        if g.kind != "file" and self.boundary.names:
+            raise _range_error(self.boundary.names[0][0], self.boundary.names[0][1],
+                               "no [boundary] section with a built-in geometry (its faces are fixed by the scene); "
+                               "set geometry.kind = 'file'")
+        if g.kind == "file":
+            if not (self.boundary.fixed or self.boundary.displacement):
+                raise ValueError("boundary: a mesh file needs boundary.fixed or boundary.displacement (names of "
+                                 "its physical groups) to hold the body")
+            if c.obstacle != "rigid_plane":
+                raise _range_error("contact.obstacle", c.obstacle, "'rigid_plane' with geometry.kind = 'file'")
+            for name, vector in self.boundary.displacement.items():
+                if len(vector) != len(c.plane_normal):
+                    raise _range_error(f"boundary.displacement.{name}", vector,
+                                       f"a {len(c.plane_normal)}-vector (mm)")
+        if lo.tangential_kind == "pressure" and g.kind != "file":
             faces = ("bottom", "right", "top", "left") if g.kind == "rectangle" else ("top", "surface")
             if lo.pressure_face not in faces:
                 raise _range_error("loading.pressure_face", lo.pressure_face,
@@ -646,6 +693,11 @@ def load_scene(source: str | Path | dict[str, Any], overrides: list[str] | None 
             raise SceneError(f"{path}: not valid TOML: {exc}") from None
         label = str(path)
     data = apply_overrides(data, overrides)
+    geometry = data.get("geometry") if isinstance(data, dict) else None
+    if (not isinstance(source, dict) and isinstance(geometry, dict) and isinstance(geometry.get("path"), str)
+            and not Path(geometry["path"]).is_absolute()):
+        # A mesh file named in a scene file is found from the scene file's folder.
+        data = {**data, "geometry": {**geometry, "path": str((path.parent / geometry["path"]).resolve())}}
     try:
         return Scene.model_validate(data)
     except ValidationError as exc:

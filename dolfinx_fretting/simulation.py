@@ -80,7 +80,8 @@ class ContactModel:
         s, sv, m = self.setup, scene.solver, scene.material
         self.half_width = s.window if window is None else window
         try:
-            contact = Contact(s.V, s.surface, s.obstacle, scene.contact.mu, s.bcs, self.half_width)
+            all_bcs = s.bcs + [bc for conditions in s.prescribed.values() for bc in conditions]
+            contact = Contact(s.V, s.surface, s.obstacle, scene.contact.mu, all_bcs, self.half_width)
         except ValueError as exc:
             raise SimulationError(str(exc)) from None
         wear = None
@@ -100,7 +101,7 @@ class ContactModel:
         solver = LocalSolver(method=sv.local_method, tol=sv.local_tol, max_iter=sv.local_max_iter,
                              force_tol=sv.force_tol, compiled_cycles=sv.cycle_kernel, warm_start=sv.warm_start,
                              pattern_reuse=sv.pattern_reuse)
-        self.problem = FrettingProblem(s.form, contact, s.bcs, wear=wear, loads=s.loads,
+        self.problem = FrettingProblem(s.form, contact, s.bcs, wear=wear, loads=s.loads, prescribed=s.prescribed,
                                        petsc_options=sv.petsc_options, delassus_method=sv.delassus_method,
                                        solver=solver, plasticity=plasticity,
                                        options_prefix="dolfinx_fretting_delassus_")
@@ -191,9 +192,11 @@ def _scene_identity(scene: Scene) -> str:
     return json.dumps(data, sort_keys=True)
 
 
-def _step_targets(step: LoadStep, model: ContactModel) -> dict[str, Any]:
-    """The API's arguments of a scene's load step."""
+def _step_targets(step: LoadStep, model: ContactModel, normal_increments: int) -> dict[str, Any]:
+    """The API's arguments of a scene's load step (the geometry's ramped loads follow the preload)."""
     loads = {PRESSURE_LOAD: step.pressure} if PRESSURE_LOAD in model.problem.load_names else {}
+    for name in model.setup.ramped:
+        loads[name] = min(1.0, step.increment / normal_increments) if step.stage == "normal" else 1.0
     return {"normal": (Force if step.normal_force_controlled else Displacement)(step.normal),
             "tangential": (Force if step.tangential_force_controlled else Displacement)(step.tangential),
             "loads": loads}
@@ -335,7 +338,7 @@ class _Run:
         while True:
             try:
                 state, info = self.problem.advance(
-                    self.state, **_step_targets(step, self.model),
+                    self.state, **_step_targets(step, self.model, self.scene.loading.normal_increments),
                     check=lambda s: self._check_window_edge(s.forces, where))
                 break
             except _WindowTooSmall as edge:
