@@ -20,7 +20,11 @@ from mpi4py import MPI
 from .problem import INCREMENT_COLUMNS
 
 __all__ = ["ResultWriter", "write_json_atomic", "HISTORY_FIELDS", "CYCLE_FIELDS", "PROFILE_FIELDS",
-           "plot_profiles"]
+           "plot_profiles", "RUN_DESCRIPTION", "read_run_description"]
+
+#: The machine-readable description of a run in its output folder: what was modelled (obstacle, bodies,
+#: wear shares, dimension) and the columns of every table, for the readers (pictures, plots, compare).
+RUN_DESCRIPTION = "run.json"
 
 #: Columns of ``history.csv`` (one row per increment).
 HISTORY_FIELDS = ["increment", "cycle", "step", "stage", "normal_displacement", "tangential_displacement",
@@ -34,6 +38,14 @@ CYCLE_FIELDS = ["cycle", "equivalent_cycles", "jump", "jump_bound", "jump_stabil
 PROFILE_FIELDS = ["increment", "cycle", "step", "node", "position", "gap", "pressure", "shear", "slip",
                   "relative_tangential", "wear", "state"]
 _TABLES = {"history": HISTORY_FIELDS, "cycles": CYCLE_FIELDS, "contact_profiles": PROFILE_FIELDS}
+
+
+def read_run_description(folder: str | Path) -> dict[str, Any] | None:
+    """The folder's :data:`RUN_DESCRIPTION`, or None if it has none (a folder of an older release)."""
+    try:
+        return json.loads((Path(folder) / RUN_DESCRIPTION).read_text())
+    except (OSError, ValueError):
+        return None
 
 
 def write_json_atomic(path: Path, data: dict[str, Any]) -> None:

@@ -226,11 +226,28 @@ class _Run:
             self.state, sizes, xdmf_started = self._restore(meta)
         self.writer = ResultWriter(out_dir, comm, profiles=scene.output.contact_profiles, resume_sizes=sizes,
                                    xdmf_started=xdmf_started)
+        if self.rank0:
+            self._describe()
         self.last_checkpoint = time.perf_counter()
         self.say(f"[{scene.name}] {self.problem.n_dofs} dofs, {self.model.contact.nc} contact candidates, "
                  f"W by {self.problem.delassus.method} in {self.model.timings['delassus_s']:.3f} s"
                  + (f"; resumed after increment {self.state.increment} (cycle {self.progress.cycle})"
                     if meta is not None else ""))
+
+    def _describe(self) -> None:
+        """``run.json``: what the readers of the folder need to know, as data (rank 0)."""
+        from .io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS, RUN_DESCRIPTION, write_json_atomic
+
+        contact = self.problem.contact
+        wear = self.problem.wear
+        write_json_atomic(self.out / RUN_DESCRIPTION, {
+            "format": 1, "scene": self.scene.name, "dim": contact.dim,
+            "obstacle": {"kind": "elastic_body" if contact.contact_set.two_body else "rigid_plane",
+                         "point": list(self.scene.contact.plane_point), "normal": contact.frame[0].tolist()},
+            "slave_wear_share": wear.slave_share if wear is not None else None,
+            "units": {"length": "mm", "force": "N/mm" if contact.dim == 2 else "N", "stress": "MPa"},
+            "tables": {"history.csv": HISTORY_FIELDS, "cycles.csv": CYCLE_FIELDS,
+                       "contact_profiles.csv": PROFILE_FIELDS}})
 
     # Checkpoints ------------------------------------------------------------------------------------
     def _read_checkpoint_meta(self) -> dict[str, Any]:
