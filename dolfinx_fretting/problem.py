@@ -655,17 +655,28 @@ class FrettingProblem:
                        factors: np.ndarray, q_body: np.ndarray | None, W: np.ndarray | None,
                        r_warm: np.ndarray | None = None) -> IncrementResult:
         """The local problem with its load control, on rank 0, broadcast; raises ConvergenceError on all ranks."""
-        solved = failure = None
+        return self._on_rank0(lambda: self._local_with_control(state, targets, controlled, factors, q_body, W,
+                                                               r_warm))
+
+    def _on_rank0(self, work: Callable[[], Any]) -> Any:
+        """Run ``work`` on rank 0 and broadcast its value; an exception there is raised on every rank (the
+        others would otherwise wait in the broadcast forever)."""
+        value = failure = None
         if self.comm.rank == 0:
             try:
-                solved = self._local_with_control(state, targets, controlled, factors, q_body, W, r_warm)
+                value = work()
             except ConvergenceError as exc:
-                failure = str(exc)
+                failure = ("ConvergenceError", str(exc), exc.step)
+            except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
+                failure = (type(exc).__name__, str(exc), None)
         if self.comm.size > 1:
-            solved, failure = self.comm.bcast((solved, failure), root=0)
+            value, failure = self.comm.bcast((value, failure), root=0)
         if failure is not None:
-            raise ConvergenceError(failure)
-        return solved
+            kind, message, step = failure
+            if kind == "ConvergenceError":
+                raise ConvergenceError(message, step=step)
+            raise RuntimeError(f"{kind} on rank 0: {message}")
+        return value
 
     def _local_with_control(self, state: ContactState, targets: np.ndarray, controlled: np.ndarray,
                             factors: np.ndarray, q_body: np.ndarray | None, W: np.ndarray | None,
@@ -998,8 +1009,10 @@ class FrettingProblem:
         for k in range(1, dim):
             D = D + obstacle[:, k:k + 1] * frame[k]
         D = np.ascontiguousarray(D)
-        result = warm_new = None
-        if self.comm.rank == 0:
+        warm_new = None
+
+        def work():  # rank 0: the compiled loop; its result is broadcast, the warm start stays on rank 0
+            nonlocal warm_new
             Wc, rho, cache = self._kernel_data(n)
             active = cache.enabled and sv.pattern_reuse
             warm = 1 if state.warm is not None and state.warm.shape == (n, m) and sv.warm_start == "cycle" else 0
@@ -1019,16 +1032,13 @@ class FrettingProblem:
                 cache.counts)
             if done < n:
                 why = "non-finite values" if status == 2 else "max_iter reached"
-                result = ("fail", f"local solver did not converge ({why}, error {err:.3e} >= tol {sv.tol:.1e} after "
-                          f"{sv.max_iter} sweeps)", done + 1)
-            else:
-                outs = (out_r, out_x, out_y, out_gw, out_states) if keep else (out_x[-1:], out_states[-1:])
-                result = ("ok", hist, gw, y, r_last, outs)
-                warm_new = r_warm  # the cycle's forces: the next cycle's warm start (rank 0 only)
-        if self.comm.size > 1:  # (a serial bcast would still pickle every array)
-            result = self.comm.bcast(result, root=0)
-        if result[0] == "fail":
-            raise ConvergenceError(result[1], step=result[2])
+                raise ConvergenceError(f"local solver did not converge ({why}, error {err:.3e} >= tol {sv.tol:.1e} "
+                                       f"after {sv.max_iter} sweeps)", step=done + 1)
+            warm_new = r_warm  # the cycle's forces: the next cycle's warm start
+            outs = (out_r, out_x, out_y, out_gw, out_states) if keep else (out_x[-1:], out_states[-1:])
+            return ("ok", hist, gw, y, r_last, outs)
+
+        result = self._on_rank0(work)
         hist, gw, y, r_last, outs = result[1:6]
         nf = len(ROW_FIELDS)
         records = {name: hist[:, i] for i, name in enumerate(ROW_FIELDS)}
@@ -1158,8 +1168,9 @@ class FrettingProblem:
         if state.plastic is not None:
             p = state.plastic
             plastic = self.comm.gather((p.u, p.sigma, p.eps_p, p.p), root=0)
-        if self.comm.rank == 0:
-            path = Path(path)
+
+        def write() -> None:  # rank 0; a failure (disk full, a folder gone) is raised on every rank
+            target = Path(path)
             arrays = {k: getattr(state, k) for k in self._ARRAYS}
             arrays["status"] = state.status if state.status is not None else np.zeros(0, np.int8)
             arrays["warm"] = state.warm if state.warm is not None else np.zeros(0)
@@ -1173,12 +1184,12 @@ class FrettingProblem:
                     "local_iterations": state.local_iterations, "record": state.record, "ranks": self.comm.size,
                     "load_names": self.load_names, "global_nodes": self.contact.contact_set.global_nodes.tolist(),
                     "plastic": plastic is not None, "meta": dict(meta or {})}
-            tmp = path.with_name(path.name + ".tmp.npz")
+            tmp = target.with_name(target.name + ".tmp.npz")
             np.savez(tmp, state=json.dumps(info, default=_jsonable), **arrays)
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
-            os.replace(tmp, path)
-        self.comm.barrier()
+            os.replace(tmp, target)
+        self._on_rank0(write)
 
     def load_state(self, path: str | Path) -> tuple[ContactState, dict[str, Any]]:
         """Read a state written by :meth:`save_state` (same problem, same contact set). Collective.
@@ -1186,11 +1197,11 @@ class FrettingProblem:
         Raises:
             ValueError: the file does not match this problem (contact nodes, loads, ranks of a plastic state).
         """
-        data = None
-        if self.comm.rank == 0:
+        def read() -> dict[str, np.ndarray]:
             with np.load(path, allow_pickle=False) as npz:
-                data = {k: npz[k] for k in npz.files}
-        data = self.comm.bcast(data, root=0)
+                return {k: npz[k] for k in npz.files}
+
+        data = self._on_rank0(read)
         info = json.loads(str(data["state"]))
         if info["global_nodes"] != self.contact.contact_set.global_nodes.tolist():
             raise ValueError(f"{path}: the saved contact set differs from this problem's")

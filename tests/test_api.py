@@ -268,3 +268,15 @@ def test_3d_box_on_a_rigid_plane_is_uniaxial_stress():
     assert problem.total_force(state)[0] == pytest.approx(E * L * L * delta / Hh, rel=1e-8)
     assert np.allclose(problem.contact_fields(state)["pressure"], E * delta / Hh, rtol=1e-8)
     problem.destroy()
+
+
+def test_a_failure_on_rank_0_is_raised_on_every_rank(tmp_path):
+    """Rank 0 writes the checkpoint; a folder that does not exist fails there only. Every rank must raise
+    (under mpirun the others would otherwise wait in the next collective forever)."""
+    problem, *_ = pressed_block()
+    state = problem.initial_state()
+    missing = MPI.COMM_WORLD.bcast(str(tmp_path / "no" / "such" / "folder" / "state.npz"), root=0)
+    with pytest.raises(RuntimeError, match="rank 0"):
+        problem.save_state(state, missing)
+    MPI.COMM_WORLD.barrier()  # every rank got here: nobody hangs
+    problem.destroy()
