@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -409,15 +410,16 @@ class FrettingProblem:
         self.bcs = list(bcs)
         self.prescribed = {k: list(v) for k, v in prescribed.items()}
         all_bcs = self.bcs + [bc for v in self.prescribed.values() for bc in v]
-        # Every fixed dof must be known to the contact (W is built on the free dofs only).
-        known = set(contact.fixed_global.tolist())
-        if not set(_global_fixed(self.V, all_bcs).tolist()) <= known:
-            raise ValueError("FrettingProblem: bcs (or prescribed) fix dofs the Contact was not told about: pass the "
-                             "same conditions to Contact(..., bcs=...) (the compliance W must exclude them)")
+        # The contact and K must fix the same dofs: W is built on the contact's free dofs, and K has identity
+        # rows exactly at the dofs of these conditions.
+        fixed = _global_fixed(self.V, all_bcs)
+        if not np.array_equal(fixed, contact.fixed_global):
+            raise ValueError("FrettingProblem: the Dirichlet conditions (bcs and prescribed) differ from those given "
+                             f"to the Contact ({fixed.size} fixed dofs here, {contact.fixed_global.size} there): pass "
+                             "the same conditions to Contact(..., bcs=...), or W would be wrong")
         if plasticity is not None and self.prescribed:
             raise ValueError("FrettingProblem: prescribed Dirichlet data are not supported with plasticity "
                              "(the Newton loop holds Dirichlet dofs at zero)")
-        import time
 
         t0 = time.perf_counter()
         #: Wall times (s) of the assembly, the factorisation and W (with the load responses).
@@ -460,7 +462,6 @@ class FrettingProblem:
         t0 = time.perf_counter()
         self._build_contact_operators()
         self.timings["delassus_s"] = time.perf_counter() - t0
-        self._u = None
         self._kernel = None
         if plasticity is not None:
             self._make_plastic_body()

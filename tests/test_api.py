@@ -280,3 +280,12 @@ def test_a_failure_on_rank_0_is_raised_on_every_rank(tmp_path):
         problem.save_state(state, missing)
     MPI.COMM_WORLD.barrier()  # every rank got here: nobody hangs
     problem.destroy()
+
+
+def test_contact_and_problem_must_fix_the_same_dofs():
+    """W is built on the Contact's free dofs and K has identity rows at the problem's: they must agree."""
+    msh, tags, V = block(4, 2)
+    bcs = [clamped(V, tags, 2)]
+    contact = dfr.Contact(V, (tags, 1), dfr.RigidPlane([0, 0], [0, 1]), mu=0.3, bcs=bcs)
+    with pytest.raises(ValueError, match="differ from those given to the Contact"):
+        dfr.FrettingProblem(elasticity(V), contact, bcs + [clamped(V, tags, 3)])
