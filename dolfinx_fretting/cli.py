@@ -158,10 +158,12 @@ def main(argv: list[str] | None = None) -> int:
 
     from mpi4py import MPI
 
-    from .simulation import SimulationError, run_scene
+    from .simulation import RunInterrupted, SimulationError, run_scene
 
     try:
         run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet, resume=args.resume)
+    except RunInterrupted as exc:  # the run said where it stopped; a checkpoint and the summary are on disk
+        return exc.exit_code
     except SimulationError as exc:
         if MPI.COMM_WORLD.rank == 0:
             print(f"dolfinx-fretting: run failed: {exc}", file=sys.stderr)

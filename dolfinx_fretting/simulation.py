@@ -40,7 +40,8 @@ from .scene_models import PRESSURE_LOAD, SceneModel, build_scene_model
 from .scenes import Scene
 from .wear import ROW
 
-__all__ = ["ContactModel", "Progress", "SimulationError", "run_scene", "read_checkpoint", "CHECKPOINT"]
+__all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "run_scene", "read_checkpoint",
+           "CHECKPOINT"]
 
 #: Checkpoint file name in the output folder.
 CHECKPOINT = "checkpoint.npz"
@@ -55,6 +56,20 @@ class SimulationError(RuntimeError):
 #: What to change when an increment does not converge (the scene keys of the solvers).
 _HINT = ("; raise solver.local_max_iter or loosen solver.local_tol (local solver), solver.newton_max_iter or "
          "solver.max_cutbacks or use more increments (Newton), then resume")
+
+
+class RunInterrupted(RuntimeError):
+    """SIGINT or SIGTERM stopped a run cleanly: a final checkpoint and a summary marked interrupted are on disk,
+    and ``run --resume`` continues it. ``exit_code`` is 130 (SIGINT) or 143 (SIGTERM)."""
+
+    def __init__(self, message: str, signum: int):
+        super().__init__(message)
+        self.signum = signum
+        self.exit_code = 128 + signum
+
+
+class _Stop(Exception):
+    """Internal: a signal arrived; the run stops at the end of the current increment or cycle."""
 
 
 class _WindowTooSmall(Exception):
@@ -219,6 +234,8 @@ class _Run:
         self.problem = self.model.problem
         self.snapshots = _snapshot_cycles(scene)
         self.progress = Progress()
+        #: Signal received (SIGINT, SIGTERM), acted on at the end of the current increment or cycle.
+        self.signal_received = 0
         if meta is None:
             self.state = self.problem.initial_state()
             sizes, xdmf_started = None, False
@@ -437,6 +454,7 @@ class _Run:
             self._fields(float(step.increment), st)
             self.writer.flush()
             self._say_increment(hist)
+            self._stop_if_signalled()
 
     # Cycles ------------------------------------------------------------------------------------------------
     def _cycle_path(self, cycle: int) -> tuple[CyclePath, list[LoadStep]]:
@@ -540,6 +558,7 @@ class _Run:
                 due = self.comm.bcast(due, root=0)
             if keep or cycle == N or due:
                 self.checkpoint()
+            self._stop_if_signalled()
             if progress_bar is None and (keep or now - t_report > 10.0):
                 t_report = now
                 self.say(f"[{sc.name}] cycle {cycle}/{N}: max wear depth {crow['max_wear_depth']:.4g} mm, "
@@ -549,6 +568,16 @@ class _Run:
             cycle = self.progress.cycle + 1
         if progress_bar is not None:
             progress_bar.close()
+
+    def _stop_if_signalled(self) -> None:
+        """Collective: stop after this increment or cycle if a signal reached any rank (mpirun forwards it to
+        all; the allreduce makes every rank stop at the same point)."""
+        signum = self.signal_received
+        if self.comm.size > 1:
+            signum = self.comm.allreduce(signum, op=MPI.MAX)
+        if signum:
+            self.signal_received = signum
+            raise _Stop()
 
     def _write_history(self, cycle: int, increment0: int, h: dict[str, np.ndarray]) -> None:
         n = h["normal_force"].size
@@ -794,9 +823,20 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
             complete cycle in a cyclic run), a checkpoint to resume from and a summary with
             ``converged = false`` and the diagnostic are on disk.
     """
+    import signal
+    import threading
+
     out = Path(out_dir)
     run = _Run(scene, out, comm, quiet, resume)
     error = None
+    # SIGINT / SIGTERM: finish the current increment or cycle, checkpoint, write the summary, then raise
+    # RunInterrupted (handlers only in the main thread, where Python delivers signals; restored after).
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        def note(signum, frame):  # noqa: ARG001
+            run.signal_received = signum
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            previous[sig] = signal.signal(sig, note)
     try:
         run.run_stepwise(preload_path(scene.loading) if scene.loading.cycles > 0 else monotonic_path(scene.loading))
         if scene.loading.cycles > 0:
@@ -806,7 +846,18 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
         run.say(f"[{scene.name}] STOPPED: {error}")
         if scene.loading.cycles > 0 and run.state.increment >= scene.loading.normal_increments:
             run.checkpoint()  # the last complete cycle: resume from it with other solver settings
+    except _Stop:
+        name = signal.Signals(run.signal_received).name
+        error = (f"interrupted by {name} after increment {run.state.increment} (cycle {run.progress.cycle}); "
+                 "continue with --resume")
+        run.checkpoint()
+        run.say(f"[{scene.name}] {error}")
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     summary = run.summary(error)
+    if run.signal_received:
+        summary["interrupted"] = signal.Signals(run.signal_received).name
     run.writer.summary(summary)
     if run.rank0 and scene.wear.law == "archard":
         run.write_worn_profiles()
@@ -834,6 +885,8 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
             f"{summary.get('stick_width', 0):.4g} mm, max wear depth = {summary.get('max_wear_depth', 0):.4g} mm, "
             f"{summary['wall_time_s']:.2f} s -> {out}")
     run.problem.destroy()
+    if run.signal_received:
+        raise RunInterrupted(error, run.signal_received)
     if error is not None:
         raise SimulationError(error)
     return summary
