@@ -47,10 +47,11 @@ from mpi4py import MPI
 
 from . import local_solvers
 from .analytic import hertz_line_contact
-from .io import _jsonable
+from .io import _jsonable, non_finite_keys
 from .contact import ContactSet, RigidPlane, find_candidates, find_pairs
 from .loading import LoadControlError, LoadStep, cycle_path, find_displacement, monotonic_path, preload_path, waveform
-from .scenes import Scene
+from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
+from .scenes import Scene, describe_differences
 from .wear import ROW, ROW_FIELDS, commit_increment
 
 __all__ = ["ContactModel", "IncrementSolver", "RunState", "SimulationError", "run_scene", "CHECKPOINT"]
@@ -435,6 +436,7 @@ class _Run:
             self.state, sizes, xdmf_started = self._restore(checkpoint)
         self.writer = ResultWriter(out_dir, comm, profiles=scene.output.contact_profiles, resume_sizes=sizes,
                                    xdmf_started=xdmf_started)
+        self.resumed_from_cycle = self.state.cycle if checkpoint is not None else None  # summary: proof of resume
         self.last_checkpoint = time.perf_counter()
         self.say(f"[{scene.name}] {model.n_dofs} dofs, {cs.nc} contact candidates, "
                  f"W by {model.delassus_method} in {model.timings['delassus_s']:.3f} s"
@@ -444,16 +446,16 @@ class _Run:
     # Checkpoints ------------------------------------------------------------------------------------
     def _read_checkpoint(self) -> dict[str, Any]:
         path = self.out / CHECKPOINT
-        if not path.is_file():
-            raise SimulationError(f"--resume: no checkpoint {path}; run without --resume to start afresh")
-        with np.load(path, allow_pickle=False) as data:
-            ck = {k: data[k] for k in data.files}
-        meta = json.loads(str(ck["meta"]))
-        if meta["identity"] != _scene_identity(self.scene):
+        try:  # a damaged file, tables shorter than it records, loading.cycles below the cycles done
+            ck = load_checkpoint(path, self.scene.loading.cycles)
+        except OutputFolderError as exc:
+            raise SimulationError(f"--resume: {exc}") from None
+        changed = describe_differences(json.loads(ck["meta"]["identity"]), json.loads(_scene_identity(self.scene)),
+                                       names=("checkpoint", "this scene"))
+        if changed:
             raise SimulationError(f"--resume: the scene differs from the one checkpointed in {path} beyond "
-                                  f"the sections {', '.join(_RESUMABLE_SECTIONS)} and loading.cycles; "
+                                  f"the sections {', '.join(_RESUMABLE_SECTIONS)} and loading.cycles: {changed}; "
                                   "resume with the same scene, or start afresh in a new folder")
-        ck["meta"] = meta
         return ck
 
     def _restore(self, ck: dict[str, Any]) -> tuple[RunState, dict[str, int], bool]:
@@ -1127,6 +1129,8 @@ class _Run:
             "scene": sc.name, "dofs": model.n_dofs, "contacts": model.contact.nc,
             "delassus_method": model.delassus_method, **{k: round(v, 6) for k, v in model.timings.items()},
             "increments": st.increment, "cycles": st.cycle, "converged": error is None,
+            "resumed_from_cycle": self.resumed_from_cycle,
+            "cycles_this_run": st.cycle - (self.resumed_from_cycle or 0),
             "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
             "wear_law": sc.wear.law, "wear_k": sc.wear.k_total, "wear_acceleration": sc.wear.acceleration,
             "wear_k_effective": self.k, "equivalent_cycles": st.cycle * sc.wear.acceleration,
@@ -1234,7 +1238,7 @@ class _Run:
 
 
 def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False,
-              resume: bool = False) -> dict[str, Any]:
+              resume: bool = False, overwrite: bool = False) -> dict[str, Any]:
     """Run a scene and write its outputs into ``out_dir``. Collective.
 
     Args:
@@ -1244,16 +1248,23 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
         quiet: Print nothing.
         resume: Continue from ``out_dir/checkpoint.npz`` (the scene may differ only in its ``solver`` and
             ``output`` sections and in ``loading.cycles``).
+        overwrite: Delete the run ``out_dir`` holds first (its files only; :mod:`dolfinx_fretting.outdir`).
 
     Returns:
         The summary (also written to ``out_dir/summary.json``).
 
     Raises:
-        SimulationError: when an increment fails; the outputs of the converged increments (of the last
-            complete cycle in a cyclic run), a checkpoint to resume from and a summary with
-            ``converged = false`` and the diagnostic are on disk.
+        OutputFolderError: before any work: ``out_dir`` is a file, not writable, locked by another run, or
+            holds a run and neither ``resume`` nor ``overwrite`` is given.
+        SimulationError: when an increment fails or a result is not finite; the outputs of the converged
+            increments (of the last complete cycle in a cyclic run), a checkpoint to resume from and a summary
+            with ``converged = false`` and the diagnostic are on disk.
     """
-    out = Path(out_dir)
+    with claim_output_folder(out_dir, comm, resume=resume, overwrite=overwrite):  # before the mesh; held to the end
+        return _run_scene(scene, Path(out_dir), comm, quiet, resume)
+
+
+def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: bool) -> dict[str, Any]:
     run = _Run(scene, out, comm, quiet, resume)
     error = None
     try:
@@ -1266,6 +1277,9 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
         if scene.loading.cycles > 0 and run.state.increment >= scene.loading.normal_increments:
             run.checkpoint()  # the last complete cycle: resume from it with other solver settings
     summary = run.summary(error)
+    if error is None and non_finite_keys(summary):  # never a success with an inf or a NaN in it
+        error = f"non-finite results: {', '.join(non_finite_keys(summary))}"
+        summary = run.summary(error)
     run.writer.summary(summary)
     if run.rank0 and scene.wear.law == "archard":
         run.write_worn_profiles()
