@@ -3,8 +3,9 @@
 Tables are written by rank 0 only and flushed after each increment (monotonic runs) or cycle (cyclic
 runs), so an interrupted run leaves every finished row readable; ``summary.json`` and checkpoints are
 replaced atomically (write to a temporary file, then rename). On resume the tables are truncated back to
-the sizes recorded in the checkpoint, so rows written after it do not appear twice. XDMF output is
-collective (every rank calls it).
+the sizes recorded in the checkpoint, so rows written after it do not appear twice; a table shorter than
+recorded (rows the checkpoint counts are gone) is refused with :class:`TableError`, never padded. XDMF output
+is collective (every rank calls it). ``summary.json`` is always valid JSON (:func:`write_json_atomic`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ from mpi4py import MPI
 
 from .wear import ROW_FIELDS
 
-__all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys", "TableError", "HISTORY_FIELDS", "CYCLE_FIELDS", "PROFILE_FIELDS",
+__all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys", "TableError", "HISTORY_FIELDS",
+           "CYCLE_FIELDS", "PROFILE_FIELDS",
            "plot_profiles"]
 
 #: Columns of ``history.csv`` (one row per increment).

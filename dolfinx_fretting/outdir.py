@@ -28,8 +28,8 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
-__all__ = ["OutputFolderError", "OutputLock", "check_output_folder", "ensure_writable_folder", "claim_output_folder", "held_run_files",
-           "clear_run_files", "check_resume_tables", "load_checkpoint", "lock_holder", "LOCK_NAME", "RUN_FILES",
+__all__ = ["OutputFolderError", "OutputLock", "check_output_folder", "ensure_writable_folder", "claim_output_folder",
+           "held_run_files", "clear_run_files", "check_resume_tables", "load_checkpoint", "lock_holder", "LOCK_NAME", "RUN_FILES",
            "RUN_MARKERS", "CHECKPOINT_NAME", "TABLE_NAMES"]
 
 #: The lock file a run holds in its output folder.
@@ -227,7 +227,8 @@ def _acquire(folder: Path) -> OutputLock:
     return OutputLock(folder, fd, previous)
 
 
-def claim_output_folder(path: str | Path, comm: Any = None, resume: bool = False, overwrite: bool = False) -> OutputLock:
+def claim_output_folder(path: str | Path, comm: Any = None, resume: bool = False,
+                        overwrite: bool = False) -> OutputLock:
     """Check the output folder, lock it for this run and, with ``overwrite``, delete the old run's files.
 
     Collective on ``comm`` (default ``MPI.COMM_WORLD``): rank 0 does the file-system work and broadcasts the

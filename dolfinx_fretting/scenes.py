@@ -679,7 +679,7 @@ class Scene(_Section):
         if Q is not None and Q != 0 and mu == 0:
             raise _range_error("loading.tangential_force", Q, "0 with contact.mu = 0 (a frictionless contact "
                                "carries no tangential force)")
-        if Q is not None and P is not None and abs(Q) >= mu * P:
+        if Q is not None and Q != 0 and P is not None and abs(Q) >= mu * P:
             raise _range_error("loading.tangential_force", Q,
                                f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} N/mm "
                                "(at or beyond mu P the contact slides and no displacement gives Q)")
@@ -698,7 +698,8 @@ class Scene(_Section):
             if d is not None and d > 2 * eps**2 * g.radius:
                 raise _range_error("loading.normal_displacement", d,
                                    f"<= {2 * eps**2 * g.radius:.4g} mm: the strain sqrt(d / (2R)) of an approach d "
-                                   f"on geometry.radius = {g.radius:g} mm must stay <= {eps:g} (small-strain elasticity)")
+                                   f"on geometry.radius = {g.radius:g} mm must stay <= {eps:g} (small-strain "
+                                   "elasticity)")
         elif c.surface in ("bottom", "top", "left", "right"):
             face, depth = (g.width, g.height) if c.surface in ("bottom", "top") else (g.height, g.width)
             if P is not None and P / (face * E_plane) > eps:

@@ -78,7 +78,8 @@ def test_a_folder_holding_a_run_is_refused_unless_resume_or_overwrite(tmp_path):
     (tmp_path / "sub" / "history.csv").write_text("foreign")
     before = (tmp_path / "history.csv").read_text()
     with pytest.raises(OutputFolderError, match=r"already holds a run \(summary.json, checkpoint.npz, history.csv, "
-                                                r"cycles.csv\); continue it with --resume, replace it with --overwrite"):
+                                                r"cycles.csv\); continue it with --resume, replace it with "
+                                                r"--overwrite"):
         run_scene(scene, tmp_path, quiet=True)
     assert (tmp_path / "history.csv").read_text() == before  # untouched
     # --overwrite deletes the old run (its checkpoint included) and runs again; foreign files stay
@@ -104,7 +105,8 @@ def test_resume_refuses_a_table_shorter_than_the_checkpoint(tmp_path):
     cycles = tmp_path / "cycles.csv"
     text = cycles.read_text()
     cycles.write_text(text[: len(text) // 2])
-    with pytest.raises(SimulationError, match=rf"--resume: {cycles} holds \d+ bytes, fewer than the \d+ the checkpoint"):
+    with pytest.raises(SimulationError,
+                       match=rf"--resume: {cycles} holds \d+ bytes, fewer than the \d+ the checkpoint"):
         run_scene(load_scene("stromberg-block", SMALL_BLOCK + ["loading.cycles=4"]), tmp_path, quiet=True, resume=True)
     assert b"\x00" not in cycles.read_bytes()
     cycles.unlink()

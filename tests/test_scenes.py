@@ -49,6 +49,7 @@ from dolfinx_fretting.scenes import SceneError, apply_overrides, builtin_scenes,
         ("material.E=100", ["loading.normal_force = 199.24", "Hertz strain", "material.E = 100"]),
         ("loading.normal_force=1e7", ["loading.normal_force = 10000000.0", "small-strain"]),
         ("wear.k=1e-3", []),  # accepted: a large but finite coefficient
+        ("contact.mu=0.0 loading.tangential_force=0.0", []),  # frictionless, no tangential force: accepted
         ("geometry.contact_mesh_size=1e-6", ["geometry.contact_mesh_size = 1e-06",
                                              "elements along the refined contact zone"]),
         # PETSc options: only the factorisation's keys, each of its type and range
@@ -77,7 +78,7 @@ from dolfinx_fretting.scenes import SceneError, apply_overrides, builtin_scenes,
 )
 def test_bad_values_name_the_key_and_range(override, expected):
     if not expected:
-        load_scene("hertz", [override])
+        load_scene("hertz", override.split())
         return
     with pytest.raises(SceneError) as info:
         load_scene("hertz", [override])

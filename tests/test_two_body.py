@@ -202,7 +202,6 @@ def _cycle_end_profiles(folder):
     return out
 
 
-@pytest.mark.slow
 def test_partial_slip_wear_final_state(tmp_path):
     """Force-controlled partial slip (+-Q*, phi = Q*/(mu P) = 0.5) worn to its final state with a large
     hypothetical k: the slip zone wears until it carries nothing; the stick zone |x| < c keeps its width and
@@ -229,7 +228,6 @@ def test_partial_slip_wear_final_state(tmp_path):
     assert np.allclose(p[inner], p_inf, rtol=0.05)
 
 
-@pytest.mark.slow
 def test_gross_slip_wear_in_asymptote(tmp_path):
     """McColl's gross-slip case under constant force (18.5 N/mm, +-25 um, k = 4.8e-8 1/MPa both bodies):
     once the scar is much wider than the stroke, the wear depth follows h(N) = [3 k delta P N / sqrt(2R)]^(2/3)
