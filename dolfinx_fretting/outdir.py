@@ -62,10 +62,13 @@ def check_output_folder(path: str | Path, *, resume: bool = False, overwrite: bo
         The folder as a :class:`~pathlib.Path` (created if it did not exist).
 
     Raises:
-        OutputFolderError: naming the folder and the reason.
+        OutputFolderError: naming the folder and the reason (also ``resume`` without a checkpoint).
     """
     folder = _usable_folder(path, resume, overwrite)
     _refuse_held_run(folder, resume, overwrite)
+    if resume and not (folder / CHECKPOINT_NAME).is_file():
+        raise OutputFolderError(f"--resume: no checkpoint {folder / CHECKPOINT_NAME}; run without --resume to "
+                                "start afresh")
     return folder
 
 

@@ -37,6 +37,7 @@ def test_write_json_atomic_writes_null_and_names_non_finite_keys(tmp_path):
     assert finite_json({"x": [1, 2]}) == ({"x": [1, 2]}, [])
 
 
+@pytest.mark.filterwarnings("ignore:invalid value encountered:RuntimeWarning")  # inf - inf: the point of the test
 def test_a_run_with_a_non_finite_result_is_not_a_success(tmp_path):
     """wear.k = inf got through validation once and the run ended 'converged' with max_wear_depth inf (and
     NaN written into summary.json). Validation refuses it now; behind validation (the value forced into a

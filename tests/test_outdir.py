@@ -178,6 +178,8 @@ def test_cli_output_folder_errors(tmp_path, capsys):
     assert main(base + ["--out", str(good), "--overwrite"]) == 0
     assert main(base + ["--out", str(good), "--overwrite", "--resume"]) == 2
     assert "give one" in capsys.readouterr().err
+    assert main(base + ["--out", str(tmp_path / "empty"), "--resume"]) == 2
+    assert "--resume: no checkpoint" in capsys.readouterr().err
 
 
 def test_cli_compare_and_study_out_that_is_a_file(tmp_path):
