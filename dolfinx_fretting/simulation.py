@@ -33,11 +33,13 @@ from mpi4py import MPI
 
 from .analytic import hertz_line_contact
 from .contact import Contact
+from .io import non_finite_keys
 from .loading import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (INCREMENT_COLUMNS, Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
                       Displacement, Force, FrettingProblem, LocalSolver, Plasticity)
+from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
 from .scene_models import PRESSURE_LOAD, SceneModel, build_scene_model
-from .scenes import Scene
+from .scenes import Scene, describe_differences
 from .wear import ROW
 
 __all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "run_scene", "read_checkpoint",
@@ -245,6 +247,8 @@ class _Run:
                                    xdmf_started=xdmf_started)
         if self.rank0:
             self._describe()
+        # proof of a resume in the summary: where it started, and the cycles this process simulated
+        self.resumed_from_cycle = self.progress.cycle if meta is not None else None
         self.last_checkpoint = time.perf_counter()
         self.say(f"[{scene.name}] {self.problem.n_dofs} dofs, {self.model.contact.nc} contact candidates, "
                  f"W by {self.problem.delassus.method} in {self.model.timings['delassus_s']:.3f} s"
@@ -269,21 +273,16 @@ class _Run:
     # Checkpoints ------------------------------------------------------------------------------------
     def _read_checkpoint_meta(self) -> dict[str, Any]:
         path = self.out / CHECKPOINT
-        meta, failure = None, None
-        if self.rank0:
-            try:
-                with np.load(path, allow_pickle=False) as data:
-                    meta = json.loads(str(data["state"]))["meta"]
-            except FileNotFoundError:
-                failure = f"--resume: no checkpoint {path}; run without --resume to start afresh"
-            except Exception as exc:  # noqa: BLE001 - any unreadable file gets the same message
-                failure = f"--resume: the checkpoint {path} cannot be read ({type(exc).__name__}: {exc})"
-        meta, failure = self.comm.bcast((meta, failure), root=0)
-        if failure is not None:
-            raise SimulationError(failure)
-        if meta["identity"] != _scene_identity(self.scene):
+        try:  # a damaged file, tables shorter than it records, loading.cycles below the cycles done
+            ck = load_checkpoint(path, self.scene.loading.cycles)
+        except OutputFolderError as exc:
+            raise SimulationError(f"--resume: {exc}") from None
+        changed = describe_differences(json.loads(ck["meta"]["identity"]), json.loads(_scene_identity(self.scene)),
+                                       names=("checkpoint", "this scene"))
+        meta = ck["meta"]
+        if changed:
             raise SimulationError(f"--resume: the scene differs from the one checkpointed in {path} beyond "
-                                  f"the sections {', '.join(_RESUMABLE_SECTIONS)} and loading.cycles; "
+                                  f"the sections {', '.join(_RESUMABLE_SECTIONS)} and loading.cycles: {changed}; "
                                   "resume with the same scene, or start afresh in a new folder")
         return meta
 
@@ -335,7 +334,7 @@ class _Run:
         explicit over a cycle, and such steps make oscillating edge spikes (the run stops instead)."""
         h = self.model.setup.element_size
         dw = float(np.max(gw_new - gw_old, initial=0.0))
-        if dw > h:
+        if not dw <= h:  # (a NaN wear step is refused too)
             raise SimulationError(
                 f"cycle {cycle}: the wear gap grew by up to {dw:.3g} mm in one cycle, more than the contact element "
                 f"size {h:.3g} mm; the explicit wear update is unstable there. Lower wear.acceleration (now "
@@ -700,6 +699,8 @@ class _Run:
             "scene": sc.name, "dofs": problem.n_dofs, "contacts": model.contact.nc,
             "delassus_method": problem.delassus.method, **{k: round(v, 6) for k, v in model.timings.items()},
             "increments": st.increment, "cycles": pr.cycle, "converged": error is None,
+            "resumed_from_cycle": self.resumed_from_cycle,
+            "cycles_this_run": pr.cycle - (self.resumed_from_cycle or 0),
             "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
             "wear_law": sc.wear.law, "wear_k": sc.wear.k_total, "wear_acceleration": sc.wear.acceleration,
             "wear_k_effective": problem._k(True), "equivalent_cycles": pr.cycle * sc.wear.acceleration,
@@ -804,7 +805,7 @@ class _Run:
 
 
 def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False,
-              resume: bool = False) -> dict[str, Any]:
+              resume: bool = False, overwrite: bool = False) -> dict[str, Any]:
     """Run a scene and write its outputs into ``out_dir``. Collective.
 
     Args:
@@ -814,19 +815,26 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
         quiet: Print nothing.
         resume: Continue from ``out_dir/checkpoint.npz`` (the scene may differ only in its ``solver`` and
             ``output`` sections and in ``loading.cycles``).
+        overwrite: Delete the run ``out_dir`` holds first (its files only; :mod:`dolfinx_fretting.outdir`).
 
     Returns:
         The summary (also written to ``out_dir/summary.json``).
 
     Raises:
-        SimulationError: when an increment fails; the outputs of the converged increments (of the last
-            complete cycle in a cyclic run), a checkpoint to resume from and a summary with
-            ``converged = false`` and the diagnostic are on disk.
+        OutputFolderError: before any work: ``out_dir`` is a file, not writable, locked by another run, or
+            holds a run and neither ``resume`` nor ``overwrite`` is given.
+        SimulationError: when an increment fails or a result is not finite; the outputs of the converged
+            increments (of the last complete cycle in a cyclic run), a checkpoint to resume from and a summary
+            with ``converged = false`` and the diagnostic are on disk.
     """
+    with claim_output_folder(out_dir, comm, resume=resume, overwrite=overwrite):  # before the mesh; held to the end
+        return _run_scene(scene, Path(out_dir), comm, quiet, resume)
+
+
+def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: bool) -> dict[str, Any]:
     import signal
     import threading
 
-    out = Path(out_dir)
     run = _Run(scene, out, comm, quiet, resume)
     error = None
     # SIGINT / SIGTERM: finish the current increment or cycle, checkpoint, write the summary, then raise
@@ -856,6 +864,9 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     summary = run.summary(error)
+    if error is None and non_finite_keys(summary):  # never a success with an inf or a NaN in it
+        error = f"non-finite results: {', '.join(non_finite_keys(summary))}"
+        summary = run.summary(error)
     if run.signal_received:
         summary["interrupted"] = signal.Signals(run.signal_received).name
     run.writer.summary(summary)

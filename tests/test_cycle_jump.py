@@ -252,6 +252,8 @@ def test_resume_carries_the_jump_state(tmp_path, monkeypatch):
     meta = read_checkpoint(tmp_path / "r" / CHECKPOINT)[0]
     assert meta["cycle"] > 200 and meta["jump"]["last"] > 1  # inside a jump that started at 200
     resumed = run_scene(scene, tmp_path / "r", quiet=True, resume=True)
+    # the checkpoint was used: the resumed process covered the cycles after it only (not all 400)
+    assert resumed["resumed_from_cycle"] == meta["cycle"] and resumed["cycles_this_run"] == 400 - meta["cycle"]
     a, b = read_table(tmp_path / "s" / "cycles.csv"), read_table(tmp_path / "r" / "cycles.csv")
     assert np.array_equal(a["cycle"], b["cycle"]) and np.array_equal(a["jump"], b["jump"])
     # The compiled loop's pattern cache restarts on resume: equal to the local tolerance, not bit for bit.
