@@ -58,7 +58,7 @@ for acc in accelerations:
                                              f"wear.acceleration={acc}",
                                              f"output.snapshot_cycles=[1, {max(1, cycles // 2)}, {cycles}]",
                                              *material, *extra])
-        summary = run_scene(scene, folder, quiet=True)
+        summary = run_scene(scene, folder, quiet=True, overwrite=True)  # a rerun replaces its own run
         if rank0:
             print(f"{name:16s} k x{acc:<4d}: peak pressure {summary['max_pressure']:.1f} MPa, "
                   f"max wear depth {summary['max_wear_depth']:.3e} mm, {summary['wall_time_s']:.0f} s")

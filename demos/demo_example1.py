@@ -49,7 +49,7 @@ rank0 = MPI.COMM_WORLD.rank == 0
 scene = load_scene("stromberg-block", [f"loading.cycles={cycles}", f"geometry.nx={elements}",
                                        f"geometry.ny={elements}", f"output.snapshot_cycles={snapshots}",
                                        f"output.loop_cycles=[1, {cycles}]", "output.progress=false"])
-summary = run_scene(scene, out, quiet=True)
+summary = run_scene(scene, out, quiet=True, overwrite=True)  # a rerun replaces its own run
 
 # The summary: contact forces at the last increment, the deepest wear and the worn area of the face, and the
 # regime of the last cycle.

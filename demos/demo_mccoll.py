@@ -57,7 +57,7 @@ rank0 = MPI.COMM_WORLD.rank == 0  # under mpirun every rank runs the scene; rank
 scene = load_scene("mccoll", [f"loading.cycles={cycles}", f"wear.acceleration={acceleration}",
                               f"geometry.contact_mesh_size={contact_mesh_size}",
                               f"output.snapshot_cycles={snapshots}", "output.progress=false"])
-summary = run_scene(scene, out, quiet=True)
+summary = run_scene(scene, out, quiet=True, overwrite=True)  # a rerun replaces its own run
 share = summary["wear_k_master"] / summary["wear_k"]          # the flat's part of the wear gap
 if rank0:
     print(f"{summary['cycles']} simulated cycles = {summary['equivalent_cycles']:.0f} physical, "

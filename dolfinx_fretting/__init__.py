@@ -62,6 +62,27 @@ if "numba" in sys.modules:
 else:
     os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
 
+
+# The public API (docs/api.md), imported on first use so that the pure NumPy/numba modules (local solvers,
+# wear, cycling) stay usable without importing DOLFINx.
+_API = {
+    "RigidPlane": "contact", "ElasticBody": "contact", "Contact": "contact",
+    "FrettingProblem": "problem", "ContactState": "problem", "IncrementResult": "problem",
+    "CyclePath": "problem", "CycleResult": "problem", "Archard": "problem", "Displacement": "problem",
+    "Force": "problem", "LocalSolver": "problem", "Plasticity": "problem", "ConvergenceError": "problem",
+    "J2Plasticity": "materials",
+}
+__all__ = sorted(_API)
+
+
+def __getattr__(name: str):
+    if name in _API:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_API[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 # On the DOLFINx wheel (0.11) DOLFINx and PETSc find their MPI library only once mpi4py has loaded it
 # ("libmpi.so.12: cannot open shared object file" otherwise): load it before anything can import dolfinx, so
 # that `import dolfinx_fretting` followed by `import dolfinx` works on every stack.

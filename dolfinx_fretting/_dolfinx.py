@@ -32,7 +32,7 @@ from dolfinx import mesh as dmesh  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
 __all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API", "TESTED_VERSIONS", "versions",
-           "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
+           "element_degree", "element_family", "value_size", "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
            "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh",
            "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec"]
 
@@ -63,6 +63,26 @@ def versions() -> dict[str, str]:
 
 
 # Spaces ------------------------------------------------------------------------------------------------------
+def element_degree(V) -> int:
+    """Polynomial degree of the element of ``V``."""
+    element = V.ufl_element()
+    return int(element.degree()) if LEGACY_API else int(element.embedded_superdegree)
+
+
+def element_family(V) -> str:
+    """Family name of the element of ``V``: ``"Q"``, ``"P"``, ``"Lagrange"`` ... for continuous Lagrange; a
+    discontinuous family is named as such (0.5: ``"DQ"``, ``"Discontinuous Lagrange"``; 0.11: ``"DG"``)."""
+    element = V.ufl_element()
+    if LEGACY_API:
+        return str(element.family())
+    return "DG" if element.discontinuous else str(element.family_name)
+
+
+def value_size(V) -> int:
+    """Number of components of a function of ``V``."""
+    return int(V.dofmap.index_map_bs) if V.num_sub_spaces == 0 else int(V.num_sub_spaces)
+
+
 def vector_space(msh, degree: int = 1, family: str = "Lagrange") -> fem.FunctionSpace:
     """Vector-valued space with ``gdim`` components (the displacement space).
 
@@ -137,7 +157,13 @@ def entities_to_geometry(msh, dim: int, entities: np.ndarray) -> np.ndarray:
     return dmesh.entities_to_geometry(msh, dim, entities, False)
 
 
-# Vectors and boundary conditions ---------------------------------------------------------------------------
+# Forms, vectors and boundary conditions --------------------------------------------------------------------
+def compiled_form(form):
+    """``form`` compiled by ``fem.form`` unless it already is (0.5: ``fem.FormMetaClass``, 0.11: ``fem.Form``)."""
+    compiled = fem.FormMetaClass if LEGACY_API else fem.Form
+    return form if isinstance(form, compiled) else fem.form(form)
+
+
 def petsc_vec(u: fem.Function) -> PETSc.Vec:
     """The PETSc vector that shares ``u``'s values (ghosted)."""
     return u.vector if LEGACY_API else u.x.petsc_vec
@@ -156,6 +182,16 @@ def set_bc(b: PETSc.Vec, bcs: list, scale: float = 1.0) -> None:
         fem.petsc.set_bc(b, bcs, scale=scale)
     else:
         fem.petsc.set_bc(b, bcs, alpha=scale)
+
+
+def solve_linear(a, L, bcs: list, petsc_options: dict, prefix: str = "dolfinx_fretting_linear_") -> fem.Function:
+    """Plain DOLFINx solve of the linear problem a(u, v) = L(v) with ``bcs`` (``fem.petsc.LinearProblem``;
+    0.11 requires an options prefix)."""
+    if LEGACY_API:
+        problem = fem.petsc.LinearProblem(a, L, bcs=bcs, petsc_options=petsc_options)
+    else:
+        problem = fem.petsc.LinearProblem(a, L, bcs=bcs, petsc_options=petsc_options, petsc_options_prefix=prefix)
+    return problem.solve()
 
 
 # Expressions -------------------------------------------------------------------------------------------------

@@ -1,6 +1,11 @@
 """Command line: ``dolfinx-fretting scenes``, ``dolfinx-fretting run SCENE --out DIR [--set k=v ...]``,
 ``dolfinx-fretting compare DIR [DIR ...] --out OUT [--labels a,b] [--cycles 1,10,100] [--node 0.0]`` and
-``dolfinx-fretting study SCENE --out DIR [--sweep k=v1,v2 ...] [--reference k=v ...] [--point "k=v k=v"]``."""
+``dolfinx-fretting study SCENE --out DIR [--sweep k=v1,v2 ...] [--reference k=v ...] [--point "k=v k=v"]``.
+
+Exit codes: 0 done; 2 bad input (scene, options, output folder, a checkpoint that cannot be resumed), with a
+message and before any expensive work; 1 a run that failed (an increment, PETSc or MUMPS, a non-finite
+result), with a message. Never a traceback for either.
+"""
 
 from __future__ import annotations
 
@@ -25,6 +30,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--resume", action="store_true",
                      help="continue the run checkpointed in --out (the scene may differ only in its solver and "
                           "output sections and in loading.cycles)")
+    run.add_argument("--overwrite", action="store_true",
+                     help="replace the run --out holds (deletes its files, checkpoint included; other files stay)")
     show = sub.add_parser("show", help="print a scene with every default filled in, as validated")
     show.add_argument("scene")
     show.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
@@ -56,7 +63,20 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--no-warm-up", dest="warm_up", action="store_false",
                     help="skip the untimed one-cycle run that loads the compiled kernels first")
     st.add_argument("--quiet", action="store_true", help="print only the final table")
+    st.add_argument("--overwrite", action="store_true",
+                    help="replace the study --out holds (its table, picture and runs)")
     return p
+
+
+def _rank() -> int:
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD.rank
+
+
+def _say_error(prefix: str, exc: BaseException | str) -> None:
+    if _rank() == 0:
+        print(f"{prefix}: {exc}", file=sys.stderr)
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -65,18 +85,25 @@ def _study(args: argparse.Namespace) -> int:
 
     from .study import format_markdown, parse_point, parse_sweep, plan_study, run_study
 
+    from .outdir import OutputFolderError
+    from .study import check_study_folder
+
     try:
         sweep = parse_sweep(args.sweep) if args.sweep is not None else None
         points = [parse_point(p) for p in args.point]
         plan = plan_study(args.scene, args.overrides, args.reference, sweep, points)
-    except SceneError as exc:
-        print(f"dolfinx-fretting study: {exc}", file=sys.stderr)
+        check_study_folder(args.out, overwrite=args.overwrite)
+    except (SceneError, OutputFolderError) as exc:
+        _say_error("dolfinx-fretting study", exc)
         return 2
     try:
-        rows = run_study(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet, warm_up=args.warm_up)
+        rows = run_study(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet, warm_up=args.warm_up,
+                         overwrite=args.overwrite)
+    except OutputFolderError as exc:
+        _say_error("dolfinx-fretting study", exc)
+        return 2
     except RuntimeError as exc:
-        if MPI.COMM_WORLD.rank == 0:
-            print(f"dolfinx-fretting study: {exc}", file=sys.stderr)
+        _say_error("dolfinx-fretting study", exc)
         return 1
     if MPI.COMM_WORLD.rank == 0:
         print(format_markdown(rows))
@@ -124,7 +151,7 @@ def _compare(args: argparse.Namespace) -> int:
             warnings.simplefilter("always", RuntimeWarning)
             written = compare_runs(args.folders, args.labels, args.out, cycles=args.cycles,
                                    node_position=args.node)
-    except ValueError as exc:
+    except (ValueError, OSError) as exc:
         print(f"dolfinx-fretting compare: {exc}", file=sys.stderr)
         return 2
     for w in caught:
@@ -155,16 +182,44 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "show":
         print(scene.model_dump_json(indent=2))
         return 0
+    return _run(args, scene)
+
+
+def _run(args: argparse.Namespace, scene) -> int:
+    """``dolfinx-fretting run``: the output folder checked before DOLFINx is imported, then the run."""
+    from .outdir import OutputFolderError, check_output_folder
+
+    try:  # each rank checks (the same answer: a file, not writable, holds a run); run_scene locks it
+        check_output_folder(args.out, resume=args.resume, overwrite=args.overwrite)
+    except OutputFolderError as exc:
+        _say_error("dolfinx-fretting", exc)
+        return 2
 
     from mpi4py import MPI
+    from petsc4py import PETSc
 
-    from .simulation import SimulationError, run_scene
+    from .compliance import DelassusError
+    from .io import TableError
+    from .simulation import RunInterrupted, SimulationError, run_scene
 
     try:
-        run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet, resume=args.resume)
+        run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet, resume=args.resume, overwrite=args.overwrite)
+    except RunInterrupted as exc:  # the run said where it stopped; a checkpoint and the summary are on disk
+        return exc.exit_code
+    except (OutputFolderError, TableError) as exc:
+        _say_error("dolfinx-fretting", exc)
+        return 2
     except SimulationError as exc:
-        if MPI.COMM_WORLD.rank == 0:
-            print(f"dolfinx-fretting: run failed: {exc}", file=sys.stderr)
+        _say_error("dolfinx-fretting: run failed", exc)
+        return 1
+    except (DelassusError, PETSc.Error) as exc:  # options PETSc or MUMPS refuse only when they factorise
+        lines = [x.strip() for x in str(exc).splitlines() if x.strip()] or [type(exc).__name__]
+        text = lines[0] + (f" ... {lines[-1]}" if len(lines) > 1 else "")  # PETSc's stack trace in between
+        _say_error("dolfinx-fretting: run failed: PETSc/MUMPS", f"{text} (solver.petsc_options: "
+                   f"{scene.solver.petsc_options or 'none given'})")
+        return 1
+    except OSError as exc:  # e.g. the disk filled up while writing
+        _say_error("dolfinx-fretting: run failed: writing the outputs", exc)
         return 1
     return 0
 

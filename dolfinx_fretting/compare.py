@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
+from .outdir import OutputFolderError, ensure_writable_folder
 from .plots import _figure, _length_unit, _mm, _save
 
 if TYPE_CHECKING:
@@ -709,8 +710,9 @@ def compare_runs(folders: Sequence[str | Path], labels: Sequence[str] | None, ou
         The files written (PNGs that could be drawn, then the CSV).
 
     Raises:
-        ValueError: No folder, a label count that does not match, or a folder that does not exist or has
-            neither ``summary.json`` nor contact profiles (named in the message).
+        ValueError: No folder, a label count that does not match, a folder that does not exist or has
+            neither ``summary.json`` nor contact profiles, or an ``out`` that is a file, under a file or not
+            writable (named in the message).
     """
     folders = [Path(f) for f in folders]
     if not folders:
@@ -726,8 +728,10 @@ def compare_runs(folders: Sequence[str | Path], labels: Sequence[str] | None, ou
     runs = [load_run(f, labels[i] if labels is not None else None) for i, f in enumerate(folders)]
     if labels is None:
         _unique_labels(runs)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    try:  # a file, under a file, not writable: said here, not as a traceback of the first picture
+        out = ensure_writable_folder(out)
+    except OutputFolderError as exc:
+        raise ValueError(str(exc)) from None
     written: list[Path] = []
 
     def attempt(name: str, draw: Callable[[], Path | None]) -> None:

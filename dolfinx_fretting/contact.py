@@ -19,8 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from mpi4py import MPI
 
-__all__ = ["RigidPlane", "ContactSet", "find_candidates", "find_pairs", "tangent_frame"]
+__all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "find_candidates", "find_pairs", "tangent_frame",
+           "constrained_dofs"]
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
@@ -181,11 +183,15 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
     coords = V.tabulate_dof_coordinates()[nodes, :gdim]
     gaps = obstacle.gap(coords)
 
-    # Point of the surface closest to the obstacle (the first point of contact), on every rank. Ties (equal
-    # gaps) go to the node nearest the plane point's foot along the plane, then the smallest coordinates, so
-    # that the window does not depend on the partition.
+    # Point of the surface closest to the obstacle (the first point of contact), on every rank. Ties go to
+    # the node nearest the plane point's foot along the plane, then the smallest coordinates, so that the
+    # window does not depend on the partition. Gaps within rounding of the smallest (1e-9 of the surface's
+    # extent: a flat face meshed by a generator is flat to ~1e-16 only) are ties.
     frame = obstacle.frame
-    keys = [(g, float(np.linalg.norm((c - obstacle.point) @ frame[1:].T)), *c) for g, c in zip(gaps, coords)]
+    extent = np.ptp(np.concatenate(comm.allgather(coords)), axis=0).max(initial=0.0)
+    g_min = comm.allreduce(gaps.min(initial=np.inf), op=MPI.MIN)
+    keys = [(g if g > g_min + 1e-9 * extent else g_min, float(np.linalg.norm((c - obstacle.point) @ frame[1:].T)),
+             *c) for g, c in zip(gaps, coords)]
     local_min = min(keys) if keys else (np.inf, np.inf) + (0.0,) * gdim
     closest = np.array(min(comm.allgather(local_min))[2:])
     if half_width is not None:
@@ -390,3 +396,178 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     return ContactSet(dim=gdim, global_nodes=gnodes, coords=coords, frames=frames, gap0=gaps,
                       tributary=trib, abscissa=abscissa, H=H, master_nodes=masters, master_weights=weights,
                       master_points=P)
+
+
+
+# The public contact object ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ElasticBody:
+    """A deformable counter-body (the *master*) meshed in the same mesh as the body (the *slave*). 2D.
+
+    Each slave node of the contact surface is paired once, in the reference configuration, with the closest
+    point of the master surface (node-to-segment, small sliding: see :func:`find_pairs`).
+
+    The obstacle's rigid motion ``D`` of :class:`~dolfinx_fretting.problem.FrettingProblem` translates the
+    master body as a whole (as if the supports that hold it moved with it; a rigid translation of a body
+    held on one face only is stress-free), in the frame of ``normal``: ``D = d_n n + d_t t1``.
+
+    Attributes:
+        surface: ``(facet_tags, marker)`` of the master's contact surface.
+        normal: Unit normal of the master surface, pointing from the master into the slave body; it fixes
+            the frame (n, t1) of the obstacle motion and of the total forces.
+        cells: Local cells of the master body (optional): the displacement recovered by
+            :meth:`~dolfinx_fretting.problem.FrettingProblem.displacement` then includes the master's rigid
+            motion ``D`` on its nodes.
+    """
+
+    surface: tuple
+    normal: np.ndarray
+    cells: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        n = np.asarray(self.normal, dtype=float)
+        if n.ndim != 1 or n.size not in (2, 3) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
+            raise ValueError(f"ElasticBody.normal = {self.normal!r}: expected a finite non-zero 2- or 3-vector")
+        object.__setattr__(self, "normal", n / np.linalg.norm(n))
+
+    @property
+    def frame(self) -> np.ndarray:
+        """Rows (n, t1[, t2]) of the obstacle-motion frame (see :func:`tangent_frame`)."""
+        return tangent_frame(self.normal)
+
+
+def _check_vector_p1(V) -> None:
+    """Refuse a space that is not a vector P1 (Lagrange degree 1, one component per space dimension)."""
+    from . import _dolfinx as dfx
+
+    gdim = V.mesh.geometry.dim
+    degree, family, value_size = dfx.element_degree(V), dfx.element_family(V), dfx.value_size(V)
+    if value_size != gdim or V.dofmap.index_map_bs != gdim or family not in ("P", "Q", "Lagrange", "CG") \
+            or degree != 1:
+        raise ValueError(
+            f"Contact: the displacement space must be vector P1 (Lagrange, degree 1, {gdim} components, one "
+            f"node per mesh vertex); got family {family!r}, degree {degree}, {value_size} component(s), block size "
+            f"{V.dofmap.index_map_bs}. Contact nodes, frames and tributary measures are defined on P1 vertices: "
+            "solve on a vector P1 space (a mixed or higher-order space is not supported)")
+
+
+def constrained_dofs(V, bcs) -> np.ndarray:
+    """Local unrolled dofs (``bs * node + component``) of ``V`` fixed by ``bcs`` (owned and ghost).
+
+    Args:
+        V: The blocked vector space the conditions act on (conditions on ``V.sub(i)`` included).
+        bcs: DOLFINx Dirichlet conditions.
+    """
+    bs = V.dofmap.index_map_bs
+    size = (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts) * bs
+    dofs = [np.asarray(bc.dof_indices()[0], dtype=np.int64) for bc in bcs]
+    out = np.unique(np.concatenate(dofs)) if dofs else np.zeros(0, dtype=np.int64)
+    if out.size and out.max() >= size:
+        raise ValueError("Contact: a Dirichlet condition in bcs is not on the displacement space V")
+    return out
+
+
+class Contact:
+    """Frictional contact of the body discretised by ``V`` with an obstacle. Collective to build.
+
+    The DOLFINx idiom of dolfinx_mpc: the user owns mesh, space, forms and boundary conditions; this object
+    holds the contact nodes of one tagged boundary, their frames, gaps and tributary measures and the operator
+    H (``x = H u + g``, see :mod:`dolfinx_fretting.contact`), identical on every rank.
+
+    Dofs fixed by ``bcs`` are handled exactly: a node whose every component is fixed is never a contact
+    candidate (it cannot move); at a node with some components fixed (a roller), those components enter the
+    relative positions (their prescribed values) but not the compliance W (``H_free``, H without the fixed
+    columns: K has identity rows there, which would add a meaningless unit compliance). A contact direction
+    left with no free dof is refused with a message.
+
+    Frames and units: the obstacle frame is ``obstacle.frame``, rows ``(n, t1[, t2])`` with n pointing from the
+    obstacle into the body, ``t1 = (n_y, -n_x)`` in 2D and ``t2 = n x t1`` in 3D; per-contact forces ``r``
+    and relative positions are in each contact's own frame (``contact_set.frames``: the obstacle frame for a
+    rigid plane, the master segment's for an elastic body).
+
+    Args:
+        V: Vector P1 displacement space (anything else is refused).
+        surface: ``(facet_tags, marker)``: the body's boundary that may touch the obstacle.
+        obstacle: :class:`RigidPlane` (2D or 3D, any orientation) or :class:`ElasticBody` (2D).
+        mu: Coulomb friction coefficient (finite, >= 0), one value or one per contact.
+        bcs: The Dirichlet conditions of the problem (their dofs are excluded as above).
+        window: Candidate half-width (length units): only nodes within this distance, measured in the
+            obstacle's tangent plane, of the body point closest to the obstacle; ``None``: every node of
+            ``surface``.
+
+    Attributes:
+        contact_set: The :class:`ContactSet` (nodes, frames, gaps, tributary measures, H).
+        H_free: H without the columns of fixed dofs (what W is built from).
+        mu: Friction coefficient per contact.
+        frame: The obstacle frame.
+    """
+
+    def __init__(self, V, surface: tuple, obstacle: RigidPlane | ElasticBody, mu: float | np.ndarray,
+                 bcs=(), window: float | None = None):
+        _check_vector_p1(V)
+        if not (isinstance(surface, tuple) and len(surface) == 2):
+            raise TypeError("Contact: surface must be (facet_tags, marker)")
+        if not isinstance(obstacle, (RigidPlane, ElasticBody)):
+            raise TypeError(f"Contact: obstacle must be a RigidPlane or an ElasticBody, got {type(obstacle).__name__}")
+        gdim = V.mesh.geometry.dim
+        if obstacle.normal.size != gdim:
+            raise ValueError(f"Contact: the obstacle normal has {obstacle.normal.size} components, the mesh is {gdim}D")
+        if window is not None and not (np.isfinite(window) and window > 0):
+            raise ValueError(f"Contact: window = {window!r}: expected a finite half-width > 0 or None")
+        self.V, self.surface, self.obstacle, self.window = V, surface, obstacle, window
+        self.bcs = list(bcs)
+        self._mu_given = mu
+        facet_tags, marker = surface
+        self.facets = np.asarray(facet_tags.find(marker), dtype=np.int32)
+        bs = V.dofmap.index_map_bs
+        fixed = constrained_dofs(V, self.bcs)
+        counts = np.bincount(fixed // bs, minlength=0)
+        self.fixed_nodes = np.flatnonzero(counts == bs).astype(np.int32)  # local blocks with every component fixed
+        imap = V.dofmap.index_map
+        local_nodes = (fixed // bs).astype(np.int32)
+        global_fixed = bs * imap.local_to_global(local_nodes).astype(np.int64) + fixed % bs
+        self.fixed_global = np.unique(np.concatenate(V.mesh.comm.allgather(global_fixed)))
+        if isinstance(obstacle, RigidPlane):
+            cs = find_candidates(V, self.facets, obstacle, window, exclude_nodes=self.fixed_nodes)
+        else:
+            master_tags, master_marker = obstacle.surface
+            cs = find_pairs(V, self.facets, np.asarray(master_tags.find(master_marker), dtype=np.int32), window,
+                            exclude_nodes=self.fixed_nodes)
+        self.contact_set: ContactSet = cs
+        H = cs.H.tocsc(copy=True)
+        free = np.ones(H.shape[1], dtype=bool)
+        free[self.fixed_global] = False
+        self.H_free = sp.csr_matrix(H @ sp.diags(free.astype(float)))
+        self.H_free.eliminate_zeros()
+        empty = np.diff(self.H_free.indptr) == 0
+        if empty.any():
+            row = int(np.flatnonzero(empty)[0])
+            c, k = divmod(row, cs.dim)
+            raise ValueError(
+                f"Contact: direction {('n', 't1', 't2')[k]} of contact {c} (node at {cs.coords[c].tolist()}) has every "
+                "dof fixed by bcs: the contact cannot move that way. Remove the node from the contact surface or "
+                "the condition from bcs")
+        mu_arr = np.broadcast_to(np.asarray(mu, dtype=float), (cs.nc,)).copy() if np.ndim(mu) == 0 else \
+            np.asarray(mu, dtype=float)
+        if mu_arr.shape != (cs.nc,) or not np.all(np.isfinite(mu_arr)) or np.any(mu_arr < 0):
+            raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact, {cs.nc})")
+        self.mu = mu_arr
+
+    @property
+    def frame(self) -> np.ndarray:
+        """Rows (n, t1[, t2]) of the obstacle frame (the directions of the obstacle motion and total forces)."""
+        return self.obstacle.frame
+
+    @property
+    def nc(self) -> int:
+        """Number of contact nodes."""
+        return self.contact_set.nc
+
+    @property
+    def dim(self) -> int:
+        """Components per contact (the space dimension)."""
+        return self.contact_set.dim
+
+    def with_window(self, window: float | None) -> Contact:
+        """The same contact with another candidate window (collective)."""
+        return Contact(self.V, self.surface, self.obstacle, self._mu_given, self.bcs, window)

@@ -2,11 +2,11 @@
 
 When no load is force controlled, an increment's right-hand side is known in advance:
 
-    q_abs = g0 + g_w - (n.D, t.D) + s q_f          (normal rows: gaps; tangential rows: positions)
+    q_abs = g0 + g_w - G D + sum_l s_l q_l      (normal rows: gaps; tangential rows: positions)
     q     = q_abs - y_prev   in the tangential rows  (so x_t is the slip increment, paper eq. 3)
 
-with D = dn n + dt t the obstacle's motion, s the face pressure and q_f = H K^-1 f the contact
-displacement per unit face pressure. So a whole cycle (thousands in a run) can run in one compiled call:
+with D the obstacle's rigid translation, G its local effect (``ContactSet.rigid_modes``), s_l the factor
+of load l and q_l = H K^-1 f_l the contact displacement per unit factor of that load. So a whole cycle (thousands in a run) can run in one compiled call:
 local Uzawa solve (:mod:`dolfinx_fretting.local_solvers`; on the normal rows alone when ``mu = 0``, with
 the same iterates), then :func:`dolfinx_fretting.wear.commit_increment`.
 Python only sees a cycle's outputs. The result is the same as the per-increment Python path (a test
@@ -160,14 +160,14 @@ def _pattern_rhs(q: np.ndarray, pattern: np.ndarray, b: np.ndarray) -> None:
 
 @numba.njit(cache=True)
 def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0: np.ndarray,
-                   gw: np.ndarray, q_f: np.ndarray, tributary: np.ndarray, abscissa: np.ndarray,
-                   dn: np.ndarray, dt: np.ndarray, s: np.ndarray, y: np.ndarray, r_last: np.ndarray,
+                   gw: np.ndarray, G: np.ndarray, D: np.ndarray, Q: np.ndarray, S: np.ndarray,
+                   tributary: np.ndarray, abscissa: np.ndarray, y: np.ndarray, r_last: np.ndarray,
                    r_warm: np.ndarray, warm: int, k: float, tol: float, max_iter: int, refresh: int,
                    keep: bool, out_r: np.ndarray, out_x: np.ndarray, out_y: np.ndarray, out_gw: np.ndarray,
                    out_states: np.ndarray, hist: np.ndarray, active: bool, pattern: np.ndarray,
                    lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray
                    ) -> tuple[int, int, float]:
-    """Solve ``dn.size`` increments in sequence, committing each converged one.
+    """Solve ``D.shape[0]`` increments in sequence, committing each converged one.
 
     Args:
         Wc: W transposed, C-contiguous (m, m) (W is symmetric: W itself).
@@ -176,9 +176,12 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         dim: 2 or 3.
         g0: Initial normal gap per contact.
         gw: Wear gap per contact (in/out).
-        q_f: Local displacement per unit face pressure (m,).
+        G: (m, gdim) local relative displacement per unit rigid translation of the obstacle
+            (``ContactSet.rigid_modes``).
+        D: (n, gdim) obstacle translation per increment, global coordinates.
+        Q: (L, m) local displacement per unit factor of each load (``H K^-1 f_l``).
+        S: (n, L) load factors per increment.
         tributary, abscissa: Per contact (see :func:`~dolfinx_fretting.wear.commit_increment`).
-        dn, dt, s: Obstacle normal and tangential displacement and face pressure per increment.
         y: Total relative position of the last converged increment (m,) (in/out).
         r_last: Forces of the last converged increment (m,) (in/out).
         r_warm: (n, m) forces of the same increments of the previous cycle (in/out: overwritten with
@@ -194,8 +197,10 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
     Returns:
         (converged increments, local status of the first failure (1 if none), its error).
     """
-    n = dn.size
-    m = q_f.size
+    n = D.shape[0]
+    m = G.shape[0]
+    gdim = G.shape[1]
+    n_loads = Q.shape[0]
     nc = mu.size
     q = np.empty(m)
     q_abs = np.empty(m)
@@ -223,15 +228,18 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
             for a in range(nc):
                 Wn[b, a] = Wc[b * dim, a * dim]
     for j in range(n):
+        # q_abs = g0 + g_w - G D + sum_l S_l Q_l, term by term in this order (so that a plane frame with
+        # exact zeros gives g0 + g_w - d_n and -d_t exactly, as the Python path's increments do).
         for a in range(nc):
             o = a * dim
-            q_abs[o] = g0[a] + gw[a] - dn[j] + s[j] * q_f[o]
-            q[o] = q_abs[o]
-            q_abs[o + 1] = -dt[j] + s[j] * q_f[o + 1]
-            q[o + 1] = q_abs[o + 1] - y[o + 1]
-            for c in range(2, dim):
-                q_abs[o + c] = s[j] * q_f[o + c]
-                q[o + c] = q_abs[o + c] - y[o + c]
+            for c in range(dim):
+                v = g0[a] + gw[a] if c == 0 else 0.0
+                for comp in range(gdim):   # (not k: that is the wear coefficient)
+                    v += -G[o + c, comp] * D[j, comp]
+                for load in range(n_loads):
+                    v += S[j, load] * Q[load, o + c]
+                q_abs[o + c] = v
+                q[o + c] = v if c == 0 else v - y[o + c]
         if warm == 1:
             for i in range(m):
                 r[i] = r_warm[j, i]

@@ -3,13 +3,15 @@
 Tables are written by rank 0 only and flushed after each increment (monotonic runs) or cycle (cyclic
 runs), so an interrupted run leaves every finished row readable; ``summary.json`` and checkpoints are
 replaced atomically (write to a temporary file, then rename). On resume the tables are truncated back to
-the sizes recorded in the checkpoint, so rows written after it do not appear twice. XDMF output is
-collective (every rank calls it).
+the sizes recorded in the checkpoint, so rows written after it do not appear twice; a table shorter than
+recorded (rows the checkpoint counts are gone) is refused with :class:`TableError`, never padded. XDMF output
+is collective (every rank calls it). ``summary.json`` is always valid JSON (:func:`write_json_atomic`).
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -17,15 +19,18 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from .wear import ROW_FIELDS
+from .problem import INCREMENT_COLUMNS
 
-__all__ = ["ResultWriter", "write_json_atomic", "HISTORY_FIELDS", "CYCLE_FIELDS", "PROFILE_FIELDS",
-           "plot_profiles"]
+__all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys", "TableError", "HISTORY_FIELDS",
+           "CYCLE_FIELDS", "PROFILE_FIELDS", "plot_profiles", "RUN_DESCRIPTION", "read_run_description"]
+
+#: The machine-readable description of a run in its output folder: what was modelled (obstacle, bodies,
+#: wear shares, dimension) and the columns of every table, for the readers (pictures, plots, compare).
+RUN_DESCRIPTION = "run.json"
 
 #: Columns of ``history.csv`` (one row per increment).
 HISTORY_FIELDS = ["increment", "cycle", "step", "stage", "normal_displacement", "tangential_displacement",
-                  "face_pressure", *ROW_FIELDS, "local_iterations", "local_error", "load_solves",
-                  "newton_iterations", "newton_delta_1", "newton_delta_2", "cutbacks", "yielded_points"]
+                  "face_pressure", *INCREMENT_COLUMNS]
 #: Columns of ``cycles.csv`` (one row per cycle of a cyclic run).
 CYCLE_FIELDS = ["cycle", "equivalent_cycles", "jump", "jump_bound", "jump_stability_limit", "jump_error_estimate",
                 "wear_error_estimate", "dissipated_energy", "wear_area", "max_wear_depth",
@@ -37,11 +42,64 @@ PROFILE_FIELDS = ["increment", "cycle", "step", "node", "position", "gap", "pres
 _TABLES = {"history": HISTORY_FIELDS, "cycles": CYCLE_FIELDS, "contact_profiles": PROFILE_FIELDS}
 
 
+def read_run_description(folder: str | Path) -> dict[str, Any] | None:
+    """The folder's :data:`RUN_DESCRIPTION`, or None if it has none (a folder of an older release)."""
+    try:
+        return json.loads((Path(folder) / RUN_DESCRIPTION).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def finite_json(data: Any, prefix: str = "") -> tuple[Any, list[str]]:
+    """A JSON-ready copy of ``data`` with every non-finite number replaced by ``None``, and their keys.
+
+    NumPy scalars and arrays become Python numbers and lists. Keys are dotted (``cycle_jump.stability_limit``),
+    list elements indexed (``values[3]``).
+
+    Returns:
+        (copy, keys of the replaced values).
+    """
+    if isinstance(data, np.ndarray):
+        data = data.tolist()
+    elif isinstance(data, np.generic):
+        data = data.item()
+    if isinstance(data, dict):
+        out, bad = {}, []
+        for key, value in data.items():
+            out[key], sub = finite_json(value, f"{prefix}.{key}" if prefix else str(key))
+            bad += sub
+        return out, bad
+    if isinstance(data, (list, tuple)):
+        out_list, bad = [], []
+        for i, value in enumerate(data):
+            v, sub = finite_json(value, f"{prefix}[{i}]")
+            out_list.append(v)
+            bad += sub
+        return out_list, bad
+    if isinstance(data, float) and not math.isfinite(data):
+        return None, [prefix or "value"]
+    return data, []
+
+
+def non_finite_keys(data: Any) -> list[str]:
+    """Dotted keys of the non-finite numbers (inf, nan) anywhere in ``data`` (dicts, lists, NumPy values)."""
+    return finite_json(data)[1]
+
+
 def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
-    """Write JSON through a temporary file and a rename, so readers never see half a file."""
+    """Write JSON through a temporary file and a rename, so readers never see half a file.
+
+    The file is always valid JSON (RFC 8259 has no infinity or NaN; ``allow_nan=False``): a non-finite number
+    is written as ``null`` and its key listed under ``"non_finite_keys"``. Written, not refused: the summary of a
+    failed run is the diagnostic a user needs, and a null with its key named cannot be mistaken for a number
+    (the runner also refuses to call such a run converged).
+    """
+    clean, bad = finite_json(data)
+    if bad:
+        clean = {**clean, "non_finite_keys": bad}
     tmp = path.with_suffix(path.suffix + ".tmp")
     with open(tmp, "w") as f:
-        json.dump(data, f, indent=2, default=_jsonable)
+        json.dump(clean, f, indent=2, default=_jsonable, allow_nan=False)
         f.write("\n")
         f.flush()
         os.fsync(f.fileno())
@@ -66,6 +124,10 @@ def _fmt(v: Any) -> str:
     return f"{float(v):.10g}"
 
 
+class TableError(ValueError):
+    """A table cannot be resumed: missing, or shorter than the checkpoint records (the message names it)."""
+
+
 class ResultWriter:
     """Writes a run's tables into ``out_dir`` (rank 0) and its fields (collective).
 
@@ -87,11 +149,22 @@ class ResultWriter:
             self.out.mkdir(parents=True, exist_ok=True)
         comm.barrier()
         self._files: dict[str, Any] = {}
+        names = ["history", "cycles"] + (["contact_profiles"] if profiles else [])
+        # A table shorter than the checkpoint records (or missing) has lost rows: truncate() would extend it
+        # with NUL bytes (or a new table would start without them). Checked on rank 0, raised on every rank.
+        problem = None
+        if self.rank0 and resume_sizes is not None:
+            from .outdir import check_resume_tables
+
+            problem = check_resume_tables(self.out, {k: v for k, v in resume_sizes.items() if k in names})
+        if comm.size > 1:
+            problem = comm.bcast(problem, root=0)
+        if problem is not None:
+            raise TableError(f"--resume: {problem}")
         if self.rank0:
-            names = ["history", "cycles"] + (["contact_profiles"] if profiles else [])
             for name in names:
                 path = self.out / f"{name}.csv"
-                if resume_sizes is not None and name in resume_sizes and path.is_file():
+                if resume_sizes is not None and name in resume_sizes:
                     f = open(path, "r+")
                     f.truncate(resume_sizes[name])
                     f.seek(resume_sizes[name])

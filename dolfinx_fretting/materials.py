@@ -120,6 +120,12 @@ class J2Plasticity:
         """The elastic part as a :class:`LinearElastic`."""
         return LinearElastic(self.E, self.nu)
 
+    def update(self, strain: np.ndarray, eps_p: np.ndarray, p: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The constitutive update of :class:`dolfinx_fretting.problem.Plasticity`: the radial return with
+        its consistent tangent (:func:`return_mapping`); returns ``(stress, eps_p, p, tangent, yielded)``."""
+        return return_mapping(self, strain, eps_p, p, tangent=True)
+
 
 def plastic_modulus_from_tangent(E: float, E_t: float) -> float:
     """Plastic modulus H of linear isotropic hardening from the tangent modulus E_t of a uniaxial curve.

@@ -453,34 +453,32 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None, plan
     return pl, info
 
 
-def _plane_from_checkpoint(folder: Path) -> tuple[list[float], list[float]] | None:
-    """The plane (point, normal) of the scene recorded in the folder's checkpoint, if any."""
-    try:
-        with np.load(folder / "checkpoint.npz", allow_pickle=False) as ck:
-            meta = json.loads(str(ck["meta"]))
-        contact = json.loads(meta["identity"])["contact"]
-        return list(contact["plane_point"]), list(contact["plane_normal"])
-    except Exception:  # noqa: BLE001 - no checkpoint, or one of another format: the caller says so
+def _plane_from_description(folder: Path) -> tuple[list[float], list[float]] | None:
+    """The obstacle plane (point, normal) recorded in the folder's ``run.json``, if any."""
+    from .io import read_run_description
+
+    run = read_run_description(folder)
+    if run is None:
         return None
+    return list(run["obstacle"]["point"]), list(run["obstacle"]["normal"])
 
 
 def _slave_share(folder: Path) -> float | None:
-    """The cylinder's share of the wear gap when the obstacle is a meshed body (``summary.json``), else None."""
-    try:
-        summary = json.loads((folder / "summary.json").read_text())
-    except (OSError, ValueError):
+    """The cylinder's share of the wear gap when the obstacle is a meshed body (``run.json``), else None."""
+    from .io import read_run_description
+
+    run = read_run_description(folder)
+    if run is None or run["obstacle"]["kind"] != "elastic_body" or run.get("slave_wear_share") is None:
         return None
-    if not str(summary.get("obstacle", "")).startswith("elastic flat") or not summary.get("wear_k"):
-        return None
-    return float(summary.get("wear_k_slave", summary["wear_k"])) / float(summary["wear_k"])
+    return float(run["slave_wear_share"])
 
 
 def _obstacle_is_a_body(folder: Path) -> bool:
-    """Whether the run's obstacle is a meshed body (``summary.json``'s ``obstacle``: an elastic flat)."""
-    try:
-        return str(json.loads((folder / "summary.json").read_text()).get("obstacle", "")).startswith("elastic flat")
-    except (OSError, ValueError):
-        return False
+    """Whether the run's obstacle is a meshed body (``run.json``)."""
+    from .io import read_run_description
+
+    run = read_run_description(folder)
+    return run is not None and run["obstacle"]["kind"] == "elastic_body"
 
 
 def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> list[str]:
@@ -489,7 +487,7 @@ def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> l
     Args:
         folder: The output folder (``fields.xdmf``, ``contact_profiles.csv``).
         plane_point, plane_normal: The rigid plane (normal pointing into the body); default: the scene in
-            the folder's checkpoint, else the built-in scenes' plane y = 0 with normal (0, 1).
+            the folder's run.json, else the built-in scenes' plane y = 0 with normal (0, 1).
 
     Returns:
         One line per picture: the file written, or why it was not.
@@ -497,7 +495,7 @@ def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> l
     folder = Path(folder)
     notes = []
     if plane_normal is None:
-        rec = _plane_from_checkpoint(folder)
+        rec = _plane_from_description(folder)
         if rec is None:
             rec = ([0.0, 0.0], [0.0, 1.0])
             notes.append("plane not recorded in the folder: assumed y = 0, normal (0, 1)")

@@ -124,7 +124,9 @@ class PlasticState:
         """Return mapping from the committed state at the strain of ``u``; fills the stress and tangent
         functions used by the forms (collective only through the ghost update)."""
         eps = self.strain(u)
-        sigma, eps_p, p, C, yielded = return_mapping(self.law, eps, self.eps_p, self.p, tangent=True)
+        # The law's own update (the constitutive hook of problem.Plasticity; J2Plasticity.update is the radial
+        # return); points of a body that stays elastic use a J2 law that never yields.
+        sigma, eps_p, p, C, yielded = self.law.update(eps, self.eps_p, self.p)
         if self.elastic_points.any():
             e = self.elastic_points
             sigma[e], eps_p[e], p[e], C[e], yielded[e] = return_mapping(self._elastic_law, eps[e], self.eps_p[e],
@@ -300,8 +302,9 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
         """Newton loop of one increment from the committed state.
 
         Args:
-            local_solve: ``local_solve(q_body, W) -> Solved`` (the contact solve with its load control;
-                called on every rank with identical input; must raise on failure).
+            local_solve: ``local_solve(q_body, W) -> IncrementResult`` (the contact solve with its load control;
+                its ``forces`` enter the equilibrium; called on every rank with identical input; must raise on
+                failure).
             pressure: Face pressure of the increment.
 
         Returns:
@@ -331,7 +334,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
             u_pred.x.array[:] = u_i.x.array - z.x.array
             solved = local_solve(self._H_dot(u_pred), W)
             # u_new = u_pred + K^-1 H^T r
-            self._z.getArray()[:] = self._contact_force(solved.r)
+            self._z.getArray()[:] = self._contact_force(solved.forces)
             dfx.set_bc(self._z, self.problem.bcs, scale=0.0)
             c = self._work[1]
             self._solve_into(op, self._z, c)
@@ -339,7 +342,7 @@ cycles most increments need no refactorisation). The wear gap is held fixed duri
             u_new.x.array[:] = u_pred.x.array + c.x.array
             du = u_new.x.array[:n] - u_i.x.array[:n]
             R = self._residual(u_new, pressure)
-            out_of_balance = R.getArray(readonly=True) - self._contact_force(solved.r)
+            out_of_balance = R.getArray(readonly=True) - self._contact_force(solved.forces)
             sums = np.array([out_of_balance @ out_of_balance, du @ du,
                              np.sum((u_new.x.array[:n] - self.u.x.array[:n]) ** 2),
                              self._z.getArray(readonly=True) @ self._z.getArray(readonly=True),

@@ -8,19 +8,32 @@ Every key is checked here: an unknown key, a wrong type or a value outside its r
 :class:`SceneError` whose message names the key (``section.key``), the value given and the allowed
 range. Checks that need the mesh (for instance "no contact candidate found") are made right after the
 mesh is built, still before any factorisation.
+
+Numbers must be finite (``inf`` and ``nan`` are refused everywhere, list elements and
+``solver.petsc_options`` values included) and of their key's type: a string is not read as a number, a
+boolean not as a count, a float not as an integer (a TOML integer is accepted for a float key). Physical
+consistency that can be checked before any work is checked here too: a prescribed tangential force must
+stay below mu times a prescribed normal force, and the loads must keep the body in small strain (see
+:data:`MAX_ELASTIC_STRAIN`).
 """
 
 from __future__ import annotations
 
 import copy
+import math
+import re
 import tomllib
+import types
+import typing
 from importlib import resources
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+import annotated_types
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-__all__ = ["Scene", "SceneError", "builtin_scenes", "load_scene", "apply_overrides", "PRESETS", "preset_values"]
+__all__ = ["Scene", "SceneError", "builtin_scenes", "load_scene", "apply_overrides", "PRESETS", "preset_values",
+           "scene_differences", "describe_differences", "MAX_ELASTIC_STRAIN"]
 
 
 class SceneError(ValueError):
@@ -28,39 +41,81 @@ class SceneError(ValueError):
 
 
 class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    # strict: no silent coercion ("1e5" is not a number, true is not a count, 2.0 is not an integer; an int
+    # is still accepted for a float); allow_inf_nan=False: inf and nan are refused in every float, list
+    # elements included.
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, strict=True, allow_inf_nan=False)
 
 
 def _range_error(key: str, value: Any, allowed: str) -> ValueError:
     return ValueError(f"{key} = {value!r} is out of range; allowed: {allowed}")
 
 
+#: Lengths (mm): from 1 nm to 100 m. Outside, the package's absolute geometric tolerances (node matching at
+#: ~1e-12 mm) and the mesh generator's stop making sense long before the floating-point range ends.
+MIN_LENGTH, MAX_LENGTH = 1e-6, 1e5
+Length = Annotated[float, Field(ge=MIN_LENGTH, le=MAX_LENGTH)]
+#: Young's modulus (MPa): from 1 kPa (softer than any solid gel) to 10 TPa (8x diamond's 1.2 TPa). W scales
+#: as 1/E and the contact forces of a prescribed approach as E: a modulus such as 1e-300 MPa puts K's entries
+#: below MUMPS's null-pivot threshold (the factorisation fails or returns garbage) and the forces near the
+#: underflow floors of the solvers' scales (1e-300), so no number of the run would mean anything.
+MIN_MODULUS, MAX_MODULUS = 1e-3, 1e7
+#: Largest elastic strain a load may produce (estimated before any work, see Scene._loads_fit_the_model):
+#: the model is small-strain linear elasticity; past a few percent its answer is meaningless (and past the
+#: elastic limit of any real solid). Estimates: half-cylinder under a normal force P, the Hertz peak
+#: p0/E* = sqrt(P / (pi R E*)); under an approach d, sqrt(d / (2R)) (from the geometric half-width
+#: sqrt(2Rd), an overestimate); a rectangle, P / (width E') or d / height; a face pressure s, |s| / E.
+MAX_ELASTIC_STRAIN = 0.1
+#: Largest mesh: elements along the refined contact zone of a half-cylinder, cells of a rectangle. Beyond,
+#: the mesh generator and the factorisation run for hours or exhaust memory (a hang, not a run): 206k dofs
+#: factorise in ~2 s here, and the cost grows faster than linearly.
+MAX_CONTACT_ELEMENTS = 20_000
+MAX_CELLS = 4_000_000
+#: Largest Archard coefficient (1/MPa), also for k x wear.acceleration: k p is the wear depth per unit slip, so
+#: at 1 MPa a coefficient of 1 wears as deep as the surfaces slide; measured coefficients are 1e-9 to 1e-4
+#: 1/MPa (severe adhesive wear). The bound keeps every wear update finite.
+MAX_WEAR_COEFFICIENT = 1.0
+FiniteFloat = Annotated[float, Field(ge=-MAX_LENGTH, le=MAX_LENGTH)]
+Cycle = Annotated[int, Field(ge=1, le=100_000_000)]
+
+
 class GeometrySettings(_Section):
     """Body and mesh (mm)."""
 
-    kind: Literal["half_cylinder", "rectangle"] = "half_cylinder"
+    kind: Literal["half_cylinder", "rectangle", "file"] = "half_cylinder"
+    #: ``kind = "file"``: the user's mesh, a gmsh ``.msh`` file with physical groups (names), 2D; a relative path
+    #: is taken from the scene file's folder. Boundaries are named in the ``[boundary]`` section.
+    path: str | None = None
     #: Half-cylinder radius (mm).
-    radius: float = Field(6.0, gt=0)
+    radius: Length = 6.0
     #: Element size in the refined contact zone (mm); the paper uses 10 µm.
-    contact_mesh_size: float = Field(0.01, gt=0)
+    contact_mesh_size: Length = 0.01
     #: Half-width of the refined contact zone (mm); ``None``: chosen from the radius (R/15).
-    contact_half_width: float | None = Field(None, gt=0)
+    contact_half_width: Length | None = None
     #: Element size far from the contact (mm); ``None``: R/10 (half-cylinder) .
-    coarse_mesh_size: float | None = Field(None, gt=0)
+    coarse_mesh_size: Length | None = None
     #: Rectangle width and height (mm) and its number of cells along x and y.
-    width: float = Field(50.0, gt=0)
-    height: float = Field(50.0, gt=0)
-    nx: int = Field(40, ge=1)
-    ny: int = Field(40, ge=1)
+    width: Length = 50.0
+    height: Length = 50.0
+    nx: int = Field(40, ge=1, le=MAX_CELLS)
+    ny: int = Field(40, ge=1, le=MAX_CELLS)
     #: Quadrilateral (four-node) cells; triangles otherwise.
     quadrilateral: bool = True
     #: The elastic flat under a half-cylinder (``contact.obstacle = "elastic_flat"``): width and height (mm).
     #: Its top is y = 0, centred under the cylinder; its bottom is fixed.
-    flat_width: float = Field(20.0, gt=0)
-    flat_height: float = Field(10.0, gt=0)
+    flat_width: Length = 20.0
+    flat_height: Length = 10.0
 
     @model_validator(mode="after")
     def _sizes_fit_the_body(self) -> GeometrySettings:
+        if self.kind == "file":
+            if self.path is None:
+                raise ValueError("geometry.path (a gmsh .msh file) is required with geometry.kind = 'file'")
+            if not self.path.endswith(".msh"):
+                raise _range_error("geometry.path", self.path, "a gmsh .msh file (with physical groups)")
+        elif self.path is not None:
+            raise _range_error("geometry.path", self.path, f"unset with geometry.kind = {self.kind!r} (the mesh is "
+                               "built in); set geometry.kind = 'file' to read it")
         if self.kind == "half_cylinder":
             if self.contact_mesh_size >= self.radius:
                 raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
@@ -75,10 +130,25 @@ class GeometrySettings(_Section):
             if self.coarse_mesh_size is not None and self.coarse_mesh_size >= self.radius:
                 raise _range_error("geometry.coarse_mesh_size", self.coarse_mesh_size,
                                    f"0 < coarse_mesh_size < geometry.radius = {self.radius} mm")
-        else:
-            hx, hy = self.width / self.nx, self.height / self.ny
-            if min(hx, hy) <= 0 or hx > self.width or hy > self.height:  # pragma: no cover - Field bounds
-                raise _range_error("geometry.nx", self.nx, "nx, ny >= 1")
+            if self.coarse_mesh_size is not None and self.coarse_mesh_size < self.contact_mesh_size:
+                raise _range_error("geometry.coarse_mesh_size", self.coarse_mesh_size,
+                                   f"geometry.contact_mesh_size = {self.contact_mesh_size} <= coarse_mesh_size "
+                                   f"< radius = {self.radius} mm")
+            # The mesh's size: elements along the refined zone and along the arc (a hang otherwise, not a run).
+            along = 2 * self.refined_half_width / self.contact_mesh_size
+            if along > MAX_CONTACT_ELEMENTS:
+                raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
+                                   f">= 2 x refined half-width {self.refined_half_width:g} mm / {MAX_CONTACT_ELEMENTS} "
+                                   f"= {2 * self.refined_half_width / MAX_CONTACT_ELEMENTS:.3g} mm (at most "
+                                   f"{MAX_CONTACT_ELEMENTS} elements along the refined contact zone)")
+            coarse = self.coarse_mesh_size if self.coarse_mesh_size is not None else self.radius / 10
+            if math.pi * self.radius / coarse > MAX_CONTACT_ELEMENTS:
+                raise _range_error("geometry.coarse_mesh_size", coarse,
+                                   f">= pi x radius / {MAX_CONTACT_ELEMENTS} = "
+                                   f"{math.pi * self.radius / MAX_CONTACT_ELEMENTS:.3g} mm")
+        elif self.kind == "rectangle" and self.nx * self.ny > MAX_CELLS:
+            raise _range_error("geometry.nx", self.nx, f"geometry.nx x geometry.ny <= {MAX_CELLS} cells "
+                               f"(ny = {self.ny})")
         return self
 
     @property
@@ -99,15 +169,15 @@ class MaterialSettings(_Section):
 
     model: Literal["elastic", "elastoplastic"] = "elastic"
     #: Young's modulus (MPa).
-    E: float = Field(115000.0, gt=0)
+    E: float = Field(115000.0, ge=MIN_MODULUS, le=MAX_MODULUS)
     #: Poisson's ratio; plane strain needs -1 < nu < 0.5.
     nu: float = Field(0.342, gt=-1.0, lt=0.5)
     #: Initial yield stress sigma_y0 (MPa), elastoplastic only.
     yield_stress: float | None = Field(None, gt=0)
     #: Plastic hardening modulus H (MPa), elastoplastic only.
-    hardening_modulus: float | None = Field(None, ge=0)
+    hardening_modulus: float | None = Field(None, ge=0, le=MAX_MODULUS)
     #: Uniaxial tangent modulus E_t (MPa), 0 <= E_t < E, instead of hardening_modulus.
-    tangent_modulus: float | None = Field(None, ge=0)
+    tangent_modulus: float | None = Field(None, ge=0, le=MAX_MODULUS)
     #: Two bodies (``contact.obstacle = "elastic_flat"``), elastoplastic: which body may yield; the other
     #: stays elastic with the same E and nu.
     plastic_body: Literal["both", "cylinder", "flat"] = "both"
@@ -149,18 +219,19 @@ class ContactSettings(_Section):
     the rigid plane: relative motions, forces and wear are those of the paper's load on the cylinder's top.
     """
 
-    #: Coulomb friction coefficient.
-    mu: float = Field(0.9, ge=0)
+    #: Coulomb friction coefficient. At most 100: measured coefficients stay below ~10 (clean metals in
+    #: vacuum); beyond, the cone is a wall and the tangential problem is meaningless.
+    mu: float = Field(0.9, ge=0, le=100)
     obstacle: Literal["rigid_plane", "elastic_flat"] = "rigid_plane"
     #: A point of the rigid plane (mm) and its unit normal pointing from the plane into the body.
-    plane_point: list[float] = Field(default_factory=lambda: [0.0, 0.0], min_length=2, max_length=3)
-    plane_normal: list[float] = Field(default_factory=lambda: [0.0, 1.0], min_length=2, max_length=3)
+    plane_point: list[FiniteFloat] = Field(default_factory=lambda: [0.0, 0.0], min_length=2, max_length=3)
+    plane_normal: list[FiniteFloat] = Field(default_factory=lambda: [0.0, 1.0], min_length=2, max_length=3)
     #: Boundary of the body that may touch the obstacle (a facet tag name of the mesh).
     surface: str = "surface"
     #: Candidate window: nodes of ``surface`` within this distance (mm, along the plane) of the point
     #: of the body closest to the plane. ``None``: the refined contact zone of the mesh (half-cylinder)
     #: or the whole surface (rectangle).
-    candidate_half_width: float | None = Field(None, gt=0)
+    candidate_half_width: Length | None = None
 
     @model_validator(mode="after")
     def _normal_is_a_direction(self) -> ContactSettings:
@@ -190,15 +261,16 @@ class WearSettings(_Section):
     """
 
     law: Literal["none", "archard"] = "none"
-    #: Archard wear coefficient of the wear gap (1/MPa): the paper's single coefficient.
-    k: float = Field(0.0, ge=0)
+    #: Archard wear coefficient of the wear gap (1/MPa): the paper's single coefficient. At most
+    #: :data:`MAX_WEAR_COEFFICIENT` (also for k times the acceleration).
+    k: float = Field(0.0, ge=0, le=1.0)
     #: Two deformable bodies: each body's own coefficient (1/MPa), given instead of ``k``. Both bodies see
     #: the same pressure and relative slip, so the wear gap grows with ``k_slave + k_master`` and each
     #: body's worn depth is its share ``k_body / (k_slave + k_master)`` of it.
-    k_slave: float | None = Field(None, ge=0)
-    k_master: float | None = Field(None, ge=0)
+    k_slave: float | None = Field(None, ge=0, le=1.0)
+    k_master: float | None = Field(None, ge=0, le=1.0)
     #: Physical cycles per simulated cycle (the wear coefficient used is k * acceleration).
-    acceleration: float = Field(1.0, ge=1.0)
+    acceleration: float = Field(1.0, ge=1.0, le=100_000_000)
     #: Cycle jumping (``dolfinx_fretting.cycle_jump``): simulate a cycle with the real k, extrapolate the
     #: wear gap over dN cycles chosen under the bounds below and the explicit stability limit, repeat.
     cycle_jump: bool = False
@@ -224,6 +296,11 @@ class WearSettings(_Section):
         if self.law == "archard" and self.k_total <= 0:
             key = "wear.k_slave + wear.k_master" if any(per_body) else "wear.k"
             raise _range_error(key, self.k_total, f"{key.removeprefix('wear.')} > 0 (1/MPa) with wear.law = 'archard'")
+        if self.k_total * self.acceleration > MAX_WEAR_COEFFICIENT:
+            key = "wear.k_slave + wear.k_master" if any(per_body) else "wear.k"
+            raise _range_error("wear.acceleration", self.acceleration,
+                               f"{key} x wear.acceleration <= {MAX_WEAR_COEFFICIENT:g} 1/MPa (here {key} = "
+                               f"{self.k_total:g}): a wear gap growing faster than the slip at 1 MPa is no wear law")
         if self.cycle_jump and self.law != "archard":
             raise _range_error("wear.cycle_jump", self.cycle_jump, "false without a wear law (nothing to extrapolate)")
         if self.cycle_jump and self.acceleration != 1.0:
@@ -269,9 +346,10 @@ class LoadingSettings(_Section):
     whose quarter points are the four load points of its Fig. 6; ``"sinusoidal"``: A sin(2 pi t)).
     """
 
-    normal_displacement: float | None = Field(None, gt=0)
+    normal_displacement: float | None = Field(None, gt=0, le=MAX_LENGTH)
     normal_force: float | None = Field(None, gt=0)
-    tangential_displacement: float | None = None
+    #: Finite, of either sign (checked against the body and the normal force in Scene._loads_fit_the_model).
+    tangential_displacement: float | None = Field(None, ge=-MAX_LENGTH, le=MAX_LENGTH)
     tangential_force: float | None = None
     tangential_pressure: float | None = None
     #: Facet tag of the face that carries ``tangential_pressure``.
@@ -324,6 +402,82 @@ class LoadingSettings(_Section):
         return float(value) if value is not None else 0.0
 
 
+# PETSc options of the factorisation (solver.petsc_options) -------------------------------------------------
+#: MUMPS ICNTL parameters a scene may set (``mat_mumps_icntl_<i>``), with their allowed integer ranges (MUMPS
+#: 5.5 user guide, section 6.1). Not settable: 1-3 (output streams) and 5, 18, 19, 20, 21 (matrix and
+#: right-hand-side formats, Schur complement: PETSc sets them), 26 (Schur), 30 (entries of the inverse) and 31
+#: (discard the factors): the Delassus operator sets or relies on them.
+MUMPS_ICNTL: dict[int, range | tuple[int, ...]] = {
+    4: range(0, 5),            # print level
+    6: range(0, 8),            # permutation to a zero-free diagonal
+    7: (0, *range(2, 8)),      # sequential ordering (1, a user's ordering, has none to read)
+    8: (*range(-2, 9), 77),    # scaling
+    10: range(-1000, 1001),    # iterative refinement steps
+    11: range(0, 3),           # error analysis
+    12: range(0, 4),           # ordering strategy of symmetric matrices
+    13: range(-1_000_000, 1_000_001),  # ScaLAPACK on the root front
+    14: range(0, 10_001),      # workspace increase (%)
+    16: range(0, 1025),        # OpenMP threads
+    22: range(0, 2),           # out of core
+    23: range(0, 1_000_000_001),  # working memory (MB per process)
+    24: range(0, 2),           # null pivot detection
+    25: range(-1, 1_000_000_001),  # null space basis
+    27: range(-1_000_000, 1_000_001),  # blocking of the multiple right-hand sides
+    28: range(0, 3),           # sequential or parallel ordering
+    29: range(0, 3),           # parallel ordering tool
+    33: range(0, 2),           # determinant
+    35: range(0, 4),           # block low-rank factorisation
+    36: range(0, 2),           # BLR variant
+    38: range(0, 1001),        # BLR compression rate (per mille)
+}
+#: MUMPS CNTL parameters (``mat_mumps_cntl_<i>``): real, finite, in these ranges.
+MUMPS_CNTL: dict[int, tuple[float, float]] = {
+    1: (0.0, 1.0),        # relative pivoting threshold
+    3: (-1e300, 1e300),   # null pivot detection threshold
+    4: (-1.0, 1e300),     # static pivoting threshold
+    5: (0.0, 1e300),      # fixation of null pivots
+    7: (0.0, 1.0),        # BLR dropping parameter
+}
+#: The other keys of solver.petsc_options and their allowed values: the Delassus operator needs a direct
+#: MUMPS factorisation.
+PETSC_OPTIONS: dict[str, tuple[str, ...]] = {"pc_type": ("cholesky", "lu"), "pc_factor_mat_solver_type": ("mumps",)}
+
+
+def check_petsc_option(key: str, value: Any) -> None:
+    """Refuse a ``solver.petsc_options`` entry PETSc would ignore, reject late, or that breaks W.
+
+    Raises:
+        ValueError: naming ``solver.petsc_options.<key>``, the value and what is allowed.
+    """
+    name = f"solver.petsc_options.{key}"
+    if key in PETSC_OPTIONS:
+        if not isinstance(value, str) or value not in PETSC_OPTIONS[key]:
+            raise _range_error(name, value, "one of " + ", ".join(repr(v) for v in PETSC_OPTIONS[key]))
+        return
+    m = re.fullmatch(r"mat_mumps_(icntl|cntl)_(\d+)", key)
+    if m is None:
+        allowed = ", ".join(list(PETSC_OPTIONS) + ["mat_mumps_icntl_<i>", "mat_mumps_cntl_<i>"])
+        raise ValueError(f"unknown PETSc option {name} = {value!r}; allowed keys: {allowed} "
+                         "(the prefix dolfinx_fretting_delassus_ is added)")
+    kind, index = m.group(1), int(m.group(2))
+    table = MUMPS_ICNTL if kind == "icntl" else MUMPS_CNTL
+    if index not in table:
+        raise ValueError(f"{name} = {value!r}: {kind.upper()}({index}) cannot be set here; allowed: "
+                         f"mat_mumps_{kind}_<i> for i in {', '.join(str(i) for i in table)}")
+    if kind == "icntl":
+        values = MUMPS_ICNTL[index]
+        ok = isinstance(value, int) and not isinstance(value, bool) and value in values
+        allowed = (f"an integer in [{values.start}, {values.stop - 1}]" if isinstance(values, range)
+                   else "one of " + ", ".join(str(v) for v in values))
+    else:
+        lo, hi = MUMPS_CNTL[index]
+        ok = (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+              and lo <= value <= hi)
+        allowed = f"a finite number in [{lo:g}, {hi:g}]"
+    if not ok:
+        raise _range_error(name, value, allowed)
+
+
 class SolverSettings(_Section):
     """Local (contact) solver and the factorisation behind W."""
 
@@ -337,7 +491,7 @@ class SolverSettings(_Section):
     local_method: Literal["uzawa", "nsgs", "newton", "auto"] = "uzawa"
     #: Unit-free tolerance of the local solver's error measure.
     local_tol: float = Field(1e-10, gt=0, lt=1)
-    local_max_iter: int = Field(20000, ge=1)
+    local_max_iter: int = Field(20000, ge=1, le=1_000_000_000)
     #: Relative tolerance on a prescribed force (force-controlled loads).
     force_tol: float = Field(1e-8, gt=0, lt=1)
     #: How W = H K^-1 H^T is built from the MUMPS factorisation.
@@ -355,7 +509,7 @@ class SolverSettings(_Section):
     #: W throughout: no refactorisation), ``"consistent"`` (tangent refactorised, W rebuilt every iteration)
     #: or ``"adaptive"`` (the last factorised matrix while it contracts the residual 10x per iteration).
     newton_tangent: Literal["elastic", "consistent", "adaptive"] = "adaptive"
-    newton_max_iter: int = Field(60, ge=1)
+    newton_max_iter: int = Field(60, ge=1, le=100_000)
     #: Newton tolerances: out-of-balance force relative to the forces in play (delta_1), last correction
     #: relative to the increment's displacement (delta_2).
     newton_residual_tol: float = Field(1e-8, gt=0, lt=1)
@@ -365,8 +519,17 @@ class SolverSettings(_Section):
     quadrature_degree: int | None = Field(None, ge=1, le=8)
     #: Halvings of an increment whose Newton loop fails before the run stops with a diagnostic.
     max_cutbacks: int = Field(4, ge=0, le=20)
-    #: Extra PETSc options for the factorisation (prefix ``dolfinx_fretting_delassus_`` is added).
-    petsc_options: dict[str, str | int | float | bool] = Field(default_factory=dict)
+    #: Extra PETSc options for the factorisation (prefix ``dolfinx_fretting_delassus_`` is added): only the
+    #: keys of :data:`PETSC_OPTIONS` (the factorisation type, MUMPS's ICNTL and CNTL parameters), each value
+    #: of its type and range.
+    petsc_options: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("petsc_options", mode="after")
+    @classmethod
+    def _known_petsc_options(cls, options: dict[str, Any]) -> dict[str, Any]:
+        for key, value in options.items():
+            check_petsc_option(key, value)
+        return options
 
 
 class OutputSettings(_Section):
@@ -379,18 +542,18 @@ class OutputSettings(_Section):
     contact_profiles: bool = True
     #: Cycles whose every increment is kept in ``contact_profiles.csv`` and whose end is written to the
     #: XDMF files; empty: 1, 2, 5, 10, 20, 50, ... and the last cycle.
-    snapshot_cycles: list[int] = Field(default_factory=list)
+    snapshot_cycles: list[Cycle] = Field(default_factory=list)
     #: Cycles whose fretting loop (tangential force against displacement) is plotted; empty: a few
     #: snapshot cycles.
-    loop_cycles: list[int] = Field(default_factory=list)
+    loop_cycles: list[Cycle] = Field(default_factory=list)
     #: Positions along the contact surface (mm) of nodes whose state history is plotted (the paper's
     #: points A and B); the nearest contact node is used.
-    track_positions: list[float] = Field(default_factory=list)
+    track_positions: list[FiniteFloat] = Field(default_factory=list)
     #: Write ``history.csv`` rows for every increment of every ``history_every``-th cycle (and of the
     #: preload and the snapshot cycles); ``cycles.csv`` always has every cycle.
-    history_every: int = Field(1, ge=1)
+    history_every: int = Field(1, ge=1, le=100_000_000)
     #: Wall time (s) between checkpoints of a cyclic run (one is also written at the end).
-    checkpoint_interval: float = Field(60.0, gt=0)
+    checkpoint_interval: float = Field(60.0, gt=0, le=1e9)
     #: A progress bar over the cycles when the terminal is interactive.
     progress: bool = True
 
@@ -461,23 +624,60 @@ def _apply_preset(scene: Scene) -> None:
             setattr(target, name, value)  # validated on assignment (e.g. against geometry.radius)
 
 
+class BoundarySettings(_Section):
+    """Boundary conditions by physical name of the mesh file (``geometry.kind = "file"`` only).
+
+    ``fixed``: every displacement component zero; ``symmetry``: zero normal displacement on a plane face normal
+    to a coordinate axis (a roller); ``displacement``: prescribed displacement vectors (mm) and ``pressure``:
+    pressures (MPa, pushing into the body), both ramped with the normal preload and held after it.
+    """
+
+    fixed: list[str] = Field(default_factory=list)
+    symmetry: list[str] = Field(default_factory=list)
+    displacement: dict[str, list[FiniteFloat]] = Field(default_factory=dict)
+    pressure: dict[str, Annotated[float, Field(ge=-MAX_MODULUS, le=MAX_MODULUS)]] = Field(default_factory=dict)
+
+    @property
+    def names(self) -> list[tuple[str, str]]:
+        """(key, physical name) of every condition."""
+        return ([("boundary.fixed", n) for n in self.fixed] + [("boundary.symmetry", n) for n in self.symmetry]
+                + [("boundary.displacement", n) for n in self.displacement]
+                + [("boundary.pressure", n) for n in self.pressure])
+
+
 class Scene(_Section):
     """A whole scene; see the README for every key with its unit."""
 
     name: str = "scene"
     description: str = ""
     geometry: GeometrySettings = Field(default_factory=GeometrySettings)
+    boundary: BoundarySettings = Field(default_factory=BoundarySettings)
     material: MaterialSettings = Field(default_factory=MaterialSettings)
     contact: ContactSettings = Field(default_factory=ContactSettings)
     wear: WearSettings = Field(default_factory=WearSettings)
-    loading: LoadingSettings = Field(default_factory=lambda: LoadingSettings(normal_force=100.0))
+    #: Required: the normal load (loading.normal_force or loading.normal_displacement) has no default.
+    loading: LoadingSettings
     solver: SolverSettings = Field(default_factory=SolverSettings)
     output: OutputSettings = Field(default_factory=OutputSettings)
 
     @model_validator(mode="after")
     def _window_fits(self) -> Scene:
         g, c, lo = self.geometry, self.contact, self.loading
-        if lo.tangential_kind == "pressure":
+        if g.kind != "file" and self.boundary.names:
+            raise _range_error(self.boundary.names[0][0], self.boundary.names[0][1],
+                               "no [boundary] section with a built-in geometry (its faces are fixed by the scene); "
+                               "set geometry.kind = 'file'")
+        if g.kind == "file":
+            if not (self.boundary.fixed or self.boundary.displacement):
+                raise ValueError("boundary: a mesh file needs boundary.fixed or boundary.displacement (names of "
+                                 "its physical groups) to hold the body")
+            if c.obstacle != "rigid_plane":
+                raise _range_error("contact.obstacle", c.obstacle, "'rigid_plane' with geometry.kind = 'file'")
+            for name, vector in self.boundary.displacement.items():
+                if len(vector) != len(c.plane_normal):
+                    raise _range_error(f"boundary.displacement.{name}", vector,
+                                       f"a {len(c.plane_normal)}-vector (mm)")
+        if lo.tangential_kind == "pressure" and g.kind != "file":
             faces = ("bottom", "right", "top", "left") if g.kind == "rectangle" else ("top", "surface")
             if lo.pressure_face not in faces:
                 raise _range_error("loading.pressure_face", lo.pressure_face,
@@ -518,6 +718,53 @@ class Scene(_Section):
         return self
 
     @model_validator(mode="after")
+    def _loads_fit_the_model(self) -> Scene:
+        """Checks of the loads against the friction and the body that need no mesh: |Q| < mu P for prescribed
+        forces, and the estimated elastic strain of each load at most MAX_ELASTIC_STRAIN."""
+        g, c, m, lo = self.geometry, self.contact, self.material, self.loading
+        mu, P, Q = c.mu, lo.normal_force, lo.tangential_force
+        if Q is not None and Q != 0 and mu == 0:
+            raise _range_error("loading.tangential_force", Q, "0 with contact.mu = 0 (a frictionless contact "
+                               "carries no tangential force)")
+        if Q is not None and Q != 0 and P is not None and abs(Q) >= mu * P:
+            raise _range_error("loading.tangential_force", Q,
+                               f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} N/mm "
+                               "(at or beyond mu P the contact slides and no displacement gives Q)")
+        two = c.obstacle == "elastic_flat"
+        E_plane = m.E / (1 - m.nu**2)
+        E_star = E_plane / (2.0 if two else 1.0)
+        eps = MAX_ELASTIC_STRAIN
+        if g.kind == "half_cylinder":
+            if P is not None and math.sqrt(P / (math.pi * g.radius * E_star)) > eps:
+                P_max = eps**2 * math.pi * g.radius * E_star
+                raise _range_error("loading.normal_force", P,
+                                   f"<= {P_max:.4g} N/mm: the Hertz strain sqrt(P / (pi R E*)) with geometry.radius "
+                                   f"= {g.radius:g} mm and material.E = {m.E:g} MPa (E* = {E_star:.4g} MPa) must stay "
+                                   f"<= {eps:g} (small-strain elasticity)")
+            d = lo.normal_displacement
+            if d is not None and d > 2 * eps**2 * g.radius:
+                raise _range_error("loading.normal_displacement", d,
+                                   f"<= {2 * eps**2 * g.radius:.4g} mm: the strain sqrt(d / (2R)) of an approach d "
+                                   f"on geometry.radius = {g.radius:g} mm must stay <= {eps:g} (small-strain "
+                                   "elasticity)")
+        elif c.surface in ("bottom", "top", "left", "right"):
+            face, depth = (g.width, g.height) if c.surface in ("bottom", "top") else (g.height, g.width)
+            if P is not None and P / (face * E_plane) > eps:
+                raise _range_error("loading.normal_force", P,
+                                   f"<= {eps * face * E_plane:.4g} N/mm: the mean strain P / (face length {face:g} mm "
+                                   f"x E/(1-nu^2) = {E_plane:.4g} MPa) must stay <= {eps:g} (small-strain elasticity)")
+            d = lo.normal_displacement
+            if d is not None and d / depth > eps:
+                raise _range_error("loading.normal_displacement", d,
+                                   f"<= {eps * depth:.4g} mm: the strain d / ({depth:g} mm, the body's depth under "
+                                   f"contact.surface = {c.surface!r}) must stay <= {eps:g} (small-strain elasticity)")
+        s_face = lo.tangential_pressure
+        if s_face is not None and abs(s_face) > eps * m.E:
+            raise _range_error("loading.tangential_pressure", s_face,
+                               f"|s| <= {eps:g} x material.E = {eps * m.E:.4g} MPa (small-strain elasticity)")
+        return self
+
+    @model_validator(mode="after")
     def _jump_elastic(self) -> Scene:
         # The jump extrapolates the wear gap only; a plastic state still evolving (ratcheting) would not
         # follow, and the stability limit uses the elastic W.
@@ -551,6 +798,55 @@ class Scene(_Section):
         return len(self.contact.plane_normal)
 
 
+#: Every key name of a scene (to tell keys from pydantic's union tags in an error's location).
+_KEY_NAMES = {name for model in (Scene, GeometrySettings, MaterialSettings, ContactSettings, WearSettings,
+                                 LoadingSettings, SolverSettings, OutputSettings) for name in model.model_fields}
+
+
+def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
+    """``{"a": {"b": 1}}`` -> ``{"a.b": 1}`` (lists and other values are leaves)."""
+    if not isinstance(data, dict):
+        return {prefix: data}
+    out: dict[str, Any] = {}
+    for key, value in data.items():
+        out.update(_flatten(value, f"{prefix}.{key}" if prefix else str(key)))
+    return out
+
+
+def _as_data(scene: Scene | dict[str, Any]) -> dict[str, Any]:
+    return scene.model_dump(mode="json") if isinstance(scene, BaseModel) else scene
+
+
+def scene_differences(a: Scene | dict[str, Any], b: Scene | dict[str, Any],
+                      ignore: tuple[str, ...] | list[str] = ()) -> list[str]:
+    """The dotted keys whose values differ between two scenes (sorted).
+
+    Args:
+        a, b: Scenes, or their ``model_dump(mode="json")`` dicts (e.g. a checkpoint's record of its scene).
+        ignore: Keys or whole sections to leave out (``"solver"``, ``"loading.cycles"``).
+
+    Returns:
+        E.g. ``["contact.mu", "material.E"]``; a key present in one only counts as different. Numbers compare
+        by value (a TOML integer 1 equals 1.0).
+    """
+    fa, fb = _flatten(_as_data(a)), _flatten(_as_data(b))
+
+    def ignored(key: str) -> bool:
+        return any(key == i or key.startswith(i + ".") for i in ignore)
+
+    missing = object()
+    return sorted(k for k in set(fa) | set(fb)
+                  if not ignored(k) and fa.get(k, missing) != fb.get(k, missing))
+
+
+def describe_differences(a: Scene | dict[str, Any], b: Scene | dict[str, Any],
+                         ignore: tuple[str, ...] | list[str] = (), names: tuple[str, str] = ("before", "now")) -> str:
+    """``scene_differences`` in words: ``"material.E = 115000.0 (before), 200000.0 (now)"``, ``"; "``-joined."""
+    fa, fb = _flatten(_as_data(a)), _flatten(_as_data(b))
+    return "; ".join(f"{k} = {fa.get(k, 'unset')!r} ({names[0]}), {fb.get(k, 'unset')!r} ({names[1]})"
+                     for k in scene_differences(a, b, ignore))
+
+
 def _allowed_keys(loc: tuple) -> list[str]:
     model: type[BaseModel] = Scene
     for part in loc:
@@ -562,18 +858,85 @@ def _allowed_keys(loc: tuple) -> list[str]:
     return list(model.model_fields)
 
 
+def _field_at(loc: tuple) -> tuple[Any, Any]:
+    """(annotation, FieldInfo) of the scene key at ``loc`` (list indices and union tags after it are skipped);
+    (None, None) if ``loc`` does not name a key."""
+    model: Any = Scene
+    field = None
+    for part in loc:
+        if isinstance(model, type) and issubclass(model, BaseModel) and str(part) in model.model_fields:
+            field = model.model_fields[str(part)]
+            model = field.annotation
+            continue
+        break
+    return (field.annotation, field) if field is not None else (None, None)
+
+
+def _constraints(metadata: list) -> list[str]:
+    out = []
+    for m in metadata:
+        for attr, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
+            if isinstance(m, getattr(annotated_types, attr.capitalize())):
+                out.append(f"{op} {getattr(m, attr):g}")
+    return out
+
+
+def _describe(annotation: Any, metadata: list | None = None) -> str:
+    """What a key of this type and these bounds accepts, in words (for error messages)."""
+    metadata = list(metadata or [])
+    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
+    if origin is Annotated:
+        inner_meta = [x for a in args[1:] for x in (getattr(a, "metadata", None) or [a])]
+        return _describe(args[0], inner_meta + metadata)
+    if origin in (typing.Union, types.UnionType):
+        options = [a for a in args if a is not type(None)]
+        text = " or ".join(_describe(a) for a in options)
+        text = " ".join([text, " and ".join(_constraints(metadata))]).strip()
+        return text + (" (or unset)" if len(options) < len(args) else "")
+    bounds = " and ".join(_constraints(metadata))
+    if origin is Literal:
+        return "one of " + ", ".join(repr(a) for a in args)
+    if origin is list:
+        lengths = [f"{name} {getattr(m, attr)}" for m in metadata
+                   for name, attr, cls in (("at least", "min_length", annotated_types.MinLen),
+                                           ("at most", "max_length", annotated_types.MaxLen))
+                   if isinstance(m, cls)]
+        return (f"a list ({', '.join(lengths)} elements)" if lengths else "a list") + (
+            f", each element {_describe(args[0])}" if args else "")
+    names = {float: "a finite number", int: "an integer", bool: "true or false", str: "a string", dict: "a table"}
+    text = names.get(origin or annotation, getattr(annotation, "__name__", str(annotation)))
+    return f"{text} {bounds}" if bounds else text
+
+
+def _allowed_text(loc: tuple) -> str:
+    annotation, field = _field_at(loc)
+    if field is None:
+        return ""
+    return _describe(annotation, field.metadata)
+
+
 def _format_validation_error(err: ValidationError, source: str) -> str:
     lines = [f"invalid scene ({source}):"]
     for e in err.errors():
-        key = ".".join(str(p) for p in e["loc"])
+        # a key's place: section.key, then a list index ([0]); pydantic's union tags (float, int...) dropped
+        loc = [p for i, p in enumerate(e["loc"]) if isinstance(p, int) or p in _KEY_NAMES
+               or (e["type"] == "extra_forbidden" and i == len(e["loc"]) - 1)]
+        key = ".".join(str(p) for p in loc if not isinstance(p, int)) + "".join(f"[{p}]" for p in loc
+                                                                                if isinstance(p, int))
         msg = e["msg"].removeprefix("Value error, ")
         if e["type"] == "extra_forbidden":
             msg = f"unknown key {key!r}; allowed keys here: {', '.join(_allowed_keys(e['loc'][:-1]))}"
+        elif e["type"] == "missing" and tuple(e["loc"]) == ("loading",):
+            msg = ("missing section [loading]: the normal load is required; give loading.normal_force (N/mm, > 0) "
+                   "or loading.normal_displacement (mm, > 0)")
         elif e["type"] == "missing":
             msg = f"missing key {key!r}"
+        elif e["type"] != "value_error" and key:
+            # a type or bound error of one key: its value, pydantic's reason and what the key accepts
+            allowed = _allowed_text(tuple(p for p in e["loc"] if not isinstance(p, int)))
+            msg = f"{key} = {e.get('input')!r}: {msg}" + (f"; allowed: {allowed}" if allowed else "")
         elif key and key not in msg:
-            given = e.get("input")
-            msg = f"{key} = {given!r}: {msg}"
+            msg = f"{key} = {e.get('input')!r}: {msg}"
         lines.append(f"  - {msg}")
     return "\n".join(lines)
 
@@ -641,11 +1004,21 @@ def load_scene(source: str | Path | dict[str, Any], overrides: list[str] | None 
             raise SceneError(f"scene {str(source)!r} is neither a built-in scene ({', '.join(sorted(scenes))}) "
                              "nor a TOML file")
         try:
-            data = tomllib.loads(path.read_text())
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
         except tomllib.TOMLDecodeError as exc:
             raise SceneError(f"{path}: not valid TOML: {exc}") from None
+        except UnicodeDecodeError as exc:
+            raise SceneError(f"{path}: not a UTF-8 text file (TOML is UTF-8): byte {exc.object[exc.start]:#04x} "
+                             f"at offset {exc.start} is not UTF-8") from None
+        except OSError as exc:
+            raise SceneError(f"{path}: cannot be read: {exc.strerror or exc}") from None
         label = str(path)
     data = apply_overrides(data, overrides)
+    geometry = data.get("geometry") if isinstance(data, dict) else None
+    if (not isinstance(source, dict) and isinstance(geometry, dict) and isinstance(geometry.get("path"), str)
+            and not Path(geometry["path"]).is_absolute()):
+        # A mesh file named in a scene file is found from the scene file's folder.
+        data = {**data, "geometry": {**geometry, "path": str((path.parent / geometry["path"]).resolve())}}
     try:
         return Scene.model_validate(data)
     except ValidationError as exc:

@@ -41,7 +41,7 @@ import numpy as np
 
 from .scenes import Scene, SceneError, load_scene
 
-__all__ = ["StudyPoint", "STUDY_FIELDS", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
+__all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
            "default_sweep", "sweep_entries", "plan_study", "run_study", "point_errors", "profile_l2_error", "write_study_table",
            "read_study_csv", "format_markdown", "plot_study"]
 
@@ -358,11 +358,24 @@ def _outcome(folder: Path) -> _Outcome:
     if prof is not None:
         last_cycle = int(prof.cycles.max())
         rows = prof.rows_of_cycle(last_cycle) if last_cycle > 0 else np.arange(prof.increments.size)
-        peak = float(np.nanmax(prof.values["pressure"][rows]))
+        pressure = prof.values["pressure"][rows]
+        # np.max, not nanmax: a NaN pressure must show (it makes the point non-finite, below)
+        peak = float(np.max(pressure)) if pressure.size else None
         position, wear = prof.position, prof.values["wear"][rows[-1]]
-    return _Outcome(_number(s.get("max_wear_depth")), peak, energy, position, wear, cycles,
-                    _number(s.get("equivalent_cycles")), s.get("contacts"), bool(s.get("converged", False)),
-                    str(s.get("error", "")))
+    converged, error = s.get("converged") is True, str(s.get("error", ""))
+    # Never a converged point with a non-finite number: the summary's own flag (written as null), the values
+    # the errors come from, and the worn profile.
+    bad = list(s.get("non_finite_keys") or [])
+    bad += [name for name, v in (("max_wear_depth", s.get("max_wear_depth")),
+                                 ("dissipated_energy", s.get("dissipated_energy"))) if _number(v) is None]
+    if peak is not None and not math.isfinite(peak):
+        bad.append("contact_profiles.csv pressure")
+    if wear is not None and not np.all(np.isfinite(wear)):
+        bad.append("contact_profiles.csv wear")
+    if converged and bad:
+        converged, error = False, f"non-finite results: {', '.join(bad)}"
+    return _Outcome(_number(s.get("max_wear_depth")), peak if peak is None or math.isfinite(peak) else None, energy,
+                    position, wear, cycles, _number(s.get("equivalent_cycles")), s.get("contacts"), converged, error)
 
 
 def point_errors(folder: str | Path, reference_folder: str | Path) -> dict[str, Any]:
@@ -385,6 +398,27 @@ def point_errors(folder: str | Path, reference_folder: str | Path) -> dict[str, 
 
 
 # Running -------------------------------------------------------------------------------------------------
+#: Files a study writes into its folder (besides ``runs/``).
+STUDY_FILES = ("study.csv", "study.md", "study.png")
+
+
+def check_study_folder(out: str | Path, overwrite: bool = False) -> Path:
+    """Check a study's output folder before any run: a writable folder (created), holding no study unless
+    ``overwrite``. Serial.
+
+    Raises:
+        OutputFolderError: naming the folder and the reason.
+    """
+    from .outdir import OutputFolderError, ensure_writable_folder
+
+    folder = ensure_writable_folder(out)
+    held = [name for name in STUDY_FILES if (folder / name).exists()]
+    if held and not overwrite:
+        raise OutputFolderError(f"--out {folder} already holds a study ({', '.join(held)}); replace it with "
+                                "--overwrite, or choose another folder")
+    return folder
+
+
 def _warm_up(point: StudyPoint, out: Path, comm) -> None:
     """An untimed short run (one cycle) so that the first timed run does not pay for loading the kernels."""
     from .simulation import SimulationError, run_scene
@@ -394,18 +428,18 @@ def _warm_up(point: StudyPoint, out: Path, comm) -> None:
         sc.loading.cycles = 1
         sc.output.snapshot_cycles = [1]
     try:
-        run_scene(sc, out / "warmup", comm, quiet=True)
+        run_scene(sc, out / "warmup", comm, quiet=True, overwrite=True)
     except SimulationError:
         pass  # a warm-up only loads code; the real runs report their own failures
 
 
 def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: bool = False,
-              warm_up: bool = True) -> list[dict[str, Any]]:
+              warm_up: bool = True, overwrite: bool = False) -> list[dict[str, Any]]:
     """Run every point of ``plan`` (reference first), compute the errors and write the table and plot.
 
     Collective: every rank runs every scene; files are written and errors computed on rank 0 and the rows
-    broadcast. A point whose run fails is kept in the table with ``converged = False``, its error message
-    and NaN errors; a failed reference stops the study.
+    broadcast. A point whose run fails, or whose results are not finite, is kept in the table with
+    ``converged = False``, its error message and NaN errors; a failed reference stops the study.
 
     Args:
         plan: From :func:`plan_study`.
@@ -413,20 +447,34 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         comm: Communicator (default ``MPI.COMM_WORLD``).
         quiet: Print nothing but the final table.
         warm_up: Run the reference's first cycle once, untimed, before the timed runs.
+        overwrite: Replace the study ``out`` holds (its runs are rerun in place).
 
     Returns:
         The rows of ``study.csv`` (:data:`STUDY_FIELDS`), reference first.
 
     Raises:
+        OutputFolderError: before any run: ``out`` is a file, not writable, or holds a study and not
+            ``overwrite``.
         RuntimeError: The reference run failed (its message included).
     """
     from mpi4py import MPI
 
+    from .compliance import DelassusError
+    from .outdir import OutputFolderError
     from .simulation import SimulationError, run_scene
 
     comm = comm or MPI.COMM_WORLD
     rank0 = comm.rank == 0
     out = Path(out)
+    problem = None
+    if rank0:
+        try:
+            check_study_folder(out, overwrite)
+        except OutputFolderError as exc:
+            problem = str(exc)
+    problem = comm.bcast(problem, root=0)
+    if problem is not None:
+        raise OutputFolderError(problem)
     runs_dir = out / "runs"
     say = (lambda m: print(m, flush=True)) if (rank0 and not quiet) else (lambda m: None)
     if warm_up:
@@ -440,9 +488,11 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         comm.barrier()
         t0 = time.perf_counter()
         failure = ""
-        try:
-            run_scene(point.scene, folder, comm, quiet=True)
-        except (SimulationError, ValueError) as exc:  # ValueError: checks that need the mesh (no candidate...)
+        try:  # the study owns runs/: a point's folder from an earlier study is replaced
+            run_scene(point.scene, folder, comm, quiet=True, overwrite=True)
+        except OutputFolderError:
+            raise  # locked by another run: not a result of this point
+        except (SimulationError, ValueError, DelassusError) as exc:  # ValueError: checks that need the mesh
             failure = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
         wall = time.perf_counter() - t0
         wall = comm.bcast(wall, root=0)  # rank 0's clock decides
@@ -456,7 +506,9 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
                    "speedup": ref_time / wall if wall > 0 else math.nan, "overrides": " ".join(point.overrides),
                    **point_errors(folder, ref_folder)}
             if failure:
-                row.update(converged=False, error=failure, **{k: math.nan for k in ERROR_FIELDS})
+                row.update(converged=False, error=failure)
+            if not row["converged"]:  # a failed or non-finite point has no error to plot or rank
+                row.update({k: math.nan for k in ERROR_FIELDS})
             say(f"    {wall:.2f} s (x{row['speedup']:.3g}), errors: "
                 + ", ".join(f"{ERROR_NAMES[k]} {row[k]:.3g}" for k in ERROR_FIELDS))
         rows.append(row)

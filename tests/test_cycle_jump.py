@@ -9,7 +9,7 @@ import pytest
 from dolfinx_fretting.contact_output import read_table
 from dolfinx_fretting.cycle_jump import CycleAnalysis, analyse_cycle, choose_jump, hertz_jump_limit, jump_error
 from dolfinx_fretting.scenes import SceneError, load_scene
-from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, run_scene
+from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, read_checkpoint, run_scene
 
 
 # Pure NumPy -------------------------------------------------------------------------------------------------
@@ -218,12 +218,11 @@ def test_forced_jump_wearing_more_than_an_element_is_refused_and_leaves_no_trace
     s = json.loads((tmp_path / "summary.json").read_text())
     cyc = read_table(tmp_path / "cycles.csv")
     assert s["cycles"] == 1 and list(cyc["cycle"]) == [1] and s["increments"] == 4 + 16
-    with np.load(tmp_path / CHECKPOINT) as data:
-        meta = json.loads(str(data["meta"]))
-        assert meta["cycle"] == 1 and meta["jump"]["simulated"] == 1
-        # The wear gap is cycle 1's: nothing of cycle 2 (simulated, then refused) is kept.
-        assert data["gw"].max() == pytest.approx(cyc["max_wear_depth"][0], rel=1e-12)
-        assert s["max_wear_depth"] == pytest.approx(cyc["max_wear_depth"][0], rel=1e-12)
+    meta, data = read_checkpoint(tmp_path / CHECKPOINT)
+    assert meta["cycle"] == 1 and meta["jump"]["simulated"] == 1
+    # The wear gap is cycle 1's: nothing of cycle 2 (simulated, then refused) is kept.
+    assert data["wear_gap"].max() == pytest.approx(cyc["max_wear_depth"][0], rel=1e-12)
+    assert s["max_wear_depth"] == pytest.approx(cyc["max_wear_depth"][0], rel=1e-12)
 
 
 class _Crash(RuntimeError):
@@ -243,17 +242,18 @@ def test_resume_carries_the_jump_state(tmp_path, monkeypatch):
 
     def checkpoint_then_die(self):
         original(self)
-        if self.state.cycle >= 200:
+        if self.progress.cycle >= 200:
             raise _Crash("killed after the checkpoint")
 
     monkeypatch.setattr(simulation._Run, "checkpoint", checkpoint_then_die)
     with pytest.raises(_Crash):
         run_scene(scene, tmp_path / "r", quiet=True)
     monkeypatch.setattr(simulation._Run, "checkpoint", original)
-    with np.load(tmp_path / "r" / CHECKPOINT) as data:
-        meta = json.loads(str(data["meta"]))
-        assert meta["cycle"] > 200 and meta["jump"]["last"] > 1  # inside a jump that started at 200
+    meta = read_checkpoint(tmp_path / "r" / CHECKPOINT)[0]
+    assert meta["cycle"] > 200 and meta["jump"]["last"] > 1  # inside a jump that started at 200
     resumed = run_scene(scene, tmp_path / "r", quiet=True, resume=True)
+    # the checkpoint was used: the resumed process covered the cycles after it only (not all 400)
+    assert resumed["resumed_from_cycle"] == meta["cycle"] and resumed["cycles_this_run"] == 400 - meta["cycle"]
     a, b = read_table(tmp_path / "s" / "cycles.csv"), read_table(tmp_path / "r" / "cycles.csv")
     assert np.array_equal(a["cycle"], b["cycle"]) and np.array_equal(a["jump"], b["jump"])
     # The compiled loop's pattern cache restarts on resume: equal to the local tolerance, not bit for bit.

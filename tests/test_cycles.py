@@ -1,18 +1,19 @@
 """Cyclic runs: the paper's Example 1 in short, checkpoints and resume (after a kill -9 and by extension)."""
 
+import dataclasses
 import json
 import os
 import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 
 from dolfinx_fretting.plots import read_table
+from dolfinx_fretting.problem import FrettingProblem
 from dolfinx_fretting.scenes import load_scene
-from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, run_scene
+from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, read_checkpoint, run_scene
 
 SMALL_BLOCK = ["geometry.nx=20", "geometry.ny=20", "output.xdmf=false", "output.plots=false"]
 
@@ -50,39 +51,50 @@ def _comparable(folder):
     return s, read_table(folder / "cycles.csv"), (folder / "history.csv").read_text()
 
 
+#: Run in a child process: the CLI, killed by SIGKILL (kill -9) at a known point: when cycle KILL_AT starts, after
+#: the checkpoint of snapshot cycle CHECKPOINT_AT and after the rows of the cycles in between were flushed, so
+#: the resume must truncate them. Deterministic: no timing, no race with a fast machine.
+CHECKPOINT_AT, KILL_AT = 5, 9
+_KILLER = """
+import os, signal, sys
+from dolfinx_fretting import simulation
+from dolfinx_fretting.cli import main
+cycle_row = simulation._Run._cycle_row
+def cycle_row_or_die(self, cycle, *args, **kwargs):
+    if cycle == {kill_at}:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return cycle_row(self, cycle, *args, **kwargs)
+simulation._Run._cycle_row = cycle_row_or_die
+sys.exit(main(sys.argv[1:]))
+"""
+
+
 def test_resume_after_kill_gives_the_uninterrupted_answer(tmp_path):
-    """Kill -9 a run part-way (Python path: ~40 ms a cycle), resume it, compare with a straight run."""
+    """Kill -9 a run part-way (per-increment path), resume it, compare with a straight run: bit for bit, every
+    row once, and the resumed run started from the checkpoint (cycle 5), not from cycle 0."""
     args = ["--set", "geometry.nx=20", "--set", "geometry.ny=20", "--set", "output.xdmf=false",
-            "--set", "output.plots=false", "--set", "loading.cycles=60", "--set", "solver.cycle_kernel=false",
-            "--set", "output.checkpoint_interval=0.01", "--set", "output.contact_profiles=false", "--quiet"]
+            "--set", "output.plots=false", "--set", "loading.cycles=20", "--set", "solver.cycle_kernel=false",
+            "--set", f"output.snapshot_cycles=[{CHECKPOINT_AT}, 20]", "--set", "output.checkpoint_interval=1e6",
+            "--set", "output.contact_profiles=false", "--quiet"]
     cmd = [sys.executable, "-m", "dolfinx_fretting", "run", "stromberg-block"]
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
     straight, cut = tmp_path / "straight", tmp_path / "cut"
     subprocess.run(cmd + ["--out", str(straight)] + args, check=True, env=env, timeout=600)
 
-    proc = subprocess.Popen(cmd + ["--out", str(cut)] + args, env=env)
-    killed_at = None
-    deadline = time.time() + 300
-    while time.time() < deadline and proc.poll() is None:
-        ck = cut / CHECKPOINT
-        if ck.is_file():
-            try:
-                with np.load(ck) as data:
-                    cycle = json.loads(str(data["meta"]))["cycle"]
-            except Exception:  # noqa: BLE001 - replaced while we read it
-                cycle = 0
-            if cycle >= 5:
-                proc.send_signal(signal.SIGKILL)
-                killed_at = cycle
-                break
-        time.sleep(0.02)
-    proc.wait()
-    if killed_at is None:
-        pytest.skip("the run finished before it could be interrupted")
-    assert not (cut / "summary.json").exists()  # really interrupted
+    proc = subprocess.run([sys.executable, "-c", _KILLER.format(kill_at=KILL_AT), "run", "stromberg-block",
+                           "--out", str(cut)] + args, env=env, timeout=600)
+    assert proc.returncode == -signal.SIGKILL  # really killed, mid-run
+    assert not (cut / "summary.json").exists()
+    assert read_checkpoint(cut / CHECKPOINT)[0]["cycle"] == CHECKPOINT_AT
+    # the cycles after the checkpoint were written before the kill: the resume has rows to cut
+    assert list(read_table(cut / "cycles.csv")["cycle"]) == list(range(1, KILL_AT))
     subprocess.run(cmd + ["--out", str(cut), "--resume"] + args, check=True, env=env, timeout=600)
     s1, c1, h1 = _comparable(straight)
     s2, c2, h2 = _comparable(cut)
+    # The checkpoint was used: the resumed process ran the 15 cycles after it (a resume restarting from cycle 0
+    # would report 20, or no resume at all).
+    assert s2["resumed_from_cycle"] == CHECKPOINT_AT and s2["cycles_this_run"] == 20 - CHECKPOINT_AT
+    assert s1["resumed_from_cycle"] is None and s1["cycles_this_run"] == 20
     # Same arithmetic from the same checkpointed state: identical results, and every row once.
     for key in ("max_wear_depth", "wear_area", "dissipated_energy", "normal_force", "tangential_force",
                 "increments", "cycles", "local_iterations"):
@@ -100,6 +112,8 @@ def test_resume_extends_a_finished_run(tmp_path):
     ext = run_scene(load_scene("stromberg-block", base + ["loading.cycles=6"]), tmp_path / "ext", quiet=True,
                     resume=True)
     assert ext["cycles"] == 6 and ext["increments"] == six["increments"]
+    # the checkpoint was used: three cycles simulated after cycle 3 (not six from the start)
+    assert ext["resumed_from_cycle"] == 3 and ext["cycles_this_run"] == 3
     for key in ("max_wear_depth", "wear_area", "dissipated_energy", "tangential_force"):
         assert ext[key] == pytest.approx(six[key], rel=1e-8), key
     assert len(read_table(tmp_path / "ext" / "cycles.csv")["cycle"]) == 6
@@ -157,25 +171,46 @@ def test_wear_acceleration_is_k_times_s_and_recorded(tmp_path):
     assert acc["wear_area"] - pre_acc == pytest.approx(big["wear_area"] - pre_big, rel=1e-6)
 
 
-def test_failed_increment_is_reported_and_leaves_no_trace(tmp_path):
-    """A cycle whose local solve fails stops the run with a diagnostic naming it; the tables, the wear gap
-    and the checkpoint stay at the last complete cycle, and a resume with other solver settings then ends
-    as an uninterrupted run does."""
-    base = SMALL_BLOCK + ["output.contact_profiles=false", "solver.local_tol=1e-12"]
+def test_failed_increment_is_reported_and_leaves_no_trace(tmp_path, monkeypatch):
+    """A local solve that fails mid-cycle (cycle 3, step 30: 29 increments of that cycle have worn the surface)
+    stops the run with a diagnostic naming it; the tables, the summary and the checkpoint stay at the last
+    complete cycle (the checkpoint's wear gap bit for bit that of the cycle-2 checkpoint), and a resume with
+    the solver restored then ends as an uninterrupted run does."""
+    base = SMALL_BLOCK + ["output.contact_profiles=false", "solver.local_tol=1e-12", "solver.cycle_kernel=false"]
     straight = run_scene(load_scene("stromberg-block", base + ["loading.cycles=4"]), tmp_path / "straight", quiet=True)
     out = tmp_path / "run"
     two = run_scene(load_scene("stromberg-block", base + ["loading.cycles=2"]), out, quiet=True)
-    starved = base + ["loading.cycles=4", "solver.local_max_iter=1", "solver.pattern_reuse=false"]
-    with pytest.raises(SimulationError, match=r"increment 162 \(cycle 3, step 1\): local solver did not converge"):
-        run_scene(load_scene("stromberg-block", starved), out, quiet=True, resume=True)
+    gw_two = read_checkpoint(out / CHECKPOINT)[1]["wear_gap"].copy()
+    solve = FrettingProblem.solve
+    seen = {}
+
+    def starved_at_cycle_3_step_30(self, state, *args, **kwargs):
+        if state.increment == 190:  # increment 191 = cycle 3, step 30 (1 preload + 2 x 80 + 30)
+            # one sweep cannot meet 1e-12 here: a genuine local failure
+            seen["gw"] = state.wear_gap.copy()
+            saved, self.solver = self.solver, dataclasses.replace(self.solver, max_iter=1)
+            try:
+                return solve(self, state, *args, **kwargs)
+            finally:
+                self.solver = saved
+        return solve(self, state, *args, **kwargs)
+
+    monkeypatch.setattr(FrettingProblem, "solve", starved_at_cycle_3_step_30)
+    with pytest.raises(SimulationError, match=r"increment 191 \(cycle 3, step 30\): local solver did not converge"):
+        run_scene(load_scene("stromberg-block", base + ["loading.cycles=4"]), out, quiet=True, resume=True)
+    monkeypatch.setattr(FrettingProblem, "solve", solve)
+    # the failure came after wear had accrued in cycle 3 ...
+    assert seen["gw"].max() > gw_two.max()
+    # ... and none of it is kept: summary, tables and the checkpoint's wear gap are cycle 2's
     s = json.loads((out / "summary.json").read_text())
-    assert s["converged"] is False and "cycle 3, step 1" in s["error"]
+    assert s["converged"] is False and "cycle 3, step 30" in s["error"]
     assert s["cycles"] == 2 and s["max_wear_depth"] == two["max_wear_depth"]
     assert list(read_table(out / "cycles.csv")["cycle"]) == [1, 2]
-    with np.load(out / CHECKPOINT) as data:
-        assert json.loads(str(data["meta"]))["cycle"] == 2
+    meta, data = read_checkpoint(out / CHECKPOINT)
+    assert meta["cycle"] == 2 and np.array_equal(data["wear_gap"], gw_two)
     done = run_scene(load_scene("stromberg-block", base + ["loading.cycles=4"]), out, quiet=True, resume=True)
-    assert done["max_wear_depth"] == pytest.approx(straight["max_wear_depth"], rel=1e-8)
+    assert done["resumed_from_cycle"] == 2 and done["cycles_this_run"] == 2
+    assert done["max_wear_depth"] == straight["max_wear_depth"]  # same path from the same state: bit for bit
     assert list(read_table(out / "cycles.csv")["cycle"]) == [1, 2, 3, 4]
 
 

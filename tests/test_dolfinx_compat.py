@@ -42,6 +42,17 @@ def test_vector_and_scalar_spaces(msh):
     assert V2.dofmap.index_map.size_global == (63 if quad else 20 + (4 * 4 + 5 * 3 + 12))
 
 
+def test_element_description(msh):
+    quad = msh.topology.cell_type == dfx.dmesh.CellType.quadrilateral
+    for space, degree, size, continuous in ((dfx.vector_space(msh, 1), 1, 2, True), (dfx.vector_space(msh, 2), 2, 2, True),
+                                            (dfx.scalar_space(msh, "Lagrange", 1), 1, 1, True),
+                                            (dfx.scalar_space(msh, "DG", 0), 0, 1, False)):
+        assert dfx.element_degree(space) == degree and dfx.value_size(space) == size
+        family = dfx.element_family(space)
+        # contact._check_vector_p1 accepts these continuous Lagrange names only.
+        assert (family in ("P", "Q", "Lagrange", "CG")) == continuous, (family, quad)
+
+
 def test_quadrature_space_layout(msh):
     degree = 2
     points, _ = basix.make_quadrature(dfx.basix_cell(msh), degree)
@@ -68,6 +79,14 @@ def test_expression_at_points_is_the_affine_map(msh):
                              X[:, 0] * X[:, 1]])
     expected = np.einsum("pv,cvd->cpd", w, nodes)
     assert np.allclose(values, expected, rtol=0, atol=1e-14)
+
+
+def test_solve_linear_is_the_mass_projection(msh):
+    """Projecting the constant 3 by the L2 mass matrix gives 3 everywhere (to solver precision)."""
+    Q = dfx.scalar_space(msh, "Lagrange", 1)
+    u, v = ufl.TrialFunction(Q), ufl.TestFunction(Q)
+    uh = dfx.solve_linear(u * v * ufl.dx, 3.0 * v * ufl.dx, [], {"ksp_type": "preonly", "pc_type": "lu"})
+    assert np.allclose(uh.x.array, 3.0, rtol=1e-12)
 
 
 def test_interpolation_points_of_dg0_are_the_centroid(msh):

@@ -87,7 +87,6 @@ def test_contact_window_stops_at_the_refined_zone(tmp_path):
                   tmp_path, quiet=True)
 
 
-@pytest.mark.slow
 def test_very_fine_contact_mesh(tmp_path):
     """401 contact nodes (h = 2.5 um over +-0.5 mm): Hertz peak within 1 % (measured 0.07 %)."""
     s = run_scene(load_scene("hertz", QUIET + ["geometry.contact_mesh_size=0.0025", "contact.candidate_half_width=0.5025",
@@ -99,13 +98,14 @@ def test_very_fine_contact_mesh(tmp_path):
 
 
 def test_tolerance_1e_14(tmp_path):
-    try:
-        s = run_scene(load_scene("hertz", QUIET + ["solver.local_tol=1e-14", "geometry.contact_mesh_size=0.02"]),
-                      tmp_path, quiet=True)
-    except SimulationError as exc:
-        assert "did not converge" in str(exc) and "local_tol" in str(exc)
-        return
-    assert _finite(s) and s["tangential_force"] == pytest.approx(89.658, rel=1e-7)
+    """A local tolerance of 1e-14 (~50 ulp of the forces' scale) is met: the run converges (measured ~15k
+    sweeps in all), every increment's error is below it, and the prescribed force holds to force_tol (1e-8;
+    1e-7 relative here)."""
+    s = run_scene(load_scene("hertz", QUIET + ["solver.local_tol=1e-14", "geometry.contact_mesh_size=0.02"]),
+                  tmp_path, quiet=True)
+    assert s["converged"] and _finite(s)
+    assert np.all(read_table(tmp_path / "history.csv")["local_error"] < 1e-14)
+    assert s["tangential_force"] == pytest.approx(89.658, rel=1e-7)
 
 
 BLOCK = QUIET + ["geometry.nx=20", "geometry.ny=20", "output.history_every=1"]
@@ -170,6 +170,7 @@ def test_window_growth_during_worn_cycles_and_resume(tmp_path):
     run_scene(load_scene("cylinder-flat", small + ["loading.cycles=2"]), tmp_path / "g", quiet=True)
     grown = run_scene(load_scene("cylinder-flat", small + ["loading.cycles=3"]), tmp_path / "g", quiet=True,
                       resume=True)
+    assert grown["resumed_from_cycle"] == 2 and grown["cycles_this_run"] == 1  # the checkpoint was used
     assert [g["to"] for g in grown["window_growths"]] == [0.16, 0.24]
     assert any("cycle 1" in g["at"] for g in grown["window_growths"])
     for key in ("max_wear_depth", "max_pressure", "dissipated_energy", "wear_area"):

@@ -43,11 +43,11 @@ def test_mpi_matches_serial(tmp_path, name):
     assert parallel["contacts"] == serial["contacts"] and parallel["dofs"] == serial["dofs"]
     assert parallel["increments"] == serial["increments"] and parallel["cycles"] == serial["cycles"]
     # Same contact set, same W up to the rounding of a differently ordered factorisation, and local
-    # solves to 1e-10: totals agree far below 1e-6 relative (measured ~1e-13).
+    # solves on rank 0 from the same replicated input: the README's 1e-8 relative (measured ~1e-13).
     for key in ("normal_force", "tangential_force", "max_pressure", "max_wear_depth", "wear_area",
                 "dissipated_energy") + (("max_equivalent_plastic_strain",) if "max_equivalent_plastic_strain" in serial
                                         else ()):
-        assert parallel[key] == pytest.approx(serial[key], rel=1e-6, abs=1e-300), key
+        assert parallel[key] == pytest.approx(serial[key], rel=1e-8, abs=1e-300), key
     for key in ("contact_width", "stick_width", "n_stick", "n_slip", "n_open"):
         assert parallel[key] == pytest.approx(serial[key], abs=1e-12), key
     # Written once: one header line plus one row per increment.

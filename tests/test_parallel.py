@@ -114,6 +114,32 @@ def test_delassus_routes_agree_in_parallel():
 
 
 @pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_output_folder_errors_are_collective(shared_dir):
+    """Rank 0 checks and locks the folder, every rank raises the same error (none hangs), before any mesh."""
+    from dolfinx_fretting.outdir import LOCK_NAME, OutputFolderError, claim_output_folder
+
+    scene = load_scene("stromberg-block", ["geometry.nx=10", "geometry.ny=10", "loading.cycles=1",
+                                           "output.plots=false", "output.xdmf=false", "output.progress=false"])
+    run_scene(scene, shared_dir / "run", COMM, quiet=True)
+    messages = []
+    for attempt in (lambda: run_scene(scene, shared_dir / "run", COMM, quiet=True),  # holds a run
+                    lambda: claim_output_folder(shared_dir / "run" / "summary.json", COMM)):  # a file
+        with pytest.raises(OutputFolderError) as info:
+            attempt()
+        messages.append(str(info.value))
+    gathered = COMM.allgather(messages)
+    assert all(m == gathered[0] for m in gathered)
+    assert "already holds a run" in messages[0] and "is a file" in messages[1]
+    with claim_output_folder(shared_dir / "fresh", COMM) as lock:  # only rank 0 holds the file
+        assert lock.held == (COMM.rank == 0)
+        COMM.barrier()
+        assert (shared_dir / "fresh" / LOCK_NAME).is_file()
+        COMM.barrier()
+    COMM.barrier()
+    assert not (shared_dir / "fresh" / LOCK_NAME).exists()
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
 def test_schur_route_is_refused_under_mpi():
     """PETSc has no distributed MUMPS Schur complement: the route says so on every rank before any work."""
     from dolfinx_fretting.simulation import ContactModel

@@ -1,0 +1,357 @@
+"""From a scene's geometry to what the public API takes: one builder per geometry, one data object out.
+
+Each builder meshes (or reads) the body, writes the user-side model a FEniCSx user would write by hand
+(vector P1 space, the elasticity form, Dirichlet conditions, named loads) and says how the contact is set up
+(surface, obstacle, candidate window and its policy). The driver (:mod:`dolfinx_fretting.simulation`) reads
+only the :class:`SceneModel` it gets: it has no branch on the geometry.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+from mpi4py import MPI
+
+from .contact import ElasticBody, RigidPlane
+from .meshes import BodyMesh
+from .scenes import Scene
+
+__all__ = ["SceneModel", "build_scene_model", "read_msh", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT",
+           "BOUNDARY_PRESSURE"]
+
+#: Name of the face-pressure load of a scene (``loading.tangential_pressure``), factor in MPa.
+PRESSURE_LOAD = "face_pressure"
+#: Names of the ``[boundary]`` loads of a mesh file's scene (ramped with the preload, then held).
+BOUNDARY_DISPLACEMENT = "boundary_displacement"
+BOUNDARY_PRESSURE = "boundary_pressure"
+
+
+@dataclass
+class SceneModel:
+    """What the driver needs of a scene's geometry.
+
+    Attributes:
+        body: Mesh with named facet and cell tags.
+        V: Vector P1 displacement space.
+        form: Bilinear form of K (plane strain in 2D).
+        bcs: Dirichlet conditions.
+        surface: ``(facet_tags, marker)`` of the contact surface.
+        obstacle: The rigid plane, or the elastic counter-body.
+        loads: Named linear forms (the face pressure, factor = the pressure in MPa).
+        element_size: Contact element size (one value: wear-step guard, window growth, sliding limit).
+        window: Initial candidate half-width (None: the whole surface).
+        window_limit: How far the window may grow (None: it may not).
+        window_automatic: The window came from the Hertz estimate (not from the scene).
+        window_edges_matter: The window's ends are not the body's edges: load there means a truncated contact.
+        elastic_cells: Cells that stay elastic in an elastic–plastic run (the other body of a pair).
+        display_cells: Cells drawn moved by the obstacle's reverse motion -D (two bodies: the paper's set-up,
+            the cylinder moved and the flat held).
+        hertz: (radius, E*, label) for a Hertz reference in the summary, or None.
+        small_sliding: The pairing is fixed (two bodies): the run warns past half an element of slip.
+        contact_text: How the contact is modelled, for the summary's ``modelled``.
+        von_mises: UFL von Mises stress of a displacement (plane strain: with sigma_zz).
+        timings: Wall times of the mesh.
+        prescribed: Named sets of Dirichlet conditions with non-zero values (see ``FrettingProblem``).
+        ramped: Loads and prescribed sets whose factor ramps from 0 to 1 with the normal preload, then stays 1.
+    """
+
+    body: BodyMesh
+    V: Any
+    form: Any
+    bcs: list
+    surface: tuple
+    obstacle: RigidPlane | ElasticBody
+    loads: dict[str, Any]
+    element_size: float
+    window: float | None
+    window_limit: float | None
+    window_automatic: bool
+    window_edges_matter: bool
+    elastic_cells: np.ndarray | None
+    display_cells: np.ndarray | None
+    hertz: tuple[float, float, str] | None
+    small_sliding: bool
+    contact_text: str
+    von_mises: Callable
+    timings: dict[str, float] = field(default_factory=dict)
+    prescribed: dict[str, list] = field(default_factory=dict)
+    ramped: list[str] = field(default_factory=list)
+
+
+def _elasticity(scene: Scene, V, quadrature_degree: int | None):
+    """The user's model: plane-strain linear elasticity and its von Mises stress."""
+    import ufl
+
+    from .materials import LinearElastic
+
+    lmbda, mu = LinearElastic(scene.material.E, scene.material.nu).lame
+    gdim = V.mesh.geometry.dim
+    eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
+    sigma = lambda w: lmbda * ufl.tr(eps(w)) * ufl.Identity(gdim) + 2.0 * mu * eps(w)  # noqa: E731
+    # An elastic-plastic body integrates its stresses with a fixed rule: K then uses the same one, so that W
+    # and the elastic iteration matrix are exact where nothing yields.
+    dx = ufl.dx if quadrature_degree is None else ufl.dx(metadata={"quadrature_degree": quadrature_degree,
+                                                                  "quadrature_scheme": "default"})
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    form = ufl.inner(sigma(u), eps(v)) * dx
+
+    def von_mises(w):
+        s = sigma(w)
+        if gdim == 2:  # plane strain: sigma_zz = lambda tr(eps)
+            szz = lmbda * ufl.tr(eps(w))
+            mean = (ufl.tr(s) + szz) / 3.0
+            dev = s - mean * ufl.Identity(2)
+            return ufl.sqrt(1.5 * (ufl.inner(dev, dev) + (szz - mean) ** 2))
+        dev = ufl.dev(s)
+        return ufl.sqrt(1.5 * ufl.inner(dev, dev))
+
+    return form, von_mises
+
+
+def _clamped(V, body: BodyMesh, names: list[str]) -> list:
+    from dolfinx import fem
+    from petsc4py import PETSc
+
+    fdim = V.mesh.topology.dim - 1
+    zero = np.zeros(V.mesh.geometry.dim, dtype=PETSc.ScalarType)
+    return [fem.dirichletbc(zero, fem.locate_dofs_topological(V, fdim, body.facets(name)), V) for name in names]
+
+
+def _pressure_load(V, body: BodyMesh, face: str):
+    """A unit pressure on a named face, pushing into the body (traction -n)."""
+    import ufl
+
+    ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=body.facet_tags)
+    return -ufl.dot(ufl.FacetNormal(V.mesh), ufl.TestFunction(V)) * ds(body.tags[face])
+
+
+def build_scene_model(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> SceneModel:
+    """Mesh the scene's geometry and write its model. Collective.
+
+    Raises:
+        ValueError: a name of the scene is not in the mesh (the message lists the names it holds).
+    """
+    return _BUILDERS[scene.geometry.kind](scene, comm)
+
+
+def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
+    """A half-cylinder on a rigid plane, or on an elastic flat (two bodies, one mesh)."""
+    from . import meshes
+    from .analytic import hertz_line_contact
+
+    g, m = scene.geometry, scene.material
+    two_body = scene.contact.obstacle == "elastic_flat"
+    t0 = time.perf_counter()
+    build = meshes.cylinder_on_flat if two_body else meshes.half_cylinder
+    extra = (g.flat_width, g.flat_height) if two_body else ()
+    body = build(comm, g.radius, *extra, contact_mesh_size=g.contact_mesh_size,
+                 contact_half_width=g.refined_half_width, coarse_mesh_size=g.coarse_mesh_size,
+                 quadrilateral=g.quadrilateral)
+    mesh_s = time.perf_counter() - t0
+    V, form, von_mises, bcs, loads = _model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
+    plane = _plane(scene, body)
+    E_star = m.E / (1 - m.nu**2) / (2.0 if two_body else 1.0)
+    # Automatic window (elastic bodies: an elastic-plastic body cannot grow its window, and plasticity widens
+    # the contact beyond the elastic estimate, so it keeps the refined zone): 1.5 a + 3 h, a from the
+    # Hertz estimate of the normal force, or the geometric sqrt(2 R d) under a prescribed approach.
+    automatic = scene.contact.candidate_half_width is None and m.model == "elastic"
+    if automatic:
+        lo = scene.loading
+        a = (hertz_line_contact(lo.normal_force, g.radius, E_star)[0] if lo.normal_force is not None
+             else float(np.sqrt(2 * g.radius * lo.normal_displacement)))
+        window = float(min(g.refined_half_width, 1.5 * a + 3 * g.contact_mesh_size))
+    else:
+        window = scene.contact.candidate_half_width if scene.contact.candidate_half_width is not None \
+            else g.refined_half_width
+    elastic_cells = display_cells = None
+    if two_body:
+        obstacle = ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal)
+        display_cells = body.cell_tags.find(body.regions["cylinder"])
+        if m.model == "elastoplastic" and m.plastic_body != "both":
+            other = "flat" if m.plastic_body == "cylinder" else "cylinder"
+            elastic_cells = body.cell_tags.find(body.regions[other])
+    else:
+        obstacle = plane
+    label = ("two identical elastic bodies: E* = E/(2(1-nu^2))" if two_body
+             else "rigid plane, frictionless: E* = E/(1-nu^2)")
+    text = ", each paired with a point of the elastic flat (node-to-segment, fixed pairing)" if two_body \
+        else ", against a rigid plane"
+    return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, g.contact_mesh_size, window,
+                      g.refined_half_width, automatic, True, elastic_cells, display_cells,
+                      (g.radius, E_star, label), two_body, text, von_mises, {"mesh_s": mesh_s})
+
+
+def _rectangle(scene: Scene, comm: MPI.Comm) -> SceneModel:
+    """A block on a rigid plane (the paper's Example 1), its top fixed."""
+    from . import meshes
+
+    g = scene.geometry
+    t0 = time.perf_counter()
+    body = meshes.rectangle(comm, g.width, g.height, g.nx, g.ny, quadrilateral=g.quadrilateral)
+    mesh_s = time.perf_counter() - t0
+    V, form, von_mises, bcs, loads = _model(scene, body, ["top"])
+    window = scene.contact.candidate_half_width
+    return SceneModel(body, V, form, bcs, _surface(scene, body), _plane(scene, body), loads, body.contact_mesh_size,
+                      window, None, False, False, None, None, None, False, ", against a rigid plane", von_mises,
+                      {"mesh_s": mesh_s})
+
+
+def _model(scene: Scene, body: BodyMesh, fixed: list[str]):
+    from . import _dolfinx as dfx
+
+    quadrature_degree = scene.solver.quadrature_degree
+    if quadrature_degree is None and scene.material.model == "elastoplastic":
+        quadrature_degree = 2  # 2 x 2 Gauss points per quadrilateral carry the plastic state
+    V = dfx.vector_space(body.mesh)
+    form, von_mises = _elasticity(scene, V, quadrature_degree)
+    loads = {}
+    if scene.loading.tangential_kind == "pressure":
+        face = scene.loading.pressure_face
+        if face not in body.tags:
+            raise ValueError(f"loading.pressure_face = {face!r} is not a boundary of the mesh; allowed: "
+                             f"{', '.join(sorted(body.tags))}")
+        loads[PRESSURE_LOAD] = _pressure_load(V, body, face)
+    return V, form, von_mises, _clamped(V, body, fixed), loads
+
+
+def _surface(scene: Scene, body: BodyMesh) -> tuple:
+    name = scene.contact.surface
+    if name not in body.tags:
+        raise ValueError(f"contact.surface = {name!r} is not a boundary of the {scene.geometry.kind} mesh; "
+                         f"allowed: {', '.join(sorted(body.tags))}")
+    return body.facet_tags, body.tags[name]
+
+
+def _plane(scene: Scene, body: BodyMesh) -> RigidPlane:
+    # Against an elastic flat this plane is the flat's top: its frame gives the directions of the flat's rigid
+    # motion D, so loads and total forces read as against a rigid plane.
+    return RigidPlane(np.array(scene.contact.plane_point), np.array(scene.contact.plane_normal))
+
+
+def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[str, int]]:
+    """A gmsh ``.msh`` file as a :class:`BodyMesh` (facet tags = its physical curves in 2D). Collective.
+
+    The file is read on rank 0; the physical names (not carried by DOLFINx's reader) are read there too and
+    broadcast. Returns the body (facet names in ``tags``) and the names of the cell groups.
+    """
+    from . import _dolfinx as dfx
+
+    import gmsh
+
+    names = failure = None
+    if comm.rank == 0:
+        gmsh.initialize()
+        gmsh.option.setNumber("General.Terminal", 0)
+        try:
+            gmsh.open(path)
+            groups = gmsh.model.getPhysicalGroups()
+            names = {dim: {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag for d, tag in groups if d == dim}
+                     for dim in (gdim - 1, gdim)}
+        except Exception as exc:  # noqa: BLE001 - gmsh raises plain Exceptions with its log
+            failure = f"geometry.path = {path!r}: gmsh cannot read it ({exc})"
+            gmsh.finalize()
+    names, failure = comm.bcast((names, failure), root=0)
+    if failure is not None:
+        raise ValueError(failure)
+    try:
+        msh, cell_tags, facet_tags = dfx.model_to_mesh(gmsh.model, comm, 0, gdim)
+    finally:
+        if comm.rank == 0:
+            gmsh.finalize()
+    if msh.geometry.dim != gdim:
+        raise ValueError(f"geometry.path = {path!r}: a {msh.geometry.dim}D mesh; the scene runner takes 2D meshes "
+                         "(3D models run through the Python API, dolfinx_fretting.FrettingProblem)")
+    body = BodyMesh(msh, facet_tags, cell_tags, dict(names[gdim - 1]), 0.0, None, {}, dict(names[gdim]))
+    return body, names[gdim]
+
+
+def _check_names(scene: Scene, facet_names: dict[str, int]) -> None:
+    """Every boundary name the scene uses must be a physical group of the file (before any work)."""
+    used = [("contact.surface", scene.contact.surface), *scene.boundary.names]
+    if scene.loading.tangential_kind == "pressure":
+        used.append(("loading.pressure_face", scene.loading.pressure_face))
+    for key, name in used:
+        if name not in facet_names:
+            raise ValueError(f"{key} = {name!r} is not a physical group of {scene.geometry.path}; the file's "
+                             f"boundary groups: {', '.join(sorted(facet_names)) or 'none'}")
+
+
+def _facet_length(V, facets: np.ndarray) -> float:
+    """Median length of the owned facets of a 2D boundary (the contact element size of a user's mesh)."""
+    msh = V.mesh
+    fdim = msh.topology.dim - 1
+    msh.topology.create_connectivity(fdim, 0)
+    owned = facets[facets < msh.topology.index_map(fdim).size_local]
+    from . import _dolfinx as dfx
+
+    nodes = dfx.entities_to_geometry(msh, fdim, owned)
+    x = msh.geometry.x
+    lengths = np.linalg.norm(x[nodes[:, 1]] - x[nodes[:, 0]], axis=1) if owned.size else np.zeros(0)
+    everything = np.concatenate(msh.comm.allgather(lengths))
+    return float(np.median(everything))
+
+
+def _file(scene: Scene, comm: MPI.Comm) -> SceneModel:
+    """The user's mesh file with boundary conditions by physical name."""
+    import ufl
+    from dolfinx import fem
+
+    g, bd = scene.geometry, scene.boundary
+    t0 = time.perf_counter()
+    body, _ = read_msh(g.path, comm)
+    _check_names(scene, body.tags)
+    mesh_s = time.perf_counter() - t0
+    V, form, von_mises, bcs, loads = _model(scene, body, list(bd.fixed))
+    gdim = body.mesh.geometry.dim
+    fdim = gdim - 1
+    for name in bd.symmetry:  # zero normal displacement on a plane face normal to a coordinate axis
+        axis = _axis_normal(V, body.facets(name), name)
+        Vi, _ = V.sub(axis).collapse()
+        dofs = fem.locate_dofs_topological((V.sub(axis), Vi), fdim, body.facets(name))
+        bcs.append(fem.dirichletbc(fem.Function(Vi), dofs, V.sub(axis)))
+    prescribed = {}
+    if bd.displacement:
+        conditions = []
+        for name, vector in bd.displacement.items():
+            value = fem.Function(V)
+            value.x.array.reshape(-1, V.dofmap.index_map_bs)[:, :gdim] = np.asarray(vector, dtype=float)
+            conditions.append(fem.dirichletbc(value, fem.locate_dofs_topological(V, fdim, body.facets(name))))
+        prescribed[BOUNDARY_DISPLACEMENT] = conditions
+    if bd.pressure:
+        ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=body.facet_tags)
+        n, v = ufl.FacetNormal(V.mesh), ufl.TestFunction(V)
+        loads[BOUNDARY_PRESSURE] = sum(-value * ufl.dot(n, v) * ds(body.tags[name]) for name, value in bd.pressure.items())
+    surface = _surface(scene, body)
+    h = _facet_length(V, body.facets(scene.contact.surface))
+    body = BodyMesh(body.mesh, body.facet_tags, body.cell_tags, body.tags, h, None, {}, body.regions)
+    return SceneModel(body, V, form, bcs, surface, _plane(scene, body), loads, h, scene.contact.candidate_half_width,
+                      None, False, False, None, None, None, False, ", against a rigid plane", von_mises,
+                      {"mesh_s": mesh_s}, prescribed, [n for n in (BOUNDARY_DISPLACEMENT, BOUNDARY_PRESSURE)
+                                                       if n in prescribed or n in loads])
+
+
+def _axis_normal(V, facets: np.ndarray, name: str) -> int:
+    """The coordinate axis normal to a plane boundary (for a roller condition on one component)."""
+    msh = V.mesh
+    fdim = msh.topology.dim - 1
+    from . import _dolfinx as dfx
+
+    owned = facets[facets < msh.topology.index_map(fdim).size_local]
+    x = msh.geometry.x[dfx.entities_to_geometry(msh, fdim, owned).ravel(), :msh.geometry.dim] if owned.size else \
+        np.zeros((0, msh.geometry.dim))
+    points = np.concatenate(msh.comm.allgather(x))
+    spread = np.ptp(points, axis=0) if points.size else np.zeros(msh.geometry.dim)
+    scale = max(spread.max(initial=0.0), 1e-300)
+    flat = np.flatnonzero(spread <= 1e-9 * scale)
+    if flat.size != 1:
+        raise ValueError(f"boundary.symmetry = {name!r}: the face is not a plane normal to a coordinate axis (its "
+                         f"extents are {spread.tolist()}); a roller on an oblique face is not supported")
+    return int(flat[0])
+
+
+_BUILDERS: dict[str, Callable[[Scene, MPI.Comm], SceneModel]] = {
+    "half_cylinder": _half_cylinder, "rectangle": _rectangle, "file": _file,
+}

@@ -1,0 +1,215 @@
+"""Freeze the answers of the five built-in scenes, CI-sized, into ``tests/data/reference_summaries.json``.
+
+The scene runner is about to be refactored; ``tests/test_reference_summaries.py`` runs the same cases and
+compares every number stored here to 1e-10, so that the refactor is checked against the arithmetic of the
+release it starts from. Run it (serially) from the repository root at the commit to freeze:
+
+    .venv/bin/python tests/data/make_reference_summaries.py [--out tests/data/reference_summaries.json]
+
+It refuses to run when ``dolfinx_fretting/`` has uncommitted changes (the stored commit would not be the
+code that made the numbers). The output holds no time or path, so two runs at one commit are identical
+byte for byte (serial runs are deterministic); the wall time of each case goes to stderr only.
+
+Each case is a built-in scene with ``--set`` overrides that make it small (coarse contact mesh, few
+increments and cycles) while keeping the path it was chosen for; ``PURPOSE`` says which.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+#: Overrides every case gets: no pictures, no XDMF fields, no progress bar (outputs that hold no answer).
+COMMON_OVERRIDES = ["output.plots=false", "output.xdmf=false", "output.progress=false"]
+
+#: name -> (built-in scene, overrides). ``output.snapshot_cycles`` is set to the cases' own cycles, as the
+#: scenes' snapshots (up to 9000) lie past the shortened runs.
+CASES: dict[str, tuple[str, list[str]]] = {
+    "hertz-force": ("hertz", [
+        "geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.tangential_increments=3",
+        "contact.candidate_half_width=none"]),
+    "stromberg-block-kernel": ("stromberg-block", [
+        "geometry.nx=20", "geometry.ny=20", "loading.cycles=3", "output.snapshot_cycles=[1, 3]"]),
+    "stromberg-block-jump": ("stromberg-block", [
+        "geometry.nx=20", "geometry.ny=20", "loading.cycles=200", "output.snapshot_cycles=[200]",
+        "wear.cycle_jump=true"]),
+    "cylinder-flat-kernel": ("cylinder-flat", [
+        "geometry.contact_mesh_size=0.02", "loading.normal_force=none", "loading.normal_displacement=0.008",
+        "loading.normal_increments=2", "loading.cycles=3", "loading.increments_per_cycle=8",
+        "wear.acceleration=100", "output.snapshot_cycles=[3]"]),
+    "cylinder-flat-plastic": ("cylinder-flat", [
+        "geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=1",
+        "loading.increments_per_cycle=4", "material.model='elastoplastic'", "material.yield_stress=840",
+        "material.hardening_modulus=7230", "output.snapshot_cycles=[1]"]),
+    "cylinder-flat-partial-python": ("cylinder-flat-partial", [
+        "geometry.contact_mesh_size=0.02", "loading.normal_force=none", "loading.normal_displacement=0.008",
+        "loading.normal_increments=2", "loading.cycles=2", "loading.increments_per_cycle=8",
+        "solver.cycle_kernel=false", "wear.acceleration=100", "output.snapshot_cycles=[2]"]),
+    "cylinder-flat-partial-force": ("cylinder-flat-partial", [
+        "geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=1",
+        "loading.increments_per_cycle=8", "loading.tangential_displacement=none",
+        "loading.tangential_force=89.658", "contact.candidate_half_width=none",
+        "output.snapshot_cycles=[1]"]),
+    "mccoll-grow": ("mccoll", [
+        "geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=2",
+        "loading.increments_per_cycle=8", "contact.candidate_half_width=0.05", "output.snapshot_cycles=[2]"]),
+}
+
+#: What each case is there for (stored with it; the test names it in a failure).
+PURPOSE = {
+    "hertz-force": "monotonic run, normal AND tangential force control (partial slip, Q = 0.5 mu P), rigid "
+                   "plane, automatic contact window (Hertz estimate), no wear",
+    "stromberg-block-kernel": "compiled cycle loop with pattern reuse, face pressure load, rectangle on a "
+                              "rigid plane, Archard wear",
+    "stromberg-block-jump": "cycle jumps (wear.cycle_jump) in the compiled loop: 200 cycles, few simulated",
+    "cylinder-flat-kernel": "two deformable bodies in the compiled loop with pattern reuse (displacement "
+                            "control), wear acceleration x100, gross slip",
+    "cylinder-flat-plastic": "elastic-plastic bodies (J2, yield 840 MPa, H = 7230 MPa): Newton with the "
+                             "contact inside, force-controlled preload",
+    "cylinder-flat-partial-python": "solver.cycle_kernel=false: the per-increment Python path through "
+                                    "cycles, two bodies, partial slip, wear acceleration x100",
+    "cylinder-flat-partial-force": "cyclic tangential force control (Python path), automatic window, two "
+                                   "bodies, partial slip",
+    "mccoll-grow": "two bodies with wear shares (k_slave, k_master), wear acceleration x25, force-controlled "
+                   "preload, a small given window that grows once",
+}
+
+#: Summary keys stored when present (``window_growths`` is stored as its count, ``cycle_jump.*`` from the
+#: nested jump summary).
+FLOAT_KEYS = ("normal_force", "tangential_force", "max_pressure", "contact_width", "stick_width",
+              "max_wear_depth", "wear_area", "dissipated_energy", "equivalent_cycles", "max_wear_depth_slave",
+              "max_wear_depth_master", "max_equivalent_plastic_strain", "max_von_mises", "contact_window",
+              "cycle_jump.wear_error_estimate")
+INT_KEYS = ("increments", "cycles", "contacts", "n_open", "n_stick", "n_slip", "window_growths",
+            "cycle_jump.simulated_cycles")
+#: Exact strings: the case must still take the path it was chosen for.
+STR_KEYS = ("cycle_path",)
+
+
+def _lookup(summary: dict[str, Any], dotted: str) -> tuple[bool, Any]:
+    node: Any = summary
+    for part in dotted.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return False, None
+        node = node[part]
+    return True, node
+
+
+def extract_answer(summary: dict[str, Any], out_dir: Path) -> dict[str, Any]:
+    """The numbers that define a run's answer: summary keys, final wear-gap profile, last cycle's energy.
+
+    Args:
+        summary: What ``run_scene`` returned.
+        out_dir: The run's output folder (``worn_profiles.csv``, ``cycles.csv``).
+
+    Returns:
+        ``{"values": {key: number or None}, "wear_gap": [...] or None,
+        "last_cycle_dissipated_energy": float or None}``.
+    """
+    values: dict[str, Any] = {}
+    for key in FLOAT_KEYS:
+        present, value = _lookup(summary, key)
+        if present:
+            values[key] = None if value is None else float(value)
+    for key in INT_KEYS:
+        present, value = _lookup(summary, key)
+        if present:
+            values[key] = len(value) if key == "window_growths" else int(value)
+    for key in STR_KEYS:
+        present, value = _lookup(summary, key)
+        if present:
+            values[key] = str(value)
+    wear_gap = None
+    worn = out_dir / "worn_profiles.csv"
+    if worn.is_file():  # written by runs with a wear law (printed with 12 significant digits)
+        with open(worn, newline="") as f:
+            wear_gap = [float(row["wear_gap"]) for row in csv.DictReader(f)]
+    last_energy = None
+    cycles = out_dir / "cycles.csv"
+    if cycles.is_file():  # cyclic runs (printed with 10 significant digits)
+        with open(cycles, newline="") as f:
+            rows = list(csv.DictReader(f))
+        if rows:
+            last_energy = float(rows[-1]["dissipated_energy"])
+    return {"values": values, "wear_gap": wear_gap, "last_cycle_dissipated_energy": last_energy}
+
+
+def run_case(name: str, out_dir: Path, overrides: list[str] | None = None, scene: str | None = None
+             ) -> dict[str, Any]:
+    """Run one case serially into ``out_dir`` and return :func:`extract_answer` of it.
+
+    Args:
+        name: A key of :data:`CASES` (its scene and overrides are used unless given).
+        out_dir: Output folder of the run.
+        overrides: The full override list (``CASES[name]`` plus :data:`COMMON_OVERRIDES` if None).
+        scene: The built-in scene (``CASES[name][0]`` if None).
+
+    Returns:
+        The answer (:func:`extract_answer`).
+    """
+    from mpi4py import MPI
+
+    from dolfinx_fretting.scenes import load_scene
+    from dolfinx_fretting.simulation import run_scene
+
+    if scene is None:
+        scene = CASES[name][0]
+    if overrides is None:
+        overrides = CASES[name][1] + COMMON_OVERRIDES
+    summary = run_scene(load_scene(scene, overrides), out_dir, MPI.COMM_SELF, quiet=True)
+    return extract_answer(summary, Path(out_dir))
+
+
+def environment() -> dict[str, str]:
+    """Versions of what does the arithmetic (a reference is exact for this stack only)."""
+    import dolfinx
+    import numba
+    import numpy
+    import petsc4py
+
+    return {"dolfinx": dolfinx.__version__, "petsc4py": petsc4py.__version__, "numpy": numpy.__version__,
+            "numba": numba.__version__, "python": sys.version.split()[0]}
+
+
+def _commit(repo: Path) -> str:
+    dirty = subprocess.run(["git", "status", "--porcelain", "--", "dolfinx_fretting"], cwd=repo, check=True,
+                           capture_output=True, text=True).stdout.strip()
+    if dirty:
+        raise SystemExit(f"dolfinx_fretting/ has uncommitted changes; commit or stash them first:\n{dirty}")
+    return subprocess.run(["git", "rev-parse", "--short=7", "HEAD"], cwd=repo, check=True,
+                          capture_output=True, text=True).stdout.strip()
+
+
+def main() -> None:
+    repo = Path(__file__).resolve().parents[2]
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=repo / "tests" / "data" / "reference_summaries.json")
+    args = parser.parse_args()
+    commit = _commit(repo)
+    cases = []
+    t_all = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="reference_summaries_") as tmp:
+        for name, (scene, overrides) in CASES.items():
+            t0 = time.perf_counter()
+            answer = run_case(name, Path(tmp) / name)
+            print(f"{name}: {time.perf_counter() - t0:.2f} s", file=sys.stderr, flush=True)
+            cases.append({"name": name, "scene": scene, "overrides": overrides + COMMON_OVERRIDES,
+                          "purpose": PURPOSE[name], "commit": commit, **answer})
+    print(f"all cases: {time.perf_counter() - t_all:.2f} s", file=sys.stderr)
+    data = {"about": "Answers of the built-in scenes, CI-sized, frozen by "
+                     "tests/data/make_reference_summaries.py; checked by tests/test_reference_summaries.py",
+            "commit": commit,
+            "environment": environment(), "cases": cases}
+    args.out.write_text(json.dumps(data, indent=1) + "\n")
+    print(f"wrote {args.out}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
