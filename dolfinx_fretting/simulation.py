@@ -456,21 +456,21 @@ class _Run:
             self._stop_if_signalled()
 
     # Cycles ------------------------------------------------------------------------------------------------
-    def _cycle_path(self, cycle: int) -> tuple[CyclePath, list[LoadStep]]:
-        steps = cycle_path(self.scene.loading, cycle)
+    def _cycle_path(self) -> tuple[CyclePath, np.ndarray]:
+        """The targets of every cycle (the same each cycle: built once) and the face pressure of each step."""
+        steps = cycle_path(self.scene.loading, 1)
         first = steps[0]
         normal = np.array([s.normal for s in steps])
         tangential = np.array([s.tangential for s in steps])
-        loads = ({PRESSURE_LOAD: np.array([s.pressure for s in steps])}
-                 if PRESSURE_LOAD in self.problem.load_names else {})
+        pressures = np.array([s.pressure for s in steps])
+        loads = {PRESSURE_LOAD: pressures} if PRESSURE_LOAD in self.problem.load_names else {}
         path = CyclePath((Force if first.normal_force_controlled else Displacement)(normal),
                          (Force if first.tangential_force_controlled else Displacement)(tangential), loads)
-        return path, steps
+        return path, pressures
 
-    def _cycle(self, cycle: int, keep: bool) -> tuple[CycleResult, list[LoadStep]]:
+    def _cycle(self, cycle: int, keep: bool, path: CyclePath) -> CycleResult:
         """Solve cycle ``cycle`` (not committed), growing the window and solving it again if its contact
         reaches the window's edge."""
-        path, steps = self._cycle_path(cycle)
         while True:
             start = self.state
             first = start.increment + 1
@@ -489,7 +489,7 @@ class _Run:
                     j = int(np.flatnonzero(edge)[0])
                     self._window_edge_reached(self._where(first + j, cycle, j + 1))
                 self._check_wear_step(cycle, start.wear_gap, result.final.wear_gap)
-                return result, steps
+                return result
             except _WindowTooSmall as edge:
                 self._grow_window(str(edge))
             except ConvergenceError as exc:
@@ -511,13 +511,15 @@ class _Run:
         jumping = sc.wear.cycle_jump
         # A jump lands on (never skips) the cycles whose outputs are asked for, and on the last one.
         landings = sorted((self.snapshots | {c for c in loop_cycles if 1 <= c <= N}) | {N})
+        path, pressures = self._cycle_path()
+        n = lo.increments_per_cycle
         cycle = self.progress.cycle + 1
         while cycle <= N:
             t0 = time.perf_counter()
             keep = cycle in self.snapshots
             write_history = keep or cycle == 1 or cycle % every == 0 or cycle in loop_cycles
             growths = len(self.progress.window_growths)
-            result, steps = self._cycle(cycle, keep or jumping)
+            result = self._cycle(cycle, keep or jumping, path)
             self.cycle_mode = "compiled" if result.compiled else "python"
             start = self.state
             new_state = self.problem.commit(start, result)
@@ -530,24 +532,23 @@ class _Run:
             self.progress.newton_fallbacks += int(result.records.get("full_newton_fallbacks", np.zeros(1)).sum())
             h = {**result.records, "normal_displacement": result.obstacle[:, 0],
                  "tangential_displacement": result.obstacle[:, 1],
-                 "face_pressure": np.array([s.pressure for s in steps])}
+                 "face_pressure": pressures}
             crow = self._cycle_row(cycle, h, time.perf_counter() - t0, jump)
             self._check_small_sliding(h["mean_relative_tangential"])
             self.progress.cycle = cycle + jump.get("jump", 1) - 1
             self.progress.last_cycle_row = crow
             self.progress.last_row = self._history_row(
-                steps[-1].increment, cycle, steps[-1].step, "cycle", result.obstacle[-1], steps[-1].pressure,
+                start.increment + n, cycle, n, "cycle", result.obstacle[-1], float(pressures[-1]),
                 {k: (v[-1].item() if hasattr(v[-1], "item") else v[-1]) for k, v in result.records.items()})
-            self.progress.last_row["increment"] = start.increment + len(steps)
             if write_history:
                 self._write_history(cycle, start.increment, h)
             self.writer.rows("cycles", [crow])
             if keep:
                 out_r, out_x, out_y, out_gw, out_status = result.kept
-                for j, s in enumerate(steps):
+                for j in range(n):
                     self._profile(start.increment + j + 1, cycle, j + 1, out_x[j], out_y[j], out_r[j], out_gw[j],
                                   out_status[j])
-                self._fields(float(start.increment + len(steps)), result.final)
+                self._fields(float(start.increment + n), result.final)
             self.writer.flush()
             if progress_bar is not None:
                 progress_bar.update(self.progress.cycle - cycle + 1)
