@@ -548,7 +548,14 @@ class _Run:
                 for j in range(n):
                     self._profile(start.increment + j + 1, cycle, j + 1, out_x[j], out_y[j], out_r[j], out_gw[j],
                                   out_status[j])
-                self._fields(float(start.increment + n), result.final)
+                # The fields of the most loaded instant of the cycle (a cycle often ends unloaded: Example 1's face
+                # pressure is back to zero); elastic–plastic: the cycle's end (its plastic history is the end's).
+                j = n - 1
+                if self.problem.body is None:
+                    j = int(np.argmax(result.records["normal_force"] + np.abs(result.records["tangential_force"])))
+                shown = replace(result.final, forces=out_r[j], positions=out_y[j], obstacle=result.obstacle[j],
+                                load_factors=result.load_factors[j])
+                self._fields(float(start.increment + j + 1), shown if self.problem.body is None else result.final)
             self.writer.flush()
             if progress_bar is not None:
                 progress_bar.update(self.progress.cycle - cycle + 1)
