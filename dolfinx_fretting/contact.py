@@ -22,7 +22,7 @@ import scipy.sparse as sp
 from mpi4py import MPI
 
 __all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "find_candidates", "find_pairs", "tangent_frame",
-           "constrained_dofs"]
+           "constrained_dofs", "constrained_global_dofs"]
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
@@ -467,6 +467,15 @@ def constrained_dofs(V, bcs) -> np.ndarray:
     return out
 
 
+def constrained_global_dofs(V, bcs) -> np.ndarray:
+    """Global PETSc dofs (``bs * global_node + component``) fixed by ``bcs``, the union over ranks. Collective."""
+    bs = V.dofmap.index_map_bs
+    fixed = constrained_dofs(V, bcs)
+    local_nodes = (fixed // bs).astype(np.int32)
+    glob = bs * V.dofmap.index_map.local_to_global(local_nodes).astype(np.int64) + fixed % bs
+    return np.unique(np.concatenate(V.mesh.comm.allgather(glob)))
+
+
 class Contact:
     """Frictional contact of the body discretised by ``V`` with an obstacle. Collective to build.
 
@@ -523,10 +532,7 @@ class Contact:
         fixed = constrained_dofs(V, self.bcs)
         counts = np.bincount(fixed // bs, minlength=0)
         self.fixed_nodes = np.flatnonzero(counts == bs).astype(np.int32)  # local blocks with every component fixed
-        imap = V.dofmap.index_map
-        local_nodes = (fixed // bs).astype(np.int32)
-        global_fixed = bs * imap.local_to_global(local_nodes).astype(np.int64) + fixed % bs
-        self.fixed_global = np.unique(np.concatenate(V.mesh.comm.allgather(global_fixed)))
+        self.fixed_global = constrained_global_dofs(V, self.bcs)
         if isinstance(obstacle, RigidPlane):
             cs = find_candidates(V, self.facets, obstacle, window, exclude_nodes=self.fixed_nodes)
         else:

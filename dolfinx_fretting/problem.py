@@ -47,7 +47,7 @@ import numpy as np
 from mpi4py import MPI
 
 from . import local_solvers
-from .contact import Contact, ElasticBody
+from .contact import Contact, ElasticBody, constrained_global_dofs
 from .loading import LoadControlError, find_displacement, waveform
 from .wear import ROW, ROW_FIELDS, commit_increment
 
@@ -414,7 +414,7 @@ class FrettingProblem:
         all_bcs = self.bcs + [bc for v in self.prescribed.values() for bc in v]
         # The contact and K must fix the same dofs: W is built on the contact's free dofs, and K has identity
         # rows exactly at the dofs of these conditions.
-        fixed = _global_fixed(self.V, all_bcs)
+        fixed = constrained_global_dofs(self.V, all_bcs)
         if not np.array_equal(fixed, contact.fixed_global):
             raise ValueError("FrettingProblem: the Dirichlet conditions (bcs and prescribed) differ from those given "
                              f"to the Contact ({fixed.size} fixed dofs here, {contact.fixed_global.size} there): pass "
@@ -1041,10 +1041,10 @@ class FrettingProblem:
                                        f"after {sv.max_iter} sweeps)", step=done + 1)
             warm_new = r_warm  # the cycle's forces: the next cycle's warm start
             outs = (out_r, out_x, out_y, out_gw, out_states) if keep else (out_x[-1:], out_states[-1:])
-            return ("ok", hist, gw, y, r_last, outs)
+            return hist, gw, y, r_last, outs
 
         result = self._on_rank0(work)
-        hist, gw, y, r_last, outs = result[1:6]
+        hist, gw, y, r_last, outs = result
         nf = len(ROW_FIELDS)
         records = {name: hist[:, i] for i, name in enumerate(ROW_FIELDS)}
         records.update(local_iterations=hist[:, nf].astype(int), local_error=hist[:, nf + 1],
@@ -1255,12 +1255,3 @@ def _plain_vector(f, K):
     out.getArray()[:] = f.getArray(readonly=True)[:n]
     f.destroy()
     return out
-
-
-def _global_fixed(V, bcs) -> np.ndarray:
-    from .contact import constrained_dofs
-
-    bs = V.dofmap.index_map_bs
-    fixed = constrained_dofs(V, bcs)
-    glob = bs * V.dofmap.index_map.local_to_global((fixed // bs).astype(np.int32)).astype(np.int64) + fixed % bs
-    return np.unique(np.concatenate(V.mesh.comm.allgather(glob)))
