@@ -33,7 +33,7 @@ from petsc4py import PETSc  # noqa: E402
 
 __all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API", "TESTED_VERSIONS", "versions",
            "element_degree", "element_family", "value_size", "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
-           "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh",
+           "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh", "create_mesh",
            "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec"]
 
 #: (major, minor) of the DOLFINx in use.
@@ -226,6 +226,22 @@ def model_to_mesh(model, comm: MPI.Comm, rank: int, gdim: int) -> tuple[Any, Any
 
     data = dgmsh.model_to_mesh(model, comm, rank, gdim=gdim)
     return data.mesh, data.cell_tags, data.facet_tags
+
+
+def create_mesh(comm: MPI.Comm, cells: np.ndarray, points: np.ndarray, cell_type: str):
+    """A first-order mesh from ``cells`` (vertex indices in DOLFINx's order for ``cell_type``, e.g.
+    ``"hexahedron"``) and ``points`` (N, gdim) given on any ranks (typically all on rank 0, none elsewhere);
+    DOLFINx distributes them with its default partitioner, as ``model_to_mesh`` does. Collective."""
+    points = np.asarray(points, dtype=np.float64)
+    gdim = points.shape[1]
+    cells = np.asarray(cells, dtype=np.int64)
+    if LEGACY_API:
+        domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell_type, 1))
+        return dmesh.create_mesh(comm, cells, points, domain)
+    import basix.ufl
+
+    element = basix.ufl.element("Lagrange", cell_type, 1, shape=(gdim,))
+    return dmesh.create_mesh(comm, cells, element, points)
 
 
 def vtk_mesh(msh, dim: int | None = None, entities: np.ndarray | None = None):
