@@ -486,8 +486,10 @@ class Contact:
     Dofs fixed by ``bcs`` are handled exactly: a node whose every component is fixed is never a contact
     candidate (it cannot move); at a node with some components fixed (a roller), those components enter the
     relative positions (their prescribed values) but not the compliance W (``H_free``, H without the fixed
-    columns: K has identity rows there, which would add a meaningless unit compliance). A contact direction
-    left with no free dof is refused with a message.
+    columns: K has identity rows there, which would add a meaningless unit compliance). A normal direction
+    left with no free dof is refused with a message; a tangential one is *held* (:attr:`held_rows`: a node on a
+    symmetry plane with its roller, whose normal is one of the frame's tangents): its force stays zero and the
+    problem refuses obstacle motions along it (see :class:`~dolfinx_fretting.problem.FrettingProblem`).
 
     Frames and units: the obstacle frame is ``obstacle.frame``, rows ``(n, t1[, t2])`` with n pointing from the
     obstacle into the body, ``t1 = (n_y, -n_x)`` in 2D and ``t2 = n x t1`` in 3D; per-contact forces ``r``
@@ -507,6 +509,7 @@ class Contact:
     Attributes:
         contact_set: The :class:`ContactSet` (nodes, frames, gaps, tributary measures, H).
         H_free: H without the columns of fixed dofs (what W is built from).
+        held_rows: Rows of H (``dim c + k``, k >= 1) whose every dof is fixed: held tangential directions.
         mu: Friction coefficient per contact.
         frame: The obstacle frame.
     """
@@ -546,13 +549,18 @@ class Contact:
         self.H_free = sp.csr_matrix(H @ sp.diags(free.astype(float)))
         self.H_free.eliminate_zeros()
         empty = np.diff(self.H_free.indptr) == 0
-        if empty.any():
-            row = int(np.flatnonzero(empty)[0])
-            c, k = divmod(row, cs.dim)
+        normal_rows = np.arange(empty.size) % cs.dim == 0
+        if (empty & normal_rows).any():
+            row = int(np.flatnonzero(empty & normal_rows)[0])
+            c = row // cs.dim
             raise ValueError(
-                f"Contact: direction {('n', 't1', 't2')[k]} of contact {c} (node at {cs.coords[c].tolist()}) has every "
-                "dof fixed by bcs: the contact cannot move that way. Remove the node from the contact surface or "
-                "the condition from bcs")
+                f"Contact: direction n of contact {c} (node at {cs.coords[c].tolist()}) has every dof fixed by bcs: "
+                "the contact cannot move that way. Remove the node from the contact surface or the condition from bcs")
+        #: Rows (``dim c + k``) of the tangential directions held by ``bcs``: every dof of the row is fixed, as at
+        #: a node on a symmetry plane with its roller (the plane's normal is then one of the contact's tangents).
+        #: Their contact force is zero (by symmetry, in a half model); FrettingProblem gives them a positive
+        #: compliance so that the local problem stays well posed, and refuses an obstacle motion along them.
+        self.held_rows = np.flatnonzero(empty & ~normal_rows)
         mu_arr = np.broadcast_to(np.asarray(mu, dtype=float), (cs.nc,)).copy() if np.ndim(mu) == 0 else \
             np.asarray(mu, dtype=float)
         if mu_arr.shape != (cs.nc,) or not np.all(np.isfinite(mu_arr)) or np.any(mu_arr < 0):

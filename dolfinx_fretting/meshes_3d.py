@@ -118,7 +118,7 @@ def _hexahedra(nx: int, ny: int, nz: int, offset: int = 0) -> np.ndarray:
 
 
 def sphere_on_flat_grid(radius: float, contact_radius: float, contact_mesh_size: float, *, zone: float = 1.5,
-                        depth_zone: float = 1.0, extent: float = 9.0, growth: float = 1.3, half: bool = True,
+                        depth_zone: float = 1.0, extent: float = 9.0, growth: float = 1.5, half: bool = True,
                         flat: bool = True, flat_mesh_size: float | None = None) -> dict[str, np.ndarray]:
     """Points and hexahedra of :func:`sphere_on_flat` (pure NumPy; the arguments are described there).
 
@@ -167,7 +167,7 @@ def sphere_on_flat_grid(radius: float, contact_radius: float, contact_mesh_size:
 
 # DOLFINx ---------------------------------------------------------------------------------------------------
 def sphere_on_flat(comm: MPI.Comm, radius: float, contact_radius: float, contact_mesh_size: float | None = None,
-                   *, zone: float = 1.5, depth_zone: float = 1.0, extent: float = 9.0, growth: float = 1.3,
+                   *, zone: float = 1.5, depth_zone: float = 1.0, extent: float = 9.0, growth: float = 1.5,
                    half: bool = True, flat: bool = True, flat_mesh_size: float | None = None) -> BodyMesh:
     """A sphere's cap on a flat (or alone, for a rigid plane), structured trilinear hexahedra. Collective.
 

@@ -290,17 +290,21 @@ class CyclePath:
     """The targets of the increments of one load cycle (``n`` increments).
 
     ``normal`` and ``tangential`` are :class:`Displacement` or :class:`Force` of arrays: ``normal`` of shape
-    (n,), ``tangential`` (n,) in 2D or (n, 2) in 3D (components along t1, t2); ``loads`` maps load names to
-    (n,) factors. Names and components not given keep the state's values.
+    (n,), ``tangential`` (n,) in 2D or (n, 2) in 3D (components along t1, t2; (n,) in 3D: along t1, t2 at 0);
+    in 3D ``tangential`` may also be a pair of items of shape (n,) with their own controls, e.g.
+    ``(Force(Q), Displacement(zeros))`` in a half model. ``loads`` maps load names to (n,) factors. Names and
+    components not given keep the state's values.
     """
 
     normal: Displacement | Force | None = None
-    tangential: Displacement | Force | None = None
+    tangential: Displacement | Force | tuple | None = None
     loads: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def increments(self) -> int:
         for item in (self.normal, self.tangential):
+            if isinstance(item, tuple):
+                item = item[0]
             if item is not None:
                 return int(np.shape(item.value)[0])
         for v in self.loads.values():
@@ -325,6 +329,8 @@ class CyclePath:
         def waved(item):
             if item is None:
                 return None
+            if isinstance(item, tuple):
+                return tuple(waved(i) for i in item)
             kind = type(item) if isinstance(item, (Displacement, Force)) else Displacement
             amp = np.asarray(item.value if isinstance(item, (Displacement, Force)) else item, dtype=float)
             return kind(np.multiply.outer(wave, amp) if amp.ndim else amp * wave)
@@ -517,11 +523,64 @@ class FrettingProblem:
         self.responses = np.zeros((len(self._vectors), cs.nc * cs.dim))
         for i, f in enumerate(self._vectors):
             self.responses[i] = self._local_response(f)
+        self._hold_directions()
         # Point stiffness of the closest node: a safe first guess of the load-displacement slope.
         k = int(np.argmin(cs.gap0))
         blk = self.W[k * cs.dim:(k + 1) * cs.dim, k * cs.dim:(k + 1) * cs.dim]
         self._stiffness = np.array([1.0 / blk[c, c] for c in range(cs.dim)])
         self._kernel = None
+
+    def _hold_directions(self) -> None:
+        """Tangential directions held by the conditions (:attr:`Contact.held_rows`, e.g. a symmetry plane's
+        roller): W is zero on their rows and columns; they get the contact's normal compliance on the diagonal,
+        which keeps the local problem well posed and leaves their force at zero as long as nothing moves along
+        them (then ``x = c r`` there: sticking gives r = 0, sliding ``r = -mu r_n x_t/|x_t|`` gives r = 0 too).
+        Obstacle components along them are refused (:meth:`_check_held`), as are loads that move them.
+        Then every contact's diagonal block must be positive definite."""
+        cs = self.contact.contact_set
+        dim = cs.dim
+        held = self.contact.held_rows
+        if held.size:
+            normal_rows = held - held % dim
+            self.W[held, held] = self.W[normal_rows, normal_rows]
+            scale = np.abs(self.responses).max(initial=0.0)
+            moved = np.abs(self.responses[:, held]).max(initial=0.0)
+            if moved > 1e-12 * scale:
+                c, k = divmod(int(held[np.argmax(np.abs(self.responses[:, held]).max(axis=0))]), dim)
+                raise ValueError(
+                    f"FrettingProblem: a load or Dirichlet value moves contact {c} (node at {cs.coords[c].tolist()}) "
+                    f"along its direction t{k}, which the conditions hold (a roller): a half model's loads must be "
+                    "symmetric about its symmetry plane")
+        # Obstacle components (rows of the obstacle frame) with a component along a held direction.
+        held_dirs = cs.frames.reshape(-1, dim)[held]
+        self._held_components = np.abs(held_dirs @ self.contact.frame.T).max(axis=0, initial=0.0) > 1e-9
+        blocks = np.array([self.W[c * dim:(c + 1) * dim, c * dim:(c + 1) * dim] for c in range(cs.nc)])
+        eig = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1))) if cs.nc else np.zeros((0, dim))
+        bad = np.flatnonzero(eig[:, 0] <= 1e-10 * eig[:, -1])
+        if bad.size:
+            c = int(bad[0])
+            raise ValueError(
+                f"FrettingProblem: the compliance of contact {c} (node at {cs.coords[c].tolist()}) is singular "
+                f"(eigenvalues {eig[c].tolist()}): the conditions fix a combination of its directions n, t1"
+                f"{', t2' if dim == 3 else ''} that is not one of them (a roller must fix the component along one "
+                "of the contact frame's directions, e.g. u_y on a symmetry plane y = 0 with the obstacle normal in "
+                "that plane)")
+
+    def _check_held(self, obstacle: np.ndarray, force_controlled: np.ndarray) -> None:
+        """Refuse obstacle motions and forces along a held contact direction (see :meth:`_hold_directions`)."""
+        held = self._held_components
+        if not held.any():
+            return
+        obstacle = np.atleast_2d(obstacle)
+        names = ["normal"] + [f"tangential t{k}" for k in range(1, self.dim)]
+        for k in np.flatnonzero(held):
+            if force_controlled[k] or np.any(obstacle[:, k] != 0.0):
+                what = "a force" if force_controlled[k] else f"a motion ({np.abs(obstacle[:, k]).max():.3g})"
+                raise ValueError(
+                    f"{names[k]} = {what}: the conditions hold some contacts along this direction (a roller, e.g. "
+                    "on a symmetry plane): a half model moves only in its symmetry plane. Prescribe "
+                    f"Displacement(0) along {names[k]} (in 3D, tangential=(Force(Q), Displacement(0.0)) for a "
+                    "force along t1 alone)")
 
     def _local_response(self, f) -> np.ndarray:
         """``H K^-1 f`` with the full H (prescribed values at fixed dofs count), replicated. Collective."""
@@ -641,6 +700,13 @@ class FrettingProblem:
         def parse(item, comps: list[int], name: str):
             if item is None:
                 return
+            if isinstance(item, (tuple, list)) and any(isinstance(i, (Displacement, Force)) for i in item):
+                # One item per component, e.g. (Force(Q), Displacement(0.0)): a force along t1, t2 held.
+                if len(item) != len(comps):
+                    raise ValueError(f"{name} = {item!r}: expected {len(comps)} component(s)")
+                for c, sub in zip(comps, item):
+                    parse(sub, [c], name)
+                return
             kind_force = isinstance(item, Force)
             value = item.value if isinstance(item, (Displacement, Force)) else item
             values = np.atleast_1d(np.asarray(value, dtype=float))
@@ -654,6 +720,7 @@ class FrettingProblem:
 
         parse(normal, [0], "normal")
         parse(tangential, list(range(1, dim)), "tangential")
+        self._check_held(targets, controlled)
         return targets, controlled
 
     def _contact_solve(self, state: ContactState, targets: np.ndarray, controlled: np.ndarray,
@@ -877,7 +944,7 @@ class FrettingProblem:
                 targets = start_targets + f * (end_targets - start_targets)
                 factors = start_factors + f * (end_factors - start_factors)
             sub_normal = (Force if end_controlled[0] else Displacement)(targets[0])
-            sub_tangential = (Force if end_controlled[1:].any() else Displacement)(targets[1:])
+            sub_tangential = _tangential_item(targets[1:], end_controlled[1:])
             sub_loads = {n: factors[self.load_names.index(n)] for n in names}
             try:
                 result = self.solve(current, sub_normal, sub_tangential, sub_loads, in_cycle=in_cycle)
@@ -943,6 +1010,16 @@ class FrettingProblem:
         for item, comps in ((path.normal, [0]), (path.tangential, list(range(1, dim)))):
             if item is None:
                 continue
+            if isinstance(item, tuple):  # one item per component
+                if len(item) != len(comps) or not all(isinstance(i, (Displacement, Force)) for i in item):
+                    raise ValueError(f"CyclePath: expected {len(comps)} Displacement or Force items per component")
+                parts = [(np.asarray(i.value, dtype=float), isinstance(i, Force)) for i in item]
+                if any(v.shape != (n,) or not np.all(np.isfinite(v)) for v, _ in parts):
+                    raise ValueError(f"CyclePath: expected {n} finite values per component")
+                for c, (v, f) in zip(comps, parts):
+                    obstacle[:, c] = v
+                    forced[c] = f
+                continue
             values = np.asarray(item.value, dtype=float).reshape(n, -1)
             if values.shape[1] == 1 and len(comps) > 1:
                 values = np.column_stack([values, np.zeros((n, len(comps) - 1))])
@@ -958,6 +1035,7 @@ class FrettingProblem:
             if values.shape != (n,) or not np.all(np.isfinite(values)):
                 raise ValueError(f"CyclePath.loads[{name!r}]: expected {n} finite factors")
             factors[:, self.load_names.index(name)] = values
+        self._check_held(obstacle, forced)
         compiled = (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
                     and not forced.any())
         if compiled:
@@ -972,7 +1050,7 @@ class FrettingProblem:
         obstacle = obstacle.copy()
         for j in range(n):
             normal = (Force if forced[0] else Displacement)(obstacle[j, 0])
-            tangential = (Force if forced[1:].any() else Displacement)(obstacle[j, 1:])
+            tangential = _tangential_item(obstacle[j, 1:], forced[1:])
             loads = {nm: factors[j, self.load_names.index(nm)] for nm in names}
             try:
                 current, info = self.advance(current, normal, tangential, loads, in_cycle=True, check=check)
@@ -1236,6 +1314,14 @@ class FrettingProblem:
             f.destroy()
         if self._own_K:
             self.K.destroy()
+
+
+def _tangential_item(values: np.ndarray, forced: np.ndarray):
+    """The ``tangential`` argument of :meth:`FrettingProblem.solve` for these values and controls: one
+    Displacement or Force of all components, or one item per component when the controls differ."""
+    if forced.all() or not forced.any():
+        return (Force if forced.all() else Displacement)(values)
+    return tuple((Force if f else Displacement)(float(v)) for v, f in zip(values, forced))
 
 
 def _zero_linear_form(V):

@@ -83,19 +83,22 @@ def test_constrained_dofs_are_excluded_and_W_is_the_free_compliance():
     """Clamp the left face (its bottom corner is on the contact surface) and a roller (u_x = 0) on the
     right face: the clamped corner is no candidate, and W equals H K_ff^-1 H^T on the free dofs computed
     independently by SciPy (K without the constrained rows and columns). Without the exclusion W would carry
-    K's unit identity entry at the corner (the issue's diagonal of 1.0 against compliances ~1e-5)."""
+    K's unit identity entry at the corner (the issue's diagonal of 1.0 against compliances ~1e-5).
+
+    The bottom-right corner keeps u_y free but its tangential direction (x) is held by the roller, as a node on
+    a symmetry plane: that row of the free compliance is zero; the problem puts the corner's normal compliance
+    on its diagonal (the local problem stays well posed) and the corner's tangential force stays exactly zero,
+    while an obstacle motion along the held direction is refused."""
     msh, tags, V = block(8, 4)
     right = fem.locate_dofs_topological((V.sub(0), V.sub(0).collapse()[0]), 1, tags.find(4))
     roller = fem.dirichletbc(fem.Function(V.sub(0).collapse()[0]), right, V.sub(0))
     bcs = [clamped(V, tags, 2), clamped(V, tags, 3), roller]
     plane = dfr.RigidPlane([0.0, 0.0], [0.0, 1.0])
-    with pytest.raises(ValueError, match="direction t1"):
-        # The bottom-right corner keeps u_y free but its tangential direction (x) is fixed by the roller.
-        dfr.Contact(V, (tags, 1), plane, mu=0.3, bcs=bcs)
-    bcs = bcs[:2]
     contact = dfr.Contact(V, (tags, 1), plane, mu=0.3, bcs=bcs)
     cs = contact.contact_set
     assert not np.any(np.isclose(cs.coords[:, 0], -1.0)), "the clamped corner is not a candidate"
+    corner = int(np.flatnonzero(np.isclose(cs.coords[:, 0], 1.0))[0])
+    assert contact.held_rows.tolist() == [2 * corner + 1]
     problem = dfr.FrettingProblem(elasticity(V), contact, bcs)
     a = fem.form(elasticity(V))
     A = fem.petsc.assemble_matrix(a)  # no conditions: the free block is taken by hand below
@@ -106,9 +109,18 @@ def test_constrained_dofs_are_excluded_and_W_is_the_free_compliance():
     free = np.setdiff1d(np.arange(K.shape[0]), fixed)
     Hf = cs.H.tocsc()[:, free]
     W_ref = Hf @ spla.spsolve(K[free][:, free].tocsc(), Hf.T.toarray())
+    held = 2 * corner + 1
+    assert np.abs(W_ref[held]).max() == 0.0  # the held row touches fixed dofs only
+    W_ref[held, held] = W_ref[held - 1, held - 1]
     # Two direct solves of the same SPD system agree to ~1e-12 of the largest entry.
     assert np.abs(problem.W - W_ref).max() <= 1e-9 * np.abs(W_ref).max()
     assert np.diag(problem.W).max() < 1e-3  # physical compliances, not K's unit identity rows
+    state = problem.commit(problem.initial_state(), problem.solve(problem.initial_state(), normal=2e-4))
+    assert state.forces[2 * corner] > 0 and state.forces[held] == 0.0
+    with pytest.raises(ValueError, match="tangential t1 = a motion"):
+        problem.solve(state, tangential=1e-5)
+    with pytest.raises(ValueError, match="tangential t1 = a force"):
+        problem.solve(state, tangential=dfr.Force(1.0))
     problem.destroy()
 
 
