@@ -22,7 +22,7 @@ import scipy.sparse as sp
 from mpi4py import MPI
 
 __all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "find_candidates", "find_pairs", "tangent_frame",
-           "constrained_dofs", "constrained_global_dofs"]
+           "constrained_dofs", "constrained_global_dofs", "pair_with_faces"]
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
@@ -92,11 +92,15 @@ class ContactSet:
     tributary: np.ndarray
     abscissa: np.ndarray
     H: sp.csr_matrix
-    #: Two deformable bodies (:func:`find_pairs`): the master segment's two global nodes per contact,
-    #: their interpolation weights and the paired master point; None against a rigid obstacle.
+    #: Two deformable bodies (:func:`find_pairs`): the master facet's global nodes per contact (2D: a segment's
+    #: two; 3D: four, a triangle's third padded with -1), their interpolation weights (0 on padding) and the
+    #: paired master point; None against a rigid obstacle.
     master_nodes: np.ndarray | None = None
     master_weights: np.ndarray | None = None
     master_points: np.ndarray | None = None
+    #: Two deformable bodies: the size of each contact's master facet (2D: the segment's length; 3D: the mean
+    #: edge length), the scale of the small-sliding limit (relative slip below half of it).
+    master_sizes: np.ndarray | None = None
 
     @property
     def two_body(self) -> bool:
@@ -291,8 +295,10 @@ def _vertex_geometry(msh, vertices: np.ndarray) -> np.ndarray:
 
 
 def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
-               exclude_nodes: np.ndarray | None = None) -> ContactSet:
+               exclude_nodes: np.ndarray | None = None, reference_frame: np.ndarray | None = None) -> ContactSet:
     """Pair each slave node with a point of the master surface, in the reference configuration. Collective.
+
+    2D here (node-to-segment); 3D in :func:`_find_pairs_3d` (node-to-face).
 
     Small sliding: the pairing is made once and kept for the whole run. In fretting the relative slip is
     micrometres, a fraction of the contact width, so the master point of a slave node moves little; the
@@ -310,29 +316,34 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     (:attr:`ContactSet.rigid_modes`). Slave candidates: the owned nodes of ``slave_facets`` within
     ``half_width`` (along t) of the slave node closest to the master.
 
-    2D only (segments); a 3D master surface would need facet projections.
+    In 3D (node-to-face, :func:`_find_pairs_3d`) the master point is the closest point of the master's
+    triangles and quadrilaterals, with linear (triangle) or bilinear (quadrilateral) weights on their nodes.
 
     Args:
         V: Vector P1 displacement space on the mesh holding both bodies.
         slave_facets, master_facets: Local facet indices of the two contact surfaces.
         half_width: Candidate window half-width (mm), or None for every slave node.
         exclude_nodes: Local block indices with prescribed displacement (never candidates).
+        reference_frame: 3D: the obstacle frame (n, t1, t2) whose t1, projected on each master facet, gives the
+            contact's t1 (so the contacts' frames follow the obstacle's); 2D: unused.
 
     Returns:
         The contact set (identical on every rank) with ``master_nodes``, ``master_weights`` and
         ``master_points`` set.
 
     Raises:
-        ValueError: on a 3D mesh, or if no slave node or master facet is found.
+        ValueError: if no slave node or master facet is found.
     """
     from dolfinx import fem
 
     msh = V.mesh
-    comm = msh.comm
     gdim = msh.geometry.dim
+    if gdim == 3:
+        return _find_pairs_3d(V, slave_facets, master_facets, half_width, exclude_nodes, reference_frame)
+    comm = msh.comm
     fdim = msh.topology.dim - 1
     if gdim != 2:
-        raise ValueError(f"two-body contact (contact.obstacle = 'elastic_flat') is 2D; the mesh is {gdim}D")
+        raise ValueError(f"two-body contact needs a 2D or 3D mesh; the mesh is {gdim}D")
     bs = V.dofmap.index_map_bs
     imap = V.dofmap.index_map
     seg_nodes, seg_x, seg_inside = _boundary_segments(V, master_facets)
@@ -395,17 +406,310 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     H.eliminate_zeros()  # weight 0 at a segment end
     return ContactSet(dim=gdim, global_nodes=gnodes, coords=coords, frames=frames, gap0=gaps,
                       tributary=trib, abscissa=abscissa, H=H, master_nodes=masters, master_weights=weights,
-                      master_points=P)
+                      master_points=P, master_sizes=np.sqrt(L2[best[order]]))
+
+
+# Node-to-face (3D) ------------------------------------------------------------------------------------------
+def _canonical_face(points: np.ndarray) -> np.ndarray:
+    """Order of a facet's 3 or 4 vertices that depends on their coordinates only (so on no partition): the
+    lexicographically smallest first; a quadrilateral's then go round the facet (cyclic order, as the bilinear
+    map needs), towards the smaller of the first vertex's two neighbours."""
+    start = np.lexsort(points.T[::-1])
+    if len(points) == 3:
+        return start
+    v0 = start[0]
+    c = points.mean(axis=0)
+    n = np.cross(points[start[1]] - points[v0], points[start[2]] - points[v0])
+    u = points[v0] - c
+    u /= np.linalg.norm(u)
+    w = np.cross(n / np.linalg.norm(n), u)
+    d = points - c
+    angle = np.mod(np.arctan2(d @ w, d @ u), 2 * np.pi)
+    angle[v0] = 0.0
+    cyc = np.argsort(angle)
+    nb1, nb3 = cyc[1], cyc[3]
+    if tuple(points[nb3]) < tuple(points[nb1]):  # go round towards the smaller neighbour
+        cyc = np.array([cyc[0], cyc[3], cyc[2], cyc[1]])
+    return cyc
+
+
+def _boundary_faces(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The owned facets of a 3D boundary, gathered on every rank and sorted by position. Collective.
+
+    Returns:
+        (global nodes (n, 4) in :func:`_canonical_face` order, -1 as a triangle's fourth; coordinates (n, 4, 3),
+        a triangle's fourth repeating its third; number of vertices (n,); the centroid of each facet's cell
+        (n, 3), which tells on which side the body lies).
+    """
+    msh = V.mesh
+    comm = msh.comm
+    tdim, gdim = msh.topology.dim, msh.geometry.dim
+    fdim = tdim - 1
+    msh.topology.create_connectivity(fdim, tdim)
+    msh.topology.create_connectivity(fdim, 0)
+    f_to_c = msh.topology.connectivity(fdim, tdim)
+    f_to_v = msh.topology.connectivity(fdim, 0)
+    c_to_v = msh.topology.connectivity(tdim, 0)
+    n_owned_facets = msh.topology.index_map(fdim).size_local
+    facets = np.asarray(facets, dtype=np.int32)
+    facets = facets[facets < n_owned_facets]  # each facet once across ranks
+    dof_x = V.tabulate_dof_coordinates()[:, :gdim]
+    imap = V.dofmap.index_map
+    nodes = np.full((facets.size, 4), -1, dtype=np.int64)
+    xs = np.zeros((facets.size, 4, gdim))
+    nv = np.zeros(facets.size, dtype=np.int64)
+    centroids = np.zeros((facets.size, gdim))
+    for i, f in enumerate(facets):
+        cell = f_to_c.links(f)[0]
+        dofs = V.dofmap.cell_dofs(cell)
+        vx = msh.geometry.x[_vertex_geometry(msh, f_to_v.links(f)), :gdim]
+        local = np.array([int(dofs[np.argmin(np.linalg.norm(dof_x[dofs] - p, axis=1))]) for p in vx])
+        order = _canonical_face(dof_x[local])
+        local = local[order]
+        k = local.size
+        nv[i] = k
+        nodes[i, :k] = imap.local_to_global(local.astype(np.int32))
+        xs[i, :k] = dof_x[local]
+        xs[i, k:] = dof_x[local[-1]]
+        centroids[i] = msh.geometry.x[_vertex_geometry(msh, c_to_v.links(cell)), :gdim].mean(axis=0)
+    gathered = comm.allgather((nodes, xs, nv, centroids))
+    nodes, xs, nv, centroids = (np.concatenate([g[k] for g in gathered]) for k in range(4))
+    # A partition-free order (by the facet's centroid), so that ties between facets go the same way anywhere.
+    mid = np.array([x[:k].mean(axis=0) for x, k in zip(xs, nv)]).reshape(-1, gdim)
+    order = np.lexsort(mid.T[::-1]) if mid.size else np.zeros(0, dtype=np.int64)
+    return nodes[order], xs[order], nv[order], centroids[order]
+
+
+def _closest_on_segments(p: np.ndarray, A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Closest points of segments AB to points p (rows): (parameter t in [0, 1], point)."""
+    d = B - A
+    t = np.clip(np.einsum("ij,ij->i", p - A, d) / np.einsum("ij,ij->i", d, d), 0.0, 1.0)
+    return t, A + t[:, None] * d
+
+
+def _closest_on_triangles(p: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Closest points of triangles X (m, 3, 3) to points p (m, 3): (barycentric weights (m, 3), point (m, 3)).
+
+    The projection on the triangle's plane if it falls inside, else the closest of the three edges' points.
+    """
+    A, B, C = X[:, 0], X[:, 1], X[:, 2]
+    e1, e2, r = B - A, C - A, p - A
+    g11, g12, g22 = (np.einsum("ij,ij->i", u, v) for u, v in ((e1, e1), (e1, e2), (e2, e2)))
+    b1, b2 = np.einsum("ij,ij->i", r, e1), np.einsum("ij,ij->i", r, e2)
+    det = g11 * g22 - g12 * g12
+    s = (g22 * b1 - g12 * b2) / det
+    t = (g11 * b2 - g12 * b1) / det
+    weights = np.column_stack([1 - s - t, s, t])
+    point = A + s[:, None] * e1 + t[:, None] * e2
+    outside = (s < 0) | (t < 0) | (s + t > 1)
+    if outside.any():
+        o = np.flatnonzero(outside)
+        best = np.full(o.size, np.inf)
+        for i, j in ((0, 1), (1, 2), (2, 0)):
+            tt, pt = _closest_on_segments(p[o], X[o, i], X[o, j])
+            dist = np.linalg.norm(p[o] - pt, axis=1)
+            better = dist < best
+            best[better] = dist[better]
+            w = np.zeros((o.size, 3))
+            w[:, i], w[:, j] = 1 - tt, tt
+            weights[o[better]] = w[better]
+            point[o[better]] = pt[better]
+    return weights, point
+
+
+def _bilinear(X: np.ndarray, xi: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Bilinear map of quadrilaterals X (m, 4, 3) (cyclic vertex order: (0,0) (1,0) (1,1) (0,1)) at (xi, eta):
+    (weights (m, 4), point, d/dxi, d/deta)."""
+    N = np.column_stack([(1 - xi) * (1 - eta), xi * (1 - eta), xi * eta, (1 - xi) * eta])
+    x = np.einsum("mi,mij->mj", N, X)
+    dxi = (1 - eta)[:, None] * (X[:, 1] - X[:, 0]) + eta[:, None] * (X[:, 2] - X[:, 3])
+    deta = (1 - xi)[:, None] * (X[:, 3] - X[:, 0]) + xi[:, None] * (X[:, 2] - X[:, 1])
+    return N, x, dxi, deta
+
+
+def _closest_on_quadrilaterals(p: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Closest points of bilinear quadrilaterals X (m, 4, 3) to points p (m, 3): (bilinear weights (m, 4),
+    point (m, 3), (xi, eta) (m, 2)).
+
+    Projected Gauss-Newton on ``|x(xi, eta) - p|^2`` over the unit square from its centre: a parameter on a
+    bound where the descent direction points outwards stays there and the other one takes its one-dimensional
+    step (exact in one or two steps for a flat parallelogram; a few for a warped facet).
+    """
+    m = p.shape[0]
+    xi, eta = np.full(m, 0.5), np.full(m, 0.5)
+    for _ in range(60):
+        _, x, dxi, deta = _bilinear(X, xi, eta)
+        r = p - x
+        a11, a12, a22 = (np.einsum("ij,ij->i", u, v) for u, v in ((dxi, dxi), (dxi, deta), (deta, deta)))
+        b1, b2 = np.einsum("ij,ij->i", dxi, r), np.einsum("ij,ij->i", deta, r)
+        det = a11 * a22 - a12 * a12
+        s1 = (a22 * b1 - a12 * b2) / det
+        s2 = (a11 * b2 - a12 * b1) / det
+        # A parameter on a bound stays there while the descent direction of |x - p|^2 along it points out.
+        out1 = ((xi <= 0) & (b1 < 0)) | ((xi >= 1) & (b1 > 0))
+        out2 = ((eta <= 0) & (b2 < 0)) | ((eta >= 1) & (b2 > 0))
+        s1 = np.where(out1, 0.0, np.where(out2, b1 / a11, s1))
+        s2 = np.where(out2, 0.0, np.where(out1, b2 / a22, s2))
+        new_xi, new_eta = np.clip(xi + s1, 0.0, 1.0), np.clip(eta + s2, 0.0, 1.0)
+        change = max(np.abs(new_xi - xi).max(initial=0.0), np.abs(new_eta - eta).max(initial=0.0))
+        xi, eta = new_xi, new_eta
+        if change < 1e-15:
+            break
+    # A parameter within 1e-10 of a bound is on it: a node facing a master node or edge gets exact zeros there
+    # (then H does not touch the other nodes, as when the node lies on a symmetry plane).
+    xi = np.where(xi < 1e-10, 0.0, np.where(xi > 1 - 1e-10, 1.0, xi))
+    eta = np.where(eta < 1e-10, 0.0, np.where(eta > 1 - 1e-10, 1.0, eta))
+    N, x, _, _ = _bilinear(X, xi, eta)
+    return N, x, np.column_stack([xi, eta])
+
+
+def pair_with_faces(points: np.ndarray, faces_x: np.ndarray, faces_nv: np.ndarray,
+                    inside: np.ndarray) -> dict[str, np.ndarray]:
+    """Pair each point with the closest point of a set of triangles and quadrilaterals (pure NumPy).
+
+    Args:
+        points: (n, 3) the slave nodes.
+        faces_x: (f, 4, 3) facet vertices (triangles: 3 and a repeat; quadrilaterals in cyclic order).
+        faces_nv: (f,) 3 or 4.
+        inside: (f, 3) a point inside the body behind each facet (its cell's centroid), to orient the normals.
+
+    Returns:
+        ``face`` (n,) the closest facet (the first in the given order among equally close ones), ``weights``
+        (n, 4) on its vertices (0 on a triangle's fourth), ``point`` (n, 3), ``normal`` (n, 3) the facet's unit
+        normal at the point, pointing out of the body, ``distance`` (n,).
+    """
+    n = points.shape[0]
+    centre = np.array([x[:k].mean(axis=0) for x, k in zip(faces_x, faces_nv)]).reshape(-1, 3)
+    diam = np.array([np.linalg.norm(x[:k, None] - x[None, :k], axis=2).max() for x, k in zip(faces_x, faces_nv)])
+    face = np.zeros(n, dtype=np.int64)
+    weights = np.zeros((n, 4))
+    point = np.zeros((n, 3))
+    distance = np.full(n, np.inf)
+    params = np.zeros((n, 2))
+    for lo in range(0, n, 256):  # chunks: (chunk x facets) distance tables stay small
+        hi = min(n, lo + 256)
+        d_c = np.linalg.norm(points[lo:hi, None, :] - centre[None], axis=2)
+        # A facet can hold a closer point than the nearest centre's facet only if |p - c_f| - diam_f <= that.
+        cand = d_c - diam[None] <= d_c.min(axis=1, keepdims=True) + 1e-12 * diam.max()
+        rows, cols = np.nonzero(cand)
+        p = points[lo + rows]
+        w = np.zeros((rows.size, 4))
+        x = np.zeros((rows.size, 3))
+        tri = faces_nv[cols] == 3
+        if tri.any():
+            w[tri, :3], x[tri] = _closest_on_triangles(p[tri], faces_x[cols[tri], :3])
+        quad = ~tri
+        par = np.zeros((rows.size, 2))
+        if quad.any():
+            w[quad], x[quad], par[quad] = _closest_on_quadrilaterals(p[quad], faces_x[cols[quad]])
+        dist = np.linalg.norm(p - x, axis=1)
+        # Smallest distance per row; ties (a node facing a shared node or edge) to the first facet.
+        order = np.lexsort((cols, dist, rows))
+        first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
+        r = lo + rows[first]
+        face[r], weights[r], point[r], distance[r], params[r] = cols[first], w[first], x[first], dist[first], par[first]
+    # The facet's normal at the point (bilinear: d/dxi x d/deta there), out of the body.
+    X = faces_x[face]
+    tri = faces_nv[face] == 3
+    normal = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+    if (~tri).any():
+        _, _, dxi, deta = _bilinear(X[~tri], params[~tri, 0], params[~tri, 1])
+        normal[~tri] = np.cross(dxi, deta)
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    flip = np.einsum("ij,ij->i", inside[face] - point, normal) > 0
+    normal[flip] *= -1
+    return {"face": face, "weights": weights, "point": point, "normal": normal, "distance": distance}
+
+
+def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None,
+                   exclude_nodes: np.ndarray | None, reference_frame: np.ndarray | None) -> ContactSet:
+    """:func:`find_pairs` in 3D: node-to-face (triangles and quadrilaterals). Collective.
+
+    Each contact's frame is (n, t1, t2): n the master facet's outward normal at the paired point, t1 the
+    reference frame's t1 projected on the facet's plane, t2 = n x t1; on a flat master the contacts' frames are
+    the reference frame. The window and the order of the contacts are measured in the reference frame's
+    tangent plane, as for a rigid plane.
+    """
+    from dolfinx import fem
+
+    msh = V.mesh
+    comm = msh.comm
+    gdim = 3
+    fdim = msh.topology.dim - 1
+    bs = V.dofmap.index_map_bs
+    imap = V.dofmap.index_map
+    ref = tangent_frame([0.0, 0.0, 1.0]) if reference_frame is None else np.asarray(reference_frame, dtype=float)
+    face_nodes, face_x, face_nv, face_inside = _boundary_faces(V, master_facets)
+    if face_nodes.shape[0] == 0:
+        raise ValueError("contact: the master surface has no facet")
+
+    slave_facets = np.asarray(slave_facets, dtype=np.int32)
+    nodes = fem.locate_dofs_topological(V, fdim, slave_facets)
+    nodes = nodes[nodes < imap.size_local]
+    if exclude_nodes is not None and len(exclude_nodes):
+        nodes = np.setdiff1d(nodes, exclude_nodes)
+    measure = _tributary_measure(V, slave_facets, fdim)
+    gathered = comm.allgather((imap.local_to_global(nodes.astype(np.int32)).astype(np.int64),
+                               V.tabulate_dof_coordinates()[nodes, :gdim], measure[nodes]))
+    gnodes = np.concatenate([g[0] for g in gathered])
+    coords = np.concatenate([g[1] for g in gathered]).reshape(-1, gdim)
+    trib = np.concatenate([g[2] for g in gathered])
+    if gnodes.size == 0:
+        raise ValueError("contact: no slave node on the contact surface")
+    # The slave nodes in a partition-free order (by position) before anything depends on their order.
+    order = np.lexsort(coords.T[::-1])
+    gnodes, coords, trib = gnodes[order], coords[order], trib[order]
+
+    pairs = pair_with_faces(coords, face_x, face_nv, face_inside)
+    normal, P = pairs["normal"], pairs["point"]
+    t1 = ref[1] - (normal @ ref[1])[:, None] * normal
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
+    frames = np.stack([normal, t1, np.cross(normal, t1)], axis=1)
+    gaps = np.einsum("ij,ij->i", coords - P, normal)
+
+    in_plane = coords @ ref[1:].T
+    distance = np.linalg.norm(in_plane, axis=1)
+    closest = coords[np.lexsort((coords[:, 1], coords[:, 0], distance, gaps))[0]]  # ties: nearest the axis
+    keep = np.ones(gnodes.size, dtype=bool)
+    if half_width is not None:
+        keep = np.linalg.norm((coords - closest) @ ref[1:].T, axis=1) <= half_width * (1 + 1e-12)
+    if not keep.any():
+        raise ValueError("contact: no slave node within the candidate window")
+    sel = np.flatnonzero(keep)
+    sel = sel[np.lexsort((in_plane[sel, 1], in_plane[sel, 0]))]  # along t1, then t2 (as find_candidates)
+    gnodes, coords, gaps, trib, frames, in_plane = (a[sel] for a in (gnodes, coords, gaps, trib, frames, in_plane))
+    face = pairs["face"][sel]
+    masters = face_nodes[face]
+    weights = pairs["weights"][sel]
+    X = face_x[face]
+    sizes = np.array([np.mean([np.linalg.norm(x[(i + 1) % k] - x[i]) for i in range(k)])
+                      for x, k in zip(X, face_nv[face])])
+
+    nc = gnodes.size
+    # Rows (n, t1, t2) of contact c: frame . (e_slave - sum_i w_i e_master_i); 5 nodes x 3 columns each.
+    node_cols = np.column_stack([gnodes, np.where(masters >= 0, masters, gnodes[:, None])])   # (nc, 5)
+    node_coef = np.column_stack([np.ones(nc), -np.where(masters >= 0, weights, 0.0)])           # (nc, 5)
+    vals = frames[:, :, None, :] * node_coef[:, None, :, None]                                  # (nc, 3, 5, 3)
+    cols = bs * node_cols[:, None, :, None] + np.arange(gdim)[None, None, None, :]
+    cols = np.broadcast_to(cols, vals.shape)
+    rws = np.broadcast_to(np.arange(nc * gdim).reshape(nc, gdim, 1, 1), vals.shape)
+    H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nc * gdim, imap.size_global * bs))
+    H.eliminate_zeros()  # zero weights (a node facing a master node or edge) touch no column
+    return ContactSet(dim=gdim, global_nodes=gnodes, coords=coords, frames=frames, gap0=gaps, tributary=trib,
+                      abscissa=in_plane[:, 0].copy(), H=H, master_nodes=masters, master_weights=weights,
+                      master_points=P[sel], master_sizes=sizes)
 
 
 
 # The public contact object ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class ElasticBody:
-    """A deformable counter-body (the *master*) meshed in the same mesh as the body (the *slave*). 2D.
+    """A deformable counter-body (the *master*) meshed in the same mesh as the body (the *slave*). 2D or 3D.
 
     Each slave node of the contact surface is paired once, in the reference configuration, with the closest
-    point of the master surface (node-to-segment, small sliding: see :func:`find_pairs`).
+    point of the master surface (small sliding, see :func:`find_pairs`): node-to-segment in 2D, node-to-face in
+    3D (triangles and quadrilaterals, linear and bilinear weights). The contacts' frames are the master's:
+    n its outward normal at the paired point, in 3D t1 the obstacle frame's t1 projected on the facet.
 
     The obstacle's rigid motion ``D`` of :class:`~dolfinx_fretting.problem.FrettingProblem` translates the
     master body as a whole (as if the supports that hold it moved with it; a rigid translation of a body
@@ -499,7 +803,7 @@ class Contact:
     Args:
         V: Vector P1 displacement space (anything else is refused).
         surface: ``(facet_tags, marker)``: the body's boundary that may touch the obstacle.
-        obstacle: :class:`RigidPlane` (2D or 3D, any orientation) or :class:`ElasticBody` (2D).
+        obstacle: :class:`RigidPlane` (2D or 3D, any orientation) or :class:`ElasticBody` (2D or 3D).
         mu: Coulomb friction coefficient (finite, >= 0), one value or one per contact.
         bcs: The Dirichlet conditions of the problem (their dofs are excluded as above).
         window: Candidate half-width (length units): only nodes within this distance, measured in the
@@ -541,7 +845,7 @@ class Contact:
         else:
             master_tags, master_marker = obstacle.surface
             cs = find_pairs(V, self.facets, np.asarray(master_tags.find(master_marker), dtype=np.int32), window,
-                            exclude_nodes=self.fixed_nodes)
+                            exclude_nodes=self.fixed_nodes, reference_frame=obstacle.frame)
         self.contact_set: ContactSet = cs
         H = cs.H.tocsc(copy=True)
         free = np.ones(H.shape[1], dtype=bool)

@@ -39,6 +39,7 @@ from __future__ import annotations
 import json
 import os
 import time
+import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -471,6 +472,9 @@ class FrettingProblem:
         self._build_contact_operators()
         self.timings["delassus_s"] = time.perf_counter() - t0
         self._kernel = None
+        #: Two bodies: warn (once) when the relative slip exceeds half a master element (see
+        #: :meth:`relative_slip_ratio`); set False when the caller reports it itself.
+        self.sliding_warning = True
         if plasticity is not None:
             self._make_plastic_body()
 
@@ -883,6 +887,7 @@ class FrettingProblem:
         the totals of :attr:`ContactState.record`. ``state`` itself is not changed. Collective only in name
         (no communication: every rank holds the same contact data)."""
         if isinstance(result, CycleResult):
+            self._check_sliding(result.final)
             return result.final
         cs = self.contact.contact_set
         states = np.empty(cs.nc, dtype=np.int8)
@@ -891,12 +896,39 @@ class FrettingProblem:
         commit_increment(result.forces, result.slip, result.positions, self.contact.mu, cs.dim, cs.tributary,
                          cs.abscissa, self._k(result.in_cycle), gw, states, row)
         record = dict(zip(ROW_FIELDS, row.tolist()))
-        return replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=gw,
-                       obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
-                       dissipated_energy=state.dissipated_energy + row[ROW["dissipated_energy"]],
-                       local_iterations=state.local_iterations + result.iterations, record=record, status=states,
-                       targets=result.targets, force_controlled=result.force_controlled,
-                       plastic=result.plastic if result.plastic is not None else state.plastic)
+        new = replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=gw,
+                      obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
+                      dissipated_energy=state.dissipated_energy + row[ROW["dissipated_energy"]],
+                      local_iterations=state.local_iterations + result.iterations, record=record, status=states,
+                      targets=result.targets, force_controlled=result.force_controlled,
+                      plastic=result.plastic if result.plastic is not None else state.plastic)
+        self._check_sliding(new)
+        return new
+
+    def relative_slip_ratio(self, state: ContactState) -> float:
+        """Two deformable bodies: the largest accumulated relative tangential displacement of a contact over its
+        master facet's size (:attr:`~dolfinx_fretting.contact.ContactSet.master_sizes`); 0 against a rigid
+        plane. The pairing is fixed (small sliding): past 0.5 the master point of a node is no longer the one
+        facing it."""
+        cs = self.contact.contact_set
+        if cs.master_sizes is None:
+            return 0.0
+        y_t = state.positions.reshape(cs.nc, cs.dim)[:, 1:]
+        return float((np.linalg.norm(y_t, axis=1) / cs.master_sizes).max(initial=0.0))
+
+    def _check_sliding(self, state: ContactState) -> None:
+        """Warn once (RuntimeWarning, rank 0) when the relative slip of two bodies exceeds half a master facet,
+        unless :attr:`sliding_warning` is False (a driver that reports it itself)."""
+        if not self.sliding_warning or getattr(self, "_sliding_warned", False):
+            return
+        ratio = self.relative_slip_ratio(state)
+        if ratio > 0.5:
+            self._sliding_warned = True
+            if self.comm.rank == 0:
+                warnings.warn(
+                    f"relative slip of {ratio:.3g} master elements exceeds half an element: the contact pairs are fixed "
+                    "in the reference configuration (small sliding), so the master's displacement is taken up to "
+                    f"{ratio:.2g} elements away from the point facing each slave node", RuntimeWarning, stacklevel=3)
 
     def _k(self, in_cycle: bool) -> float:
         if self.wear is None:
@@ -1210,11 +1242,13 @@ class FrettingProblem:
         obstacle = self.contact.obstacle
         if not isinstance(obstacle, ElasticBody) or obstacle.cells is None:
             return u
-        from ._dolfinx import fem
+        from ._dolfinx import cell_dofmap
 
         frame = self.contact.frame
         D = sum(state.obstacle[k] * frame[k] for k in range(self.dim))
-        nodes = fem.locate_dofs_topological(self.V, self.V.mesh.topology.dim, obstacle.cells)
+        # The cells' nodes from the dofmap (DOLFINx 0.11 wants a cell-to-cell connectivity for
+        # locate_dofs_topological on cells of a 3D mesh).
+        nodes = np.unique(cell_dofmap(self.V)[np.asarray(obstacle.cells, dtype=np.int32)])
         values = u.x.array.reshape(-1, self.V.dofmap.index_map_bs)
         values[nodes, :D.size] += D
         return u
