@@ -146,6 +146,37 @@ def _tributary_measure(V, facets: np.ndarray, fdim: int) -> np.ndarray:
     return values
 
 
+def _node_coordinates(V) -> np.ndarray:
+    """(nodes, gdim) coordinates of the P1 nodes of ``V`` (owned and ghost), copied from the mesh geometry.
+
+    ``V.tabulate_dof_coordinates()`` recomputes them by the cells' maps, with rounding that depends on which
+    cell does it (~1e-18 on a coordinate that is 0), hence on the partition; the geometry holds the mesh's
+    input coordinates, the same bits on every partition. A P1 space and a first-order geometry number a
+    cell's nodes alike.
+    """
+    from ._dolfinx import cell_dofmap, geometry_dofmap
+
+    msh = V.mesh
+    gdim = msh.geometry.dim
+    dofs, xdofs = cell_dofmap(V), geometry_dofmap(msh)
+    n = V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts
+    out = np.zeros((n, gdim))
+    out[dofs.ravel()] = msh.geometry.x[xdofs.ravel(), :gdim]
+    return out
+
+
+def _in_plane_order(in_plane: np.ndarray, extent: float) -> np.ndarray:
+    """Order of points by their first in-plane coordinate, then the second (3D): values within 1e-9 of the
+    extent count as equal, so that the rounding of a coordinate cannot reorder a column of nodes."""
+    if in_plane.shape[1] == 1:
+        return np.argsort(in_plane[:, 0], kind="stable")
+    first = np.argsort(in_plane[:, 0], kind="stable")
+    column = np.concatenate([[0], np.cumsum(np.diff(in_plane[first, 0]) > 1e-9 * extent)])
+    groups = np.empty(first.size, dtype=np.int64)
+    groups[first] = column
+    return np.lexsort((in_plane[:, 1], groups))
+
+
 def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: float | None = None,
                     exclude_nodes: np.ndarray | None = None) -> ContactSet:
     """Choose candidate nodes on a boundary and build their frames, gaps and H. Collective.
@@ -184,7 +215,8 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
     nodes = nodes[nodes < n_owned]  # owned only: each node listed once across ranks
     if exclude_nodes is not None and len(exclude_nodes):
         nodes = np.setdiff1d(nodes, exclude_nodes)
-    coords = V.tabulate_dof_coordinates()[nodes, :gdim]
+    # 3D: the geometry's coordinates (partition-free bits, see _node_coordinates); 2D keeps the tabulated ones.
+    coords = (_node_coordinates(V) if gdim == 3 else V.tabulate_dof_coordinates())[nodes, :gdim]
     gaps = obstacle.gap(coords)
 
     # Point of the surface closest to the obstacle (the first point of contact), on every rank. Ties go to
@@ -219,7 +251,8 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
 
     # Order along the surface (t1, then t2): independent of the partition.
     in_plane = coords @ frame[1:].T
-    order = np.lexsort(tuple(in_plane[:, k] for k in reversed(range(gdim - 1))))
+    order = (_in_plane_order(in_plane, np.ptp(coords, axis=0).max()) if gdim == 3
+             else np.lexsort(tuple(in_plane[:, k] for k in reversed(range(gdim - 1)))))
     gnodes, coords, gaps, trib, in_plane = (a[order] for a in (gnodes, coords, gaps, trib, in_plane))
 
     nc = gnodes.size
@@ -453,7 +486,7 @@ def _boundary_faces(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     n_owned_facets = msh.topology.index_map(fdim).size_local
     facets = np.asarray(facets, dtype=np.int32)
     facets = facets[facets < n_owned_facets]  # each facet once across ranks
-    dof_x = V.tabulate_dof_coordinates()[:, :gdim]
+    dof_x = _node_coordinates(V)
     imap = V.dofmap.index_map
     nodes = np.full((facets.size, 4), -1, dtype=np.int64)
     xs = np.zeros((facets.size, 4, gdim))
@@ -650,7 +683,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
         nodes = np.setdiff1d(nodes, exclude_nodes)
     measure = _tributary_measure(V, slave_facets, fdim)
     gathered = comm.allgather((imap.local_to_global(nodes.astype(np.int32)).astype(np.int64),
-                               V.tabulate_dof_coordinates()[nodes, :gdim], measure[nodes]))
+                               _node_coordinates(V)[nodes], measure[nodes]))
     gnodes = np.concatenate([g[0] for g in gathered])
     coords = np.concatenate([g[1] for g in gathered]).reshape(-1, gdim)
     trib = np.concatenate([g[2] for g in gathered])
@@ -676,7 +709,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
     if not keep.any():
         raise ValueError("contact: no slave node within the candidate window")
     sel = np.flatnonzero(keep)
-    sel = sel[np.lexsort((in_plane[sel, 1], in_plane[sel, 0]))]  # along t1, then t2 (as find_candidates)
+    sel = sel[_in_plane_order(in_plane[sel], np.ptp(coords, axis=0).max())]  # along t1, then t2 (as find_candidates)
     gnodes, coords, gaps, trib, frames, in_plane = (a[sel] for a in (gnodes, coords, gaps, trib, frames, in_plane))
     face = pairs["face"][sel]
     masters = face_nodes[face]
