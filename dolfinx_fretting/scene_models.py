@@ -79,6 +79,10 @@ class SceneModel:
     timings: dict[str, float] = field(default_factory=dict)
     prescribed: dict[str, list] = field(default_factory=dict)
     ramped: list[str] = field(default_factory=list)
+    #: The fraction of the bodies the model holds (0.5: a half model about a symmetry plane): the scene's
+    #: forces are the whole contact's, so a driver prescribes ``model_fraction`` times them and reports forces,
+    #: energies and volumes divided by it.
+    model_fraction: float = 1.0
 
 
 def _elasticity(scene: Scene, V, quadrature_degree: int | None):
@@ -128,13 +132,27 @@ def _pressure_load(V, body: BodyMesh, face: str):
     return -ufl.dot(ufl.FacetNormal(V.mesh), ufl.TestFunction(V)) * ds(body.tags[face])
 
 
-def build_scene_model(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD) -> SceneModel:
+def build_scene_model(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD, *,
+                      applies_model_fraction: bool = False) -> SceneModel:
     """Mesh the scene's geometry and write its model. Collective.
 
+    Args:
+        scene: The validated scene.
+        comm: Communicator of the mesh.
+        applies_model_fraction: The caller prescribes :attr:`SceneModel.model_fraction` times the scene's forces
+            and divides the totals it reports by it. A model of a fraction of the bodies (a half model) is refused
+            to a caller that does not: its forces would be the whole contact's on half of it.
+
     Raises:
-        ValueError: a name of the scene is not in the mesh (the message lists the names it holds).
+        ValueError: a name of the scene is not in the mesh (the message lists the names it holds), or a half
+            model for a caller that does not apply its fraction.
     """
-    return _BUILDERS[scene.geometry.kind](scene, comm)
+    g = scene.geometry
+    if g.kind == "sphere" and g.half_model and not applies_model_fraction:
+        raise ValueError("geometry.half_model = true: this caller does not scale the scene's forces to the half "
+                         "model (SceneModel.model_fraction = 0.5) yet; run the whole sphere with "
+                         "geometry.half_model = false, or build the model with applies_model_fraction=True")
+    return _BUILDERS[g.kind](scene, comm)
 
 
 def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
@@ -182,6 +200,55 @@ def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
     return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, g.contact_mesh_size, window,
                       g.refined_half_width, automatic, True, elastic_cells, display_cells,
                       (g.radius, E_star, label), two_body, text, von_mises, {"mesh_s": mesh_s})
+
+
+def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
+    """A sphere's cap on an elastic flat of the same material (two bodies, one mesh) or on a rigid plane, 3D:
+    structured hexahedra sized from the Hertz contact radius (:func:`~dolfinx_fretting.meshes_3d.sphere_on_flat`),
+    a half model about y = 0 by default (a roller there)."""
+    from dolfinx import fem
+
+    from .meshes_3d import hertz_sphere, sphere_on_flat
+
+    g, m, lo = scene.geometry, scene.material, scene.loading
+    two_body = scene.contact.obstacle == "elastic_flat"
+    E_star = m.E / (1 - m.nu**2) / (2.0 if two_body else 1.0)
+    # The expected contact radius: Hertz under the normal force; under an approach d, the geometric sqrt(R d)
+    # (rigid plane; against the flat the two bodies share d, sqrt(R d / 2) is then an underestimate by 2^(1/2)
+    # of nothing: the mesh's uniform zone (1.5 a) holds either).
+    a = (hertz_sphere(lo.normal_force, g.radius, E_star)[0] if lo.normal_force is not None
+         else float(np.sqrt(g.radius * lo.normal_displacement)))
+    h = g.contact_mesh_size if "contact_mesh_size" in g.model_fields_set else a / 4.0
+    h = min(h, a)
+    t0 = time.perf_counter()
+    body = sphere_on_flat(comm, g.radius, a, h, half=g.half_model, flat=two_body)
+    mesh_s = time.perf_counter() - t0
+    V, form, von_mises, bcs, loads = _model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
+    if g.half_model:  # the symmetry plane y = 0: a roller (u_y = 0) on both bodies' faces there
+        V_y, _ = V.sub(1).collapse()
+        faces = np.concatenate([body.facets(n) for n in body.tags if n.endswith("symmetry")])
+        bcs.append(fem.dirichletbc(fem.Function(V_y), fem.locate_dofs_topological((V.sub(1), V_y), 2, faces),
+                                   V.sub(1)))
+    plane = _plane(scene, body)
+    automatic = scene.contact.candidate_half_width is None and m.model == "elastic"
+    zone = body.contact_half_width
+    window = (float(min(zone, 1.5 * a + 3 * h)) if automatic
+              else scene.contact.candidate_half_width if scene.contact.candidate_half_width is not None else zone)
+    elastic_cells = display_cells = None
+    if two_body:
+        obstacle = ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal)
+        display_cells = body.cell_tags.find(body.regions["sphere"])
+        if m.model == "elastoplastic" and m.plastic_body != "both":
+            other = "flat" if m.plastic_body == "cylinder" else "sphere"
+            elastic_cells = body.cell_tags.find(body.regions[other])
+    else:
+        obstacle = plane
+    text = (", each paired with the closest point of the elastic flat's faces (node-to-face, fixed pairing)"
+            if two_body else ", against a rigid plane") + (", half model (roller on y = 0)" if g.half_model else "")
+    # hertz = None: the driver's reference is the line contact's; the sphere's is meshes_3d.hertz_sphere.
+    return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, h, window, zone, automatic, True,
+                      elastic_cells, display_cells, None, two_body, text, von_mises, {"mesh_s": mesh_s},
+                      model_fraction=0.5 if g.half_model else 1.0)
 
 
 def _rectangle(scene: Scene, comm: MPI.Comm) -> SceneModel:
@@ -353,5 +420,5 @@ def _axis_normal(V, facets: np.ndarray, name: str) -> int:
 
 
 _BUILDERS: dict[str, Callable[[Scene, MPI.Comm], SceneModel]] = {
-    "half_cylinder": _half_cylinder, "rectangle": _rectangle, "file": _file,
+    "half_cylinder": _half_cylinder, "rectangle": _rectangle, "file": _file, "sphere": _sphere,
 }

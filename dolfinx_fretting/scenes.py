@@ -79,16 +79,22 @@ FiniteFloat = Annotated[float, Field(ge=-MAX_LENGTH, le=MAX_LENGTH)]
 Cycle = Annotated[int, Field(ge=1, le=100_000_000)]
 
 
+#: Keys of the 2D geometries a sphere does not use (its mesh is sized from the Hertz contact radius).
+_NOT_FOR_SPHERE = ("contact_half_width", "coarse_mesh_size", "width", "height", "nx", "ny", "quadrilateral",
+                   "flat_width", "flat_height")
+
+
 class GeometrySettings(_Section):
     """Body and mesh (mm)."""
 
-    kind: Literal["half_cylinder", "rectangle", "file"] = "half_cylinder"
+    kind: Literal["half_cylinder", "rectangle", "file", "sphere"] = "half_cylinder"
     #: ``kind = "file"``: the user's mesh, a gmsh ``.msh`` file with physical groups (names), 2D; a relative path
     #: is taken from the scene file's folder. Boundaries are named in the ``[boundary]`` section.
     path: str | None = None
-    #: Half-cylinder radius (mm).
+    #: Half-cylinder or sphere radius (mm).
     radius: Length = 6.0
-    #: Element size in the refined contact zone (mm); the paper uses 10 µm.
+    #: Element size in the refined contact zone (mm); the paper uses 10 µm. A sphere: the edge of the cubes
+    #: under the contact, by default a quarter of the Hertz contact radius of the normal load.
     contact_mesh_size: Length = 0.01
     #: Half-width of the refined contact zone (mm); ``None``: chosen from the radius (R/15).
     contact_half_width: Length | None = None
@@ -105,9 +111,24 @@ class GeometrySettings(_Section):
     #: Its top is y = 0, centred under the cylinder; its bottom is fixed.
     flat_width: Length = 20.0
     flat_height: Length = 10.0
+    #: A sphere (``kind = "sphere"``, :func:`dolfinx_fretting.meshes_3d.sphere_on_flat`): model half of it (and
+    #: of the flat) about the plane y = 0 that contains the sliding direction x, with a roller there; forces,
+    #: energies and volumes are the whole contact's. False: the whole sphere.
+    half_model: bool = True
 
     @model_validator(mode="after")
     def _sizes_fit_the_body(self) -> GeometrySettings:
+        if self.kind == "sphere":
+            unused = [k for k in _NOT_FOR_SPHERE if k in self.model_fields_set]
+            if unused:
+                raise ValueError(f"geometry.{unused[0]} is not a key of geometry.kind = 'sphere' (its mesh of "
+                                 "hexahedra is sized from the Hertz contact radius: geometry.radius, "
+                                 "geometry.contact_mesh_size, geometry.half_model)")
+            if "contact_mesh_size" in self.model_fields_set and self.contact_mesh_size >= self.radius / 20:
+                raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
+                                   f"< geometry.radius / 20 = {self.radius / 20:g} mm")
+        elif "half_model" in self.model_fields_set:
+            raise _range_error("geometry.half_model", self.half_model, "unset unless geometry.kind = 'sphere'")
         if self.kind == "file":
             if self.path is None:
                 raise ValueError("geometry.path (a gmsh .msh file) is required with geometry.kind = 'file'")
@@ -179,7 +200,7 @@ class MaterialSettings(_Section):
     #: Uniaxial tangent modulus E_t (MPa), 0 <= E_t < E, instead of hardening_modulus.
     tangent_modulus: float | None = Field(None, ge=0, le=MAX_MODULUS)
     #: Two bodies (``contact.obstacle = "elastic_flat"``), elastoplastic: which body may yield; the other
-    #: stays elastic with the same E and nu.
+    #: stays elastic with the same E and nu ("cylinder": the curved body, the sphere of a sphere).
     plastic_body: Literal["both", "cylinder", "flat"] = "both"
 
     @model_validator(mode="after")
@@ -604,6 +625,14 @@ def preset_values(scene: Scene) -> dict[str, Any]:
                   else plane_strain_modulus(m.E, m.nu))
         a, _ = hertz_line_contact(lo.normal_force, g.radius, E_star)
         out["geometry.contact_mesh_size"] = float(f"{a / p['contact_elements_per_half_width']:.3g}")
+    elif g.kind == "sphere" and lo.normal_force is not None:
+        # 3D: a quarter of these elements per contact radius (balanced: a/h = 4, the built-in default;
+        # measured on Hertz: the peak pressure within 0.2 % from a/h = 3, tests/test_sphere.py)
+        from .meshes_3d import hertz_sphere
+
+        E_star = m.E / (1 - m.nu**2) / (2.0 if scene.contact.obstacle == "elastic_flat" else 1.0)
+        a, _ = hertz_sphere(lo.normal_force, g.radius, E_star)
+        out["geometry.contact_mesh_size"] = float(f"{a / (p['contact_elements_per_half_width'] / 2.5):.3g}")
     elif g.kind == "rectangle":
         nx = int(p["rectangle_cells"])
         out["geometry.nx"] = nx
@@ -677,7 +706,7 @@ class Scene(_Section):
                 if len(vector) != len(c.plane_normal):
                     raise _range_error(f"boundary.displacement.{name}", vector,
                                        f"a {len(c.plane_normal)}-vector (mm)")
-        if lo.tangential_kind == "pressure" and g.kind != "file":
+        if lo.tangential_kind == "pressure" and g.kind not in ("file", "sphere"):
             faces = ("bottom", "right", "top", "left") if g.kind == "rectangle" else ("top", "surface")
             if lo.pressure_face not in faces:
                 raise _range_error("loading.pressure_face", lo.pressure_face,
@@ -688,21 +717,40 @@ class Scene(_Section):
         if g.kind == "half_cylinder" and c.candidate_half_width is not None and c.candidate_half_width > g.radius:
             raise _range_error("contact.candidate_half_width", c.candidate_half_width,
                                f"0 < candidate_half_width <= geometry.radius = {g.radius} mm")
-        if len(c.plane_normal) != 2:
+        if g.kind == "sphere":
+            if [float(x) for x in c.plane_normal] != [0.0, 0.0, 1.0]:
+                raise _range_error("contact.plane_normal", c.plane_normal,
+                                   "[0, 0, 1] with geometry.kind = 'sphere' (the sphere's axis is z, its lowest "
+                                   "point the origin; it slides along x)")
+            if len(c.plane_point) != 3 or c.plane_point[2] > 0:
+                raise _range_error("contact.plane_point", c.plane_point, "[x, y, z] with z <= 0 (the sphere's "
+                                   "lowest point is the origin)")
+            if lo.tangential_kind == "pressure":
+                raise _range_error("loading.tangential_pressure", lo.tangential_pressure,
+                                   "unset with geometry.kind = 'sphere' (rub it by loading.tangential_displacement "
+                                   "or loading.tangential_force)")
+            if c.surface != "surface":
+                raise _range_error("contact.surface", c.surface, "'surface' (the sphere's face) with a sphere")
+        elif len(c.plane_normal) != 2:
             raise _range_error("contact.plane_normal", c.plane_normal,
-                               "a 2-vector: the geometries built in are two-dimensional (plane strain)")
+                               "a 2-vector: the geometries built in are two-dimensional (plane strain), but the "
+                               "sphere (geometry.kind = 'sphere')")
         if c.obstacle == "elastic_flat":
-            if g.kind != "half_cylinder":
+            if g.kind not in ("half_cylinder", "sphere"):
                 raise _range_error("contact.obstacle", c.obstacle,
                                    "'rigid_plane' with geometry.kind = 'rectangle' ('elastic_flat' needs a "
-                                   "half_cylinder on it)")
-            moved = [k for k, v in (("plane_point", [0, 0]), ("plane_normal", [0, 1]))
+                                   "half_cylinder or a sphere on it)")
+            origin = [0.0] * len(c.plane_normal)
+            up = origin[:-1] + [1.0]
+            moved = [k for k, v in (("plane_point", origin), ("plane_normal", up))
                      if [float(x) for x in getattr(c, k)] != v]
             if moved:
+                axis = "y" if len(origin) == 2 else "z"
                 raise ValueError(f"contact.{moved[0]} describes a rigid plane; with contact.obstacle = "
-                                 "'elastic_flat' the flat's top is the plane y = 0 (remove the key)")
+                                 f"'elastic_flat' the flat's top is the plane {axis} = 0 (remove the key)")
             if c.surface != "surface":
                 raise _range_error("contact.surface", c.surface, "'surface' (the cylinder's arc) with an elastic flat")
+        if c.obstacle == "elastic_flat" and g.kind == "half_cylinder":
             if g.flat_width <= 2 * g.refined_half_width:
                 raise _range_error("geometry.flat_width", g.flat_width,
                                    f"> 2 x the refined half-width {g.refined_half_width} mm")
@@ -734,7 +782,20 @@ class Scene(_Section):
         E_plane = m.E / (1 - m.nu**2)
         E_star = E_plane / (2.0 if two else 1.0)
         eps = MAX_ELASTIC_STRAIN
-        if g.kind == "half_cylinder":
+        if g.kind == "sphere":
+            # Hertz (Johnson §4.2): p0 / E* = (6 P / (pi^3 R^2 E*))^(1/3); an approach d: a = sqrt(R d), a / R
+            if P is not None and (6 * P / (math.pi**3 * g.radius**2 * E_star)) ** (1 / 3) > eps:
+                P_max = eps**3 * math.pi**3 * g.radius**2 * E_star / 6
+                raise _range_error("loading.normal_force", P,
+                                   f"<= {P_max:.4g} N: the Hertz strain p0/E* = (6 P / (pi^3 R^2 E*))^(1/3) with "
+                                   f"geometry.radius = {g.radius:g} mm and material.E = {m.E:g} MPa (E* = "
+                                   f"{E_star:.4g} MPa) must stay <= {eps:g} (small-strain elasticity)")
+            d = lo.normal_displacement
+            if d is not None and math.sqrt(d / g.radius) > eps:
+                raise _range_error("loading.normal_displacement", d,
+                                   f"<= {eps**2 * g.radius:.4g} mm: the strain sqrt(d / R) of an approach d on "
+                                   f"geometry.radius = {g.radius:g} mm must stay <= {eps:g} (small-strain elasticity)")
+        elif g.kind == "half_cylinder":
             if P is not None and math.sqrt(P / (math.pi * g.radius * E_star)) > eps:
                 P_max = eps**2 * math.pi * g.radius * E_star
                 raise _range_error("loading.normal_force", P,

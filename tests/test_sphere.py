@@ -245,3 +245,45 @@ def test_half_model_equals_full_model():
     assert np.abs(ff["shear"][mirror] * [1, -1] - ff["shear"][index]).max() <= 1e-6 * np.abs(ff["shear"]).max()
     half.destroy()
     full.destroy()
+
+
+# The built-in scene's model ----------------------------------------------------------------------------------
+def test_sphere_flat_scene_model_is_hertz():
+    """The ``sphere-flat`` scene's model (scene_models._sphere), with the Contact and FrettingProblem a run
+    builds from it, pressed by the scene's P on the half model (model_fraction 0.5): Hertz for two identical
+    steel bodies; h = a/3 here (12.5k dofs) as in test_hertz_sphere_on_an_identical_flat. A caller that does not
+    scale the forces to the half model is refused."""
+    from dolfinx_fretting.meshes_3d import hertz_sphere
+    from dolfinx_fretting.scene_models import build_scene_model
+    from dolfinx_fretting.scenes import load_scene
+
+    scene = load_scene("sphere-flat", ["geometry.contact_mesh_size=0.0622", "contact.mu=0"])
+    with pytest.raises(ValueError, match="geometry.half_model = true"):
+        build_scene_model(scene, COMM)
+    setup = build_scene_model(scene, COMM, applies_model_fraction=True)
+    contact = dfr.Contact(setup.V, setup.surface, setup.obstacle, scene.contact.mu, setup.bcs, setup.window)
+    problem = dfr.FrettingProblem(setup.form, contact, setup.bcs, loads=setup.loads)
+    assert setup.model_fraction == 0.5 and setup.small_sliding and setup.element_size == 0.0622
+    E_star = scene.material.E / (2 * (1 - scene.material.nu**2))
+    a, p0 = hertz_sphere(scene.loading.normal_force, scene.geometry.radius, E_star)
+    state = pressed(problem, scene.loading.normal_force * setup.model_fraction)
+    a_eq, r_max, p_max = contact_radii(problem, state)
+    assert abs(a_eq - a) <= setup.element_size and p_max == pytest.approx(p0, rel=0.02)
+    problem.destroy()
+
+
+@pytest.mark.parametrize("override, fragment", [
+    (["contact.plane_normal=[0.0, 1.0]", "contact.plane_point=[0.0, 0.0]"], "contact.plane_normal"),
+    (["geometry.nx=10"], "geometry.nx is not a key of geometry.kind = 'sphere'"),
+    (["geometry.contact_mesh_size=1.0"], "geometry.contact_mesh_size"),
+    (["loading.normal_force=1e9"], "loading.normal_force"),
+    (["loading.tangential_displacement=none", "loading.tangential_pressure=10.0"], "loading.tangential_pressure"),
+    (["contact.obstacle='rigid_plane'", "contact.plane_point=[0.0, 0.0, 0.1]"], "contact.plane_point"),
+    (["geometry.kind='half_cylinder'", "contact.plane_normal=[0.0, 1.0]", "contact.plane_point=[0.0, 0.0]"],
+     "geometry.half_model"),
+])
+def test_sphere_flat_scene_refuses_bad_keys(override, fragment):
+    from dolfinx_fretting.scenes import SceneError, load_scene
+
+    with pytest.raises(SceneError, match=fragment.replace("[", r"\[").replace("(", r"\(")):
+        load_scene("sphere-flat", override)
