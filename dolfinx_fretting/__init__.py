@@ -70,7 +70,7 @@ _API = {
     "FrettingProblem": "problem", "ContactState": "problem", "IncrementResult": "problem",
     "CyclePath": "problem", "CycleResult": "problem", "Archard": "problem", "Displacement": "problem",
     "Force": "problem", "LocalSolver": "problem", "Plasticity": "problem", "ConvergenceError": "problem",
-    "J2Plasticity": "materials",
+    "J2Plasticity": "materials", "FrettingWriter": "output", "RunDescription": "output", "plot_run": "plots",
 }
 __all__ = sorted(_API)
 
