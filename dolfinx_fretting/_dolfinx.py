@@ -34,7 +34,7 @@ from petsc4py import PETSc  # noqa: E402
 __all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API", "TESTED_VERSIONS", "versions",
            "element_degree", "element_family", "value_size", "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
            "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh",
-           "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec"]
+           "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec", "write_meshtags"]
 
 #: (major, minor) of the DOLFINx in use.
 DOLFINX_VERSION: tuple[int, int] = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])  # type: ignore[assignment]
@@ -226,6 +226,14 @@ def model_to_mesh(model, comm: MPI.Comm, rank: int, gdim: int) -> tuple[Any, Any
 
     data = dgmsh.model_to_mesh(model, comm, rank, gdim=gdim)
     return data.mesh, data.cell_tags, data.facet_tags
+
+
+def write_meshtags(xdmf, tags, msh) -> None:
+    """Write mesh tags to an open ``XDMFFile`` after its mesh (0.10+ also take the mesh geometry). Collective."""
+    if LEGACY_API:
+        xdmf.write_meshtags(tags)
+    else:
+        xdmf.write_meshtags(tags, msh.geometry)
 
 
 def vtk_mesh(msh, dim: int | None = None, entities: np.ndarray | None = None):

@@ -83,9 +83,13 @@ class GeometrySettings(_Section):
     """Body and mesh (mm)."""
 
     kind: Literal["half_cylinder", "rectangle", "file"] = "half_cylinder"
-    #: ``kind = "file"``: the user's mesh, a gmsh ``.msh`` file with physical groups (names), 2D; a relative path
-    #: is taken from the scene file's folder. Boundaries are named in the ``[boundary]`` section.
+    #: ``kind = "file"``: the user's mesh, 2D: a gmsh ``.msh`` file with physical groups (names), or a DOLFINx XDMF
+    #: file with its facet meshtags (``XDMFFile.write_mesh`` + ``write_meshtags``); a relative path is taken from
+    #: the scene file's folder. Boundaries are named in the ``[boundary]`` section.
     path: str | None = None
+    #: An XDMF file's facet markers by name (``{face = 1, top = 2}``): XDMF stores no names (unnamed markers are
+    #: called by their number, ``"3"``). Not with a ``.msh`` file, whose physical groups carry their names.
+    groups: dict[str, int] | None = None
     #: Half-cylinder radius (mm).
     radius: Length = 6.0
     #: Element size in the refined contact zone (mm); the paper uses 10 µm.
@@ -110,12 +114,18 @@ class GeometrySettings(_Section):
     def _sizes_fit_the_body(self) -> GeometrySettings:
         if self.kind == "file":
             if self.path is None:
-                raise ValueError("geometry.path (a gmsh .msh file) is required with geometry.kind = 'file'")
-            if not self.path.endswith(".msh"):
-                raise _range_error("geometry.path", self.path, "a gmsh .msh file (with physical groups)")
-        elif self.path is not None:
-            raise _range_error("geometry.path", self.path, f"unset with geometry.kind = {self.kind!r} (the mesh is "
-                               "built in); set geometry.kind = 'file' to read it")
+                raise ValueError("geometry.path (a gmsh .msh or an XDMF file) is required with "
+                                 "geometry.kind = 'file'")
+            if not self.path.endswith((".msh", ".xdmf")):
+                raise _range_error("geometry.path", self.path, "a gmsh .msh file (with physical groups) or a DOLFINx "
+                                   ".xdmf file (with facet meshtags)")
+            if self.groups is not None and not self.path.endswith(".xdmf"):
+                raise _range_error("geometry.groups", self.groups, "unset with a .msh file (its physical groups "
+                                   "carry their names); only an .xdmf file's markers need names")
+        elif self.path is not None or self.groups is not None:
+            key, value = ("geometry.path", self.path) if self.path is not None else ("geometry.groups", self.groups)
+            raise _range_error(key, value, f"unset with geometry.kind = {self.kind!r} (the mesh is built in); set "
+                               "geometry.kind = 'file' to read a mesh file")
         if self.kind == "half_cylinder":
             if self.contact_mesh_size >= self.radius:
                 raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
