@@ -37,8 +37,11 @@ import numpy as np
 from .io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS, RUN_DESCRIPTION, ResultWriter, write_json_atomic
 from .problem import INCREMENT_COLUMNS
 
-__all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description"]
+__all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT"]
 
+#: What each kind of obstacle is, in words (pictures and ``compare`` label runs with it).
+OBSTACLE_TEXT = {"rigid_plane": "rigid plane",
+                 "elastic_body": "elastic counter-body (two deformable bodies, small-sliding pairing)"}
 #: How the tangential load of a run is controlled (:attr:`RunDescription.tangential_control`).
 TANGENTIAL_CONTROLS = ("displacement", "force", "pressure", "none")
 
@@ -85,7 +88,7 @@ class RunDescription:
     loop_cycles: tuple[int, ...] = field(default_factory=tuple)
 
     def __post_init__(self) -> None:
-        if self.obstacle not in ("rigid_plane", "elastic_body"):
+        if self.obstacle not in OBSTACLE_TEXT:
             raise ValueError(f"RunDescription.obstacle must be 'rigid_plane' or 'elastic_body', got {self.obstacle!r}")
         if self.tangential_control not in TANGENTIAL_CONTROLS:
             raise ValueError(f"RunDescription.tangential_control must be one of {TANGENTIAL_CONTROLS}, got "
