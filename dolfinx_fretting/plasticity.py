@@ -33,7 +33,8 @@ from ._dolfinx import fem
 from .materials import J2Plasticity, return_mapping
 from .plastic_zone import LowRankTangent, point_strains, rows_axpy, zone_tangent_matrix, zone_update
 
-__all__ = ["ElastoplasticBody", "NewtonError", "PlasticState", "PlasticZone", "mandel_strain"]
+__all__ = ["ElastoplasticBody", "NewtonError", "PlasticState", "PlasticZone", "condensation_unavailable",
+           "is_radial_return", "mandel_strain"]
 
 _SQ2 = math.sqrt(2.0)
 
@@ -54,6 +55,35 @@ def mandel_strain(u, gdim: int):
     if gdim == 2:
         return ufl.as_vector([e[0, 0], e[1, 1], _SQ2 * e[0, 1]])
     return ufl.as_vector([e[0, 0], e[1, 1], e[2, 2], _SQ2 * e[1, 2], _SQ2 * e[0, 2], _SQ2 * e[0, 1]])
+
+
+def is_radial_return(law) -> bool:
+    """Whether ``law`` updates by :class:`~dolfinx_fretting.materials.J2Plasticity`'s own radial return (a
+    subclass that overrides ``update`` does not: its update is the hook)."""
+    return isinstance(law, J2Plasticity) and type(law).update is J2Plasticity.update
+
+
+def _not_lagrange(V) -> str | None:
+    """Why the point matrices of :meth:`PlasticState.point_matrices` cannot be built on ``V`` (None: they can)."""
+    family, degree = dfx.element_family(V), dfx.element_degree(V)
+    if family not in ("P", "Q", "Lagrange", "CG"):
+        return (f"the displacement space's element is {family!r} degree {degree}; the strains at the points are "
+                "built from the gradients of a continuous Lagrange basis (families P, Q, Lagrange)")
+    return None
+
+
+def condensation_unavailable(law, V) -> str | None:
+    """Why the condensed Newton iteration (:class:`PlasticZone`) cannot run for ``law`` on ``V``, or None.
+
+    The zone's kernel (:func:`~dolfinx_fretting.plastic_zone.zone_update`) *is* J2's radial return and its
+    tangent difference C_T - C_e, so another constitutive update (the ``Plasticity.law`` hook) cannot be
+    condensed; and the points' strain-displacement matrices need a continuous Lagrange space. Such bodies
+    run Newton by refactorising the tangent (the same iterates, slower).
+    """
+    if not is_radial_return(law):
+        return (f"the law {type(law).__name__} has its own update (the condensed kernel is J2Plasticity's "
+                "radial return)")
+    return _not_lagrange(V)
 
 
 class PlasticState:
@@ -135,9 +165,9 @@ class PlasticState:
         the residual form and, if ``tangent``, the consistent tangent used by the tangent form (collective
         only through the ghost update). ``eps``: the strain of ``u`` at the points if already known."""
         eps = self.strain(u) if eps is None else eps
-        # The law's own update (the constitutive hook of problem.Plasticity; for J2Plasticity the radial return,
-        # called directly so that the tangent is computed only when asked for).
-        if isinstance(self.law, J2Plasticity):
+        # The law's own update (the constitutive hook of problem.Plasticity; for J2Plasticity's own update the
+        # radial return, called directly so that the tangent is computed only when asked for).
+        if is_radial_return(self.law):
             sigma, eps_p, p, C, yielded = return_mapping(self.law, eps, self.eps_p, self.p, tangent=tangent)
         else:
             sigma, eps_p, p, C, yielded = self.law.update(eps, self.eps_p, self.p)
@@ -167,28 +197,28 @@ class PlasticState:
             with ``u_cell`` the cell's dofs node-major (``[u_0x, u_0y, u_1x, ...]``, the dofmap's order);
             ``w`` (len(cells) * nq,): quadrature weight x |det J|, so that ``sum w B^T C B`` is the
             element stiffness of the forms.
+
+        Raises:
+            ValueError: the displacement space is not continuous Lagrange (any degree; tested 1 to 3).
         """
         import basix
-        from dolfinx import cpp
 
         if not hasattr(self, "_grad_expr"):
-            # DOLFINx 0.5.2 tabulates an Expression with a *scalar* argument correctly (a blocked one comes
-            # back wrong): the gradients of the scalar basis give B.
+            # The gradients of the scalar basis of the same element give B (DOLFINx 0.5.2 tabulates an
+            # Expression with a *scalar* argument correctly; a blocked one comes back wrong).
             # Collective (a function space and two JIT-compiled expressions): the first call must come
             # from every rank, with or without cells.
-            el = self.V.ufl_element()
-            if el.family() not in ("Lagrange", "Q", "P") or el.degree() > 2:
-                raise NotImplementedError(f"point matrices for {el.family()} degree {el.degree()}")
-            scalar = fem.FunctionSpace(self.mesh, (el.family(), el.degree()))
-            basix_cell = basix.cell.string_to_type(cpp.mesh.to_string(self.mesh.topology.cell_type))
-            points, weights = basix.make_quadrature(basix_cell, self._degree)
-            self._grad_expr = fem.Expression(ufl.grad(ufl.TrialFunction(scalar)), points)
-            self._detj_expr = fem.Expression(abs(ufl.JacobianDeterminant(self.mesh)), points)
+            reason = _not_lagrange(self.V)
+            if reason is not None:
+                raise ValueError(f"PlasticState.point_matrices: {reason}")
+            points, weights = basix.make_quadrature(dfx.basix_cell(self.mesh), self._degree)
+            self._grad_expr = dfx.basis_gradient_expression(self.V, points)
+            self._detj_expr = dfx.expression(abs(ufl.JacobianDeterminant(self.mesh)), points)
             self._qweights = weights
         cells = np.asarray(cells, dtype=np.int32)
         gdim, nq = self.gdim, self.nq
-        nn = self._grad_expr.argument_function_space.element.space_dimension
-        grads = self._grad_expr.eval(cells).reshape(cells.size * nq, gdim, nn)  # (point, d/dx_i, node)
+        grads = dfx.eval_basis_gradients(self._grad_expr, self.mesh, cells)  # (point, d/dx_i, node)
+        nn = grads.shape[2]
         B = np.zeros((cells.size * nq, len(self.comps), gdim * nn))
         for a, (i, j) in enumerate(_strain_pairs(gdim)):
             if i == j:  # eps_ii = du_i/dx_i
@@ -196,7 +226,7 @@ class PlasticState:
             else:  # sqrt2 eps_ij = (du_i/dx_j + du_j/dx_i) / sqrt2
                 B[:, a, i::gdim] = grads[:, j] / _SQ2
                 B[:, a, j::gdim] = grads[:, i] / _SQ2
-        w = (self._detj_expr.eval(cells).reshape(cells.size, nq) * self._qweights).ravel()
+        w = (dfx.eval_expression(self._detj_expr, self.mesh, cells).reshape(cells.size, nq) * self._qweights).ravel()
         return B, w
 
     def commit(self) -> None:
@@ -263,7 +293,7 @@ class PlasticZone:
 
     X is the set of (global, unconstrained) dofs of the zone's cells and of the contact; ``Z = (K^-1)_XX``
     (one MUMPS selected inverse of the elastic factor per growth), ``HZ = H[:, X] Z = (H K^-1)[:, X]``,
-    ``aX = (K^-1 f)_X`` for the unit face load. The zone's points (owned cells only) carry their B matrices,
+    ``aX = (K^-1 f)_X`` for the unit load f of :meth:`set_load`. The zone's points (owned cells only) carry their B matrices,
     weights and the positions in X of their cell's dofs (see :mod:`dolfinx_fretting.plastic_zone`).
     """
 
@@ -292,12 +322,10 @@ class PlasticZone:
         self.comps = np.asarray(state.comps, dtype=np.int64)
         self.rstart, self.rend = body.rstart, body.rend
         self.cell_mask = np.zeros(ncells, dtype=bool)
-        self.a_full = None
-        if body.face_load is not None:  # K^-1 f once: the face load's displacement
-            a = body.face_load.duplicate()
-            problem.delassus.solve(body.face_load, a)
-            self.a_full = a.getArray(readonly=True).copy()
-            a.destroy()
+        #: K^-1 f (this rank's owned entries) of each load vector met, by id: one solve per load, ever (the
+        #: vector is kept beside it, so that its id cannot be reused by another vector).
+        self._responses: dict[int, tuple[PETSc.Vec, np.ndarray]] = {}
+        self._load_terms: tuple = ()
         # Every owned point's B (the check of a converged iterate needs the strain everywhere; B @ u is
         # cheaper than the fem.Expression and the same to rounding).
         self.B_all, self.w_all = state.point_matrices(state.cells)
@@ -346,7 +374,7 @@ class PlasticZone:
         self.ZH = np.ascontiguousarray(self.HZ.T)
         self.own = np.flatnonzero((X >= self.rstart) & (X < self.rend))
         self.own_local = (X[self.own] - self.rstart).astype(np.int64)
-        self.aX = self.gather(self.a_full) if self.a_full is not None else np.zeros(X.size)
+        self.aX = self._load_response_on_X()
         # The zone's points: every point of its cells that may yield (an elastic body's points never do).
         nq = state.nq
         pts = (cells[:, None] * nq + np.arange(nq)).ravel()
@@ -366,6 +394,28 @@ class PlasticZone:
                     "g": np.zeros(X.size)}
         self.builds += 1
         self.build_time += time.perf_counter() - t0
+
+    def set_load(self, terms: tuple) -> None:
+        """The applied unit load is ``sum c_i f_i`` over ``terms = ((f_i, c_i), ...)``: ``aX`` becomes its
+        K^-1 response on X, combined from one cached response per load vector (a face pressure and a
+        traction, say, applied with changing factors). Collective."""
+        terms = tuple((vec, float(c)) for vec, c in terms)
+        if len(terms) == len(self._load_terms) and all(
+                a is b and c == d for (a, c), (b, d) in zip(terms, self._load_terms)):
+            return
+        self._load_terms = terms
+        self.aX = self._load_response_on_X()
+
+    def _load_response_on_X(self) -> np.ndarray:
+        owned = np.zeros(self.body.rend - self.body.rstart)
+        for vec, c in self._load_terms:
+            if id(vec) not in self._responses:
+                a = vec.duplicate()
+                self.body.problem.delassus.solve(vec, a)
+                self._responses[id(vec)] = (vec, a.getArray(readonly=True).copy())
+                a.destroy()
+            owned += c * self._responses[id(vec)][1]
+        return self.gather(owned)
 
     # ------------------------------------------------------------------------------------------------
     def gather(self, owned: np.ndarray) -> np.ndarray:
@@ -469,7 +519,7 @@ class ElastoplasticBody:
         law: The J2 material.
         H: Contact operator (replicated, global dofs).
         W: Delassus matrix of the elastic K.
-        face_load: Load vector of a unit face pressure, or None.
+        face_load: Load vector of a unit face pressure, or None (several loads: :meth:`set_loads`).
         tangent: ``"elastic"``, ``"consistent"`` or ``"adaptive"``.
         max_iter, delta_1, delta_2: Newton settings.
         quadrature_degree: Of the plastic state.
@@ -527,6 +577,42 @@ class ElastoplasticBody:
         self._serial_ksp = None
         self._kept = None  # the adaptive tangent of the condensed path (a LowRankTangent), or None: K
         self.last_info: dict = {}
+        #: The applied unit load as ``((vector, coefficient), ...)`` (see :meth:`set_loads`); ``face_load``
+        #: is their sum (the vector itself for one load).
+        self._load_terms: tuple = ((face_load, 1.0),) if face_load is not None else ()
+        self._combined: PETSc.Vec | None = None  # face_load when it sums several loads (this body's own)
+        #: Why this body cannot run the condensed iteration (None: it can); it then refactorises.
+        self.condensed_unavailable = condensation_unavailable(law, V)
+        if self.condensed_unavailable is not None:
+            self.condensed = False
+
+    def set_loads(self, terms) -> float:
+        """Apply the loads ``terms = ((vector, factor), ...)`` in the next increments (each vector a load of
+        the whole body, zero at the Dirichlet dofs; any number of them, e.g. a face pressure and a traction
+        with their own factors). Returns the scale to pass to :meth:`increment`: one load is applied as its
+        vector times its factor, several as their sum at scale 1 (a vector of this body's, made again only
+        when the factors change). The condensed iteration combines one cached K^-1 response per vector.
+        Collective."""
+        terms = tuple((vec, float(c)) for vec, c in terms if c != 0.0)
+        if len(terms) <= 1:
+            unit, scale = (((terms[0][0], 1.0),), terms[0][1]) if terms else ((), 0.0)
+        else:
+            unit, scale = terms, 1.0
+        same = len(unit) == len(self._load_terms) and all(
+            a is b and c == d for (a, c), (b, d) in zip(unit, self._load_terms))
+        if not same:
+            if self._combined is not None:
+                self._combined.destroy()
+                self._combined = None
+            if len(unit) > 1:
+                self._combined = unit[0][0].copy()
+                self._combined.scale(unit[0][1])
+                for vec, c in unit[1:]:
+                    self._combined.axpy(c, vec)
+            self.face_load = self._combined if len(unit) > 1 else (unit[0][0] if unit else None)
+            self.__dict__.pop("_fnorm", None)  # the cached norm is the force scale of the Newton test
+            self._load_terms = unit
+        return scale
 
     # Linear algebra helpers ---------------------------------------------------------------------------
     def _H_dot(self, u: fem.Function) -> np.ndarray:
@@ -681,6 +767,7 @@ class ElastoplasticBody:
     def _increment_condensed(self, local_solve, pressure: float) -> tuple:
         if self.zone is None:
             self.zone = PlasticZone(self)
+        self.zone.set_load(self._load_terms)
         while True:  # the zone only grows, and stops at max_zone_dofs: this ends
             # Plastic strain outside the zone (e.g. a state restored from a checkpoint): grow first.
             outside = (self.state.p > 0.0) & ~self.zone.point_mask
@@ -864,6 +951,8 @@ class ElastoplasticBody:
     def destroy(self) -> None:
         for obj in (self._rhs, self._z, self._fint):
             obj.destroy()
+        if self._combined is not None:
+            self._combined.destroy()
         if self._tangent_op is not None:
             self._tangent_op.destroy()
         if self._KT is not None:

@@ -3,10 +3,11 @@ against independent references: dense linear algebra, and DOLFINx's own assembly
 
 import numpy as np
 import pytest
-import ufl
-from dolfinx import fem, mesh
-from mpi4py import MPI
+from mpi4py import MPI  # before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs
 
+from dolfinx import fem, mesh  # noqa: E402
+
+from dolfinx_fretting import _dolfinx as dfx
 from dolfinx_fretting.materials import J2Plasticity, elastic_stiffness
 from dolfinx_fretting.plastic_zone import LowRankTangent, zone_tangent_matrix, zone_update
 from dolfinx_fretting.plasticity import PlasticState
@@ -50,13 +51,13 @@ def test_low_rank_tangent_is_the_updated_inverse():
     assert np.abs(xT - ref).max() <= 1e-10 * np.abs(ref).max()
 
 
-def _state(cell_type, degree, law):
+def _state(cell_type, degree, law, family="Lagrange"):
     msh = mesh.create_unit_square(MPI.COMM_SELF, 3, 4, cell_type)
     x = msh.geometry.x  # a distorted mesh: non-constant Jacobians
     x[:, 0] += 0.08 * np.sin(3.0 * x[:, 1])
     x[:, 1] += 0.05 * np.cos(2.0 * x[:, 0]) * x[:, 0]
-    V = fem.VectorFunctionSpace(msh, ("Lagrange", degree))
-    return PlasticState(V, law, quadrature_degree=2 if degree == 1 else 4)
+    V = dfx.vector_space(msh, degree, family)
+    return PlasticState(V, law, quadrature_degree=2 if degree == 1 else 2 * degree)
 
 
 def _cell_dofs(state):
@@ -65,12 +66,14 @@ def _cell_dofs(state):
     return (2 * nodes[:, :, None] + np.arange(2)).reshape(nodes.shape[0], -1)
 
 
-@pytest.mark.parametrize("cell_type, degree", [(mesh.CellType.quadrilateral, 1), (mesh.CellType.triangle, 2)])
+@pytest.mark.parametrize("cell_type, degree", [(mesh.CellType.quadrilateral, 1), (mesh.CellType.triangle, 2),
+                                               (mesh.CellType.triangle, 3), (mesh.CellType.quadrilateral, 3)])
 def test_point_matrices_reproduce_dolfinx(cell_type, degree):
     """B u_cell is the strain DOLFINx evaluates, sum w B^T C_e B is the stiffness DOLFINx assembles, and the
     zone kernel's plastic forces are DOLFINx's F_int(u) - K u. All three are the same quadrature sums in
     another order: agreement to ~1e-13 relative; 1e-11 is asserted (a wrong weight, node order or factor
-    sqrt2 is an O(1) error)."""
+    sqrt2 is an O(1) error). Degree 3 has two dofs on an edge, whose order DOLFINx permutes per cell: the
+    basis gradients come from DOLFINx's own tabulation, so they follow it."""
     law = J2Plasticity(E, NU, 1e12, 0.0)  # never yields: sigma = C_e (eps - eps_p) at every point
     st = _state(cell_type, degree, law)
     rng = np.random.default_rng(2)
@@ -96,7 +99,7 @@ def test_point_matrices_reproduce_dolfinx(cell_type, degree):
     st.eps_p[:, [0, 1, 2, 5]] = rng.normal(scale=2e-3, size=(st.n_points, 4))
     st.eps_p[:, :3] -= st.eps_p[:, :3].mean(axis=1, keepdims=True)
     st.update(u, tangent=False)
-    b = fem.petsc.create_vector(st.residual_form)
+    b = dfx.vector_for_form(st.residual_form)
     st.assemble_residual(b, [])
     g_ref = b.getArray() - Kd @ u.x.array
     n = st.n_points
@@ -137,3 +140,16 @@ def test_tangent_matrix_is_dolfinx_tangent_minus_stiffness():
     assert np.abs(diff[np.ix_(P, P)] - D).max() <= 1e-11 * np.abs(K).max()
     rest = np.setdiff1d(np.arange(K.shape[0]), P)
     assert np.abs(diff[rest]).max() <= 1e-11 * np.abs(K).max()  # K_T = K off the yielded cells' dofs
+
+
+def test_point_matrices_refuse_a_discontinuous_space():
+    """The points' strains come from a continuous Lagrange basis: another element is refused by name (the
+    condensed Newton then refactorises instead, see plasticity.condensation_unavailable)."""
+    from dolfinx_fretting.plasticity import condensation_unavailable
+
+    law = J2Plasticity(E, NU, 300.0, 5e3)
+    st = _state(mesh.CellType.quadrilateral, 1, law, family="DG")
+    with pytest.raises(ValueError, match="point_matrices: the displacement space's element is 'D"):
+        st.point_matrices(st.cells)
+    assert "continuous Lagrange" in condensation_unavailable(law, st.V)
+    assert condensation_unavailable(law, _state(mesh.CellType.quadrilateral, 1, law).V) is None
