@@ -614,6 +614,31 @@ class ElastoplasticBody:
             self._load_terms = unit
         return scale
 
+    def describe(self) -> dict[str, str]:
+        """What the Newton loop did so far, in words (a run's ``modelled`` text): ``"iteration"`` (how the
+        tangent was applied, with its counts) and ``"delassus"`` (how the tangent's W was made)."""
+        z = self.zone
+        refactorised = (f"{self.refactorizations} tangent refactorisation(s) (K_T assembled and factorised, "
+                        "W rebuilt by selected inverse)")
+        if self.condensed or z is not None:
+            zone = (f"plastic zone of {z.X.size} dofs ({z.builds} build(s) of K^-1 on its dofs by selected inverse, "
+                    f"{self.zone_growths} increment(s) restarted because it grew)" if z is not None
+                    else "no plastic zone yet")
+            iteration = (f"condensed on the plastic zone: {self.tangent_updates} tangent update(s) as low-rank "
+                         f"(Woodbury) corrections of K^-1 and W, each converged increment checked on the whole "
+                         f"body; {zone}")
+            if self.condensed_fallbacks or self.refactorizations:
+                iteration += (f"; {self.condensed_fallbacks} increment(s) redone by refactorisation, "
+                              + refactorised)
+            if not self.condensed:
+                iteration += "; the zone outgrew max_zone_dofs, refactorising since"
+            delassus = "W of the tangent = the elastic W minus a low-rank term on the yielded cells' dofs"
+        else:
+            why = self.condensed_unavailable or "ElastoplasticBody.condensed = False"
+            iteration = f"not condensed ({why}): {refactorised}"
+            delassus = "W of the tangent rebuilt at each refactorisation"
+        return {"iteration": iteration, "delassus": delassus}
+
     # Linear algebra helpers ---------------------------------------------------------------------------
     def _H_dot(self, u: fem.Function) -> np.ndarray:
         n = self.rend - self.rstart

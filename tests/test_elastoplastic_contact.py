@@ -89,7 +89,8 @@ def test_plasticity_lowers_the_peak_pressure(tmp_path):
                         tmp_path / "p", quiet=True)
     assert plastic["max_equivalent_plastic_strain"] > 1e-3
     assert plastic["modelled"]["material"].startswith("J2 plasticity: Newton")
-    assert "W of the tangent rebuilt" in plastic["modelled"]["delassus"]
+    assert "condensed on the plastic zone" in plastic["modelled"]["material"]
+    assert "low-rank term" in plastic["modelled"]["delassus"]
     assert plastic["max_pressure"] < 0.95 * elastic["max_pressure"]
     hist = read_table(tmp_path / "p" / "history.csv")
     assert hist["yielded_points"].max() > 0 and hist["newton_iterations"].max() > 1
