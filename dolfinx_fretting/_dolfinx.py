@@ -232,7 +232,8 @@ def eval_basis_gradients(compiled: fem.Expression, msh, cells: np.ndarray) -> np
         values = compiled.eval(cells)  # (cell, point x component x basis function)
         num_basis = compiled.argument_function_space.element.space_dimension
     else:
-        raise NotImplementedError("0.11: see step 2")
+        values = compiled.eval(msh, cells)  # (cell, point, component, basis function)
+        num_basis = values.shape[-1]
     return values.reshape(-1, gdim, num_basis)
 
 

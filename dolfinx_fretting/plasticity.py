@@ -30,6 +30,7 @@ from petsc4py import PETSc
 
 from . import _dolfinx as dfx
 from ._dolfinx import fem
+from .contact import constrained_global_dofs
 from .materials import J2Plasticity, return_mapping
 from .plastic_zone import LowRankTangent, point_strains, rows_axpy, zone_tangent_matrix, zone_update
 
@@ -305,19 +306,16 @@ class PlasticZone:
         state, problem = body.state, body.problem
         self.comm = body.comm
         V = state.V
-        bs = V.dofmap.bs
+        bs = V.dofmap.index_map_bs
         ncells = state.cells.size
-        nodes = V.dofmap.list.array.reshape(-1, V.dofmap.dof_layout.num_dofs)[:ncells]
+        nodes = dfx.cell_dofmap(V)[:ncells]
         gnodes = V.dofmap.index_map.local_to_global(nodes.ravel()).reshape(nodes.shape).astype(np.int64)
         comp = np.arange(bs)
         #: (ncells, nd) global / local dofs of the owned cells, node-major (the order of B's columns).
         self.cell_gdofs = (bs * gnodes[:, :, None] + comp).reshape(ncells, -1)
         cell_ldofs = (bs * nodes[:, :, None].astype(np.int64) + comp).reshape(ncells, -1)
-        mark = fem.Function(V)
-        mark.x.array[:] = 1.0
-        fem.set_bc(mark.x.array, problem.bcs, scale=0.0)
-        mark.x.scatter_forward()
-        self.cell_fixed = mark.x.array[cell_ldofs] == 0.0  # constrained dofs (value 0, not in X)
+        # Constrained dofs (value 0, not in X).
+        self.cell_fixed = np.isin(self.cell_gdofs, constrained_global_dofs(V, problem.bcs))
         self.S = np.unique(body.H.indices).astype(np.int64)  # the contact's dofs
         self.comps = np.asarray(state.comps, dtype=np.int64)
         self.rstart, self.rend = body.rstart, body.rend
@@ -818,7 +816,7 @@ class ElastoplasticBody:
         arr[z.own_local] += c[z.own]
         if self.face_load is not None and s != 0.0:
             b.axpy(s, self.face_load)
-        fem.petsc.set_bc(b, self.problem.bcs, scale=0.0)
+        dfx.set_bc(b, self.problem.bcs, scale=0.0)
         self._solve_into(self._whole_body_solver(), b, out)
 
     def _whole_body_solver(self):

@@ -62,7 +62,7 @@ def _state(cell_type, degree, law, family="Lagrange"):
 
 def _cell_dofs(state):
     V = state.V
-    nodes = V.dofmap.list.array.reshape(-1, V.dofmap.dof_layout.num_dofs)[: state.cells.size]
+    nodes = dfx.cell_dofmap(V)[: state.cells.size]
     return (2 * nodes[:, :, None] + np.arange(2)).reshape(nodes.shape[0], -1)
 
 
