@@ -23,7 +23,7 @@ Two sub-commands; every run is a subprocess with ``PYTHONPATH`` set to a package
 Usage::
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_plastic.py profile --cycles 3
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_plastic.py compare --cycles 10 --before 51443a6 --repeat 2
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_plastic.py compare --cycles 10 --before c1eb8dc --repeat 2
 """
 
 from __future__ import annotations
@@ -68,7 +68,7 @@ TIMED = [
     ("plasticity", "PlasticZone", "tangent", "zone: low-rank tangent (D, LU, W_T)"),
     ("plasticity", "PlasticZone", "inverse_of", "zone: Z g (rows where g changed)"),
     ("plasticity", "ElastoplasticBody", "_solve_condensed", "whole-body solves (condensed path)"),
-    ("simulation", "_Run", "_local", "contact solve: load control (Python)"),
+    ("problem", "FrettingProblem", "_local_with_control", "contact solve: load control (Python)"),
     ("local_solvers", None, "solve", "contact solve: local solver calls"),
 ]
 #: Categories nested in others: reported exclusive of their children.
@@ -149,10 +149,10 @@ def child(spec: dict) -> dict:
         row = cycle_row(self, cycle, h, wall, jump)
         cpu = time.process_time()
         st, cs = self.state, self.model.contact
-        body = self.model.plastic
+        body = self.problem.body
         cycles.append({"cycle": cycle, "wall_s": wall, "cpu_s": cpu - clock["cpu"],
                        "max_pressure_end": row["max_pressure_end"], "max_wear_depth": row["max_wear_depth"],
-                       "pressure": (st.r[0::cs.dim] / cs.tributary).tolist(), "wear_gap": st.gw.tolist(),
+                       "pressure": (st.forces[0::cs.dim] / cs.tributary).tolist(), "wear_gap": st.wear_gap.tolist(),
                        "newton_iterations_history": int(h["newton_iterations"].sum()),
                        "increments": newton["increments"], "failed_increments": newton["failed"],
                        "newton_time_s": newton["time"], "refactorizations": body.refactorizations,
@@ -170,7 +170,7 @@ def child(spec: dict) -> dict:
     start: dict = {}
 
     def recording_run_cycles(self):  # the counters at the end of the preload: cycle 1 starts from them
-        body = self.model.plastic
+        body = self.problem.body
         start.update({"increments": newton["increments"], "failed_increments": newton["failed"],
                       "newton_time_s": newton["time"], "refactorizations": body.refactorizations,
                       "times": dict(times), "calls": dict(calls)})
@@ -285,6 +285,11 @@ def profile_section(res: dict, tangent: str) -> list[str]:
                  f"{c.get(SELECTED, 0)} | {c.get('linear solves (MUMPS)', 0)} / "
                  f"{c.get('whole-body solves (condensed path)', 0)} | "
                  f"{c.get('contact solve: local solver calls', 0)} |")
+    return L + [""] + breakdown(per)
+
+
+def breakdown(per: list[dict]) -> list[str]:
+    """Where the cycles' time went, by category (exclusive), totals and per cycle."""
     times: dict[str, float] = {}
     calls: dict[str, int] = {}
     for d in per:
@@ -294,15 +299,17 @@ def profile_section(res: dict, tangent: str) -> list[str]:
     times = exclusive(times)
     newton = sum(d["newton_s"] for d in per)
     wall = sum(d["wall_s"] for d in per)
+    n = len(per)
     rest = newton - sum(times.values())
-    L += ["", f"### Breakdown over cycles 1..{len(per)} ({wall:.1f} s of cycles, {newton:.1f} s inside Newton)", "",
-          "| category | time (s) | share of the cycles' time | calls | ms / call |",
-          "| --- | ---: | ---: | ---: | ---: |"]
+    L = [f"### Breakdown over cycles 1..{n} ({wall:.1f} s of cycles, {newton:.1f} s inside Newton)", "",
+         "| category | time (s) | per cycle (s) | share of the cycles' time | calls | ms / call |",
+         "| --- | ---: | ---: | ---: | ---: | ---: |"]
     for k, v in sorted(times.items(), key=lambda kv: -kv[1]):
-        L.append(f"| {k} | {v:.2f} | {100 * v / wall:.1f} % | {calls[k]} | {1e3 * v / max(calls[k], 1):.2f} |")
+        L.append(f"| {k} | {v:.2f} | {v / n:.3f} | {100 * v / wall:.1f} % | {calls[k]} | "
+                 f"{1e3 * v / max(calls[k], 1):.2f} |")
     L.append(f"| rest of the Newton loop (Python: vector copies, norms, allreduce, set_bc) | {rest:.2f} | "
-             f"{100 * rest / wall:.1f} % | | |")
-    L.append(f"| outside Newton (wear, history, bookkeeping) | {wall - newton:.2f} | "
+             f"{rest / n:.3f} | {100 * rest / wall:.1f} % | | |")
+    L.append(f"| outside Newton (wear, history, bookkeeping) | {wall - newton:.2f} | {(wall - newton) / n:.3f} | "
              f"{100 * (wall - newton) / wall:.1f} % | | |")
     return L + [""]
 
@@ -354,6 +361,7 @@ def compare(args, argv) -> int:
             res["per_cycle"] = deltas(res["cycles"], res["start"])
             if results[i] is None:
                 results[i] = res
+                res["per_cycle_first"] = [dict(d) for d in res["per_cycle"]]  # the breakdown's (not min'ed)
                 res["repeats"] = [[(d["wall_s"], d["cpu_s"]) for d in res["per_cycle"]]]
             else:
                 first = results[i]
@@ -410,6 +418,9 @@ def compare(args, argv) -> int:
                  f"{last['condensed_fallbacks']} fallbacks" if last.get("zone_dofs") else "")
         L.append(f"| {r['spec']['label']} | {w:.1f} | {c:.1f} | {bc / c:.2f} | {bw / w:.2f} | "
                  f"{c2:.1f} | {bc2 / max(c2, 1e-9):.2f} | {dp:.1e} / {dpp:.1e} / {dw:.1e}{extra} |")
+    for r in results:
+        L += ["", f"## Where the time of **{r['spec']['label']}** goes (its first repeat)", ""]
+        L += breakdown(r["per_cycle_first"])
     text = "\n".join(L) + "\n"
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(text)
@@ -433,9 +444,9 @@ def main(argv=None) -> int:
     c = sub.add_parser("compare")
     c.add_argument("--cycles", type=int, default=3)
     c.add_argument("--before", default=None, help="package tree, or commit of this repository, of the 'before' runs")
-    c.add_argument("--runs", nargs="+", default=["today (adaptive)=before:adaptive",
-                                                 "full Newton, refactorising=before:consistent",
-                                                 "new default=this:consistent"],
+    c.add_argument("--runs", nargs="+", default=["before (adaptive)=before:adaptive",
+                                                 "full Newton, refactorising=this:consistent:refactorizing",
+                                                 "condensed (default)=this:adaptive"],
                    help="label=tree:tangent[:condensed|refactorizing]; the first is the ratios' base")
     c.add_argument("--reference", default="full Newton, refactorising", help="label of the reference run")
     c.add_argument("--repeat", type=int, default=1, help="runs of each configuration, in alternating order")
