@@ -32,9 +32,9 @@ from dolfinx import mesh as dmesh  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
 __all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API", "TESTED_VERSIONS", "versions",
+           "basis_gradient_expression", "eval_basis_gradients",
            "element_degree", "element_family", "value_size", "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
-           "set_bc", "interpolation_points", "expression", "eval_expression",
-           "basis_gradient_expression", "eval_basis_gradients", "model_to_mesh",
+           "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh",
            "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec"]
 
 #: (major, minor) of the DOLFINx in use.
