@@ -170,31 +170,44 @@ problem.destroy()
 # ## Fretting: friction, Archard wear, cycles
 #
 # The same model with $\mu = 0.5$ and Archard wear; the normal force is held while the flat moves
-# sideways by $\pm\delta$ (a triangular cycle of 40 increments). Cycles run in the compiled loop.
+# sideways by $\pm\delta$ (a triangular cycle of 40 increments). Cycles run in the compiled loop. A
+# `FrettingWriter` puts the states into the output folder as the scenes' runs do (`history.csv`, `cycles.csv`,
+# `contact_profiles.csv`, `fields.xdmf`, `run.json`), and `plot_run` draws the same pictures from it.
 
 # +
 contact = dfr.Contact(V, (facet_tags, 1), flat, mu=mu, bcs=bcs, window=1.2)
 problem = dfr.FrettingProblem(a, contact, bcs, wear=dfr.Archard(k))
 state = problem.initial_state()
+sigma = lambda w: lmbda * ufl.tr(eps(w)) * ufl.Identity(2) + 2 * G * eps(w)  # noqa: E731
+von_mises = lambda w: ufl.sqrt(1.5 * ufl.inner(ufl.dev(sigma(w)), ufl.dev(sigma(w))))  # noqa: E731 (in-plane)
+description = dfr.RunDescription.of(problem, "punch", cycles=cycles, preload_increments=4,
+                                    increments_per_cycle=40, tangential_control="displacement",
+                                    tangential_amplitude=stroke)
+writer = dfr.FrettingWriter(problem, out, description, von_mises=von_mises)
 for fraction in (0.25, 0.5, 0.75, 1.0):
     state = problem.commit(state, problem.solve(state, normal=dfr.Force(fraction * P), tangential=dfr.Force(0.0)))
+    writer.write_increment(state, stage="normal")
 path = dfr.CyclePath.waveform(40, normal=state.obstacle[0], tangential=stroke)
 for cycle in range(1, cycles + 1):
-    state = problem.commit(state, problem.run_cycle(state, path))
+    snapshot = cycle in (1, cycles)        # profiles and fields of the first and the last cycle
+    result = problem.run_cycle(state, path, keep=snapshot)
+    start, state = state, problem.commit(state, result)
+    writer.write_cycle(cycle, start, result, profiles=snapshot)
 fields = problem.contact_fields(state)
 summary = {"normal_force": state.record["normal_force"], "max_pressure": state.record["max_pressure"],
            "max_wear_depth": float(fields["wear"].max()), "wear_area": state.record["wear_area"],
            "dissipated_energy": state.dissipated_energy, "cycles": cycles, "contacts": contact.nc,
            "frictionless_peak_pressure": float(peak_fe), "half_plane_peak_pressure": float(peak_ref),
            "frictionless_half_width": float(half_width_fe), "half_plane_half_width": float(a_ref)}
-u_final = problem.displacement(state)
+writer.write_summary(summary)
+writer.write_worn_profiles(state)
+writer.close()
 if comm.rank == 0:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    dfr.plot_run(out)   # wear_evolution.png, fretting_loops.png, ... from the folder alone
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.6))
     ax1.plot(grid, p_grid, "k-", label="half-plane inversion")
     ax1.plot(x, pressure, "o", ms=3, label="dolfinx_fretting, frictionless")

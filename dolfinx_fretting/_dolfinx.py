@@ -32,9 +32,10 @@ from dolfinx import mesh as dmesh  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
 __all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API", "TESTED_VERSIONS", "versions",
+           "basis_gradient_expression", "eval_basis_gradients",
            "element_degree", "element_family", "value_size", "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
            "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh", "create_mesh",
-           "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec"]
+           "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec", "write_meshtags"]
 
 #: (major, minor) of the DOLFINx in use.
 DOLFINX_VERSION: tuple[int, int] = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])  # type: ignore[assignment]
@@ -214,6 +215,28 @@ def eval_expression(compiled: fem.Expression, msh, cells: np.ndarray) -> np.ndar
     return values.reshape(cells.size, -1)
 
 
+def basis_gradient_expression(V, points: np.ndarray) -> fem.Expression:
+    """A compiled expression of the physical gradients of the *scalar* basis of ``V``'s element (the
+    scalar space of the same family and degree) at reference ``points``; evaluate it with
+    :func:`eval_basis_gradients`. Collective (a function space and a JIT compilation)."""
+    scalar = scalar_space(V.mesh, element_family(V), element_degree(V))
+    return expression(ufl.grad(ufl.TrialFunction(scalar)), points)
+
+
+def eval_basis_gradients(compiled: fem.Expression, msh, cells: np.ndarray) -> np.ndarray:
+    """Values of :func:`basis_gradient_expression` in ``cells``: shape (num_cells * num_points, gdim, num_basis),
+    ``[c * num_points + j, i, a]`` = d phi_a / d x_i at point j of cell c (phi_a in the cell dofmap's order)."""
+    cells = np.asarray(cells, dtype=np.int32)
+    gdim = msh.geometry.dim
+    if LEGACY_API:
+        values = compiled.eval(cells)  # (cell, point x component x basis function)
+        num_basis = compiled.argument_function_space.element.space_dimension
+    else:
+        values = compiled.eval(msh, cells)  # (cell, point, component, basis function)
+        num_basis = values.shape[-1]
+    return values.reshape(-1, gdim, num_basis)
+
+
 # Meshes --------------------------------------------------------------------------------------------------------
 def model_to_mesh(model, comm: MPI.Comm, rank: int, gdim: int) -> tuple[Any, Any, Any]:
     """``(mesh, cell_tags, facet_tags)`` from the gmsh model that lives on ``rank``. Collective."""
@@ -242,6 +265,14 @@ def create_mesh(comm: MPI.Comm, cells: np.ndarray, points: np.ndarray, cell_type
 
     element = basix.ufl.element("Lagrange", cell_type, 1, shape=(gdim,))
     return dmesh.create_mesh(comm, cells, element, points)
+
+
+def write_meshtags(xdmf, tags, msh) -> None:
+    """Write mesh tags to an open ``XDMFFile`` after its mesh (0.10+ also take the mesh geometry). Collective."""
+    if LEGACY_API:
+        xdmf.write_meshtags(tags)
+    else:
+        xdmf.write_meshtags(tags, msh.geometry)
 
 
 def vtk_mesh(msh, dim: int | None = None, entities: np.ndarray | None = None):

@@ -35,6 +35,7 @@ import numpy as np
 
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
 from .outdir import OutputFolderError, ensure_writable_folder
+from .output import OBSTACLE_TEXT, RunDescription, read_description
 from .plots import _figure, _length_unit, _mm, _save
 
 if TYPE_CHECKING:
@@ -75,6 +76,7 @@ class RunData:
         profiles: ``contact_profiles.csv`` (``None`` when missing or without a complete increment).
         history: ``history.csv`` as columns (empty when missing).
         cycles: ``cycles.csv`` as columns (empty when missing).
+        description: ``run.json`` (what was modelled, as data), or None for a folder of an older release.
     """
 
     folder: Path
@@ -83,6 +85,7 @@ class RunData:
     profiles: ContactProfiles | None = None
     history: dict[str, np.ndarray] = field(default_factory=dict)
     cycles: dict[str, np.ndarray] = field(default_factory=dict)
+    description: RunDescription | None = None
 
     @property
     def increments_per_cycle(self) -> int:
@@ -162,7 +165,7 @@ def load_run(folder: str | Path, label: str | None = None) -> RunData:
                          f"contact_profiles.csv)")
     return RunData(folder=folder, label=label if label is not None else default_label(summary, folder),
                    summary=summary, profiles=profiles, history=read_table(folder / "history.csv"),
-                   cycles=read_table(folder / "cycles.csv"))
+                   cycles=read_table(folder / "cycles.csv"), description=read_description(folder))
 
 
 # Summary table --------------------------------------------------------------------------------------------
@@ -305,9 +308,10 @@ def format_table(rows: list[dict[str, Any]]) -> str:
 # Pictures: helpers ----------------------------------------------------------------------------------------
 def _obstacle_note(runs: Sequence[RunData]) -> str:
     """The obstacle of the runs for a subtitle (one text when all runs agree, else per run)."""
-    texts = {r.label: str(r.summary["obstacle"]) for r in runs if r.summary.get("obstacle")}
+    texts = {r.label: OBSTACLE_TEXT[r.description.obstacle] if r.description is not None
+             else str(r.summary["obstacle"]) for r in runs if r.description is not None or r.summary.get("obstacle")}
     if not texts:
-        return "obstacle: not recorded in summary.json"
+        return "obstacle: not recorded (no run.json)"
     unique = list(dict.fromkeys(texts.values()))
     if len(unique) == 1 and len(texts) == len(runs):
         return f"obstacle: {unique[0]}"

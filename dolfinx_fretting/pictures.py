@@ -31,7 +31,6 @@ Nothing here uses MPI: it runs on rank 0 after the run.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import subprocess
@@ -39,7 +38,6 @@ import sys
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 

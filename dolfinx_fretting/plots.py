@@ -1,12 +1,19 @@
 """Pictures of a finished run, drawn from its output files (matplotlib, Agg, PNG; rank 0 only).
 
 Everything is read back from ``history.csv``, ``cycles.csv`` and ``contact_profiles.csv``, so the same
-pictures can be redrawn from any (even interrupted) output folder: ``plot_run(folder, scene)``.
+pictures can be redrawn from any (even interrupted) output folder: ``plot_run(folder)``. What the pictures need to
+know about the run (its name, load control, tracked positions, Hertz reference) is read from the folder's
+``run.json`` (:class:`~dolfinx_fretting.output.RunDescription`), written by any
+:class:`~dolfinx_fretting.output.FrettingWriter`: a user's own script gets the same pictures as a scene.
 
 Pictures (all in the output folder):
 
 * ``profiles.png``: contact pressure and shear at the end of the preload and at the last increment
   (with the frictionless Hertz pressure for a half-cylinder).
+* 3D contacts: ``contact_maps.png``, maps over the contact plane of the pressure, the shear and slip
+  magnitudes, the contact state and the wear depth at the end of the preload and at the last kept increment;
+  the other pictures show the profiles along the sliding direction through the line of nodes nearest to
+  t2 = 0 (the plane of symmetry of a half model).
 * cyclic runs only:
 
   - ``wear_first_cycle.png`` (paper Fig. 6): wear gap and contact pressure along the surface at the
@@ -31,7 +38,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
-from .scenes import Scene
+from .output import RunDescription, read_description
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -111,20 +118,20 @@ class _History:
         return np.unique(self.t["cycle"]) if self.n else np.zeros(0, dtype=int)
 
 
-def _load_label(scene: Scene, hist: _History, cycle: int, step: int) -> str:
+def _load_label(run: RunDescription, hist: _History, cycle: int, step: int) -> str:
     """The tangential load at (cycle, step) read from ``history.csv``, e.g. ``q = +10 MPa``.
 
     Values within 1e-6 of the load amplitude of zero (round-off of a force-controlled load) read 0.
     """
     r = hist.row(cycle, step)
-    kind = scene.loading.tangential_kind
+    kind = run.tangential_control
     if r is None or kind == "none":
         return ""
     column, symbol, unit = {"pressure": ("face_pressure", "q", "MPa"),
                             "displacement": ("tangential_displacement", "δ", "mm"),
                             "force": ("tangential_force", "Q", "N/mm")}[kind]
     value = float(hist.t[column][r])
-    if abs(value) <= 1e-6 * abs(scene.loading.tangential_amplitude):
+    if abs(value) <= 1e-6 * abs(run.tangential_amplitude):
         return f"{symbol} = 0 {unit}"
     return f"{symbol} = {value:+.3g} {unit}"
 
@@ -172,21 +179,21 @@ def _quarter_lines(ax, n: int) -> None:
         ax.axvline(s, color="k", lw=0.6, ls=":", zorder=1)
 
 
-def tracked_nodes(scene: Scene, prof: ContactProfiles) -> list[int]:
+def tracked_nodes(run: RunDescription, prof: ContactProfiles) -> list[int]:
     """Columns of the contact nodes whose history is drawn.
 
-    The nodes nearest to ``scene.output.track_positions``; when none is given, the outermost node in
+    The nodes nearest to ``run.track_positions``; when none is given, the outermost node in
     contact at the end of the preload (on the side of the smaller position) and the node nearest to the
     centre of the contact nodes.
 
     Args:
-        scene: The run's scene.
+        run: The run's description (``run.json``).
         prof: Its contact profiles.
 
     Returns:
         Distinct columns of ``prof`` (at most one per tracked position).
     """
-    picks = [prof.nearest_node(x) for x in scene.output.track_positions]
+    picks = [prof.nearest_node(x) for x in run.track_positions]
     if not picks:
         pre = _preload_row(prof)
         closed = np.flatnonzero(prof.values["state"][pre] != 0) if pre is not None else np.zeros(0, int)
@@ -199,14 +206,14 @@ def tracked_nodes(scene: Scene, prof: ContactProfiles) -> list[int]:
     return list(dict.fromkeys(picks))
 
 
-def plot_wear_first_cycle(path: Path, scene: Scene, prof: ContactProfiles, hist: _History) -> Path | None:
+def plot_wear_first_cycle(path: Path, run: RunDescription, prof: ContactProfiles, hist: _History) -> Path | None:
     """Wear gap and contact pressure along the surface at the quarter points of cycle 1 (paper Fig. 6).
 
     When cycle 1 was not kept, the first kept cycle is drawn (named in the title).
 
     Args:
         path: PNG file.
-        scene: The run's scene.
+        run: The run's description (``run.json``).
         prof: Contact profiles.
         hist: ``history.csv`` (for the load values in the legend).
 
@@ -217,7 +224,7 @@ def plot_wear_first_cycle(path: Path, scene: Scene, prof: ContactProfiles, hist:
     if not cycles:
         return None
     cycle = 1 if 1 in cycles else cycles[0]
-    n = scene.loading.increments_per_cycle
+    n = run.increments_per_cycle
     rows = prof.rows_of_cycle(cycle)
     by_step = {int(prof.steps[r]): int(r) for r in rows}
     chosen = [(s, by_step[s]) for s in (n // 4, n // 2, 3 * n // 4, n) if s in by_step]
@@ -233,7 +240,7 @@ def plot_wear_first_cycle(path: Path, scene: Scene, prof: ContactProfiles, hist:
     styles = [("tab:blue", "o", 3.2), ("tab:orange", "s", 2.4), ("tab:green", "^", 1.7),
               ("tab:red", "v", 1.0)]
     for (s, r), (c, marker, lw) in zip(chosen, styles):
-        load = _load_label(scene, hist, cycle, s)
+        load = _load_label(run, hist, cycle, s)
         label = f"step {s}/{n}" + (f", {load}" if load else "")
         for ax, y in ((ax_w, prof.values["wear"][r] * f), (ax_p, prof.values["pressure"][r])):
             ax.plot(prof.position, y, "-", marker=marker, ms=3.5, lw=lw, color=c, label=label)
@@ -245,16 +252,16 @@ def plot_wear_first_cycle(path: Path, scene: Scene, prof: ContactProfiles, hist:
         ax.set_xlabel("position along the surface (mm)")
         ax.grid(alpha=0.3)
     _profile_pair_legend(fig, ax_w, ax_p, wear)
-    fig.suptitle(f"{scene.name}: wear gap and contact pressure during cycle {cycle} (quarter points)")
+    fig.suptitle(f"{run.name}: wear gap and contact pressure during cycle {cycle} (quarter points)")
     return _save(fig, path)
 
 
-def plot_wear_evolution(path: Path, scene: Scene, prof: ContactProfiles, hist: _History) -> Path | None:
+def plot_wear_evolution(path: Path, run: RunDescription, prof: ContactProfiles, hist: _History) -> Path | None:
     """Wear gap and contact pressure at the last kept step of each snapshot cycle (paper Fig. 7).
 
     Args:
         path: PNG file.
-        scene: The run's scene.
+        run: The run's description (``run.json``).
         prof: Contact profiles.
         hist: ``history.csv`` (for the load value in the title).
 
@@ -266,7 +273,7 @@ def plot_wear_evolution(path: Path, scene: Scene, prof: ContactProfiles, hist: _
     cycles = _snapshot_cycles(prof)
     if not cycles:
         return None
-    n = scene.loading.increments_per_cycle
+    n = run.increments_per_cycle
     last = [(c, int(prof.rows_of_cycle(c)[-1])) for c in cycles]
     f, unit = _length_unit(prof.values["wear"][[r for _, r in last]])
     cmap = matplotlib.colormaps["viridis"]
@@ -288,13 +295,13 @@ def plot_wear_evolution(path: Path, scene: Scene, prof: ContactProfiles, hist: _
         ax.set_xlabel("position along the surface (mm)")
         ax.grid(alpha=0.3)
     _profile_pair_legend(fig, ax_w, ax_p, prof.values["wear"][[r for _, r in last]])
-    load = _load_label(scene, hist, last[-1][0], n)
-    fig.suptitle(f"{scene.name}: wear gap and contact pressure at the end of the cycle (step {n}"
+    load = _load_label(run, hist, last[-1][0], n)
+    fig.suptitle(f"{run.name}: wear gap and contact pressure at the end of the cycle (step {n}"
                  + (f", {load}" if load else "") + ")")
     return _save(fig, path)
 
 
-def plot_node_history(path: Path, scene: Scene, prof: ContactProfiles) -> Path | None:
+def plot_node_history(path: Path, run: RunDescription, prof: ContactProfiles) -> Path | None:
     """State of the tracked nodes over the steps of up to three snapshot cycles (paper Figs. 8-9).
 
     One block of panels per tracked node (:func:`tracked_nodes`) and one column per cycle (the first, a
@@ -306,7 +313,7 @@ def plot_node_history(path: Path, scene: Scene, prof: ContactProfiles) -> Path |
 
     Args:
         path: PNG file.
-        scene: The run's scene.
+        run: The run's description (``run.json``).
         prof: Contact profiles.
 
     Returns:
@@ -319,8 +326,8 @@ def plot_node_history(path: Path, scene: Scene, prof: ContactProfiles) -> Path |
     if not cycles:
         return None
     shown = list(dict.fromkeys([cycles[0], cycles[len(cycles) // 2], cycles[-1]]))
-    nodes = tracked_nodes(scene, prof)
-    n = scene.loading.increments_per_cycle
+    nodes = tracked_nodes(run, prof)
+    n = run.increments_per_cycle
     rows_of = {c: prof.rows_of_cycle(c) for c in shown}
     gap, slip = prof.values["gap"], prof.values["slip"]
     pairs = [(j, c) for j in nodes for c in shown]
@@ -382,30 +389,30 @@ def plot_node_history(path: Path, scene: Scene, prof: ContactProfiles) -> Path |
     handles += [Line2D([], [], color="tab:red", marker=".", label="P_n (pressure)"),
                 Line2D([], [], color="tab:purple", marker=".", label="P_t (shear)")]
     fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=9, frameon=False)
-    fig.suptitle(f"{scene.name}: contact state of tracked nodes over a cycle", fontsize=12,
+    fig.suptitle(f"{run.name}: contact state of tracked nodes over a cycle", fontsize=12,
                  y=1 - 0.12 / height)
     return _save(fig, path)
 
 
-def _loop_displacement(scene: Scene, hist: _History) -> tuple[np.ndarray, str]:
-    if scene.loading.tangential_kind == "displacement":
+def _loop_displacement(run: RunDescription, hist: _History) -> tuple[np.ndarray, str]:
+    if run.tangential_control == "displacement":
         return hist.t["tangential_displacement"], "tangential displacement of the obstacle"
     return hist.t["mean_relative_tangential"], "mean relative tangential displacement"
 
 
-def plot_fretting_loops(path: Path, scene: Scene, hist: _History) -> Path | None:
+def plot_fretting_loops(path: Path, run: RunDescription, hist: _History) -> Path | None:
     """Tangential contact force against displacement over the loop cycles (``history.csv``).
 
     The displacement is the obstacle's tangential displacement for a displacement-controlled load, else
     the mean tangential relative displacement of the loaded contacts (``mean_relative_tangential``; it
     jumps when the set of loaded contacts changes). A pressure-controlled run gets a second panel with
-    the force against the face pressure q. The cycles are ``scene.output.loop_cycles`` found in the
+    the force against the face pressure q. The cycles are ``run.loop_cycles`` found in the
     table, else up to four cycles spread over those present. Each loop starts at the last row before
     its cycle (the end of the previous cycle or of the preload), so it is closed.
 
     Args:
         path: PNG file.
-        scene: The run's scene.
+        run: The run's description (``run.json``).
         hist: ``history.csv``.
 
     Returns:
@@ -416,11 +423,11 @@ def plot_fretting_loops(path: Path, scene: Scene, hist: _History) -> Path | None
     present = [int(c) for c in hist.cycles() if c >= 1]
     if not present:
         return None
-    wanted = [c for c in scene.output.loop_cycles if c in present]
+    wanted = [c for c in run.loop_cycles if c in present]
     if not wanted:
         idx = np.unique(np.linspace(0, len(present) - 1, min(4, len(present))).round().astype(int))
         wanted = [present[i] for i in idx]
-    x_all, what = _loop_displacement(scene, hist)
+    x_all, what = _loop_displacement(run, hist)
     loops = []
     for c in wanted:
         rows = hist.cycle_rows(c)
@@ -430,7 +437,7 @@ def plot_fretting_loops(path: Path, scene: Scene, hist: _History) -> Path | None
         loops.append((c, rows))
     f, unit = _length_unit(np.concatenate([x_all[r] for _, r in loops]))
     cmap = matplotlib.colormaps["viridis"]
-    pressure = scene.loading.tangential_kind == "pressure"
+    pressure = run.tangential_control == "pressure"
     fig = _figure((12.5, 5.2) if pressure else (7, 5.2))
     axes = list(np.atleast_1d(fig.subplots(1, 2 if pressure else 1, gridspec_kw=dict(
         left=0.065 if pressure else 0.12, right=0.985, bottom=0.11, top=0.9, wspace=0.2))))
@@ -443,25 +450,25 @@ def plot_fretting_loops(path: Path, scene: Scene, hist: _History) -> Path | None
                          label=f"cycle {c}")
     axes[0].set_xlabel(f"{what} ({unit})")
     if pressure:
-        axes[1].set_xlabel(f"face pressure q on '{scene.loading.pressure_face}' (MPa)")
+        axes[1].set_xlabel(f"face pressure q on '{run.pressure_face}' (MPa)")
     for ax in axes:
         ax.axhline(0, color="k", lw=0.5)
         ax.axvline(0, color="k", lw=0.5)
         ax.set_ylabel("tangential contact force Q (N/mm)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(f"{scene.name}: fretting loops")
+    fig.suptitle(f"{run.name}: fretting loops")
     return _save(fig, path)
 
 
-def plot_wear_growth(path: Path, scene: Scene, cycles: dict[str, np.ndarray]) -> Path | None:
+def plot_wear_growth(path: Path, run: RunDescription, cycles: dict[str, np.ndarray]) -> Path | None:
     """Maximum wear depth, wear area and dissipated energy per cycle against the cycle (``cycles.csv``).
 
     The x axis is ``equivalent_cycles`` (physical cycles: simulated cycles times ``wear.acceleration``).
 
     Args:
         path: PNG file.
-        scene: The run's scene.
+        run: The run's description (``run.json``).
         cycles: ``cycles.csv`` as read by :func:`read_table`.
 
     Returns:
@@ -488,17 +495,83 @@ def plot_wear_growth(path: Path, scene: Scene, cycles: dict[str, np.ndarray]) ->
         ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4), useMathText=True)
     ax_d.set_ylim(bottom=0)
     ax_a.set_ylim(bottom=0)
-    acc = scene.wear.acceleration
-    fig.suptitle(f"{scene.name}: wear growth" + (f" (wear acceleration {acc:g})" if acc != 1 else ""))
+    acc = run.wear_acceleration
+    fig.suptitle(f"{run.name}: wear growth" + (f" (wear acceleration {acc:g})" if acc != 1 else ""))
     return _save(fig, path)
 
 
-def _plot_profiles(out: Path, scene: Scene, prof: ContactProfiles, hist: _History) -> Path | None:
+#: The fields of ``contact_maps.png``: (name, quantity: "stress" in MPa, "length" in mm, or "state"; value of a
+#: row of the profiles).
+_MAP_FIELDS = (
+    ("pressure", "stress", lambda v, r: v["pressure"][r]),
+    ("|shear|", "stress", lambda v, r: np.hypot(v["shear"][r], v["shear_2"][r])),
+    ("|slip increment|", "length", lambda v, r: np.hypot(v["slip"][r], v["slip_2"][r])),
+    ("state", "state", lambda v, r: v["state"][r]),
+    ("wear depth", "length", lambda v, r: v["wear"][r]),
+)
+
+
+def plot_contact_maps(path: Path, run: RunDescription, prof: ContactProfiles) -> Path | None:
+    """Maps over the contact plane (t1, t2) of a 3D contact: pressure, shear and slip magnitudes, state and wear
+    depth at the end of the preload and at the last kept increment (one row each).
+
+    Args:
+        path: PNG file.
+        run: The run's description (``run.json``).
+        prof: Contact profiles of a 3D contact (``prof.position_2`` set).
+
+    Returns:
+        ``path``, or ``None`` for a 2D contact or fewer than three nodes.
+    """
+    import matplotlib.tri as mtri
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    if prof.position_2 is None or prof.position.size < 3:
+        return None
+    # the end of the preload (a monotonic run's rows are all of cycle 0: the preload is its first increments)
+    pre = prof.index(run.preload_increments) if run.preload_increments else _preload_row(prof)
+    rows = list(dict.fromkeys([r for r in (pre, prof.increments.size - 1) if r is not None]))
+    tri = mtri.Triangulation(prof.position, prof.position_2)
+    height = 3.1 * len(rows) + 0.7
+    fig = _figure((3.9 * len(_MAP_FIELDS), height))
+    axes = np.atleast_2d(fig.subplots(len(rows), len(_MAP_FIELDS), gridspec_kw=dict(
+        left=0.045, right=0.975, bottom=0.45 / height, top=1 - 0.6 / height, wspace=0.55, hspace=0.35)))
+    states = ListedColormap([STATE_COLORS[k] for k in (0, 1, 2)])
+    for i, r in enumerate(rows):
+        for j, (name, quantity, value) in enumerate(_MAP_FIELDS):
+            ax = axes[i, j]
+            data = np.nan_to_num(np.asarray(value(prof.values, r), dtype=float))
+            if quantity == "state":
+                # a state is a node's, not an area's: one dot per node (colouring triangles would average codes)
+                art = ax.scatter(prof.position, prof.position_2, c=data, s=max(4.0, 3000.0 / data.size),
+                                 cmap=states, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5], 3), linewidths=0)
+                bar = fig.colorbar(art, ax=ax, ticks=[0, 1, 2], fraction=0.046)
+                bar.ax.set_yticklabels([STATE_NAMES[k] for k in (0, 1, 2)])
+                title = name
+            else:
+                f, unit = _length_unit(data) if quantity == "length" else (1.0, "MPa")
+                art = ax.tripcolor(tri, data * f, shading="gouraud", cmap="viridis")
+                fig.colorbar(art, ax=ax, fraction=0.046)
+                title = f"{name} ({unit})"
+            ax.set_aspect("equal")
+            ax.set_title(title, fontsize=9)
+            ax.tick_params(labelsize=7)
+            if j == 0:
+                inc = int(prof.increments[r])
+                label = f"end of preload (inc {inc})" if r == pre else f"increment {inc}"
+                ax.set_ylabel(f"{label}\nt2 (mm)", fontsize=8)
+            if i == len(rows) - 1:
+                ax.set_xlabel("t1 (mm)", fontsize=8)
+    fig.suptitle(f"{run.name}: the contact plane (t1 the first tangent, t2 the second)")
+    return _save(fig, path)
+
+
+def _plot_profiles(out: Path, run: RunDescription, prof: ContactProfiles, hist: _History) -> Path | None:
     """``profiles.png``: pressure and shear at the end of the preload and at the last kept increment."""
     from .analytic import hertz_pressure
     from .io import plot_profiles
 
-    pre = scene.loading.normal_increments
+    pre = run.preload_increments
     chosen = [i for i in (pre, int(prof.increments.max())) if prof.index(i) is not None]
     if not chosen:
         chosen = [int(prof.increments.max())]
@@ -508,21 +581,20 @@ def _plot_profiles(out: Path, scene: Scene, prof: ContactProfiles, hist: _Histor
         label = "end of preload" if inc == pre else "final"
         curves.append((f"{label} (inc {inc})", prof.values["pressure"][r], prof.values["shear"][r]))
     reference = None
-    g = scene.geometry
     pre_rows = np.flatnonzero(hist.t["increment"] == pre) if hist.n else np.zeros(0, int)
-    if g.kind == "half_cylinder" and pre_rows.size:
+    if run.hertz is not None and pre_rows.size:
         P = float(hist.t["normal_force"][pre_rows[-1]])
         xs = np.linspace(prof.position.min(), prof.position.max(), 400)
-        two_bodies = scene.contact.obstacle == "elastic_flat"
-        E_star = scene.material.E / (1 - scene.material.nu**2) / (2.0 if two_bodies else 1.0)
+        radius, E_star = run.hertz
+        two_bodies = run.obstacle == "elastic_body"
         reference = ("Hertz" + (", two identical bodies" if two_bodies else ", rigid flat, frictionless")
-                     + ", end of preload", xs, hertz_pressure(xs, P, g.radius, E_star))
+                     + ", end of preload", xs, hertz_pressure(xs, P, radius, E_star))
     path = out / "profiles.png"
-    plot_profiles(path, prof.position, curves, reference, title=f"{scene.name}: contact tractions")
+    plot_profiles(path, prof.position, curves, reference, title=f"{run.name}: contact tractions")
     return path
 
 
-def plot_run(out: Path, scene: Scene) -> list[Path]:
+def plot_run(out: Path, run: RunDescription | None = None) -> list[Path]:
     """Write the run's PNGs into ``out`` (see the module docstring for the list).
 
     Never raises: a picture whose data are missing is skipped, one that fails is skipped with a
@@ -530,11 +602,17 @@ def plot_run(out: Path, scene: Scene) -> list[Path]:
 
     Args:
         out: The run's output folder.
-        scene: The run's scene.
+        run: The run's description; default: the folder's ``run.json`` (none there: no pictures, a warning).
 
     Returns:
         The PNG files written.
     """
+    if run is None:
+        run = read_description(out)
+        if run is None:
+            warnings.warn(f"{out}: no run.json (written by FrettingWriter), no pictures", RuntimeWarning,
+                          stacklevel=2)
+            return []
     out = Path(out)
     written: list[Path] = []
 
@@ -542,7 +620,7 @@ def plot_run(out: Path, scene: Scene) -> list[Path]:
         try:
             path = draw()
         except Exception as exc:  # noqa: BLE001 - a failed picture must not stop the others
-            warnings.warn(f"{scene.name}: {name} not drawn: {type(exc).__name__}: {exc}", RuntimeWarning,
+            warnings.warn(f"{run.name}: {name} not drawn: {type(exc).__name__}: {exc}", RuntimeWarning,
                           stacklevel=2)
             return
         if path is not None:
@@ -551,24 +629,28 @@ def plot_run(out: Path, scene: Scene) -> list[Path]:
     try:
         prof = read_profiles(out / "contact_profiles.csv")
         hist = _History(read_table(out / "history.csv"))
-        cycles = read_table(out / "cycles.csv") if scene.loading.cycles > 0 else {}
+        cycles = read_table(out / "cycles.csv") if run.cycles > 0 else {}
     except Exception as exc:  # noqa: BLE001 - unreadable tables: no pictures, but no failure either
-        warnings.warn(f"{scene.name}: output tables not readable, no pictures: {type(exc).__name__}: {exc}",
+        warnings.warn(f"{run.name}: output tables not readable, no pictures: {type(exc).__name__}: {exc}",
                       RuntimeWarning, stacklevel=2)
         return written
 
+    if prof is not None and prof.dim == 3:
+        full = prof
+        attempt("contact_maps.png", lambda: plot_contact_maps(out / "contact_maps.png", run, full))
+        prof = prof.section(0.0)
     if prof is not None:
-        attempt("profiles.png", lambda: _plot_profiles(out, scene, prof, hist))
-    if scene.loading.cycles > 0:
+        attempt("profiles.png", lambda: _plot_profiles(out, run, prof, hist))
+    if run.cycles > 0:
         if prof is not None:
             attempt("wear_first_cycle.png",
-                    lambda: plot_wear_first_cycle(out / "wear_first_cycle.png", scene, prof, hist))
+                    lambda: plot_wear_first_cycle(out / "wear_first_cycle.png", run, prof, hist))
             attempt("wear_evolution.png",
-                    lambda: plot_wear_evolution(out / "wear_evolution.png", scene, prof, hist))
-            attempt("node_history.png", lambda: plot_node_history(out / "node_history.png", scene, prof))
+                    lambda: plot_wear_evolution(out / "wear_evolution.png", run, prof, hist))
+            attempt("node_history.png", lambda: plot_node_history(out / "node_history.png", run, prof))
         if hist.n:
             attempt("fretting_loops.png",
-                    lambda: plot_fretting_loops(out / "fretting_loops.png", scene, hist))
+                    lambda: plot_fretting_loops(out / "fretting_loops.png", run, hist))
         if cycles:
-            attempt("wear_growth.png", lambda: plot_wear_growth(out / "wear_growth.png", scene, cycles))
+            attempt("wear_growth.png", lambda: plot_wear_growth(out / "wear_growth.png", run, cycles))
     return written

@@ -243,8 +243,9 @@ class ContactState:
         increment: Increments committed.
         dissipated_energy: Frictional energy dissipated so far.
         local_iterations: Local solver sweeps so far.
-        record: The last increment's totals (:data:`~dolfinx_fretting.wear.ROW_FIELDS`: forces, peak
-            pressure, energy and wear added, widths, state counts ...), or None before any increment.
+        record: The last increment's row (:data:`INCREMENT_COLUMNS`: forces, peak pressure, energy and wear
+            added, widths, state counts ..., then the solver's iterations and errors), or None before any
+            increment.
         status: Contact status codes of the last increment (0 open, 1 stick, 2 slip).
         warm: Compiled cycles: the forces of every increment of the last cycle (rank 0 only; None elsewhere).
         plastic: This rank's committed plastic history (elastic–plastic problems), else None.
@@ -361,6 +362,20 @@ class CycleResult:
     compiled: bool
 
 
+def _solver_columns(result: IncrementResult, newton_iterations: int | None = None,
+                    local_iterations: int | None = None, cutbacks: int = 0) -> dict[str, Any]:
+    """The :data:`SOLVER_COLUMNS` of an increment (and ``full_newton_fallbacks``); ``advance`` gives the totals
+    over its sub-increments."""
+    newton = result.newton or {}
+    return {"local_iterations": result.iterations if local_iterations is None else local_iterations,
+            "local_error": result.error, "load_solves": result.local_solves,
+            "newton_iterations": (newton_iterations if newton_iterations is not None
+                                  else newton.get("newton_iterations", 1)) if result.newton is not None else 1,
+            "newton_delta_1": newton.get("delta_1", 0.0), "newton_delta_2": newton.get("delta_2", 0.0),
+            "cutbacks": cutbacks, "yielded_points": newton.get("yielded_points", 0),
+            "full_newton_fallbacks": newton.get("full_newton_fallback", 0)}
+
+
 # The problem ----------------------------------------------------------------------------------------------
 class FrettingProblem:
     """Frictional contact and wear of a linear elastic (or elastic–plastic) body. Collective.
@@ -447,6 +462,12 @@ class FrettingProblem:
             self.K.assemble()
             self._own_K = True
         self.all_bcs = all_bcs
+        base = self._dirichlet_vector(self.bcs) if self._form is not None else None
+        if base is not None and plasticity is not None:
+            base.destroy()
+            raise ValueError("FrettingProblem: non-zero Dirichlet values in bcs are not supported with plasticity "
+                             "(the Newton loop holds the Dirichlet dofs at zero); give the motion to the obstacle "
+                             "(normal=, tangential=) or apply a load instead")
         self.timings["assemble_s"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         self.delassus = DelassusOperator(self.K, self.comm, method=delassus_method,
@@ -455,7 +476,6 @@ class FrettingProblem:
         self.timings["factorize_s"] = time.perf_counter() - t0
         self._vectors: list = []   # PETSc vectors of the loads (owned by this problem)
         self.load_names: list[str] = []
-        base = self._dirichlet_vector(self.bcs) if self._form is not None else None
         if base is not None:
             self._add_vector("dirichlet values", base)
         for name, form in loads.items():
@@ -816,20 +836,7 @@ class FrettingProblem:
 
         body = self.body
         self._load_plastic(state.plastic)
-        active = [i for i in range(len(self.load_names)) if factors[i] != 0.0]
-        if len(active) <= 1:
-            vec = self._vectors[active[0]] if active else self._single_load_vector()
-            if vec is not body.face_load:
-                body.face_load = vec
-                body.__dict__.pop("_fnorm", None)  # its cached norm is the force scale of the Newton test
-            scale = factors[active[0]] if active else 0.0
-        else:
-            combined = self._vectors[active[0]].copy()
-            combined.scale(factors[active[0]])
-            for i in active[1:]:
-                combined.axpy(factors[i], self._vectors[i])
-            body.face_load, scale = combined, 1.0
-            body.__dict__.pop("_fnorm", None)
+        scale = body.set_loads([(self._vectors[i], factors[i]) for i in range(len(self.load_names))])
         warm = [state.forces]
         total = {"iterations": 0, "solves": 0}
 
@@ -855,11 +862,6 @@ class FrettingProblem:
                 info = dict(info, full_newton_fallback=1)
         except (NewtonError, ConvergenceError) as exc:
             raise ConvergenceError(str(exc)) from None
-        finally:
-            if len(active) > 1:
-                body.face_load.destroy()
-                body.face_load = None
-                body.__dict__.pop("_fnorm", None)
         st = body.state
         history = PlasticHistory(body._trial.x.array.copy(), st.trial_sigma.copy(), st.trial_eps_p.copy(),
                                  st.trial_p.copy())
@@ -895,7 +897,7 @@ class FrettingProblem:
         gw = state.wear_gap.copy()
         commit_increment(result.forces, result.slip, result.positions, self.contact.mu, cs.dim, cs.tributary,
                          cs.abscissa, self._k(result.in_cycle), gw, states, row)
-        record = dict(zip(ROW_FIELDS, row.tolist()))
+        record = {**dict(zip(ROW_FIELDS, row.tolist())), **_solver_columns(result)}
         new = replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=gw,
                       obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
                       dissipated_energy=state.dissipated_energy + row[ROW["dissipated_energy"]],
@@ -998,18 +1000,13 @@ class FrettingProblem:
                 current = committed
                 sums += (current.record["dissipated_energy"], current.record["wear_area_increment"])
                 continue
-            record = dict(committed.record)
+            info = _solver_columns(result, newton_iterations=newton, local_iterations=local_its, cutbacks=cuts)
+            record = {**committed.record, **info}
             record["dissipated_energy"] += sums[0]
             record["wear_area_increment"] += sums[1]
             # The sub-increments count as one increment of the caller's path.
             new = replace(committed, record=record, increment=state.increment + 1,
                           local_iterations=state.local_iterations + local_its)
-            info = {"local_iterations": local_its, "local_error": result.error, "load_solves": result.local_solves,
-                    "newton_iterations": newton if result.newton is not None else 1,
-                    "newton_delta_1": (result.newton or {}).get("delta_1", 0.0),
-                    "newton_delta_2": (result.newton or {}).get("delta_2", 0.0), "cutbacks": cuts,
-                    "yielded_points": (result.newton or {}).get("yielded_points", 0),
-                    "full_newton_fallbacks": (result.newton or {}).get("full_newton_fallback", 0)}
             return new, info
 
     # Cycles ------------------------------------------------------------------------------------------------
@@ -1088,7 +1085,7 @@ class FrettingProblem:
                 current, info = self.advance(current, normal, tangential, loads, in_cycle=True, check=check)
             except ConvergenceError as exc:
                 raise ConvergenceError(str(exc), step=j + 1) from None
-            rows.append({**current.record, **info})
+            rows.append(current.record)
             obstacle[j] = current.obstacle
             if keep:
                 kept.append((current.forces, current.slip, current.positions, current.wear_gap, current.status))
@@ -1167,7 +1164,7 @@ class FrettingProblem:
                         load_factors=factors[-1].copy(), increment=state.increment + n,
                         dissipated_energy=state.dissipated_energy + float(hist[:, ROW["dissipated_energy"]].sum()),
                         local_iterations=state.local_iterations + int(hist[:, nf].sum()),
-                        record={k: float(records[k][-1]) for k in ROW_FIELDS},
+                        record={k: records[k][-1].item() for k in INCREMENT_COLUMNS},
                         status=status, warm=warm_new if self.comm.rank == 0 else None)
         return CycleResult(records, obstacle, factors, final, outs if keep else None, True)
 

@@ -16,10 +16,10 @@ import numpy as np
 from mpi4py import MPI
 
 from .contact import ElasticBody, RigidPlane
-from .meshes import BodyMesh
+from .meshes import BODY_CELL_TAG, BodyMesh
 from .scenes import Scene
 
-__all__ = ["SceneModel", "build_scene_model", "read_msh", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT",
+__all__ = ["SceneModel", "build_scene_model", "read_msh", "read_xdmf", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT",
            "BOUNDARY_PRESSURE"]
 
 #: Name of the face-pressure load of a scene (``loading.tangential_pressure``), factor in MPa.
@@ -335,6 +335,83 @@ def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[s
     return body, names[gdim]
 
 
+#: XDMF topology types of the cells of a 2D mesh and of its facets.
+_XDMF_CELLS_2D, _XDMF_FACETS_2D = ("Triangle", "Quadrilateral"), ("PolyLine",)
+
+
+def _xdmf_grids(path: str) -> list[tuple[str, str, bool]]:
+    """(name, topology type, has an attribute) of every grid of an XDMF file (its XML alone)."""
+    import xml.etree.ElementTree as ET
+
+    grids = []
+    for grid in ET.parse(path).getroot().iter("Grid"):
+        topology = grid.find("Topology")
+        if topology is None or grid.get("GridType") == "Collection":
+            continue
+        grids.append((grid.get("Name", ""), topology.get("TopologyType", topology.get("Type", "")),
+                      grid.find("Attribute") is not None))
+    return grids
+
+
+def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -> tuple[BodyMesh, dict[str, int]]:
+    """A DOLFINx XDMF mesh with its facet meshtags as a :class:`BodyMesh`. Collective.
+
+    The file holds one 2D mesh grid and one grid of facet markers (as ``XDMFFile.write_mesh`` and
+    ``write_meshtags`` write them); the grids are found by their topology. XDMF carries no names for the marker
+    values: ``groups`` names them (``{"face": 1, "top": 2}``); a value not named there is called by its number
+    (``"3"``). Returns the body and the names of the cell groups (all cells one group ``"body"`` unless the file
+    has cell markers).
+    """
+    from dolfinx import mesh as dmesh
+    from dolfinx.io import XDMFFile
+
+    found = failure = None
+    if comm.rank == 0:
+        try:
+            grids = _xdmf_grids(path)
+            meshes = [g for g in grids if g[1] in _XDMF_CELLS_2D and not g[2]]
+            facets = [g for g in grids if g[1] in _XDMF_FACETS_2D and g[2]]
+            cells = [g for g in grids if g[1] in _XDMF_CELLS_2D and g[2]]
+            listing = ", ".join(f"{n!r} ({t}{', markers' if a else ''})" for n, t, a in grids) or "none"
+            if len(meshes) != 1 or len(facets) != 1:
+                failure = (f"geometry.path = {path!r}: needs one 2D mesh grid and one grid of facet markers "
+                           f"(XDMFFile.write_mesh and write_meshtags); the file holds: {listing}")
+            else:
+                found = (meshes[0][0], facets[0][0], cells[0][0] if len(cells) == 1 else None)
+        except (OSError, ValueError) as exc:  # ValueError covers xml.etree's ParseError
+            failure = f"geometry.path = {path!r}: not a readable XDMF file ({exc})"
+    found, failure = comm.bcast((found, failure), root=0)
+    if failure is not None:
+        raise ValueError(failure)
+    mesh_name, facet_name, cell_name = found
+    with XDMFFile(comm, path, "r") as xdmf:
+        msh = xdmf.read_mesh(name=mesh_name)
+        tdim = msh.topology.dim
+        if msh.geometry.dim != 2:  # a 2D mesh written with three coordinates: the plane-strain forms need two
+            raise ValueError(f"geometry.path = {path!r}: the mesh has {msh.geometry.dim} coordinates; the scene "
+                             "runner takes 2D meshes with 2 (3D models run through the Python API)")
+        msh.topology.create_connectivity(tdim - 1, tdim)
+        facet_tags = xdmf.read_meshtags(msh, facet_name)
+        cell_tags = xdmf.read_meshtags(msh, cell_name) if cell_name is not None else None
+    if cell_tags is None:
+        cells = np.arange(msh.topology.index_map(tdim).size_local, dtype=np.int32)
+        cell_tags = dmesh.meshtags(msh, tdim, cells, np.full(cells.size, BODY_CELL_TAG, dtype=np.int32))
+        regions = {"body": BODY_CELL_TAG}
+    else:
+        values = np.unique(np.concatenate(comm.allgather(np.asarray(cell_tags.values))))
+        regions = {str(v): int(v) for v in values}
+    values = np.unique(np.concatenate(comm.allgather(np.asarray(facet_tags.values))))
+    names = {str(int(v)): int(v) for v in values}
+    for name, value in (groups or {}).items():
+        if value not in values:
+            raise ValueError(f"geometry.groups.{name} = {value} is not a facet marker of {path}; its markers: "
+                             f"{', '.join(str(int(v)) for v in values) or 'none'}")
+        names.pop(str(value), None)
+        names[name] = int(value)
+    body = BodyMesh(msh, facet_tags, cell_tags, names, 0.0, None, {}, regions)
+    return body, regions
+
+
 def _check_names(scene: Scene, facet_names: dict[str, int]) -> None:
     """Every boundary name the scene uses must be a physical group of the file (before any work)."""
     used = [("contact.surface", scene.contact.surface), *scene.boundary.names]
@@ -343,7 +420,9 @@ def _check_names(scene: Scene, facet_names: dict[str, int]) -> None:
     for key, name in used:
         if name not in facet_names:
             raise ValueError(f"{key} = {name!r} is not a physical group of {scene.geometry.path}; the file's "
-                             f"boundary groups: {', '.join(sorted(facet_names)) or 'none'}")
+                             f"boundary groups: {', '.join(sorted(facet_names)) or 'none'}"
+                             + (" (an XDMF file's markers are named by geometry.groups, else by their numbers)"
+                                if scene.geometry.path.endswith(".xdmf") else ""))
 
 
 def _facet_length(V, facets: np.ndarray) -> float:
@@ -368,7 +447,7 @@ def _file(scene: Scene, comm: MPI.Comm) -> SceneModel:
 
     g, bd = scene.geometry, scene.boundary
     t0 = time.perf_counter()
-    body, _ = read_msh(g.path, comm)
+    body, _ = (read_xdmf(g.path, comm, g.groups) if g.path.endswith(".xdmf") else read_msh(g.path, comm))
     _check_names(scene, body.tags)
     mesh_s = time.perf_counter() - t0
     V, form, von_mises, bcs, loads = _model(scene, body, list(bd.fixed))

@@ -88,9 +88,13 @@ class GeometrySettings(_Section):
     """Body and mesh (mm)."""
 
     kind: Literal["half_cylinder", "rectangle", "file", "sphere"] = "half_cylinder"
-    #: ``kind = "file"``: the user's mesh, a gmsh ``.msh`` file with physical groups (names), 2D; a relative path
-    #: is taken from the scene file's folder. Boundaries are named in the ``[boundary]`` section.
+    #: ``kind = "file"``: the user's mesh, 2D: a gmsh ``.msh`` file with physical groups (names), or a DOLFINx XDMF
+    #: file with its facet meshtags (``XDMFFile.write_mesh`` + ``write_meshtags``); a relative path is taken from
+    #: the scene file's folder. Boundaries are named in the ``[boundary]`` section.
     path: str | None = None
+    #: An XDMF file's facet markers by name (``{face = 1, top = 2}``): XDMF stores no names (unnamed markers are
+    #: called by their number, ``"3"``). Not with a ``.msh`` file, whose physical groups carry their names.
+    groups: dict[str, int] | None = None
     #: Half-cylinder or sphere radius (mm).
     radius: Length = 6.0
     #: Element size in the refined contact zone (mm); the paper uses 10 µm. A sphere: the edge of the cubes
@@ -131,12 +135,18 @@ class GeometrySettings(_Section):
             raise _range_error("geometry.half_model", self.half_model, "unset unless geometry.kind = 'sphere'")
         if self.kind == "file":
             if self.path is None:
-                raise ValueError("geometry.path (a gmsh .msh file) is required with geometry.kind = 'file'")
-            if not self.path.endswith(".msh"):
-                raise _range_error("geometry.path", self.path, "a gmsh .msh file (with physical groups)")
-        elif self.path is not None:
-            raise _range_error("geometry.path", self.path, f"unset with geometry.kind = {self.kind!r} (the mesh is "
-                               "built in); set geometry.kind = 'file' to read it")
+                raise ValueError("geometry.path (a gmsh .msh or an XDMF file) is required with "
+                                 "geometry.kind = 'file'")
+            if not self.path.endswith((".msh", ".xdmf")):
+                raise _range_error("geometry.path", self.path, "a gmsh .msh file (with physical groups) or a DOLFINx "
+                                   ".xdmf file (with facet meshtags)")
+            if self.groups is not None and not self.path.endswith(".xdmf"):
+                raise _range_error("geometry.groups", self.groups, "unset with a .msh file (its physical groups "
+                                   "carry their names); only an .xdmf file's markers need names")
+        elif self.path is not None or self.groups is not None:
+            key, value = ("geometry.path", self.path) if self.path is not None else ("geometry.groups", self.groups)
+            raise _range_error(key, value, f"unset with geometry.kind = {self.kind!r} (the mesh is built in); set "
+                               "geometry.kind = 'file' to read a mesh file")
         if self.kind == "half_cylinder":
             if self.contact_mesh_size >= self.radius:
                 raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
@@ -526,9 +536,12 @@ class SolverSettings(_Section):
     #: 2D compiled loop: first try the previous cycle's contact pattern at each increment (a cached LU
     #: solve, accepted only if it meets ``local_tol``), then Uzawa sweeps if it does not.
     pattern_reuse: bool = True
-    #: Elastic-plastic bodies: the Newton iteration matrix, ``"elastic"`` (the factorised elastic K and its
-    #: W throughout: no refactorisation), ``"consistent"`` (tangent refactorised, W rebuilt every iteration)
-    #: or ``"adaptive"`` (the last factorised matrix while it contracts the residual 10x per iteration).
+    #: Elastic-plastic bodies: the Newton iteration matrix, ``"elastic"`` (the elastic K and its W
+    #: throughout), ``"consistent"`` (K in the first iteration, the consistent tangent from the second on:
+    #: full Newton) or ``"adaptive"`` (the same, but the first iteration with the tangent the previous
+    #: increment converged with: where the plastic flow repeats, two iterations instead of five; the
+    #: first iteration is then never accepted on its own). The tangent is applied as a low-rank update of
+    #: the elastic K on the plastic zone (plasticity.ElastoplasticBody; benchmarks/results/plastic.md).
     newton_tangent: Literal["elastic", "consistent", "adaptive"] = "adaptive"
     newton_max_iter: int = Field(60, ge=1, le=100_000)
     #: Newton tolerances: out-of-balance force relative to the forces in play (delta_1), last correction

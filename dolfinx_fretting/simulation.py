@@ -34,13 +34,13 @@ from mpi4py import MPI
 from .analytic import hertz_line_contact
 from .contact import Contact
 from .io import non_finite_keys
+from .output import FrettingWriter, RunDescription
 from .loading import LoadStep, cycle_path, monotonic_path, preload_path
-from .problem import (INCREMENT_COLUMNS, Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
+from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
                       Displacement, Force, FrettingProblem, LocalSolver, Plasticity)
 from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
 from .scene_models import PRESSURE_LOAD, SceneModel, build_scene_model
 from .scenes import Scene, describe_differences
-from .wear import ROW
 
 __all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "run_scene", "read_checkpoint",
            "CHECKPOINT"]
@@ -219,12 +219,33 @@ def _step_targets(step: LoadStep, model: ContactModel, normal_increments: int) -
             "loads": loads}
 
 
+def _cycle_path(scene: Scene, problem: FrettingProblem) -> CyclePath:
+    """The targets of every cycle of the scene (the same each cycle: built once)."""
+    steps = cycle_path(scene.loading, 1)
+    first = steps[0]
+    pressures = np.array([s.pressure for s in steps])
+    loads = {PRESSURE_LOAD: pressures} if PRESSURE_LOAD in problem.load_names else {}
+    return CyclePath((Force if first.normal_force_controlled else Displacement)(np.array([s.normal for s in steps])),
+                     (Force if first.tangential_force_controlled else Displacement)(
+                         np.array([s.tangential for s in steps])), loads)
+
+
+def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> RunDescription:
+    """The scene's run described for the folder's readers (``run.json``)."""
+    lo, hertz = scene.loading, model.setup.hertz
+    return RunDescription.of(
+        model.problem, scene.name, path=path, cycles=lo.cycles, preload_increments=lo.normal_increments,
+        plane_point=scene.contact.plane_point, tangential_control=lo.tangential_kind,
+        tangential_amplitude=float(lo.tangential_amplitude or 0.0),
+        pressure_face=lo.pressure_face if lo.tangential_kind == "pressure" else None,
+        wear_acceleration=scene.wear.acceleration, hertz=hertz[:2] if hertz is not None else None,
+        track_positions=tuple(scene.output.track_positions), loop_cycles=tuple(scene.output.loop_cycles))
+
+
 class _Run:
     """One run of a scene: the load path, the checks, the outputs and the checkpoints. Collective."""
 
     def __init__(self, scene: Scene, out_dir: Path, comm: MPI.Comm, quiet: bool, resume: bool):
-        from .io import ResultWriter
-
         self.scene = scene
         self.out = out_dir
         self.comm = comm
@@ -243,10 +264,12 @@ class _Run:
             sizes, xdmf_started = None, False
         else:
             self.state, sizes, xdmf_started = self._restore(meta)
-        self.writer = ResultWriter(out_dir, comm, profiles=scene.output.contact_profiles, resume_sizes=sizes,
-                                   xdmf_started=xdmf_started)
-        if self.rank0:
-            self._describe()
+        self.path = _cycle_path(scene, self.problem) if scene.loading.cycles > 0 else None
+        self.writer = FrettingWriter(
+            self.problem, out_dir, _description(scene, self.model, self.path), profiles=scene.output.contact_profiles,
+            fields=scene.output.xdmf, von_mises=self.model.setup.von_mises, pressure_load=PRESSURE_LOAD,
+            shifted_cells=self.model.setup.display_cells,
+            resume={"sizes": sizes, "xdmf_started": xdmf_started} if meta is not None else None)
         # proof of a resume in the summary: where it started, and the cycles this process simulated
         self.resumed_from_cycle = self.progress.cycle if meta is not None else None
         self.last_checkpoint = time.perf_counter()
@@ -254,21 +277,6 @@ class _Run:
                  f"W by {self.problem.delassus.method} in {self.model.timings['delassus_s']:.3f} s"
                  + (f"; resumed after increment {self.state.increment} (cycle {self.progress.cycle})"
                     if meta is not None else ""))
-
-    def _describe(self) -> None:
-        """``run.json``: what the readers of the folder need to know, as data (rank 0)."""
-        from .io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS, RUN_DESCRIPTION, write_json_atomic
-
-        contact = self.problem.contact
-        wear = self.problem.wear
-        write_json_atomic(self.out / RUN_DESCRIPTION, {
-            "format": 1, "scene": self.scene.name, "dim": contact.dim,
-            "obstacle": {"kind": "elastic_body" if contact.contact_set.two_body else "rigid_plane",
-                         "point": list(self.scene.contact.plane_point), "normal": contact.frame[0].tolist()},
-            "slave_wear_share": wear.slave_share if wear is not None else None,
-            "units": {"length": "mm", "force": "N/mm" if contact.dim == 2 else "N", "stress": "MPa"},
-            "tables": {"history.csv": HISTORY_FIELDS, "cycles.csv": CYCLE_FIELDS,
-                       "contact_profiles.csv": PROFILE_FIELDS}})
 
     # Checkpoints ------------------------------------------------------------------------------------
     def _read_checkpoint_meta(self) -> dict[str, Any]:
@@ -298,11 +306,10 @@ class _Run:
         return state, {k: int(v) for k, v in meta["sizes"].items()}, bool(meta["xdmf_started"])
 
     def checkpoint(self) -> None:
-        sizes = self.writer.sizes()
         progress = asdict(self.progress)
         rate = self.progress.jump["rate"]
         progress["jump"]["rate"] = rate.tolist() if rate is not None else None
-        meta = {"identity": _scene_identity(self.scene), "sizes": sizes, "xdmf_started": self.writer.xdmf_started,
+        meta = {"identity": _scene_identity(self.scene), **self.writer.checkpoint_info(),
                 "window": self.model.half_width, "progress": progress,
                 "written": time.strftime("%Y-%m-%dT%H:%M:%S")}
         self.problem.save_state(self.state, self.out / CHECKPOINT, meta=meta)
@@ -365,8 +372,8 @@ class _Run:
                      "Pressure and wear stay consistent; the flat's worn profile is attached to the reference pairing.")
 
     # Increments -----------------------------------------------------------------------------------------
-    def _increment(self, step: LoadStep) -> dict[str, Any]:
-        """Solve and commit one increment of the preload or monotonic stage; returns its history row."""
+    def _increment(self, step: LoadStep) -> None:
+        """Solve and commit one increment of the preload or monotonic stage."""
         where = self._where(step.increment, stage=step.stage)
         while True:
             try:
@@ -380,61 +387,6 @@ class _Run:
                 raise SimulationError(f"{where}: {exc}" + _HINT) from None
         self.progress.newton_fallbacks += int(info.get("full_newton_fallbacks", 0))
         self.state = state
-        return self._history_row(step.increment, step.cycle, step.step, step.stage, state.obstacle,
-                                 step.pressure, {**state.record, **info})
-
-    def _history_row(self, increment: int, cycle: int, step: int, stage: str, obstacle: np.ndarray,
-                     pressure: float, values: dict[str, Any]) -> dict[str, Any]:
-        row = {"increment": increment, "cycle": cycle, "step": step, "stage": stage,
-               "normal_displacement": float(obstacle[0]), "tangential_displacement": float(obstacle[1]),
-               "face_pressure": pressure, **{k: values[k] for k in INCREMENT_COLUMNS}}
-        self.progress.last_row = row
-        return row
-
-    def _profile(self, increment: int, cycle: int, step: int, x: np.ndarray, y: np.ndarray, r: np.ndarray,
-                 gw: np.ndarray, status: np.ndarray) -> None:
-        cs = self.model.contact
-        dim = cs.dim
-        self.writer.profile_block(increment, cycle, step, [
-            cs.abscissa, y[0::dim], r[0::dim] / cs.tributary, r[1::dim] / cs.tributary, x[1::dim], y[1::dim],
-            gw, status])
-
-    def _fields(self, t: float, state: ContactState) -> None:
-        if not self.scene.output.xdmf:
-            return
-        if not hasattr(self, "_out_functions"):
-            from dolfinx import fem
-
-            from . import _dolfinx as dfx
-
-            V = self.model.setup.V
-            Q = dfx.scalar_space(V.mesh, "DG", 0)
-            u = fem.Function(V, name="displacement")
-            self._out_functions = (u, fem.Function(Q, name="von_mises"),
-                                   fem.Function(Q, name="equivalent_plastic_strain"))
-            self._vm_expr = dfx.expression(self.model.setup.von_mises(u), dfx.interpolation_points(Q))
-        u, vm, peq = self._out_functions
-        self.problem.displacement(state, out=u)
-        functions = [u, vm]
-        if self.problem.body is not None:
-            ps = self.problem.plastic_state(state)
-            n = ps.cells.size
-            vm.x.array[:n] = ps.cell_average(ps.von_mises())
-            peq.x.array[:n] = ps.cell_average(ps.p)
-            vm.x.scatter_forward()
-            peq.x.scatter_forward()
-            functions.append(peq)
-        else:
-            vm.interpolate(self._vm_expr)
-        cells = self.model.setup.display_cells
-        if cells is not None:  # the paper's set-up: these cells moved by -D, the obstacle's body held
-            from dolfinx import fem
-
-            frame = self.problem.contact.frame
-            D = sum(state.obstacle[k] * frame[k] for k in range(self.model.contact.dim))
-            nodes = fem.locate_dofs_topological(u.function_space, u.function_space.mesh.topology.dim, cells)
-            u.x.array.reshape(-1, u.function_space.dofmap.index_map_bs)[nodes, :D.size] -= D
-        self.writer.fields(t, functions)
 
     def _say_increment(self, h: dict[str, Any]) -> None:
         self.say(f"[{self.scene.name}] inc {h['increment']:4d} {h['stage']:10s} P = {h['normal_force']:.6g} "
@@ -445,29 +397,14 @@ class _Run:
         for step in steps:
             if step.increment <= self.state.increment:
                 continue  # done before the checkpoint
-            hist = self._increment(step)
+            self._increment(step)
+            hist = self.writer.write_increment(self.state, stage=step.stage)
+            self.progress.last_row = hist
             self._check_small_sliding(np.array([hist["mean_relative_tangential"]]))
-            self.writer.rows("history", [hist])
-            st = self.state
-            self._profile(step.increment, 0, 0, st.slip, st.positions, st.forces, st.wear_gap, st.status)
-            self._fields(float(step.increment), st)
-            self.writer.flush()
             self._say_increment(hist)
             self._stop_if_signalled()
 
     # Cycles ------------------------------------------------------------------------------------------------
-    def _cycle_path(self) -> tuple[CyclePath, np.ndarray]:
-        """The targets of every cycle (the same each cycle: built once) and the face pressure of each step."""
-        steps = cycle_path(self.scene.loading, 1)
-        first = steps[0]
-        normal = np.array([s.normal for s in steps])
-        tangential = np.array([s.tangential for s in steps])
-        pressures = np.array([s.pressure for s in steps])
-        loads = {PRESSURE_LOAD: pressures} if PRESSURE_LOAD in self.problem.load_names else {}
-        path = CyclePath((Force if first.normal_force_controlled else Displacement)(normal),
-                         (Force if first.tangential_force_controlled else Displacement)(tangential), loads)
-        return path, pressures
-
     def _cycle(self, cycle: int, keep: bool, path: CyclePath) -> CycleResult:
         """Solve cycle ``cycle`` (not committed), growing the window and solving it again if its contact
         reaches the window's edge."""
@@ -511,8 +448,7 @@ class _Run:
         jumping = sc.wear.cycle_jump
         # A jump lands on (never skips) the cycles whose outputs are asked for, and on the last one.
         landings = sorted((self.snapshots | {c for c in loop_cycles if 1 <= c <= N}) | {N})
-        path, pressures = self._cycle_path()
-        n = lo.increments_per_cycle
+        path = self.path
         cycle = self.progress.cycle + 1
         while cycle <= N:
             t0 = time.perf_counter()
@@ -530,33 +466,12 @@ class _Run:
                                              len(self.progress.window_growths) > growths)
             self.state = new_state
             self.progress.newton_fallbacks += int(result.records.get("full_newton_fallbacks", np.zeros(1)).sum())
-            h = {**result.records, "normal_displacement": result.obstacle[:, 0],
-                 "tangential_displacement": result.obstacle[:, 1],
-                 "face_pressure": pressures}
-            crow = self._cycle_row(cycle, h, time.perf_counter() - t0, jump)
-            self._check_small_sliding(h["mean_relative_tangential"])
+            self._check_small_sliding(result.records["mean_relative_tangential"])
+            crow = self.writer.write_cycle(cycle, start, result, history=write_history, profiles=keep,
+                                           wall=time.perf_counter() - t0, jump=jump)
             self.progress.cycle = cycle + jump.get("jump", 1) - 1
             self.progress.last_cycle_row = crow
-            self.progress.last_row = self._history_row(
-                start.increment + n, cycle, n, "cycle", result.obstacle[-1], float(pressures[-1]),
-                {k: (v[-1].item() if hasattr(v[-1], "item") else v[-1]) for k, v in result.records.items()})
-            if write_history:
-                self._write_history(cycle, start.increment, h)
-            self.writer.rows("cycles", [crow])
-            if keep:
-                out_r, out_x, out_y, out_gw, out_status = result.kept
-                for j in range(n):
-                    self._profile(start.increment + j + 1, cycle, j + 1, out_x[j], out_y[j], out_r[j], out_gw[j],
-                                  out_status[j])
-                # The fields of the most loaded instant of the cycle (a cycle often ends unloaded: Example 1's face
-                # pressure is back to zero); elastic–plastic: the cycle's end (its plastic history is the end's).
-                j = n - 1
-                if self.problem.body is None:
-                    j = int(np.argmax(result.records["normal_force"] + np.abs(result.records["tangential_force"])))
-                shown = replace(result.final, forces=out_r[j], positions=out_y[j], obstacle=result.obstacle[j],
-                                load_factors=result.load_factors[j])
-                self._fields(float(start.increment + j + 1), shown if self.problem.body is None else result.final)
-            self.writer.flush()
+            self.progress.last_row = self.writer.cycle_end_row(cycle, start, result)
             if progress_bar is not None:
                 progress_bar.update(self.progress.cycle - cycle + 1)
             now = time.perf_counter()
@@ -585,39 +500,6 @@ class _Run:
         if signum:
             self.signal_received = signum
             raise _Stop()
-
-    def _write_history(self, cycle: int, increment0: int, h: dict[str, np.ndarray]) -> None:
-        n = h["normal_force"].size
-        head = list(zip(range(increment0 + 1, increment0 + n + 1), [cycle] * n, range(1, n + 1)))
-        cols = ["normal_displacement", "tangential_displacement", "face_pressure", *INCREMENT_COLUMNS]
-        self.writer.history_block(head, np.column_stack([h[c] for c in cols]), "cycle")
-
-    def _cycle_row(self, cycle: int, h: dict[str, np.ndarray], wall: float,
-                   jump: dict[str, Any] | None = None) -> dict[str, Any]:
-        sc = self.scene
-        Q = h["tangential_force"]
-        disp = h["tangential_displacement"] if sc.loading.tangential_kind == "displacement" \
-            else h["mean_relative_tangential"]
-        E = float(h["dissipated_energy"].sum())
-        Qa = 0.5 * (Q.max() - Q.min())
-        da = 0.5 * (disp.max() - disp.min())
-        loaded = (h["n_stick"] + h["n_slip"]) > 0
-        min_stick = int(h["n_stick"][loaded].min()) if loaded.any() else 0
-        gross = bool(np.any((h["n_stick"] == 0) & (h["n_slip"] > 0)))
-        jump = jump or {}
-        n_jump = jump.get("jump", 1)
-        return {"cycle": cycle, "equivalent_cycles": (cycle + n_jump - 1) * sc.wear.acceleration,
-                "jump": n_jump, "jump_bound": jump.get("bound", "none"),
-                "jump_stability_limit": jump.get("stability_limit", 0.0),
-                "jump_error_estimate": jump.get("error", 0.0),
-                "wear_error_estimate": jump.get("error_total", 0.0), "dissipated_energy": E,
-                "wear_area": float(h["wear_area"][-1]), "max_wear_depth": float(h["max_wear_depth"][-1]),
-                "tangential_force_max": float(Q.max()), "tangential_force_min": float(Q.min()),
-                "displacement_max": float(disp.max()), "displacement_min": float(disp.min()),
-                "energy_ratio": E / (4 * Qa * da) if Qa * da > 0 else 0.0, "min_stick": min_stick,
-                "regime": "gross_slip" if gross else ("partial_slip" if loaded.any() else "open"),
-                "max_pressure_end": float(h["max_pressure"][-1]),
-                "local_iterations": int(h["local_iterations"].sum()), "wall_time_s": round(wall, 6)}
 
     # Cycle jumps -----------------------------------------------------------------------------------
     def _jump(self, cycle: int, start: ContactState, new: ContactState, result: CycleResult, room: int,
@@ -683,23 +565,6 @@ class _Run:
         return new, {"jump": dN, "bound": bound, "stability_limit": stab, "error": err, "error_total": js["error"]}
 
     # Outputs at the end ---------------------------------------------------------------------------------
-    def write_worn_profiles(self) -> None:
-        """``worn_profiles.csv``: each body's worn depth along the contact (rank 0, at the end of a run).
-
-        Both bodies see the same pressure and slip, so each wears its share ``k_body / k_total`` of the wear
-        gap; the flat's depth is placed at the master point paired with each cylinder node.
-        """
-        import csv
-
-        cs, share = self.model.contact, self.problem.wear.slave_share
-        gw = self.state.wear_gap
-        master_x = cs.master_points[:, 0] if cs.two_body else np.full(cs.nc, np.nan)
-        with open(self.out / "worn_profiles.csv", "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(["position", "wear_gap", "cylinder_wear", "flat_position", "flat_wear"])
-            for row in zip(cs.abscissa, gw, share * gw, master_x, (1 - share) * gw):
-                w.writerow([f"{v:.12g}" for v in row])
-
     def summary(self, error: str | None) -> dict[str, Any]:
         sc, model, st, pr = self.scene, self.model, self.state, self.progress
         problem = self.problem
@@ -786,12 +651,12 @@ class _Run:
         window = model.half_width
         growths = self.progress.window_growths
         two_body = cs.two_body
+        newton = body.describe() if body is not None else None
         return {
             "material": ("J2 plasticity: Newton with the contact inside each iteration, tangent "
-                         f"'{sc.solver.newton_tangent}', {body.refactorizations} tangent refactorisations"
+                         f"'{sc.solver.newton_tangent}', {newton['iteration']}"
                          if body is not None else "linear elastic: no Newton loop, no plastic state"),
-            "delassus": ("W of the elastic K built once" + (", W of the tangent rebuilt at each refactorisation"
-                                                          if body is not None else "")),
+            "delassus": "W of the elastic K built once" + (f"; {newton['delassus']}" if body is not None else ""),
             "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0): "
                         "normal-only contact, the local problem solved on the normal rows of W alone",
             "wear": (f"Archard, k = {sc.wear.k_total} 1/MPa x acceleration {sc.wear.acceleration}"
@@ -877,9 +742,9 @@ def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: boo
         summary = run.summary(error)
     if run.signal_received:
         summary["interrupted"] = signal.Signals(run.signal_received).name
-    run.writer.summary(summary)
+    run.writer.write_summary(summary)
     if run.rank0 and scene.wear.law == "archard":
-        run.write_worn_profiles()
+        run.writer.write_worn_profiles(run.state)
     run.writer.close()
     if run.rank0 and scene.output.xdmf and scene.output.contact_profiles:
         from .contact_output import write_contact_xdmf
@@ -890,7 +755,7 @@ def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: boo
     if run.rank0 and scene.output.plots and run.progress.last_row:
         from .plots import plot_run
         try:
-            plot_run(out, scene)
+            plot_run(out, run.writer.description)
         except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
             run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
         if scene.output.xdmf:  # pyvista pictures, in a child process: a VTK failure costs only them

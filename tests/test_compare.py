@@ -230,3 +230,17 @@ def test_cli(tmp_path, two_runs):
     assert res.returncode == 2 and "--cycles" in res.stderr
     res = _cli(str(fe))
     assert res.returncode == 2 and "--out" in res.stderr
+
+
+def test_obstacle_note_reads_the_run_description(tmp_path):
+    """The obstacle named under the pictures comes from run.json (data), not from summary.json's prose; a
+    folder of an older release without run.json falls back to the prose."""
+    from dolfinx_fretting.compare import RunData, _obstacle_note
+    from dolfinx_fretting.output import OBSTACLE_TEXT, RunDescription
+
+    two_bodies = RunDescription(name="mccoll", dim=2, obstacle="elastic_body", plane_point=(0.0, 0.0),
+                                plane_normal=(0.0, 1.0))
+    runs = [RunData(tmp_path, "a", summary={"obstacle": "stale prose"}, description=two_bodies),
+            RunData(tmp_path, "b", summary={}, description=two_bodies)]
+    assert _obstacle_note(runs) == f"obstacle: {OBSTACLE_TEXT['elastic_body']}"
+    assert _obstacle_note([RunData(tmp_path, "old", summary={"obstacle": OBSTACLE})]) == f"obstacle: {OBSTACLE}"

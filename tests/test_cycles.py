@@ -57,14 +57,14 @@ def _comparable(folder):
 CHECKPOINT_AT, KILL_AT = 5, 9
 _KILLER = """
 import os, signal, sys
-from dolfinx_fretting import simulation
+from dolfinx_fretting import output
 from dolfinx_fretting.cli import main
-cycle_row = simulation._Run._cycle_row
-def cycle_row_or_die(self, cycle, *args, **kwargs):
+write_cycle = output.FrettingWriter.write_cycle
+def write_cycle_or_die(self, cycle, *args, **kwargs):
     if cycle == {kill_at}:
         os.kill(os.getpid(), signal.SIGKILL)
-    return cycle_row(self, cycle, *args, **kwargs)
-simulation._Run._cycle_row = cycle_row_or_die
+    return write_cycle(self, cycle, *args, **kwargs)
+output.FrettingWriter.write_cycle = write_cycle_or_die
 sys.exit(main(sys.argv[1:]))
 """
 

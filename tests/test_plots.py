@@ -20,7 +20,7 @@ from dolfinx_fretting.contact_output import (XDMF_FIELDS, read_contact_xdmf, rea
                                              write_contact_xdmf)
 from dolfinx_fretting.io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS
 from dolfinx_fretting.plots import CYCLIC_PICTURES, plot_run, tracked_nodes
-from dolfinx_fretting.scenes import load_scene
+from dolfinx_fretting.output import RunDescription
 
 N_NODES, N_STEPS, N_CYCLES = 11, 8, 3
 POSITIONS = np.linspace(0.0, 10.0, N_NODES)
@@ -92,11 +92,19 @@ def write_cyclic_folder(out: Path, skip_history_cycles: tuple[int, ...] = (2,),
     _write_csv(out / "cycles.csv", CYCLE_FIELDS, cyc)
 
 
+def cyclic_description(**changes) -> RunDescription:
+    """What plot_run knows of the synthetic cyclic run: a face-pressure load of amplitude 10 MPa."""
+    values = dict(name="synthetic-block", dim=2, obstacle="rigid_plane", plane_point=(0.0, 0.0),
+                  plane_normal=(0.0, 1.0), cycles=N_CYCLES, preload_increments=1, increments_per_cycle=N_STEPS,
+                  tangential_control="pressure", tangential_amplitude=10.0, pressure_face="right",
+                  loop_cycles=(1, 3), track_positions=(1.2, 5.0))
+    values.update(changes)
+    return RunDescription(**values)
+
+
 @pytest.fixture
-def cyclic_scene():
-    return load_scene("stromberg-block", [
-        f"loading.cycles={N_CYCLES}", f"loading.increments_per_cycle={N_STEPS}",
-        "output.snapshot_cycles=[1, 3]", "output.loop_cycles=[1, 3]", "output.track_positions=[1.2, 5.0]"])
+def cyclic_run():
+    return cyclic_description()
 
 
 def _csv_rows(path: Path, increment: int) -> list[dict[str, str]]:
@@ -117,11 +125,11 @@ def assert_png(path: Path) -> None:
     assert float(img[..., :3].std()) > 0.01, f"{path.name} is blank"
 
 
-def test_plot_run_cyclic_writes_every_picture(tmp_path, cyclic_scene):
+def test_plot_run_cyclic_writes_every_picture(tmp_path, cyclic_run):
     write_cyclic_folder(tmp_path)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        written = plot_run(tmp_path, cyclic_scene)
+        written = plot_run(tmp_path, cyclic_run)
     problems = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
     assert not problems, problems
     assert sorted(p.name for p in written) == sorted(["profiles.png", *CYCLIC_PICTURES])
@@ -129,8 +137,23 @@ def test_plot_run_cyclic_writes_every_picture(tmp_path, cyclic_scene):
         assert_png(tmp_path / name)
 
 
+def test_plot_run_reads_the_run_description_of_the_folder(tmp_path):
+    """plot_run(folder) needs nothing but the folder: run.json round-trips the description exactly."""
+    import json
+
+    write_cyclic_folder(tmp_path)
+    with pytest.warns(RuntimeWarning, match="no run.json"):
+        assert plot_run(tmp_path) == []
+    run = cyclic_description()
+    (tmp_path / "run.json").write_text(json.dumps(run.to_json()))
+    assert RunDescription.from_json(json.loads((tmp_path / "run.json").read_text())) == run
+    assert sorted(p.name for p in plot_run(tmp_path)) == sorted(["profiles.png", *CYCLIC_PICTURES])
+
+
 def test_plot_run_monotonic_writes_only_profiles(tmp_path):
-    scene = load_scene("hertz")
+    run = RunDescription(name="hertz", dim=2, obstacle="rigid_plane", plane_point=(0.0, 0.0),
+                         plane_normal=(0.0, 1.0), preload_increments=4, tangential_control="displacement",
+                         tangential_amplitude=1e-3, hertz=(10.0, 2.3e5))
     out = tmp_path
     hist, prof = [], []
     x = np.linspace(-0.2, 0.2, 21)
@@ -147,7 +170,7 @@ def test_plot_run_monotonic_writes_only_profiles(tmp_path):
     _write_csv(out / "history.csv", HISTORY_FIELDS, hist)
     _write_csv(out / "contact_profiles.csv", PROFILE_FIELDS, prof)
     _write_csv(out / "cycles.csv", CYCLE_FIELDS, [])
-    written = plot_run(out, scene)
+    written = plot_run(out, run)
     assert [p.name for p in written] == ["profiles.png"]
     assert_png(out / "profiles.png")
     assert not any((out / name).exists() for name in CYCLIC_PICTURES)
@@ -160,7 +183,7 @@ def _truncate(path: Path, fraction: float) -> None:
 
 @pytest.mark.parametrize("damage", ["empty_folder", "headers_only", "cut_mid_line", "no_profiles",
                                     "no_history", "garbage_rows"])
-def test_plot_run_never_raises_on_a_partial_folder(tmp_path, cyclic_scene, damage):
+def test_plot_run_never_raises_on_a_partial_folder(tmp_path, cyclic_run, damage):
     write_cyclic_folder(tmp_path)
     files = {n: tmp_path / f"{n}.csv" for n in ("history", "cycles", "contact_profiles")}
     if damage == "empty_folder":
@@ -182,7 +205,7 @@ def test_plot_run_never_raises_on_a_partial_folder(tmp_path, cyclic_scene, damag
             f.write("1,2,3\nnot,a,row\n")
         with open(files["contact_profiles"], "a") as f:
             f.write("999,9,9,0,abc\n")
-    written = plot_run(tmp_path, cyclic_scene)  # must not raise
+    written = plot_run(tmp_path, cyclic_run)  # must not raise
     for p in written:
         assert_png(p)
     names = {p.name for p in written}
@@ -196,7 +219,7 @@ def test_plot_run_never_raises_on_a_partial_folder(tmp_path, cyclic_scene, damag
         assert names == {"profiles.png", *CYCLIC_PICTURES}
 
 
-def test_a_failing_picture_is_skipped_with_a_warning(tmp_path, cyclic_scene, monkeypatch):
+def test_a_failing_picture_is_skipped_with_a_warning(tmp_path, cyclic_run, monkeypatch):
     write_cyclic_folder(tmp_path)
 
     def broken(*args, **kwargs):
@@ -204,7 +227,7 @@ def test_a_failing_picture_is_skipped_with_a_warning(tmp_path, cyclic_scene, mon
 
     monkeypatch.setattr(plots, "plot_node_history", broken)
     with pytest.warns(RuntimeWarning, match="node_history.png not drawn: RuntimeError: boom"):
-        written = plot_run(tmp_path, cyclic_scene)
+        written = plot_run(tmp_path, cyclic_run)
     names = {p.name for p in written}
     assert "node_history.png" not in names
     assert {"wear_first_cycle.png", "wear_evolution.png", "fretting_loops.png", "wear_growth.png"} <= names
@@ -248,19 +271,18 @@ def test_read_table_types_and_unterminated_line(tmp_path):
     assert t["energy_ratio"][0] == 0.5 and np.isnan(t["energy_ratio"][1])
 
 
-def test_tracked_nodes_and_load_labels(tmp_path, cyclic_scene):
+def test_tracked_nodes_and_load_labels(tmp_path, cyclic_run):
     write_cyclic_folder(tmp_path)
     prof = read_profiles(tmp_path)
-    assert tracked_nodes(cyclic_scene, prof) == [1, 5]  # nearest to 1.2 mm and 5.0 mm
-    untracked = cyclic_scene.model_copy(deep=True)
-    untracked.output.track_positions = []
+    assert tracked_nodes(cyclic_run, prof) == [1, 5]  # nearest to 1.2 mm and 5.0 mm
+    untracked = cyclic_description(track_positions=())
     # the edge node in contact at the end of the preload (all are) and the centre node
     assert tracked_nodes(untracked, prof) == [0, 5]
     hist = plots._History(read_table(tmp_path / "history.csv"))
-    assert plots._load_label(cyclic_scene, hist, 1, N_STEPS // 4) == "q = +10 MPa"
-    assert plots._load_label(cyclic_scene, hist, 1, 3 * N_STEPS // 4) == "q = -10 MPa"
-    assert plots._load_label(cyclic_scene, hist, 1, N_STEPS // 2) == "q = 0 MPa"
-    assert plots._load_label(cyclic_scene, hist, 2, 1) == ""  # cycle 2 not in history.csv
+    assert plots._load_label(cyclic_run, hist, 1, N_STEPS // 4) == "q = +10 MPa"
+    assert plots._load_label(cyclic_run, hist, 1, 3 * N_STEPS // 4) == "q = -10 MPa"
+    assert plots._load_label(cyclic_run, hist, 1, N_STEPS // 2) == "q = 0 MPa"
+    assert plots._load_label(cyclic_run, hist, 2, 1) == ""  # cycle 2 not in history.csv
 
 
 def test_contact_xdmf_holds_the_csv_values(tmp_path):

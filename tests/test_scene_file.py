@@ -68,8 +68,8 @@ def punch_file(tmp_path_factory):
     return path
 
 
-def api_answer(path: Path, increments: int = 4, window: float = 1.2) -> dict[str, float]:
-    """The user's script: read the mesh, write the model, press by a force through the API."""
+def read_punch(path: Path):
+    """The user's own reading of the .msh file: (mesh, facet tags)."""
     if COMM.rank == 0:
         gmsh.initialize()
         gmsh.option.setNumber("General.Terminal", 0)
@@ -77,6 +77,12 @@ def api_answer(path: Path, increments: int = 4, window: float = 1.2) -> dict[str
     msh, _, facet_tags = dfx.model_to_mesh(gmsh.model, COMM, 0, gdim=2)
     if COMM.rank == 0:
         gmsh.finalize()
+    return msh, facet_tags
+
+
+def api_answer(path: Path, increments: int = 4, window: float = 1.2) -> dict[str, float]:
+    """The user's script: read the mesh, write the model, press by a force through the API."""
+    msh, facet_tags = read_punch(path)
     V = dfx.vector_space(msh, 1)
     lmbda, mu = LinearElastic(E, NU).lame
     eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
@@ -119,6 +125,43 @@ def test_scene_file_gives_the_api_answer(punch_file, tmp_path_factory):
     assert abs(by_scene["contact_width"] / 2 - 0.7993) <= 0.06
 
 
+def write_punch_xdmf(msh_path: Path, xdmf_path: Path) -> None:
+    """The same punch as a DOLFINx XDMF file with its facet meshtags (markers 1 = face, 2 = top; no names)."""
+    from dolfinx.io import XDMFFile
+
+    msh, facet_tags = read_punch(msh_path)
+    msh.name = "punch"
+    facet_tags.name = "punch_facets"
+    with XDMFFile(COMM, str(xdmf_path), "w") as xdmf:
+        xdmf.write_mesh(msh)
+        dfx.write_meshtags(xdmf, facet_tags, msh)
+
+
+def test_xdmf_scene_file_gives_the_msh_answer(punch_file, tmp_path_factory):
+    """The punch as an XDMF file with unnamed markers named by geometry.groups: the .msh scene's answer."""
+    folder = Path(COMM.bcast(str(tmp_path_factory.mktemp("xdmf")) if COMM.rank == 0 else None, root=0))
+    xdmf = folder / "punch.xdmf"
+    write_punch_xdmf(punch_file, xdmf)
+    by_msh = run_scene(load_scene(scene_dict(punch_file)), folder / "msh", COMM, quiet=True)
+    scene = scene_dict(xdmf)
+    scene["geometry"]["groups"] = {"face": 1, "top": 2}
+    by_xdmf = run_scene(load_scene(scene), folder / "xdmf", COMM, quiet=True)
+    assert by_xdmf["contacts"] == by_msh["contacts"]
+    for key in ("normal_force", "max_pressure", "contact_width", "n_stick", "n_slip"):
+        # the same mesh written and read back (coordinates exact in HDF5 doubles): equal to rounding
+        assert by_xdmf[key] == pytest.approx(by_msh[key], rel=1e-10, abs=1e-10), key
+    # unnamed markers go by their numbers, and a wrong name lists them
+    scene = scene_dict(xdmf, surface="1")
+    scene["boundary"] = {"fixed": ["2"]}
+    assert run_scene(load_scene(scene), folder / "numbers", COMM, quiet=True)["contacts"] == by_msh["contacts"]
+    with pytest.raises(SimulationError, match=r"contact.surface = 'face' is not a physical group .* 1, 2 \(an XDMF"):
+        run_scene(load_scene(scene_dict(xdmf)), folder / "bad", COMM, quiet=True)
+    bad = scene_dict(xdmf)
+    bad["geometry"]["groups"] = {"face": 7}
+    with pytest.raises(SimulationError, match=r"geometry.groups.face = 7 is not a facet marker .* 1, 2"):
+        run_scene(load_scene(bad), folder / "bad7", COMM, quiet=True)
+
+
 def test_scene_file_from_toml_with_relative_path(punch_file, tmp_path_factory):
     """A relative geometry.path is found from the scene file's folder."""
     folder = punch_file.parent
@@ -148,3 +191,6 @@ def test_boundary_section_needs_a_mesh_file():
         load_scene("hertz", ["boundary.fixed=['top']"])
     with pytest.raises(SceneError, match="geometry.path"):
         load_scene({"geometry": {"kind": "file"}, "loading": {"normal_force": 1.0}})
+    with pytest.raises(SceneError, match="geometry.groups"):  # names come from a .msh file itself
+        load_scene({"geometry": {"kind": "file", "path": "a.msh", "groups": {"face": 1}},
+                    "loading": {"normal_force": 1.0}})

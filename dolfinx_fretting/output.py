@@ -1,0 +1,451 @@
+"""Output writers of a fretting problem's states: tables, contact profiles, fields and the run description.
+
+A user's own script and the scene runner write results the same way::
+
+    writer = FrettingWriter(problem, "out", RunDescription.of(problem, "punch", path=path))
+    state = problem.advance(state, normal=Force(P))[0]
+    writer.write_increment(state, stage="normal")
+    for cycle in range(1, cycles + 1):
+        result = problem.run_cycle(state, path, keep=True)
+        start, state = state, problem.commit(state, result)
+        writer.write_cycle(cycle, start, result, profiles=True)
+    writer.write_worn_profiles(state)
+    writer.close()
+    plot_run("out")            # the folder's plots, from its tables and run.json alone
+
+What goes where (the columns are declared once, in :mod:`dolfinx_fretting.io`):
+
+- ``history.csv``: one row per increment (:data:`~dolfinx_fretting.io.HISTORY_FIELDS`);
+- ``cycles.csv``: one row per cycle (:data:`~dolfinx_fretting.io.CYCLE_FIELDS`, :func:`cycle_row`);
+- ``contact_profiles.csv``: one row per contact node of every written increment;
+- ``fields.xdmf``: displacement, von Mises stress (and the equivalent plastic strain), collective;
+- ``worn_profiles.csv``: each body's worn depth at the end;
+- ``run.json``: the :class:`RunDescription`, which plots, pictures and ``compare`` read instead of the scene.
+
+Tables are written by rank 0; fields by every rank (collective), like DOLFINx's ``XDMFFile``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from .io import CYCLE_FIELDS, HISTORY_FIELDS, RUN_DESCRIPTION, ResultWriter, profile_fields, write_json_atomic
+from .problem import INCREMENT_COLUMNS
+
+__all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT"]
+
+#: What each kind of obstacle is, in words (pictures and ``compare`` label runs with it).
+OBSTACLE_TEXT = {"rigid_plane": "rigid plane",
+                 "elastic_body": "elastic counter-body (two deformable bodies, small-sliding pairing)"}
+#: How the tangential load of a run is controlled (:attr:`RunDescription.tangential_control`).
+TANGENTIAL_CONTROLS = ("displacement", "force", "pressure", "none")
+
+
+@dataclass(frozen=True)
+class RunDescription:
+    """What the readers of an output folder need to know about the run, as data (``run.json``).
+
+    Attributes:
+        name: The run's name (titles of the plots).
+        dim: Geometric dimension of the contact (2 or 3).
+        obstacle: ``"rigid_plane"`` or ``"elastic_body"``.
+        plane_point, plane_normal: The obstacle plane (normal from the obstacle into the body); for an elastic
+            body the plane of its undeformed contact face.
+        slave_wear_share: The contact body's share of the wear gap (two bodies; None: a rigid obstacle or no
+            wear law).
+        cycles: Cycles asked for (0: a monotonic run).
+        preload_increments: Increments of the normal preload.
+        increments_per_cycle: Increments of each cycle.
+        tangential_control: One of :data:`TANGENTIAL_CONTROLS`: what drives the tangential load.
+        tangential_amplitude: Its amplitude (mm, N/mm or N, MPa).
+        pressure_face: The face a tangential pressure acts on (for labels), or None.
+        wear_acceleration: Factor on the wear coefficient (the plots' titles say so when it is not 1).
+        hertz: (radius, E*) of a Hertz line-contact reference drawn on the profiles, or None.
+        track_positions: Contact positions whose nodes' histories are drawn (empty: chosen automatically).
+        loop_cycles: Cycles whose fretting loops are drawn.
+    """
+
+    name: str
+    dim: int
+    obstacle: str
+    plane_point: tuple[float, ...]
+    plane_normal: tuple[float, ...]
+    slave_wear_share: float | None = None
+    cycles: int = 0
+    preload_increments: int = 0
+    increments_per_cycle: int = 0
+    tangential_control: str = "none"
+    tangential_amplitude: float = 0.0
+    pressure_face: str | None = None
+    wear_acceleration: float = 1.0
+    hertz: tuple[float, float] | None = None
+    track_positions: tuple[float, ...] = ()
+    loop_cycles: tuple[int, ...] = field(default_factory=tuple)
+
+    def __post_init__(self) -> None:
+        if self.obstacle not in OBSTACLE_TEXT:
+            raise ValueError(f"RunDescription.obstacle must be 'rigid_plane' or 'elastic_body', got {self.obstacle!r}")
+        if self.tangential_control not in TANGENTIAL_CONTROLS:
+            raise ValueError(f"RunDescription.tangential_control must be one of {TANGENTIAL_CONTROLS}, got "
+                             f"{self.tangential_control!r}")
+
+    @classmethod
+    def of(cls, problem, name: str, *, path=None, cycles: int = 0, preload_increments: int = 0,
+           plane_point=None, **extra: Any) -> RunDescription:
+        """The description of a run of ``problem``, the rest read from ``problem`` and the cycle ``path``.
+
+        Args:
+            problem: The :class:`~dolfinx_fretting.problem.FrettingProblem`.
+            name: The run's name.
+            path: The :class:`~dolfinx_fretting.problem.CyclePath` of its cycles (sets the increments per cycle
+                and the tangential control), or None.
+            cycles: Cycles asked for.
+            preload_increments: Increments before the first cycle.
+            plane_point: A point of the obstacle plane (default: the rigid plane's, else the origin).
+            **extra: Any other attribute (``tangential_control``, ``hertz``, ``track_positions`` ...).
+        """
+        from .problem import Displacement, Force
+
+        contact = problem.contact
+        obstacle = contact.obstacle
+        if plane_point is None:
+            plane_point = getattr(obstacle, "point", np.zeros(contact.dim))
+        wear = problem.wear
+        values: dict[str, Any] = {
+            "dim": contact.dim, "obstacle": "elastic_body" if contact.contact_set.two_body else "rigid_plane",
+            "plane_point": tuple(float(v) for v in plane_point),
+            "plane_normal": tuple(float(v) for v in contact.frame[0]),
+            "slave_wear_share": wear.slave_share if wear is not None and contact.contact_set.two_body else None,
+            "cycles": cycles, "preload_increments": preload_increments,
+            "wear_acceleration": float(wear.acceleration) if wear is not None else 1.0}
+        if path is not None:
+            values["increments_per_cycle"] = path.increments
+            tangential = path.tangential
+            if isinstance(tangential, (Displacement, Force)):
+                amplitude = float(np.abs(np.asarray(tangential.value, dtype=float)).max(initial=0.0))
+                if amplitude > 0:
+                    values["tangential_control"] = "displacement" if isinstance(tangential, Displacement) else "force"
+                    values["tangential_amplitude"] = amplitude
+        values.update(extra)
+        return cls(name=name, **values)
+
+    @property
+    def displacement_controlled(self) -> bool:
+        """Whether the obstacle's tangential displacement is prescribed (then the fretting loop's abscissa)."""
+        return self.tangential_control == "displacement"
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``run.json`` document (with the tables' columns and the units)."""
+        data = asdict(self)
+        return {"format": 2, "scene": self.name, "dim": self.dim,
+                "obstacle": {"kind": self.obstacle, "point": list(self.plane_point),
+                             "normal": list(self.plane_normal)},
+                "slave_wear_share": self.slave_wear_share,
+                "units": {"length": "mm", "force": "N/mm" if self.dim == 2 else "N", "stress": "MPa"},
+                "tables": {"history.csv": HISTORY_FIELDS, "cycles.csv": CYCLE_FIELDS,
+                           "contact_profiles.csv": profile_fields(self.dim)},
+                "run": {k: data[k] for k in ("cycles", "preload_increments", "increments_per_cycle",
+                                             "tangential_control", "tangential_amplitude", "pressure_face",
+                                             "wear_acceleration", "hertz", "track_positions", "loop_cycles")}}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> RunDescription:
+        run = dict(data.get("run", {}))  # format 1 (no "run" section): the defaults
+        for key in ("track_positions", "loop_cycles", "hertz"):
+            if run.get(key) is not None:
+                run[key] = tuple(run[key])
+        return cls(name=data["scene"], dim=int(data["dim"]), obstacle=data["obstacle"]["kind"],
+                   plane_point=tuple(data["obstacle"]["point"]), plane_normal=tuple(data["obstacle"]["normal"]),
+                   slave_wear_share=data.get("slave_wear_share"), **run)
+
+
+def read_description(folder: str | Path) -> RunDescription | None:
+    """The :class:`RunDescription` in a run's output folder, or None when it has none (an older release)."""
+    try:
+        data = json.loads((Path(folder) / RUN_DESCRIPTION).read_text())
+    except (OSError, ValueError):
+        return None
+    return RunDescription.from_json(data)
+
+
+def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_controlled: bool,
+              wear_acceleration: float = 1.0, wall: float = 0.0, jump: dict[str, Any] | None = None) -> dict[str, Any]:
+    """One row of ``cycles.csv`` from the per-increment columns of a cycle.
+
+    Args:
+        cycle: The cycle's number.
+        records: Per-increment arrays of the cycle: the :data:`~dolfinx_fretting.problem.INCREMENT_COLUMNS` and
+            ``tangential_displacement`` (the obstacle's).
+        displacement_controlled: The loop's abscissa is the obstacle's displacement (else the mean relative
+            tangential displacement of the loaded contacts).
+        wear_acceleration: Factor on the wear coefficient (``equivalent_cycles``).
+        wall: Wall time of the cycle (s).
+        jump: The cycle jump that follows it (``jump``, ``bound``, ``stability_limit``, ``error``,
+            ``error_total``), or None.
+    """
+    Q = records["tangential_force"]
+    disp = records["tangential_displacement"] if displacement_controlled else records["mean_relative_tangential"]
+    energy = float(records["dissipated_energy"].sum())
+    force_amplitude = 0.5 * (Q.max() - Q.min())
+    displacement_amplitude = 0.5 * (disp.max() - disp.min())
+    loaded = (records["n_stick"] + records["n_slip"]) > 0
+    min_stick = int(records["n_stick"][loaded].min()) if loaded.any() else 0
+    gross = bool(np.any((records["n_stick"] == 0) & (records["n_slip"] > 0)))
+    jump = jump or {}
+    n_jump = jump.get("jump", 1)
+    loop_area = 4 * force_amplitude * displacement_amplitude  # the rectangle of the loop's amplitudes
+    return {"cycle": cycle, "equivalent_cycles": (cycle + n_jump - 1) * wear_acceleration,
+            "jump": n_jump, "jump_bound": jump.get("bound", "none"),
+            "jump_stability_limit": jump.get("stability_limit", 0.0),
+            "jump_error_estimate": jump.get("error", 0.0),
+            "wear_error_estimate": jump.get("error_total", 0.0), "dissipated_energy": energy,
+            "wear_area": float(records["wear_area"][-1]), "max_wear_depth": float(records["max_wear_depth"][-1]),
+            "tangential_force_max": float(Q.max()), "tangential_force_min": float(Q.min()),
+            "displacement_max": float(disp.max()), "displacement_min": float(disp.min()),
+            "energy_ratio": energy / loop_area if loop_area > 0 else 0.0, "min_stick": min_stick,
+            "regime": "gross_slip" if gross else ("partial_slip" if loaded.any() else "open"),
+            "max_pressure_end": float(records["max_pressure"][-1]),
+            "local_iterations": int(records["local_iterations"].sum()), "wall_time_s": round(wall, 6)}
+
+
+class FrettingWriter:
+    """Writes a :class:`~dolfinx_fretting.problem.FrettingProblem`'s states into a folder. Collective.
+
+    Args:
+        problem: The problem whose states are written.
+        folder: Output folder (created).
+        description: What the folder's readers need (``run.json``, written at once); default
+            ``RunDescription.of(problem, "run")``.
+        profiles: Write ``contact_profiles.csv``.
+        fields: Write ``fields.xdmf`` (displacement, von Mises, equivalent plastic strain).
+        von_mises: UFL von Mises stress of a displacement ``u -> expr`` for elastic problems (elastic–plastic
+            ones take it from the plastic state); None: the fields hold the displacement only.
+        pressure_load: The named load whose factor is the ``face_pressure`` column (None: 0).
+        shifted_cells: Cells whose displacement is drawn moved by the obstacle's reverse motion (two bodies
+            driven as the paper does: the obstacle body held, the contact body moved); None: none.
+        resume: ``checkpoint_info()`` of a checkpoint to continue from: the tables are truncated to its sizes
+            and appended to (a table shorter than recorded raises :class:`~dolfinx_fretting.io.TableError`).
+    """
+
+    def __init__(self, problem, folder: str | Path, description: RunDescription | None = None, *,
+                 profiles: bool = True, fields: bool = True, von_mises: Callable | None = None,
+                 pressure_load: str | None = None, shifted_cells: np.ndarray | None = None,
+                 resume: dict[str, Any] | None = None):
+        self.problem = problem
+        self.folder = Path(folder)
+        self.comm = problem.comm
+        self.description = description if description is not None else RunDescription.of(problem, "run")
+        self.fields_enabled = fields
+        self.von_mises = von_mises
+        self.shifted_cells = shifted_cells
+        names = problem.load_names
+        self._pressure_index = names.index(pressure_load) if pressure_load in names else None
+        resume = resume or {}
+        self.tables = ResultWriter(self.folder, self.comm, profiles=profiles, resume_sizes=resume.get("sizes"),
+                                   xdmf_started=bool(resume.get("xdmf_started", False)), dim=problem.contact.dim)
+        self._functions = None
+        if self.comm.rank == 0:
+            write_json_atomic(self.folder / RUN_DESCRIPTION, self.description.to_json())
+
+    # Rows ----------------------------------------------------------------------------------------------
+    def _face_pressure(self, load_factors: np.ndarray) -> np.ndarray | float:
+        if self._pressure_index is None:
+            return np.zeros(load_factors.shape[:-1]) if load_factors.ndim > 1 else 0.0
+        return load_factors[..., self._pressure_index]
+
+    def history_row(self, state, *, stage: str, cycle: int = 0, step: int = 0) -> dict[str, Any]:
+        """The ``history.csv`` row of a committed state."""
+        values = state.record
+        return {"increment": state.increment, "cycle": cycle, "step": step, "stage": stage,
+                "normal_displacement": float(state.obstacle[0]), "tangential_displacement": float(state.obstacle[1]),
+                "face_pressure": float(self._face_pressure(state.load_factors)),
+                **{k: values[k] for k in INCREMENT_COLUMNS}}
+
+    def write_increment(self, state, *, stage: str = "increment", profile: bool = True,
+                        fields: bool = True) -> dict[str, Any]:
+        """Append a committed increment: its history row, its contact profile and its fields. Collective.
+
+        Returns:
+            The history row.
+        """
+        row = self.history_row(state, stage=stage)
+        self.tables.rows("history", [row])
+        if profile:
+            self.write_profile(state.increment, 0, 0, state.slip, state.positions, state.forces, state.wear_gap,
+                               state.status)
+        if fields:
+            self.write_fields(float(state.increment), state)
+        self.tables.flush()
+        return row
+
+    def cycle_end_row(self, cycle: int, start, result) -> dict[str, Any]:
+        """The ``history.csv`` row of a cycle's last increment (written or not: the summary reads it)."""
+        records = self.cycle_records(result)
+        n = records["normal_force"].size
+        last = {k: (v[-1].item() if hasattr(v[-1], "item") else v[-1]) for k, v in records.items()}
+        return {"increment": start.increment + n, "cycle": cycle, "step": n, "stage": "cycle",
+                **{k: last[k] for k in ("normal_displacement", "tangential_displacement", "face_pressure")},
+                **{k: last[k] for k in INCREMENT_COLUMNS}}
+
+    def cycle_records(self, result) -> dict[str, np.ndarray]:
+        """A cycle's per-increment columns with the obstacle's displacement and the face pressure."""
+        return {**result.records, "normal_displacement": result.obstacle[:, 0],
+                "tangential_displacement": result.obstacle[:, 1],
+                "face_pressure": self._face_pressure(result.load_factors)}
+
+    def write_cycle(self, cycle: int, start, result, *, history: bool = True, profiles: bool = False,
+                    fields: bool | None = None, wall: float = 0.0, jump: dict[str, Any] | None = None
+                    ) -> dict[str, Any]:
+        """Append a committed cycle: its history block, its ``cycles.csv`` row, and with ``profiles`` the contact
+        profile of every increment and the fields of its most loaded instant. Collective.
+
+        Args:
+            cycle: The cycle's number.
+            start: The state the cycle started from.
+            result: The :class:`~dolfinx_fretting.problem.CycleResult` (solved with ``keep=True`` for profiles).
+            history: Write the cycle's increments into ``history.csv``.
+            profiles: Write the contact profiles (and, unless ``fields`` is False, the fields).
+            fields: Write the fields (default: with the profiles).
+            wall: Wall time of the cycle (s), for the table.
+            jump: The cycle jump after it (see :func:`cycle_row`).
+
+        Returns:
+            The ``cycles.csv`` row.
+        """
+        records = self.cycle_records(result)
+        n = records["normal_force"].size
+        if history:
+            head = list(zip(range(start.increment + 1, start.increment + n + 1), [cycle] * n, range(1, n + 1)))
+            columns = ["normal_displacement", "tangential_displacement", "face_pressure", *INCREMENT_COLUMNS]
+            self.tables.history_block(head, np.column_stack([records[c] for c in columns]), "cycle")
+        row = cycle_row(cycle, records, displacement_controlled=self.description.displacement_controlled,
+                        wear_acceleration=self.description.wear_acceleration, wall=wall, jump=jump)
+        self.tables.rows("cycles", [row])
+        if profiles:
+            if result.kept is None:
+                raise ValueError("write_cycle(profiles=True) needs the cycle solved with keep=True")
+            out_r, out_x, out_y, out_gw, out_status = result.kept
+            for j in range(n):
+                self.write_profile(start.increment + j + 1, cycle, j + 1, out_x[j], out_y[j], out_r[j], out_gw[j],
+                                   out_status[j])
+        if profiles if fields is None else fields:
+            j, shown = self.most_loaded(result)
+            self.write_fields(float(start.increment + j + 1), shown)
+        self.tables.flush()
+        return row
+
+    def most_loaded(self, result) -> tuple[int, Any]:
+        """The increment of a cycle whose fields are drawn and its state: the most loaded instant (largest
+        normal + |tangential| contact force; a cycle often ends unloaded, as Example 1's face pressure does);
+        elastic–plastic problems: the cycle's end (the plastic history kept is the end's)."""
+        n = result.records["normal_force"].size
+        if self.problem.body is not None or result.kept is None:
+            return n - 1, result.final
+        j = int(np.argmax(result.records["normal_force"] + np.abs(result.records["tangential_force"])))
+        out_r, _, out_y, _, _ = result.kept
+        return j, replace(result.final, forces=out_r[j], positions=out_y[j], obstacle=result.obstacle[j],
+                          load_factors=result.load_factors[j])
+
+    def write_profile(self, increment: int, cycle: int, step: int, slip: np.ndarray, positions: np.ndarray,
+                      forces: np.ndarray, wear_gap: np.ndarray, status: np.ndarray) -> None:
+        """Append one increment's contact profile (rank 0): the columns of
+        :func:`~dolfinx_fretting.io.profile_fields` (t1 components, and in 3D the t2 ones and the position
+        along t2)."""
+        cs = self.problem.contact.contact_set
+        dim = cs.dim
+        if status is None:
+            status = np.zeros(cs.nc, dtype=np.int8)
+        columns = [cs.abscissa, positions[0::dim], forces[0::dim] / cs.tributary, forces[1::dim] / cs.tributary,
+                   slip[1::dim], positions[1::dim], wear_gap]
+        if dim == 3:
+            columns += [np.einsum("ij,ij->i", cs.coords, cs.frames[:, 2]), forces[2::dim] / cs.tributary,
+                        slip[2::dim], positions[2::dim]]
+        self.tables.profile_block(increment, cycle, step, [*columns, status])
+
+    # Fields ----------------------------------------------------------------------------------------------
+    def write_fields(self, t: float, state) -> None:
+        """Append the displacement, von Mises stress (and equivalent plastic strain) of ``state`` at time ``t``
+        to ``fields.xdmf``. Collective."""
+        if not self.fields_enabled:
+            return
+        from dolfinx import fem
+
+        from . import _dolfinx as dfx
+
+        problem = self.problem
+        if self._functions is None:
+            V = problem.V
+            Q = dfx.scalar_space(V.mesh, "DG", 0)
+            u = fem.Function(V, name="displacement")
+            self._functions = (u, fem.Function(Q, name="von_mises"), fem.Function(Q, name="equivalent_plastic_strain"))
+            self._von_mises_expr = (dfx.expression(self.von_mises(u), dfx.interpolation_points(Q))
+                                    if self.von_mises is not None else None)
+        u, von_mises, plastic_strain = self._functions
+        problem.displacement(state, out=u)
+        functions = [u]
+        if problem.body is not None:
+            plastic = problem.plastic_state(state)
+            n = plastic.cells.size
+            von_mises.x.array[:n] = plastic.cell_average(plastic.von_mises())
+            plastic_strain.x.array[:n] = plastic.cell_average(plastic.p)
+            von_mises.x.scatter_forward()
+            plastic_strain.x.scatter_forward()
+            functions += [von_mises, plastic_strain]
+        elif self._von_mises_expr is not None:
+            von_mises.interpolate(self._von_mises_expr)
+            functions.append(von_mises)
+        if self.shifted_cells is not None:
+            frame = problem.contact.frame
+            dim = problem.contact.dim
+            D = sum(state.obstacle[k] * frame[k] for k in range(dim))
+            nodes = fem.locate_dofs_topological(u.function_space, u.function_space.mesh.topology.dim,
+                                                self.shifted_cells)
+            u.x.array.reshape(-1, u.function_space.dofmap.index_map_bs)[nodes, :D.size] -= D
+        self.tables.fields(t, functions)
+
+    # The end ---------------------------------------------------------------------------------------------
+    def write_worn_profiles(self, state) -> None:
+        """``worn_profiles.csv`` (rank 0): each body's worn depth along the contact.
+
+        Both bodies see the same pressure and slip, so each wears its share ``k_body / k_total`` of the wear
+        gap; the obstacle body's depth is placed at the master point paired with each contact node.
+        """
+        if self.comm.rank != 0:
+            return
+        import csv
+
+        cs = self.problem.contact.contact_set
+        wear = self.problem.wear
+        share = wear.slave_share if wear is not None else 1.0
+        gw = state.wear_gap
+        master_x = cs.master_points[:, 0] if cs.two_body else np.full(cs.nc, np.nan)
+        with open(self.folder / "worn_profiles.csv", "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["position", "wear_gap", "cylinder_wear", "flat_position", "flat_wear"])
+            for values in zip(cs.abscissa, gw, share * gw, master_x, (1 - share) * gw):
+                w.writerow([f"{v:.12g}" for v in values])
+
+    def write_summary(self, summary: dict[str, Any]) -> None:
+        """``summary.json`` (rank 0, atomically; non-finite numbers as null with their keys listed)."""
+        self.tables.summary(summary)
+
+    def checkpoint_info(self) -> dict[str, Any]:
+        """What a checkpoint records to resume the writer (``resume=``): the tables' sizes, the XDMF state."""
+        return {"sizes": self.tables.sizes(), "xdmf_started": self.tables.xdmf_started}
+
+    def flush(self) -> None:
+        self.tables.flush()
+
+    def close(self) -> None:
+        self.tables.close()
+
+    def __enter__(self) -> FrettingWriter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
