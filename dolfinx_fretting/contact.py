@@ -109,7 +109,7 @@ class ContactSet:
 
     @property
     def rigid_modes(self) -> np.ndarray:
-        """(nc*dim, dim) matrix: local relative displacement per unit rigid translation of the body.
+        """Local relative displacement per unit rigid translation of the body, shape (nc*dim, dim).
 
         Its transpose sums local contact forces into the total global force on the body,
         ``F = rigid_modes.T @ r``.
@@ -508,7 +508,6 @@ class Contact:
         contact_set: The :class:`ContactSet` (nodes, frames, gaps, tributary measures, H).
         H_free: H without the columns of fixed dofs (what W is built from).
         mu: Friction coefficient per contact.
-        frame: The obstacle frame.
     """
 
     def __init__(self, V, surface: tuple, obstacle: RigidPlane | ElasticBody, mu: float | np.ndarray,
