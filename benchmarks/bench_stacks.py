@@ -8,7 +8,11 @@ Jobs (each a fresh process of the stack's own CLI or Python):
 * ``W``: factorisation of K and W by the selected inverse on the 206k-dof block and the 32k-dof cylinder
   (``benchmarks/bench_schur.py``'s measurement, selected inverse only);
 * ``np2``: ``hertz`` at h = 5 µm on 2 MPI ranks (Open MPI's ``mpirun`` for Debian's stack, the wheel's own
-  ``mpiexec`` for 0.11).
+  ``mpiexec`` for 0.11);
+* ``plastic``: one elastic–plastic fretting cycle, ``cylinder-flat`` with both bodies von Mises (the paper's
+  Table 2: sigma_y0 = 840 MPa, H = 7230 MPa; ``PLASTIC_SETTINGS``): the preload and 80 increments of Newton
+  with the contact solve inside every iteration, on the 10 µm contact mesh (``benchmarks/results/plastic.md``
+  runs the same scene for 3 and 100 cycles).
 
 Reported: wall time of each process (median over ``--repeat``), the run's own ``wall_time_s``, and the
 largest relative difference between the stacks' summaries (results must agree, see tests/test_stacks.py).
@@ -21,6 +25,7 @@ differ by the mesh, the block's not at all. Usage (from the repository root, any
 from __future__ import annotations
 
 import argparse
+import csv
 import datetime
 import json
 import os
@@ -35,6 +40,10 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 STACKS = {"debian": {"venv": ROOT / ".venv", "launcher": ["mpirun", "--oversubscribe", "-n", "2"]},
           "current": {"venv": ROOT / ".venv-current", "launcher": [str(ROOT / ".venv-current/bin/mpiexec"), "-n", "2"]}}
+
+#: The elastic–plastic job's scene: cylinder-flat (elastic flat by default) made elastic–plastic, one cycle.
+PLASTIC_SETTINGS = ("material.model=elastoplastic", "material.yield_stress=840", "material.hardening_modulus=7230",
+                    "loading.cycles=1", "output.plots=false")
 
 _W_SCRIPT = r"""
 import json, sys, time
@@ -75,6 +84,10 @@ def run_job(stack: str, job: str, cycles: int, work: Path) -> dict:
     if job == "main":
         cmd = [str(venv / "bin/dolfinx-fretting"), "run", "stromberg-block", "--out", str(out), "--quiet",
                "--set", f"loading.cycles={cycles}", "--set", "output.plots=false"]
+    elif job == "plastic":
+        cmd = [str(venv / "bin/dolfinx-fretting"), "run", "cylinder-flat", "--out", str(out), "--quiet"]
+        for setting in PLASTIC_SETTINGS:
+            cmd += ["--set", setting]
     elif job == "np2":
         cmd = [*STACKS[stack]["launcher"], str(venv / "bin/python"), "-m", "mpi4py", "-m", "dolfinx_fretting", "run",
                "hertz", "--out", str(out), "--quiet", "--set", "geometry.contact_mesh_size=0.005",
@@ -91,19 +104,34 @@ def run_job(stack: str, job: str, cycles: int, work: Path) -> dict:
         rec["W"] = json.loads([ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")][-1][7:])
     else:
         rec["summary"] = json.loads((out / "summary.json").read_text())
+    if job == "plastic":  # the Newton loop's work, summed over the increments of history.csv
+        with open(out / "history.csv", newline="") as fh:
+            rows = list(csv.DictReader(fh))
+        rec["newton"] = {key: int(sum(float(r[key]) for r in rows)) for key in ("newton_iterations", "cutbacks")}
     return rec
 
 
 def _max_rel_diff(a: dict, b: dict) -> tuple[float, str]:
     worst, where = 0.0, ""
     for key in ("normal_force", "tangential_force", "max_pressure", "max_wear_depth", "wear_area",
-                "dissipated_energy", "contact_width", "stick_width"):
+                "dissipated_energy", "contact_width", "stick_width", "max_equivalent_plastic_strain"):
         x, y = a.get(key), b.get(key)
         if isinstance(x, (int, float)) and isinstance(y, (int, float)) and max(abs(x), abs(y)) > 0:
             d = abs(x - y) / max(abs(x), abs(y))
             if d >= worst:
                 worst, where = d, key
     return worst, where
+
+
+def _plastic_line(rec: dict) -> str:
+    """What the Newton loop did in the elastic–plastic job (its summary and history.csv) and where it ended."""
+    s = rec["summary"]
+    return (f"{s['dofs']} dofs, {s['contacts']} contacts, {s['increments']} increments, "
+            f"{rec['newton']['newton_iterations']} Newton iterations, {s['tangent_refactorizations']} tangent "
+            f"refactorisations, {s['newton_full_fallbacks']} full-Newton fallbacks, {rec['newton']['cutbacks']} "
+            f"cut-backs; max equivalent plastic strain {s['max_equivalent_plastic_strain']:.6g}, peak pressure "
+            f"{s['max_pressure']:.2f} MPa, max wear depth {s['max_wear_depth']:.6g} mm, run's wall_time_s "
+            f"{s['wall_time_s']:.1f}")
 
 
 def _median(values: list[float]) -> float:
@@ -116,7 +144,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--cycles", type=int, default=9000, help="cycles of the main job")
     ap.add_argument("--repeat", type=int, default=2)
-    ap.add_argument("--jobs", nargs="*", default=["main", "W", "np2"])
+    ap.add_argument("--jobs", nargs="*", default=["main", "W", "np2", "plastic"],
+                    choices=["main", "W", "np2", "plastic"])
     ap.add_argument("--out", type=Path, default=HERE / "results" / "stacks")
     args = ap.parse_args(argv)
     argv_used = sys.argv[1:] if argv is None else argv
@@ -157,8 +186,10 @@ def main(argv=None) -> int:
         else:
             d, key = _max_rel_diff(deb[-1]["summary"], cur[-1]["summary"])
             diff = f"{d:.1e} ({key})"
-            label = (f"main job: stromberg-block, {args.cycles} cycles" if job == "main"
-                     else "hertz h = 5 µm on 2 ranks")
+            label = {"main": f"main job: stromberg-block, {args.cycles} cycles",
+                     "np2": "hertz h = 5 µm on 2 ranks",
+                     "plastic": "one elastic–plastic cycle: cylinder-flat, both bodies von Mises, 10 µm, "
+                                "80 increments"}[job]
         lines.append(f"| {label} | {wd:.1f} | {wc:.1f} | {wc / wd:.2f} | {diff} |")
     if "main" in args.jobs or "np2" in args.jobs:
         lines += ["", "The runs' own `wall_time_s` (from start to end of the scene, excluding the interpreter "
@@ -178,8 +209,13 @@ def main(argv=None) -> int:
                           f"{_median([r['selected_inverse_s'] for r in recs]) * 1e3:.1f}"]
             r0 = results["W"]["debian"][0]["W"][mesh]
             lines.append(f"| {mesh} | {r0['dofs']} | {r0['contacts']} | " + " | ".join(cells) + " |")
-    lines += ["", "The cylinder (hertz) is meshed by each stack's own gmsh (4.8.4 / 4.15), so its results differ "
-              "by the mesh; tests/test_stacks.py compares the stacks on identical meshes (<= 5e-13)."]
+    if "plastic" in args.jobs:
+        lines += ["", "The elastic–plastic cycle in detail (last run of each stack): "
+                  + "; ".join(f"{s}: {_plastic_line(results['plastic'][s][-1])}" for s in STACKS)
+                  + f". Scene settings: `{' '.join('--set ' + x for x in PLASTIC_SETTINGS)}`."]
+    lines += ["", "The cylinders (hertz, cylinder-flat) are meshed by each stack's own gmsh (4.8.4 / 4.15), so "
+              "their results differ by the mesh; tests/test_stacks.py compares the stacks on identical meshes "
+              "(<= 5e-13)."]
     args.out.with_suffix(".md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0
