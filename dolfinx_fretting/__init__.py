@@ -14,7 +14,7 @@ from pathlib import Path
 __version__ = "0.1.0"
 
 #: The modules with numba-compiled functions (the cycle loop calls into the wear and solver modules).
-_COMPILED = ("cycling.py", "local_solvers.py", "materials.py", "plasticity.py", "wear.py")
+_COMPILED = ("cycling.py", "local_solvers.py", "materials.py", "plastic_zone.py", "plasticity.py", "wear.py")
 
 
 def _numba_cache_dir() -> str:

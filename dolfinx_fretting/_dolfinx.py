@@ -32,6 +32,7 @@ from dolfinx import mesh as dmesh  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
 __all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API", "TESTED_VERSIONS", "versions",
+           "basis_gradient_expression", "eval_basis_gradients",
            "element_degree", "element_family", "value_size", "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
            "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh",
            "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec", "write_meshtags"]
@@ -212,6 +213,28 @@ def eval_expression(compiled: fem.Expression, msh, cells: np.ndarray) -> np.ndar
     cells = np.asarray(cells, dtype=np.int32)
     values = compiled.eval(cells) if LEGACY_API else compiled.eval(msh, cells)
     return values.reshape(cells.size, -1)
+
+
+def basis_gradient_expression(V, points: np.ndarray) -> fem.Expression:
+    """A compiled expression of the physical gradients of the *scalar* basis of ``V``'s element (the
+    scalar space of the same family and degree) at reference ``points``; evaluate it with
+    :func:`eval_basis_gradients`. Collective (a function space and a JIT compilation)."""
+    scalar = scalar_space(V.mesh, element_family(V), element_degree(V))
+    return expression(ufl.grad(ufl.TrialFunction(scalar)), points)
+
+
+def eval_basis_gradients(compiled: fem.Expression, msh, cells: np.ndarray) -> np.ndarray:
+    """Values of :func:`basis_gradient_expression` in ``cells``: shape (num_cells * num_points, gdim, num_basis),
+    ``[c * num_points + j, i, a]`` = d phi_a / d x_i at point j of cell c (phi_a in the cell dofmap's order)."""
+    cells = np.asarray(cells, dtype=np.int32)
+    gdim = msh.geometry.dim
+    if LEGACY_API:
+        values = compiled.eval(cells)  # (cell, point x component x basis function)
+        num_basis = compiled.argument_function_space.element.space_dimension
+    else:
+        values = compiled.eval(msh, cells)  # (cell, point, component, basis function)
+        num_basis = values.shape[-1]
+    return values.reshape(-1, gdim, num_basis)
 
 
 # Meshes --------------------------------------------------------------------------------------------------------

@@ -33,6 +33,8 @@ _INT_COLUMNS = frozenset({"increment", "cycle", "step", "node", "state", "n_open
                           "local_iterations", "load_solves", "jump"})
 #: Per-node columns of ``contact_profiles.csv`` after ``position``.
 _PROFILE_VALUES = ("gap", "pressure", "shear", "slip", "relative_tangential", "wear", "state")
+#: The t2 columns of a 3D contact's profiles (besides ``position_2``, the node's position along t2).
+_PROFILE_VALUES_3D = ("shear_2", "slip_2", "relative_tangential_2")
 #: Point attributes of ``contact.xdmf`` (``state``: 0 open, 1 stick, 2 slip).
 XDMF_FIELDS = ("pressure", "shear", "slip", "wear", "gap", "relative_tangential", "state")
 #: Names of the contact state codes.
@@ -134,10 +136,12 @@ class ContactProfiles:
         cycles: Cycle of each kept increment (0: preload or monotonic load), shape (m,).
         steps: Step of each kept increment within its cycle, shape (m,).
         nodes: Column numbers 0..n-1 (the CSV's ``node`` column when the node set never changed), shape (n,).
-        position: Node positions along the surface (mm), ascending, shape (n,): the union over the kept
-            increments.
+        position: Node positions along the surface (mm; in 3D along t1), ascending, shape (n,): the union
+            over the kept increments.
         values: ``gap``, ``pressure``, ``shear``, ``slip``, ``relative_tangential``, ``wear`` (float) and
-            ``state`` (int: 0 open, 1 stick, 2 slip), each of shape (m, n), row i for ``increments[i]``.
+            ``state`` (int: 0 open, 1 stick, 2 slip), each of shape (m, n), row i for ``increments[i]``; in 3D
+            also ``shear_2``, ``slip_2``, ``relative_tangential_2`` (the t2 components).
+        position_2: 3D: node positions along t2 (nodes ordered by (position, position_2)); None in 2D.
     """
 
     increments: np.ndarray
@@ -146,6 +150,12 @@ class ContactProfiles:
     nodes: np.ndarray
     position: np.ndarray
     values: dict[str, np.ndarray] = field(default_factory=dict)
+    position_2: np.ndarray | None = None
+
+    @property
+    def dim(self) -> int:
+        """2 or 3 (the contact's dimension)."""
+        return 2 if self.position_2 is None else 3
 
     def index(self, increment: int) -> int | None:
         """Row of ``increment`` in the arrays, or ``None`` when it was not kept."""
@@ -159,9 +169,23 @@ class ContactProfiles:
         rows = np.flatnonzero(self.cycles == cycle)
         return rows[np.argsort(self.steps[rows], kind="stable")]
 
-    def nearest_node(self, position: float) -> int:
-        """Column of the contact node nearest to ``position`` (mm along the surface)."""
-        return int(np.argmin(np.abs(self.position - position)))
+    def section(self, position_2: float = 0.0) -> ContactProfiles:
+        """A 3D contact's nodes on the line along t1 nearest to ``position_2`` (a profile along the sliding
+        direction), as 2D profiles; 2D profiles are returned as they are."""
+        if self.position_2 is None:
+            return self
+        levels = np.unique(self.position_2)
+        level = levels[np.argmin(np.abs(levels - position_2))]
+        cols = np.flatnonzero(self.position_2 == level)
+        return ContactProfiles(self.increments, self.cycles, self.steps, np.arange(cols.size), self.position[cols],
+                               {k: v[:, cols] for k, v in self.values.items()})
+
+    def nearest_node(self, position: float, position_2: float = 0.0) -> int:
+        """Column of the contact node nearest to ``position`` (mm along the surface; in 3D the point
+        (``position``, ``position_2``) of the contact plane)."""
+        if self.position_2 is None:
+            return int(np.argmin(np.abs(self.position - position)))
+        return int(np.argmin(np.hypot(self.position - position, self.position_2 - position_2)))
 
 
 def read_profiles(path: str | Path) -> ContactProfiles | None:
@@ -182,7 +206,8 @@ def read_profiles(path: str | Path) -> ContactProfiles | None:
     if path.is_dir():
         path = path / "contact_profiles.csv"
     table = read_table(path)
-    need = ("increment", "cycle", "step", "node", "position", *_PROFILE_VALUES)
+    need = ("increment", "cycle", "step", "node", "position", *_PROFILE_VALUES,
+            *(_PROFILE_VALUES_3D if "position_2" in table else ()))
     if not table or any(k not in table for k in need) or table["increment"].size == 0:
         return None
     ok = np.isfinite(np.asarray(table["increment"], dtype=float)) & np.isfinite(
@@ -200,6 +225,9 @@ def read_profiles(path: str | Path) -> ContactProfiles | None:
     # interrupted run): kept only if it has as many rows as the one before.
     node_sorted = node[order]
     pos_all = np.asarray(table["position"][ok], dtype=float)[order]
+    three_d = "position_2" in table
+    if three_d:  # nodes keyed by their point of the contact plane: complex numbers sort by (real, imaginary)
+        pos_all = pos_all + 1j * np.asarray(table["position_2"][ok], dtype=float)[order]
     keep: list[int] = []
     for k in range(uniq.size):
         nodes_k = node_sorted[start[k]:start[k] + count[k]]
@@ -226,7 +254,7 @@ def read_profiles(path: str | Path) -> ContactProfiles | None:
         out[present] = data[rows[present]]
         return out
 
-    values = {name: col(name) for name in _PROFILE_VALUES}
+    values = {name: col(name) for name in _PROFILE_VALUES + (_PROFILE_VALUES_3D if three_d else ())}
     state = values["state"]
     values["state"] = np.where(np.isfinite(state), state, -1).astype(np.int64)
     first_rows = order[start[keep_arr]]
@@ -235,8 +263,9 @@ def read_profiles(path: str | Path) -> ContactProfiles | None:
         cycles=np.asarray(np.asarray(table["cycle"])[ok][first_rows], dtype=np.int64),
         steps=np.asarray(np.asarray(table["step"])[ok][first_rows], dtype=np.int64),
         nodes=np.arange(n, dtype=np.int64),
-        position=union,
+        position=union.real.copy() if three_d else union,
         values=values,
+        position_2=union.imag.copy() if three_d else None,
     )
 
 
@@ -255,7 +284,9 @@ def write_contact_xdmf(out_dir: str | Path) -> Path | None:
     ``/Mesh/contact/topology`` the polyline joining the nodes in order of position ((n - 1, 2), or
     (1, 1) polyvertex for a single node), ``/Mesh/contact/node`` the CSV node numbers, ``/Data/increment``,
     ``/Data/cycle``, ``/Data/step`` (m,) and ``/Data/<field>/<increment>`` (n,) for each field of
-    :data:`XDMF_FIELDS`, in node order (the order of the CSV). Both files are written under temporary
+    :data:`XDMF_FIELDS`, in node order (the order of the CSV). A 3D contact is the surface of its nodes in
+    the contact plane: coordinates ``(position, position_2, 0)`` (along t1, t2), triangles of their Delaunay
+    triangulation, and the t2 components as ``shear_2``, ``slip_2``, ``relative_tangential_2``. Both files are written under temporary
     names and renamed, so an existing pair is replaced only by a complete one. Plain Python; call on
     one rank only.
 
@@ -277,8 +308,17 @@ def write_contact_xdmf(out_dir: str | Path) -> Path | None:
 
     geometry = np.zeros((n, 3))
     geometry[:, 0] = prof.position
+    fields = XDMF_FIELDS
+    if prof.position_2 is not None:
+        geometry[:, 1] = prof.position_2
+        fields = XDMF_FIELDS + _PROFILE_VALUES_3D
     by_position = np.argsort(prof.position, kind="stable")
-    if n >= 2:
+    if prof.position_2 is not None and n >= 3:
+        from scipy.spatial import Delaunay
+
+        topology = Delaunay(geometry[:, :2]).simplices.astype(np.int64)
+        topo_type, per_element = "Triangle", 3
+    elif n >= 2:
         topology = np.column_stack([by_position[:-1], by_position[1:]]).astype(np.int64)
         topo_type, per_element = "Polyline", 2
     else:
@@ -294,7 +334,7 @@ def write_contact_xdmf(out_dir: str | Path) -> Path | None:
         data.create_dataset("increment", data=prof.increments)
         data.create_dataset("cycle", data=prof.cycles)
         data.create_dataset("step", data=prof.steps)
-        for name in XDMF_FIELDS:
+        for name in fields:
             group = data.create_group(name)
             arr = prof.values[name]
             for i, inc in enumerate(prof.increments):
@@ -316,7 +356,7 @@ def write_contact_xdmf(out_dir: str | Path) -> Path | None:
         ET.SubElement(grid, "Time", {"Value": str(int(inc))})
         ET.SubElement(grid, "Information", {"Name": "cycle", "Value": str(int(prof.cycles[i]))})
         ET.SubElement(grid, "Information", {"Name": "step", "Value": str(int(prof.steps[i]))})
-        for name in XDMF_FIELDS:
+        for name in fields:
             att = ET.SubElement(grid, "Attribute",
                                 {"Name": name, "AttributeType": "Scalar", "Center": "Node"})
             _data_item(att, h5_name, f"/Data/{name}/{int(inc)}", (n,),

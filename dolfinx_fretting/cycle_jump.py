@@ -39,6 +39,18 @@ moves monotonically between the two ends, the Euler step misses at most ``(dN - 
 over the ``dN - 1`` extrapolated cycles (twice the trapezoidal correction, which is the exact error for a
 rate linear in N). Its maximum over the contacts is the jump's error estimate; their sum over the jumps
 bounds the accumulated error in the wear gap when errors do not cancel.
+
+
+**Elastic–plastic bodies** (functions for the runner, not yet called by it: see
+:func:`analyse_plastic_cycle`). A jump extrapolates the plastic state as it does the wear gap: the
+displacement, plastic strain and accumulated plastic strain at the end of the simulated cycle plus dN - 1
+times the cycle's change, with the same error estimate on their rates. Three regimes, by the cycle's largest
+plastic flow (increase of the accumulated plastic strain p) and net plastic strain (change of eps_p over the
+cycle) against a tolerance: *elastic shakedown* (no flow: nothing to extrapolate, and the elastic W of the
+stability limit is the body's exact compliance), *plastic shakedown* (flow, but a closed loop of eps_p: p
+grows, and with it the yield stress under hardening) and *ratcheting* (eps_p drifts every cycle). The jump
+is bounded so that the extrapolated net plastic strain stays within a fraction of the yield strain and the
+hardening within the same fraction of the yield stress (:func:`plastic_jump_limit`).
 """
 
 from __future__ import annotations
@@ -48,7 +60,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CycleAnalysis", "analyse_cycle", "choose_jump", "jump_error", "hertz_jump_limit"]
+__all__ = ["CycleAnalysis", "PlasticCycle", "analyse_cycle", "analyse_plastic_cycle", "choose_jump",
+           "extrapolate", "jump_error", "hertz_jump_limit", "plastic_jump_error", "plastic_jump_limit"]
 
 _OPEN = 0
 _SLIP = 2
@@ -134,7 +147,8 @@ def analyse_cycle(W: np.ndarray, dim: int, tributary: np.ndarray, states: np.nda
 
 
 def choose_jump(analysis: CycleAnalysis, k: float, element_size: float, wear_fraction: float,
-                pressure_fraction: float, max_jump: int, previous: int, room: int) -> tuple[int, str, int]:
+                pressure_fraction: float, max_jump: int, previous: int, room: int,
+                plastic_limit: float = math.inf) -> tuple[int, str, int]:
     """The jump after a simulated cycle: the largest ``dN`` within every bound (see the module docstring).
 
     Args:
@@ -146,6 +160,7 @@ def choose_jump(analysis: CycleAnalysis, k: float, element_size: float, wear_fra
         max_jump: Upper bound on ``dN``.
         previous: The previous jump (``dN`` may at most double).
         room: Cycles until the next cycle that must be simulated (``dN <= room``).
+        plastic_limit: An elastic–plastic body's bound (:func:`plastic_jump_limit`; inf: none).
 
     Returns:
         ``(dN, bound, free)``: the jump (>= 1), the name of the bound that set it, and the jump the bounds
@@ -160,6 +175,7 @@ def choose_jump(analysis: CycleAnalysis, k: float, element_size: float, wear_fra
         "stability": analysis.monotone_limit(k),
         "growth": 2.0 * max(previous, 1),
         "max_jump": float(max_jump),
+        "plastic": float(plastic_limit),
     }
     free_name = min(bounds, key=bounds.get)
     free = max(1, int(math.floor(bounds[free_name] * (1 + 1e-12))))
@@ -179,3 +195,103 @@ def jump_error(rate_start: np.ndarray, rate_end: np.ndarray, jump: int) -> float
 def hertz_jump_limit(element_size: float, k: float, slip_amplitude: float, E_star: float) -> float:
     """The literature's estimate of the jump past which edge spikes appear, ``0.37 h / (k delta E*)``."""
     return 0.37 * element_size / (k * slip_amplitude * E_star)
+
+
+# Elastic-plastic bodies ----------------------------------------------------------------------------------
+_SQRT_2_3 = math.sqrt(2.0 / 3.0)
+
+
+@dataclass
+class PlasticCycle:
+    """What a simulated cycle did to the plastic state.
+
+    Attributes:
+        flow: Largest increase of the accumulated equivalent plastic strain p over the cycle (every rank's
+            points when analysed with a communicator).
+        net: Largest equivalent net plastic strain of the cycle, ``sqrt(2/3) |eps_p(end) - eps_p(start)|``
+            (Mandel vectors: the tensor norm; a uniaxial plastic strain e gives e).
+        regime: ``"elastic_shakedown"`` (flow <= tol), ``"plastic_shakedown"`` (net <= tol < flow: a closed
+            loop of plastic strain) or ``"ratcheting"`` (net > tol).
+        d_eps_p: This rank's change of eps_p over the cycle per point, (n, 6).
+        d_p: This rank's change of p over the cycle per point, (n,).
+    """
+
+    flow: float
+    net: float
+    regime: str
+    d_eps_p: np.ndarray
+    d_p: np.ndarray
+
+
+def _global_max(value: float, comm) -> float:
+    return float(value if comm is None or comm.size == 1 else comm.allreduce(value, op=_mpi_max()))
+
+
+def _mpi_max():
+    from mpi4py import MPI
+
+    return MPI.MAX
+
+
+def analyse_plastic_cycle(eps_p_start: np.ndarray, p_start: np.ndarray, eps_p_end: np.ndarray,
+                          p_end: np.ndarray, tol: float, comm=None) -> PlasticCycle:
+    """The plastic regime of a simulated cycle from the committed plastic state at its start and its end.
+
+    A runner would call it after each simulated cycle of an elastic–plastic body (with its quadrature-point
+    arrays, e.g. ``problem.plastic_state(state).eps_p``), extrapolate the plastic state over a jump with
+    :func:`extrapolate` (u, eps_p, p; sigma for output), bound the jump with :func:`plastic_jump_limit`
+    (``choose_jump(..., plastic_limit=...)``), add :func:`plastic_jump_error` to the jump's error and write
+    the regime into ``cycles.csv``; collective when ``comm`` has several ranks.
+
+    Args:
+        eps_p_start, p_start: Plastic strain (n, 6) and accumulated plastic strain (n,) at the cycle's start.
+        eps_p_end, p_end: The same at its end.
+        tol: Plastic strain below which a change counts as none (e.g. 1e-3 x the yield strain).
+        comm: Communicator of a distributed state (None: these arrays are all the points).
+
+    Returns:
+        The cycle's :class:`PlasticCycle`.
+    """
+    d_eps_p = np.asarray(eps_p_end, dtype=float) - np.asarray(eps_p_start, dtype=float)
+    d_p = np.asarray(p_end, dtype=float) - np.asarray(p_start, dtype=float)
+    flow = _global_max(float(d_p.max(initial=0.0)), comm)
+    net = _global_max(_SQRT_2_3 * float(np.linalg.norm(d_eps_p, axis=1).max(initial=0.0)), comm)
+    regime = "elastic_shakedown" if flow <= tol else ("plastic_shakedown" if net <= tol else "ratcheting")
+    return PlasticCycle(flow, net, regime, d_eps_p, d_p)
+
+
+def plastic_jump_limit(cycle: PlasticCycle, fraction: float, yield_stress: float, E: float,
+                       hardening: float) -> float:
+    """Largest jump whose extrapolated plastic state moves by at most ``fraction`` of the yield point: net
+    plastic strain ``dN net <= fraction sigma_y / E`` and hardening ``dN H flow <= fraction sigma_y``
+    (inf in elastic shakedown).
+
+    Args:
+        cycle: The simulated cycle's :class:`PlasticCycle`.
+        fraction: The allowed move per jump, as a fraction of the yield strain and stress.
+        yield_stress, E, hardening: sigma_y0, Young's modulus, the linear isotropic hardening modulus H.
+    """
+    if cycle.regime == "elastic_shakedown":
+        return math.inf
+    strain = fraction * yield_stress / E / cycle.net if cycle.net > 0 else math.inf
+    harden = fraction * yield_stress / (hardening * cycle.flow) if hardening * cycle.flow > 0 else math.inf
+    return min(strain, harden)
+
+
+def extrapolate(start: np.ndarray, end: np.ndarray, jump: int) -> np.ndarray:
+    """A field at the end of the simulated cycle plus ``jump - 1`` times its change over it: the explicit Euler
+    step of a jump of ``jump`` cycles (the simulated cycle is the first of them), as for the wear gap."""
+    end = np.asarray(end, dtype=float)
+    return end + (jump - 1) * (end - np.asarray(start, dtype=float))
+
+
+def plastic_jump_error(previous: PlasticCycle, current: PlasticCycle, jump: int, comm=None) -> tuple[float, float]:
+    """Error bounds of a jump for rates monotone over it, as :func:`jump_error` for the wear gap: the
+    equivalent plastic strain ``(jump - 1) max sqrt(2/3) |d_eps_p(end) - d_eps_p(start)|`` and the accumulated
+    plastic strain ``(jump - 1) max |d_p(end) - d_p(start)|`` (``previous``: the cycle simulated before the
+    jump, ``current``: the one after it)."""
+    if jump <= 1:
+        return 0.0, 0.0
+    de = _SQRT_2_3 * float(np.linalg.norm(current.d_eps_p - previous.d_eps_p, axis=1).max(initial=0.0))
+    dp = float(np.abs(current.d_p - previous.d_p).max(initial=0.0))
+    return (jump - 1) * _global_max(de, comm), (jump - 1) * _global_max(dp, comm)

@@ -22,7 +22,8 @@ from mpi4py import MPI
 from .problem import INCREMENT_COLUMNS
 
 __all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys", "TableError", "HISTORY_FIELDS",
-           "CYCLE_FIELDS", "PROFILE_FIELDS", "plot_profiles", "RUN_DESCRIPTION", "read_run_description"]
+           "CYCLE_FIELDS", "PROFILE_FIELDS", "PROFILE_FIELDS_3D", "profile_fields", "plot_profiles",
+           "RUN_DESCRIPTION", "read_run_description"]
 
 #: The machine-readable description of a run in its output folder: what was modelled (obstacle, bodies,
 #: wear shares, dimension) and the columns of every table, for the readers (pictures, plots, compare).
@@ -39,7 +40,18 @@ CYCLE_FIELDS = ["cycle", "equivalent_cycles", "jump", "jump_bound", "jump_stabil
 #: Columns of ``contact_profiles.csv`` (one row per contact node and kept increment).
 PROFILE_FIELDS = ["increment", "cycle", "step", "node", "position", "gap", "pressure", "shear", "slip",
                   "relative_tangential", "wear", "state"]
+#: The columns a 3D contact adds to ``contact_profiles.csv``: the position along t2 and the t2 components (the
+#: 2D columns ``position``, ``shear``, ``slip``, ``relative_tangential`` hold the t1 components).
+PROFILE_FIELDS_3D = ("position_2", "shear_2", "slip_2", "relative_tangential_2")
 _TABLES = {"history": HISTORY_FIELDS, "cycles": CYCLE_FIELDS, "contact_profiles": PROFILE_FIELDS}
+
+
+def profile_fields(dim: int) -> list[str]:
+    """Columns of ``contact_profiles.csv`` for a contact of dimension ``dim``: :data:`PROFILE_FIELDS` in 2D; in
+    3D the t2 columns :data:`PROFILE_FIELDS_3D` before ``state`` (the integer column stays last)."""
+    if dim == 2:
+        return list(PROFILE_FIELDS)
+    return [*PROFILE_FIELDS[:-1], *PROFILE_FIELDS_3D, PROFILE_FIELDS[-1]]
 
 
 def read_run_description(folder: str | Path) -> dict[str, Any] | None:
@@ -138,10 +150,11 @@ class ResultWriter:
         resume_sizes: Byte sizes of the tables at the checkpoint to resume from: the tables are
             truncated to them and appended to. ``None``: new tables.
         xdmf_started: The XDMF file already holds the mesh (resume).
+        dim: Dimension of the contact (the columns of ``contact_profiles.csv``, :func:`profile_fields`).
     """
 
     def __init__(self, out_dir: str | Path, comm: MPI.Comm, profiles: bool = True,
-                 resume_sizes: dict[str, int] | None = None, xdmf_started: bool = False):
+                 resume_sizes: dict[str, int] | None = None, xdmf_started: bool = False, dim: int = 2):
         self.out = Path(out_dir)
         self.comm = comm
         self.rank0 = comm.rank == 0
@@ -149,6 +162,7 @@ class ResultWriter:
             self.out.mkdir(parents=True, exist_ok=True)
         comm.barrier()
         self._files: dict[str, Any] = {}
+        self._columns = {**_TABLES, "contact_profiles": profile_fields(dim)}
         names = ["history", "cycles"] + (["contact_profiles"] if profiles else [])
         # A table shorter than the checkpoint records (or missing) has lost rows: truncate() would extend it
         # with NUL bytes (or a new table would start without them). Checked on rank 0, raised on every rank.
@@ -170,7 +184,7 @@ class ResultWriter:
                     f.seek(resume_sizes[name])
                 else:
                     f = open(path, "w")
-                    f.write(",".join(_TABLES[name]) + "\n")
+                    f.write(",".join(self._columns[name]) + "\n")
                 self._files[name] = f
         self._xdmf_path = self.out / "fields.xdmf"
         self._xdmf_started = xdmf_started
@@ -183,7 +197,7 @@ class ResultWriter:
     def rows(self, name: str, rows: list[dict[str, Any]]) -> None:
         """Append rows (dicts keyed by the table's columns) to ``name`` (``history``, ``cycles``)."""
         if name in self._files:
-            cols = _TABLES[name]
+            cols = self._columns[name]
             self._write(name, [",".join(_fmt(r[c]) for c in cols) for r in rows])
 
     def history_block(self, head: list[tuple], table: np.ndarray, stage: str) -> None:
@@ -195,7 +209,7 @@ class ResultWriter:
         self._write("history", [fmt % (*h, *row) for h, row in zip(head, table.tolist())])
 
     def profile_block(self, increment: int, cycle: int, step: int, columns: list[np.ndarray]) -> None:
-        """Append one increment's contact profile; ``columns`` follow :data:`PROFILE_FIELDS` from ``position``."""
+        """Append one increment's contact profile; ``columns`` follow :func:`profile_fields` from ``position``."""
         if "contact_profiles" not in self._files:
             return
         n = columns[0].size

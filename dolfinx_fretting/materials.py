@@ -197,7 +197,9 @@ def _radial_return(E, nu, sy0, H, eps, eps_p_old, p_old, sigma, eps_p, p, C, yie
         p: (n,) output cumulative plastic strains.
         C: (n, 6, 6) output consistent tangents; ignored (may be (0, 6, 6)) if not want_tangent.
         yielded: (n,) bool output, True where the step was plastic.
-        want_tangent: Whether to fill C.
+        want_tangent: 0 (False): no tangent; 1 (True): C is the consistent tangent; 2: C is the consistent
+            tangent minus the elastic stiffness, computed directly (exactly 0 at an elastic point, and no
+            cancellation where a point yields: what a low-rank update of the elastic stiffness needs).
 
     Each point reads all of its inputs before writing, so ``eps_p`` may be ``eps_p_old`` and ``p`` may be
     ``p_old`` (an in-place commit) without changing the result.
@@ -239,10 +241,12 @@ def _radial_return(E, nu, sy0, H, eps, eps_p_old, p_old, sigma, eps_p, p, C, yie
                 for a in range(6):
                     for b in range(6):
                         C[i, a, b] = 0.0
-                    C[i, a, a] = 2.0 * G
-                for a in range(3):
-                    for b in range(3):
-                        C[i, a, b] += K - 2.0 * G / 3.0
+                if want_tangent != 2:
+                    for a in range(6):
+                        C[i, a, a] = 2.0 * G
+                    for a in range(3):
+                        for b in range(3):
+                            C[i, a, b] += K - 2.0 * G / 3.0
         else:
             yielded[i] = True
             dp = f_tr / (3.0 * G + H)
@@ -256,8 +260,10 @@ def _radial_return(E, nu, sy0, H, eps, eps_p_old, p_old, sigma, eps_p, p, C, yie
             p[i] = pi + dp
             if want_tangent:
                 # de Souza Neto et al. eq. 7.120:
-                # C = K 1(x)1 + 2G scale I_dev + 6G^2 (dp/q_tr - 1/(3G+H)) n(x)n,  n = s_tr/|s_tr|.
-                g2 = 2.0 * G * scale
+                # C = K 1(x)1 + 2G scale I_dev + 6G^2 (dp/q_tr - 1/(3G+H)) n(x)n,  n = s_tr/|s_tr|;
+                # minus C_e = K 1(x)1 + 2G I_dev: 2G (scale - 1) I_dev + the same n(x)n term.
+                g2 = 2.0 * G * (scale - 1.0) if want_tangent == 2 else 2.0 * G * scale
+                bulk = 0.0 if want_tangent == 2 else K
                 cn = 6.0 * G * G * (dp / q_tr - 1.0 / (3.0 * G + H)) / (snorm * snorm)
                 for a in range(6):
                     for b in range(6):
@@ -265,7 +271,7 @@ def _radial_return(E, nu, sy0, H, eps, eps_p_old, p_old, sigma, eps_p, p, C, yie
                     C[i, a, a] += g2
                 for a in range(3):
                     for b in range(3):
-                        C[i, a, b] += K - g2 / 3.0
+                        C[i, a, b] += bulk - g2 / 3.0
 
 
 #: Public name of the numba kernel ``_radial_return``, for callers that preallocate outputs.
@@ -321,5 +327,5 @@ def return_mapping(
     C = np.empty((n if tangent else 0, 6, 6))
     yielded = np.empty(n, dtype=np.bool_)
     _radial_return(float(law.E), float(law.nu), float(law.sigma_y0), float(law.H), eps, eps_p_old, p_old,
-                   sigma, eps_p, p, C, yielded, bool(tangent))
+                   sigma, eps_p, p, C, yielded, int(bool(tangent)))
     return sigma, eps_p, p, (C if tangent else None), yielded

@@ -34,7 +34,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS, RUN_DESCRIPTION, ResultWriter, write_json_atomic
+from .io import CYCLE_FIELDS, HISTORY_FIELDS, RUN_DESCRIPTION, ResultWriter, profile_fields, write_json_atomic
 from .problem import INCREMENT_COLUMNS
 
 __all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT"]
@@ -148,7 +148,7 @@ class RunDescription:
                 "slave_wear_share": self.slave_wear_share,
                 "units": {"length": "mm", "force": "N/mm" if self.dim == 2 else "N", "stress": "MPa"},
                 "tables": {"history.csv": HISTORY_FIELDS, "cycles.csv": CYCLE_FIELDS,
-                           "contact_profiles.csv": PROFILE_FIELDS},
+                           "contact_profiles.csv": profile_fields(self.dim)},
                 "run": {k: data[k] for k in ("cycles", "preload_increments", "increments_per_cycle",
                                              "tangential_control", "tangential_amplitude", "pressure_face",
                                              "wear_acceleration", "hertz", "track_positions", "loop_cycles")}}
@@ -247,7 +247,7 @@ class FrettingWriter:
         self._pressure_index = names.index(pressure_load) if pressure_load in names else None
         resume = resume or {}
         self.tables = ResultWriter(self.folder, self.comm, profiles=profiles, resume_sizes=resume.get("sizes"),
-                                   xdmf_started=bool(resume.get("xdmf_started", False)))
+                                   xdmf_started=bool(resume.get("xdmf_started", False)), dim=problem.contact.dim)
         self._functions = None
         if self.comm.rank == 0:
             write_json_atomic(self.folder / RUN_DESCRIPTION, self.description.to_json())
@@ -354,14 +354,18 @@ class FrettingWriter:
     def write_profile(self, increment: int, cycle: int, step: int, slip: np.ndarray, positions: np.ndarray,
                       forces: np.ndarray, wear_gap: np.ndarray, status: np.ndarray) -> None:
         """Append one increment's contact profile (rank 0): the columns of
-        :data:`~dolfinx_fretting.io.PROFILE_FIELDS`, the tangential ones along t1."""
+        :func:`~dolfinx_fretting.io.profile_fields` (t1 components, and in 3D the t2 ones and the position
+        along t2)."""
         cs = self.problem.contact.contact_set
         dim = cs.dim
         if status is None:
             status = np.zeros(cs.nc, dtype=np.int8)
-        self.tables.profile_block(increment, cycle, step, [
-            cs.abscissa, positions[0::dim], forces[0::dim] / cs.tributary, forces[1::dim] / cs.tributary,
-            slip[1::dim], positions[1::dim], wear_gap, status])
+        columns = [cs.abscissa, positions[0::dim], forces[0::dim] / cs.tributary, forces[1::dim] / cs.tributary,
+                   slip[1::dim], positions[1::dim], wear_gap]
+        if dim == 3:
+            columns += [np.einsum("ij,ij->i", cs.coords, cs.frames[:, 2]), forces[2::dim] / cs.tributary,
+                        slip[2::dim], positions[2::dim]]
+        self.tables.profile_block(increment, cycle, step, [*columns, status])
 
     # Fields ----------------------------------------------------------------------------------------------
     def write_fields(self, t: float, state) -> None:

@@ -10,6 +10,10 @@ Pictures (all in the output folder):
 
 * ``profiles.png``: contact pressure and shear at the end of the preload and at the last increment
   (with the frictionless Hertz pressure for a half-cylinder).
+* 3D contacts: ``contact_maps.png``, maps over the contact plane of the pressure, the shear and slip
+  magnitudes, the contact state and the wear depth at the end of the preload and at the last kept increment;
+  the other pictures show the profiles along the sliding direction through the line of nodes nearest to
+  t2 = 0 (the plane of symmetry of a half model).
 * cyclic runs only:
 
   - ``wear_first_cycle.png`` (paper Fig. 6): wear gap and contact pressure along the surface at the
@@ -496,6 +500,72 @@ def plot_wear_growth(path: Path, run: RunDescription, cycles: dict[str, np.ndarr
     return _save(fig, path)
 
 
+#: The fields of ``contact_maps.png``: (name, quantity: "stress" in MPa, "length" in mm, or "state"; value of a
+#: row of the profiles).
+_MAP_FIELDS = (
+    ("pressure", "stress", lambda v, r: v["pressure"][r]),
+    ("|shear|", "stress", lambda v, r: np.hypot(v["shear"][r], v["shear_2"][r])),
+    ("|slip increment|", "length", lambda v, r: np.hypot(v["slip"][r], v["slip_2"][r])),
+    ("state", "state", lambda v, r: v["state"][r]),
+    ("wear depth", "length", lambda v, r: v["wear"][r]),
+)
+
+
+def plot_contact_maps(path: Path, run: RunDescription, prof: ContactProfiles) -> Path | None:
+    """Maps over the contact plane (t1, t2) of a 3D contact: pressure, shear and slip magnitudes, state and wear
+    depth at the end of the preload and at the last kept increment (one row each).
+
+    Args:
+        path: PNG file.
+        run: The run's description (``run.json``).
+        prof: Contact profiles of a 3D contact (``prof.position_2`` set).
+
+    Returns:
+        ``path``, or ``None`` for a 2D contact or fewer than three nodes.
+    """
+    import matplotlib.tri as mtri
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    if prof.position_2 is None or prof.position.size < 3:
+        return None
+    # the end of the preload (a monotonic run's rows are all of cycle 0: the preload is its first increments)
+    pre = prof.index(run.preload_increments) if run.preload_increments else _preload_row(prof)
+    rows = list(dict.fromkeys([r for r in (pre, prof.increments.size - 1) if r is not None]))
+    tri = mtri.Triangulation(prof.position, prof.position_2)
+    height = 3.1 * len(rows) + 0.7
+    fig = _figure((3.9 * len(_MAP_FIELDS), height))
+    axes = np.atleast_2d(fig.subplots(len(rows), len(_MAP_FIELDS), gridspec_kw=dict(
+        left=0.045, right=0.975, bottom=0.45 / height, top=1 - 0.6 / height, wspace=0.55, hspace=0.35)))
+    states = ListedColormap([STATE_COLORS[k] for k in (0, 1, 2)])
+    for i, r in enumerate(rows):
+        for j, (name, quantity, value) in enumerate(_MAP_FIELDS):
+            ax = axes[i, j]
+            data = np.nan_to_num(np.asarray(value(prof.values, r), dtype=float))
+            if quantity == "state":
+                # a state is a node's, not an area's: one dot per node (colouring triangles would average codes)
+                art = ax.scatter(prof.position, prof.position_2, c=data, s=max(4.0, 3000.0 / data.size),
+                                 cmap=states, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5], 3), linewidths=0)
+                bar = fig.colorbar(art, ax=ax, ticks=[0, 1, 2], fraction=0.046)
+                bar.ax.set_yticklabels([STATE_NAMES[k] for k in (0, 1, 2)])
+                title = name
+            else:
+                f, unit = _length_unit(data) if quantity == "length" else (1.0, "MPa")
+                art = ax.tripcolor(tri, data * f, shading="gouraud", cmap="viridis")
+                fig.colorbar(art, ax=ax, fraction=0.046)
+                title = f"{name} ({unit})"
+            ax.set_aspect("equal")
+            ax.set_title(title, fontsize=9)
+            ax.tick_params(labelsize=7)
+            if j == 0:
+                inc = int(prof.increments[r])
+                label = f"end of preload (inc {inc})" if r == pre else f"increment {inc}"
+                ax.set_ylabel(f"{label}\nt2 (mm)", fontsize=8)
+            if i == len(rows) - 1:
+                ax.set_xlabel("t1 (mm)", fontsize=8)
+    fig.suptitle(f"{run.name}: the contact plane (t1 the first tangent, t2 the second)")
+    return _save(fig, path)
+
+
 def _plot_profiles(out: Path, run: RunDescription, prof: ContactProfiles, hist: _History) -> Path | None:
     """``profiles.png``: pressure and shear at the end of the preload and at the last kept increment."""
     from .analytic import hertz_pressure
@@ -565,6 +635,10 @@ def plot_run(out: Path, run: RunDescription | None = None) -> list[Path]:
                       RuntimeWarning, stacklevel=2)
         return written
 
+    if prof is not None and prof.dim == 3:
+        full = prof
+        attempt("contact_maps.png", lambda: plot_contact_maps(out / "contact_maps.png", run, full))
+        prof = prof.section(0.0)
     if prof is not None:
         attempt("profiles.png", lambda: _plot_profiles(out, run, prof, hist))
     if run.cycles > 0:

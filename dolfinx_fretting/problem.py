@@ -456,6 +456,12 @@ class FrettingProblem:
             self.K.assemble()
             self._own_K = True
         self.all_bcs = all_bcs
+        base = self._dirichlet_vector(self.bcs) if self._form is not None else None
+        if base is not None and plasticity is not None:
+            base.destroy()
+            raise ValueError("FrettingProblem: non-zero Dirichlet values in bcs are not supported with plasticity "
+                             "(the Newton loop holds the Dirichlet dofs at zero); give the motion to the obstacle "
+                             "(normal=, tangential=) or apply a load instead")
         self.timings["assemble_s"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         self.delassus = DelassusOperator(self.K, self.comm, method=delassus_method,
@@ -466,7 +472,6 @@ class FrettingProblem:
         #: Names of the load vectors, in the order of :attr:`ContactState.load_factors`: ``"dirichlet
         #: values"`` first if ``bcs`` prescribe non-zero values, then the keys of ``loads``, ``prescribed``.
         self.load_names: list[str] = []
-        base = self._dirichlet_vector(self.bcs) if self._form is not None else None
         if base is not None:
             self._add_vector("dirichlet values", base)
         for name, form in loads.items():
@@ -763,20 +768,7 @@ class FrettingProblem:
 
         body = self.body
         self._load_plastic(state.plastic)
-        active = [i for i in range(len(self.load_names)) if factors[i] != 0.0]
-        if len(active) <= 1:
-            vec = self._vectors[active[0]] if active else self._single_load_vector()
-            if vec is not body.face_load:
-                body.face_load = vec
-                body.__dict__.pop("_fnorm", None)  # its cached norm is the force scale of the Newton test
-            scale = factors[active[0]] if active else 0.0
-        else:
-            combined = self._vectors[active[0]].copy()
-            combined.scale(factors[active[0]])
-            for i in active[1:]:
-                combined.axpy(factors[i], self._vectors[i])
-            body.face_load, scale = combined, 1.0
-            body.__dict__.pop("_fnorm", None)
+        scale = body.set_loads([(self._vectors[i], factors[i]) for i in range(len(self.load_names))])
         warm = [state.forces]
         total = {"iterations": 0, "solves": 0}
 
@@ -802,11 +794,6 @@ class FrettingProblem:
                 info = dict(info, full_newton_fallback=1)
         except (NewtonError, ConvergenceError) as exc:
             raise ConvergenceError(str(exc)) from None
-        finally:
-            if len(active) > 1:
-                body.face_load.destroy()
-                body.face_load = None
-                body.__dict__.pop("_fnorm", None)
         st = body.state
         history = PlasticHistory(body._trial.x.array.copy(), st.trial_sigma.copy(), st.trial_eps_p.copy(),
                                  st.trial_p.copy())

@@ -515,9 +515,12 @@ class SolverSettings(_Section):
     #: 2D compiled loop: first try the previous cycle's contact pattern at each increment (a cached LU
     #: solve, accepted only if it meets ``local_tol``), then Uzawa sweeps if it does not.
     pattern_reuse: bool = True
-    #: Elastic-plastic bodies: the Newton iteration matrix, ``"elastic"`` (the factorised elastic K and its
-    #: W throughout: no refactorisation), ``"consistent"`` (tangent refactorised, W rebuilt every iteration)
-    #: or ``"adaptive"`` (the last factorised matrix while it contracts the residual 10x per iteration).
+    #: Elastic-plastic bodies: the Newton iteration matrix, ``"elastic"`` (the elastic K and its W
+    #: throughout), ``"consistent"`` (K in the first iteration, the consistent tangent from the second on:
+    #: full Newton) or ``"adaptive"`` (the same, but the first iteration with the tangent the previous
+    #: increment converged with: where the plastic flow repeats, two iterations instead of five; the
+    #: first iteration is then never accepted on its own). The tangent is applied as a low-rank update of
+    #: the elastic K on the plastic zone (plasticity.ElastoplasticBody; benchmarks/results/plastic.md).
     newton_tangent: Literal["elastic", "consistent", "adaptive"] = "adaptive"
     newton_max_iter: int = Field(60, ge=1, le=100_000)
     #: Newton tolerances: out-of-balance force relative to the forces in play (delta_1), last correction

@@ -651,12 +651,12 @@ class _Run:
         window = model.half_width
         growths = self.progress.window_growths
         two_body = cs.two_body
+        newton = body.describe() if body is not None else None
         return {
             "material": ("J2 plasticity: Newton with the contact inside each iteration, tangent "
-                         f"'{sc.solver.newton_tangent}', {body.refactorizations} tangent refactorisations"
+                         f"'{sc.solver.newton_tangent}', {newton['iteration']}"
                          if body is not None else "linear elastic: no Newton loop, no plastic state"),
-            "delassus": ("W of the elastic K built once" + (", W of the tangent rebuilt at each refactorisation"
-                                                          if body is not None else "")),
+            "delassus": "W of the elastic K built once" + (f"; {newton['delassus']}" if body is not None else ""),
             "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0): "
                         "normal-only contact, the local problem solved on the normal rows of W alone",
             "wear": (f"Archard, k = {sc.wear.k_total} 1/MPa x acceleration {sc.wear.acceleration}"

@@ -41,6 +41,8 @@ ROW_FIELDS = (
     "stick_width",         # span of the sticking contacts (mm)
     "mean_relative_tangential",  # mean total tangential relative position of all contacts (mm)
     "edge_loaded",         # 1 if the first or last contact (the ends of the candidate window) carries load
+    "contact_area",        # sum A of the loaded contacts: length (2D, mm) or area (3D, mm^2)
+    "stick_area",          # sum A of the sticking contacts
 )
 #: Index of each field in the row.
 ROW = {name: i for i, name in enumerate(ROW_FIELDS)}
@@ -80,6 +82,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
     lo_c, hi_c, lo_s, hi_s = np.inf, -np.inf, np.inf, -np.inf
     ysum = 0.0
     nloaded = 0
+    area_loaded = area_stick = 0.0
     for a in range(nc):
         o = a * dim
         ysum += y[o + 1]
@@ -104,6 +107,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
         lo_c = min(lo_c, abscissa[a])
         hi_c = max(hi_c, abscissa[a])
         nloaded += 1
+        area_loaded += tributary[a]
         if rt >= (1.0 - _STATE_TOL) * mu[a] * rn:
             states[a] = _SLIP
             n_slip += 1
@@ -114,6 +118,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
         else:
             states[a] = _STICK
             n_stick += 1
+            area_stick += tributary[a]
             lo_s = min(lo_s, abscissa[a])
             hi_s = max(hi_s, abscissa[a])
     wmax = 0.0
@@ -135,6 +140,8 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
     row[11] = hi_s - lo_s if n_stick > 0 else 0.0
     row[12] = ysum / nc if nc > 0 else 0.0
     row[13] = 1.0 if nc > 0 and (states[0] != _OPEN or states[nc - 1] != _OPEN) else 0.0
+    row[14] = area_loaded
+    row[15] = area_stick
 
 
 def archard_increment(k: float, pressure: np.ndarray, slip_increment: np.ndarray) -> np.ndarray:

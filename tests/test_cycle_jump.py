@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from dolfinx_fretting.contact_output import read_table
-from dolfinx_fretting.cycle_jump import CycleAnalysis, analyse_cycle, choose_jump, hertz_jump_limit, jump_error
+from dolfinx_fretting.cycle_jump import (CycleAnalysis, analyse_cycle, analyse_plastic_cycle, choose_jump, extrapolate,
+                                         hertz_jump_limit, jump_error, plastic_jump_error, plastic_jump_limit)
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, read_checkpoint, run_scene
 
@@ -127,6 +128,72 @@ def test_error_estimate_bounds_a_monotone_rate():
     assert jump_error(r0, r1, dN) == pytest.approx(np.abs(worst - euler).max(), rel=1e-9)
     assert jump_error(rate(N0), rate(N0 + 1), 1) == 0.0
     assert hertz_jump_limit(0.01, 8.5e-9, 0.03, 130000.0) == pytest.approx(0.37 * 0.01 / (8.5e-9 * 0.03 * 130000))
+
+
+def test_plastic_regimes_and_equivalent_strains():
+    """The regimes of a cycle by its plastic flow and net plastic strain. References by hand: a uniaxial
+    plastic strain diag(e, -e/2, -e/2) has the equivalent plastic strain e (von Mises); a pure shear
+    (Mandel sqrt2 g in xy) has 2 g / sqrt3."""
+    n, tol = 5, 1e-6
+    eps0, p0 = np.zeros((n, 6)), np.full(n, 0.02)
+    a = analyse_plastic_cycle(eps0, p0, eps0.copy(), p0.copy(), tol)
+    assert (a.regime, a.flow, a.net) == ("elastic_shakedown", 0.0, 0.0)
+    # A closed loop: eps_p back where it started, p grown by the flow of the loop.
+    p1 = p0 + np.array([0.0, 3e-5, 1e-5, 0.0, 0.0])
+    a = analyse_plastic_cycle(eps0, p0, eps0, p1, tol)
+    assert a.regime == "plastic_shakedown" and a.flow == pytest.approx(3e-5, rel=1e-12) and a.net == 0.0
+    e, g = 4e-6, 2e-6
+    eps1 = eps0.copy()
+    eps1[1, :3] = [e, -e / 2, -e / 2]
+    eps1[3, 5] = np.sqrt(2) * g
+    a = analyse_plastic_cycle(eps0, p0, eps1, p1, tol)
+    assert a.regime == "ratcheting" and a.net == pytest.approx(e, rel=1e-12)
+    eps1[1] = 0.0
+    assert analyse_plastic_cycle(eps0, p0, eps1, p1, tol).net == pytest.approx(2 * g / np.sqrt(3), rel=1e-12)
+
+
+def test_plastic_jump_limit_and_bound_name():
+    """dN net <= f sigma_y / E and dN H flow <= f sigma_y, by hand; no bound in elastic shakedown; the bound
+    takes part in choose_jump under the name 'plastic'."""
+    n = 3
+    eps0, p0 = np.zeros((n, 6)), np.zeros(n)
+    eps1 = eps0.copy()
+    eps1[0, :3] = [3e-6, -1.5e-6, -1.5e-6]                     # net 3e-6
+    p1 = p0 + np.array([3e-5, 0.0, 0.0])                        # flow 3e-5
+    a = analyse_plastic_cycle(eps0, p0, eps1, p1, 1e-6)
+    f, sy, E, H = 0.1, 840.0, 115e3, 7230.0
+    assert plastic_jump_limit(a, f, sy, E, H) == pytest.approx(min(f * sy / E / 3e-6, f * sy / (H * 3e-5)), rel=1e-12)
+    assert plastic_jump_limit(a, f, sy, E, 0.0) == pytest.approx(f * sy / E / 3e-6, rel=1e-12)  # no hardening
+    still = analyse_plastic_cycle(eps0, p0, eps0, p0, 1e-6)
+    assert plastic_jump_limit(still, f, sy, E, H) == np.inf
+    wear = CycleAnalysis(rate=np.array([1e-9]), rho=0.0, pressure_rate=0.0, peak_pressure=100.0)
+    assert choose_jump(wear, 1e-5, 1e-2, 0.1, 1.0, 1000, 1000, 10**6, plastic_limit=37.5) == (37, "plastic", 37)
+
+
+def test_plastic_extrapolation_and_its_error():
+    """A plastic state whose change per cycle is constant is extrapolated exactly and its error estimate is
+    zero; a change that drifts linearly, d(N) = d0 + b N, is missed by (dN - 1) dN b / 2 over the jump, half
+    the estimate (dN - 1) |d(N0 + dN) - d(N0)| (as for the wear gap, test above)."""
+    rng = np.random.default_rng(3)
+    n, dN, N0 = 4, 12, 5
+    base = rng.normal(scale=1e-3, size=(n, 6))
+    d0, b = rng.normal(scale=1e-6, size=(n, 6)), rng.normal(scale=1e-8, size=(n, 6))
+    change = lambda N: d0 + b * N  # noqa: E731 - the net change of eps_p in cycle N
+    state = {N0: base}
+    for N in range(N0, N0 + dN + 1):
+        state[N + 1] = state[N] + change(N)
+    p = lambda N: np.full(n, 0.01 + 1e-5 * N)  # noqa: E731 - a steady flow
+    start = analyse_plastic_cycle(state[N0], p(N0), state[N0 + 1], p(N0 + 1), 1e-9)
+    # The Euler jump from cycle N0 lands dN cycles later: exact for the steady p, off by the drift for eps_p.
+    assert np.allclose(extrapolate(p(N0), p(N0 + 1), dN), p(N0 + dN), rtol=1e-13, atol=0)
+    missed = np.abs(extrapolate(state[N0], state[N0 + 1], dN) - state[N0 + dN])
+    assert missed == pytest.approx(np.abs(b) * (dN - 1) * dN / 2, rel=1e-6)
+    end = analyse_plastic_cycle(state[N0 + dN], p(N0 + dN), state[N0 + dN + 1], p(N0 + dN + 1), 1e-9)
+    err_eps, err_p = plastic_jump_error(start, end, dN)
+    assert err_p == pytest.approx(0.0, abs=1e-18)
+    worst = np.sqrt(2 / 3) * np.linalg.norm(missed, axis=1).max()
+    assert err_eps == pytest.approx(2 * worst, rel=1e-9)  # twice the miss of a linear drift, as for the wear
+    assert plastic_jump_error(start, end, 1) == (0.0, 0.0)
 
 
 # Scene keys ------------------------------------------------------------------------------------------------

@@ -333,6 +333,33 @@ def test_inputs_not_modified_and_kernel_in_place():
         assert np.array_equal(a, b)
 
 
+def test_kernel_tangent_minus_elastic():
+    """``want_tangent = 2`` gives C_T - C_e computed directly (what the low-rank tangent of
+    plasticity.ElastoplasticBody adds to K): the consistent tangent of ``want_tangent = 1`` minus
+    ``elastic_stiffness`` to round-off (a few ulp of |C_e| ~ 3e5 MPa: 1e-12 relative is far above that and
+    far below any wrong term, which would be O(G)), exactly zero at elastic points, and the same stresses
+    and state, bit for bit."""
+    rng = np.random.default_rng(11)
+    n = 60
+    e_y = SY0 / E
+    eps_p_old = dev(rng.normal(scale=e_y, size=(n, 6)))
+    p_old = np.linalg.norm(eps_p_old, axis=1) * math.sqrt(2 / 3) * rng.uniform(1, 2, n)
+    # Half the points well inside the (hardened) yield surface, half well outside.
+    eps = eps_p_old + rng.normal(scale=e_y, size=(n, 6)) * np.repeat([0.2, 3.0], n // 2)[:, None]
+    outs = []
+    for mode in (1, 2):
+        out = [np.empty((n, 6)), np.empty((n, 6)), np.empty(n), np.empty((n, 6, 6)), np.empty(n, bool)]
+        radial_return_kernel(E, NU, SY0, H, eps, eps_p_old, p_old, out[0], out[1], out[2], out[3], out[4], mode)
+        outs.append(out)
+    (sig, ep, p, C, y), (sig2, ep2, p2, dC, y2) = outs
+    assert y.any() and not y.all()
+    for a, b in ((sig, sig2), (ep, ep2), (p, p2), (y, y2)):
+        assert np.array_equal(a, b)
+    Ce = elastic_stiffness(E, NU)
+    assert np.abs(dC - (C - Ce)).max() <= 1e-12 * np.abs(Ce).max()
+    assert np.all(dC[~y] == 0.0) and np.abs(dC[y]).max(axis=(1, 2)).min() > 1e-3 * G
+
+
 def test_elastic_below_yield_is_hooke():
     """Below yield sigma = lambda tr(eps) 1 + 2 mu eps (Hooke, written independently of the kernel's K/G
     split; the two differ only by round-off, ~1e-16 relative)."""

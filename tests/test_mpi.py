@@ -18,7 +18,7 @@ CASES = {
     "stromberg-block": ["geometry.nx=20", "geometry.ny=20", "loading.cycles=3", "output.snapshot_cycles=[1, 3]",
                         "output.history_every=1",
                         "output.plots=false"],
-    # Elastic-plastic: Newton with the contact inside, collective assembly, tangent refactorised.
+    # Elastic-plastic: Newton with the contact inside, collective assembly, the condensed plastic zone.
     "cylinder-flat": ["geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=1",
                       "loading.increments_per_cycle=8", "output.plots=false", "output.history_every=1",
                       "material.model='elastoplastic'", "material.yield_stress=840",

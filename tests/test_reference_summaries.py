@@ -16,6 +16,18 @@ the rate by dN). A change of what is computed moves them past 1e-10: a 10x tight
 previous increment instead of the previous cycle (same fixed point, another path to it) moved them by at most
 8.2e-11, inside the local solver's tolerance, and passes.
 
+The elastic-plastic case (``cylinder-flat-plastic``) also stores the answer of full Newton at the same
+commit (``full_newton``: the case with ``solver.newton_tangent = 'consistent'``, K_T refactorised every
+iteration). Its frozen answer came from the Newton iteration of that time ("adaptive", which accepted
+iterates up to the Newton tolerance delta_1 = 1e-8 from the solution): it lies 7.8e-10 from that commit's own
+full Newton (measured, worst over the stored numbers: wear_gap[25]). The iteration now (condensed on the
+plastic zone, "adaptive" from the last converged tangent) and full Newton by refactorisation today both lie
+within 2.9e-12 of that full-Newton answer (measured). So the run is held to the full-Newton answer at 1e-10
+(rounding, as above), and to the frozen answer at ``REL_NEWTON`` = 1e-8: the agreement with full Newton the
+Newton iteration must keep (issue 14), 13 times the 7.8e-10 measured. (Looser Newton tolerances do not move
+today's answer: delta_1 = 1e-6 or delta_2 = 1e-4 give the same 2.9e-12 from full Newton, measured; the
+quadratic last step lands far inside them.)
+
 Numbers near zero (a stick width in gross slip, the flat's wear with a single k, the tangential force at the
 end of a force-controlled cycle) are compared relative to the natural scale of their quantity, the stored
 value of the key ``SCALE_OF`` names: ``|actual - expected| <= 1e-10 * max(|expected|, scale)``. Integers and
@@ -45,6 +57,8 @@ _spec.loader.exec_module(generator)
 
 #: Rounding-only changes must stay within this (relative to max(|expected|, scale)); see the module docstring.
 REL = 1e-10
+#: An elastic-plastic answer against the frozen one of another Newton iteration (see the module docstring).
+REL_NEWTON = 1e-8
 #: ``cycles.csv`` prints 10 significant digits: one unit in the last is up to 1e-9 relative, so a value read
 #: back from it cannot be held to 1e-10 if the refactor writes it with more digits (or a rounding-level change
 #: tips its last digit). The same energy at full precision is ``dissipated_energy`` (total), held to 1e-10.
@@ -75,11 +89,12 @@ def _deviation(actual: float | None, expected: float | None, scale: float) -> fl
     return abs(actual - expected) / denominator if denominator > 0 else float("inf")
 
 
-def deviations(reference: dict[str, Any], answer: dict[str, Any]) -> list[tuple[str, Any, Any, float, float]]:
+def deviations(reference: dict[str, Any], answer: dict[str, Any], rel: float = REL
+               ) -> list[tuple[str, Any, Any, float, float]]:
     """Each stored number against the new answer: (key, actual, expected, deviation, allowed).
 
     Integers and strings get deviation 0 when equal, inf otherwise; float keys the relative deviation of
-    :func:`_deviation`; the wear-gap profile one row per node (scale: its largest value).
+    :func:`_deviation`, allowed ``rel``; the wear-gap profile one row per node (scale: its largest value).
     """
     expected_values, values = reference["values"], answer["values"]
     rows: list[tuple[str, Any, Any, float, float]] = []
@@ -87,7 +102,7 @@ def deviations(reference: dict[str, Any], answer: dict[str, Any]) -> list[tuple[
         expected, actual = expected_values.get(key, "<absent>"), values.get(key, "<absent>")
         if key in SCALE_OF and not isinstance(expected, str) and not isinstance(actual, str):
             scale = abs(expected_values.get(SCALE_OF[key]) or 0.0)
-            rows.append((key, actual, expected, _deviation(actual, expected, scale), REL))
+            rows.append((key, actual, expected, _deviation(actual, expected, scale), rel))
         else:  # integers, strings, or a key present on one side only
             rows.append((key, actual, expected, 0.0 if actual == expected else float("inf"), 0.0))
     ref_gap, gap = reference["wear_gap"], answer["wear_gap"]
@@ -96,12 +111,12 @@ def deviations(reference: dict[str, Any], answer: dict[str, Any]) -> list[tuple[
                      None if ref_gap is None else len(ref_gap), 0.0 if ref_gap == gap else float("inf"), 0.0))
     else:
         scale = max((abs(v) for v in ref_gap), default=0.0)
-        rows += [(f"wear_gap[{i}]", a, b, _deviation(a, b, scale), REL)
+        rows += [(f"wear_gap[{i}]", a, b, _deviation(a, b, scale), rel)
                  for i, (a, b) in enumerate(zip(gap, ref_gap))]
     expected_energy = reference["last_cycle_dissipated_energy"]
     energy = answer["last_cycle_dissipated_energy"]
     rows.append(("last_cycle_dissipated_energy", energy, expected_energy,
-                 _deviation(energy, expected_energy, 0.0), REL_CYCLES_CSV))
+                 _deviation(energy, expected_energy, 0.0), max(rel, REL_CYCLES_CSV)))
     return rows
 
 
@@ -149,7 +164,12 @@ def _answer(name: str, reference: dict, out: Path) -> dict:
 def test_scene_answer_matches_frozen_reference(name, tmp_path):
     reference = CASES[name]
     answer = _answer(name, reference, tmp_path / name)
-    failed = [row for row in deviations(reference, answer) if not row[3] <= row[4]]
+    if "full_newton" in reference:  # held to full Newton's answer at REL, to the frozen one at REL_NEWTON
+        full = {**reference, **reference["full_newton"]}
+        failed = [(f"{row[0]} (full Newton)", *row[1:]) for row in deviations(full, answer) if not row[3] <= row[4]]
+        failed += [row for row in deviations(reference, answer, REL_NEWTON) if not row[3] <= row[4]]
+    else:
+        failed = [row for row in deviations(reference, answer) if not row[3] <= row[4]]
     if failed:
         environment = generator.environment()
         note = ("" if environment == REFERENCE["environment"] else

@@ -68,8 +68,8 @@ def punch_file(tmp_path_factory):
     return path
 
 
-def api_answer(path: Path, increments: int = 4, window: float = 1.2) -> dict[str, float]:
-    """The user's script: read the mesh, write the model, press by a force through the API."""
+def read_punch(path: Path):
+    """The user's own reading of the .msh file: (mesh, facet tags)."""
     if COMM.rank == 0:
         gmsh.initialize()
         gmsh.option.setNumber("General.Terminal", 0)
@@ -77,6 +77,12 @@ def api_answer(path: Path, increments: int = 4, window: float = 1.2) -> dict[str
     msh, _, facet_tags = dfx.model_to_mesh(gmsh.model, COMM, 0, gdim=2)
     if COMM.rank == 0:
         gmsh.finalize()
+    return msh, facet_tags
+
+
+def api_answer(path: Path, increments: int = 4, window: float = 1.2) -> dict[str, float]:
+    """The user's script: read the mesh, write the model, press by a force through the API."""
+    msh, facet_tags = read_punch(path)
     V = dfx.vector_space(msh, 1)
     lmbda, mu = LinearElastic(E, NU).lame
     eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
@@ -123,13 +129,7 @@ def write_punch_xdmf(msh_path: Path, xdmf_path: Path) -> None:
     """The same punch as a DOLFINx XDMF file with its facet meshtags (markers 1 = face, 2 = top; no names)."""
     from dolfinx.io import XDMFFile
 
-    if COMM.rank == 0:
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.open(str(msh_path))
-    msh, _, facet_tags = dfx.model_to_mesh(gmsh.model, COMM, 0, gdim=2)
-    if COMM.rank == 0:
-        gmsh.finalize()
+    msh, facet_tags = read_punch(msh_path)
     msh.name = "punch"
     facet_tags.name = "punch_facets"
     with XDMFFile(COMM, str(xdmf_path), "w") as xdmf:

@@ -61,6 +61,14 @@ def _is_timing(key: str) -> bool:
 # 4.0e-7 in max_pressure and 1.5e-6 in dissipated_energy (the coarse zone's nodes move).
 RTOL = 1e-8
 
+#: Iteration counts allowed to differ between the stacks, relative, by (case, key). The elastic-plastic run's
+#: Newton iterates (condensed on the plastic zone: dense LU and products of the two numpy/OpenBLAS builds)
+#: differ by rounding, ~1e-13, between the stacks, and the local solver, stopping at its tolerance, takes a
+#: sweep more or less here and there: measured 108382 vs 108380 sweeps (2e-5), with every result within
+#: 7e-14. Its answers are held to RTOL like the others; 1e-4 (11 sweeps) still catches one local solve more or
+#: less (~120 sweeps each here; a Newton iteration makes ~4.5 of them, measured).
+COUNT_RTOL = {("cylinder-flat-plastic", "local_iterations"): 1e-4}
+
 _CHILD = r"""
 import json, sys
 from pathlib import Path
@@ -138,6 +146,8 @@ def test_same_summary_on_both_stacks(runs, case):
             assert isinstance(x, (int, float)) and isinstance(y, (int, float)), key
             assert math.isclose(x, y, rel_tol=RTOL, abs_tol=1e-300), (key, x, y, abs(x - y) / max(abs(x), abs(y)))
             compared += 1
+        elif (case, key) in COUNT_RTOL:
+            assert abs(x - y) <= COUNT_RTOL[case, key] * max(abs(x), abs(y)), (key, x, y)
         else:
             assert x == y, (key, x, y)
     assert compared >= 10

@@ -45,6 +45,8 @@ def test_commit_wears_sliding_contacts_only():
     assert row[ROW["max_pressure"]] == 8.0
     assert (row[ROW["n_open"]], row[ROW["n_stick"]], row[ROW["n_slip"]]) == (1, 1, 1)
     assert row[ROW["contact_width"]] == 1.0 and row[ROW["stick_width"]] == 0.0
+    # loaded and sticking measures: the tributary lengths (0.5 each) of contacts {1, 2} and {1}
+    assert row[ROW["contact_area"]] == 1.0 and row[ROW["stick_area"]] == 0.5
 
 
 def test_commit_without_wear_law_keeps_the_gap():

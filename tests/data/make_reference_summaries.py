@@ -81,6 +81,11 @@ PURPOSE = {
                    "preload, a small given window that grows once",
 }
 
+#: Cases whose answer is also stored as full Newton gives it (``"full_newton"``: these overrides added). The
+#: elastic-plastic answer is defined to the Newton tolerances; the default iteration may stop anywhere inside
+#: them, full Newton's quadratic last steps pin it to rounding (tests/test_reference_summaries.py).
+FULL_NEWTON = {"cylinder-flat-plastic": ["solver.newton_tangent='consistent'"]}
+
 #: Summary keys stored when present (``window_growths`` is stored as its count, ``cycle_jump.*`` from the
 #: nested jump summary).
 FLOAT_KEYS = ("normal_force", "tangential_force", "max_pressure", "contact_width", "stick_width",
@@ -200,8 +205,13 @@ def main() -> None:
             t0 = time.perf_counter()
             answer = run_case(name, Path(tmp) / name)
             print(f"{name}: {time.perf_counter() - t0:.2f} s", file=sys.stderr, flush=True)
-            cases.append({"name": name, "scene": scene, "overrides": overrides + COMMON_OVERRIDES,
-                          "purpose": PURPOSE[name], "commit": commit, **answer})
+            case = {"name": name, "scene": scene, "overrides": overrides + COMMON_OVERRIDES,
+                    "purpose": PURPOSE[name], "commit": commit, **answer}
+            if name in FULL_NEWTON:
+                full = run_case(name, Path(tmp) / f"{name}-full-newton",
+                                overrides=overrides + COMMON_OVERRIDES + FULL_NEWTON[name])
+                case["full_newton"] = {"added_overrides": FULL_NEWTON[name], **full}
+            cases.append(case)
     print(f"all cases: {time.perf_counter() - t_all:.2f} s", file=sys.stderr)
     data = {"about": "Answers of the built-in scenes, CI-sized, frozen by "
                      "tests/data/make_reference_summaries.py; checked by tests/test_reference_summaries.py",
