@@ -131,7 +131,7 @@ def _plastic_line(rec: dict) -> str:
             f"refactorisations, {s['newton_full_fallbacks']} full-Newton fallbacks, {rec['newton']['cutbacks']} "
             f"cut-backs; max equivalent plastic strain {s['max_equivalent_plastic_strain']:.6g}, peak pressure "
             f"{s['max_pressure']:.2f} MPa, max wear depth {s['max_wear_depth']:.6g} mm, run's wall_time_s "
-            f"{s['wall_time_s']:.1f}")
+            f"{s['wall_time_s']:.1f} (the run's own account: \"{s['modelled']['material']}\")")
 
 
 def _median(values: list[float]) -> float:
@@ -147,7 +147,13 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", nargs="*", default=["main", "W", "np2", "plastic"],
                     choices=["main", "W", "np2", "plastic"])
     ap.add_argument("--out", type=Path, default=HERE / "results" / "stacks")
+    ap.add_argument("--report-from", type=Path, metavar="JSON",
+                    help="measure nothing: write OUT.md again from the results of an earlier run")
     args = ap.parse_args(argv)
+    if args.report_from:
+        report = write_report(json.loads(args.report_from.read_text()), args.out)
+        print(report)
+        return 0
     argv_used = sys.argv[1:] if argv is None else argv
     command = "OPENBLAS_NUM_THREADS=1 python3 benchmarks/bench_stacks.py" + "".join(" " + shlex.quote(a) for a in argv_used)
     versions = {s: _versions(STACKS[s]["venv"] / "bin/python") for s in STACKS}
@@ -167,17 +173,25 @@ def main(argv=None) -> int:
             "total_s": total, "settings": vars(args) | {"out": str(args.out)}, "results": results}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.with_suffix(".json").write_text(json.dumps(data, indent=1, default=str) + "\n")
+    print(write_report(data, args.out))
+    return 0
 
+
+def write_report(data: dict, out: Path) -> str:
+    """OUT.md from the results of a run (``data`` as in OUT.json); returns its text."""
+    command, total, versions, results = data["command"], data["total_s"], data["versions"], data["results"]
+    load0 = data["load_average_start"]
+    jobs, repeat, cycles = data["settings"]["jobs"], data["settings"]["repeat"], data["settings"]["cycles"]
     lines = ["# The two stacks side by side", "", f"Command (from the repository root): `{command}`", "",
              f"- date: {data['date']}; load average {load0[0]:.2f} at start, {data['load_average_end'][0]:.2f} at "
              f"end (2-core machine shared with other jobs: compare the two columns of one row, measured "
              f"alternately, not rows or runs); total {total:.0f} s",
              *[f"- {s}: DOLFINx {v['dolfinx']}, PETSc {v['petsc']}, numpy {v['numpy']}, {v['mpi'].split(',')[0]}, Python "
                f"{v['python']}" for s, v in versions.items()],
-             f"- median of {args.repeat} alternated runs per job and stack", "",
+             f"- median of {repeat} alternated runs per job and stack", "",
              "| job | debian: wall s | current: wall s | current / debian | results: max rel diff |",
              "|---|---:|---:|---:|---|"]
-    for job in args.jobs:
+    for job in jobs:
         deb, cur = results[job]["debian"], results[job]["current"]
         wd, wc = _median([r["wall_s"] for r in deb]), _median([r["wall_s"] for r in cur])
         if job == "W":
@@ -186,18 +200,18 @@ def main(argv=None) -> int:
         else:
             d, key = _max_rel_diff(deb[-1]["summary"], cur[-1]["summary"])
             diff = f"{d:.1e} ({key})"
-            label = {"main": f"main job: stromberg-block, {args.cycles} cycles",
+            label = {"main": f"main job: stromberg-block, {cycles} cycles",
                      "np2": "hertz h = 5 µm on 2 ranks",
                      "plastic": "one elastic–plastic cycle: cylinder-flat, both bodies von Mises, 10 µm, "
                                 "80 increments"}[job]
         lines.append(f"| {label} | {wd:.1f} | {wc:.1f} | {wc / wd:.2f} | {diff} |")
-    if "main" in args.jobs or "np2" in args.jobs:
+    if "main" in jobs or "np2" in jobs:
         lines += ["", "The runs' own `wall_time_s` (from start to end of the scene, excluding the interpreter "
                   "start and imports):", "", "| job | debian | current |", "|---|---:|---:|"]
-        for job in [j for j in args.jobs if j != "W"]:
+        for job in [j for j in jobs if j != "W"]:
             cells = [f"{_median([r['summary']['wall_time_s'] for r in results[job][s]]):.2f}" for s in STACKS]
             lines.append(f"| {job} | " + " | ".join(cells) + " |")
-    if "W" in args.jobs:
+    if "W" in jobs:
         lines += ["", "W in detail (median of 3 inside each process, then of the runs; ms):", "",
                   "| mesh | dofs | contacts | debian: factorise | debian: W | current: factorise | current: W |",
                   "|---|---:|---:|---:|---:|---:|---:|"]
@@ -209,16 +223,16 @@ def main(argv=None) -> int:
                           f"{_median([r['selected_inverse_s'] for r in recs]) * 1e3:.1f}"]
             r0 = results["W"]["debian"][0]["W"][mesh]
             lines.append(f"| {mesh} | {r0['dofs']} | {r0['contacts']} | " + " | ".join(cells) + " |")
-    if "plastic" in args.jobs:
+    if "plastic" in jobs:
         lines += ["", "The elastic–plastic cycle in detail (last run of each stack): "
                   + "; ".join(f"{s}: {_plastic_line(results['plastic'][s][-1])}" for s in STACKS)
                   + f". Scene settings: `{' '.join('--set ' + x for x in PLASTIC_SETTINGS)}`."]
     lines += ["", "The cylinders (hertz, cylinder-flat) are meshed by each stack's own gmsh (4.8.4 / 4.15), so "
               "their results differ by the mesh; tests/test_stacks.py compares the stacks on identical meshes "
               "(<= 5e-13)."]
-    args.out.with_suffix(".md").write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
-    return 0
+    text = "\n".join(lines) + "\n"
+    out.with_suffix(".md").write_text(text)
+    return text
 
 
 if __name__ == "__main__":
