@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The README's two commands:  ./tasks.sh run   (main job)   and   ./tasks.sh test   (test suite).
 # Each first runs scripts/setup.sh, which installs whatever is missing and is quick otherwise.
+# ./tasks.sh docs builds the API reference (docs/, Sphinx) into docs/_build/html.
 #
 # Two stacks: Debian's DOLFINx 0.5.2 (.venv, the default) and today's DOLFINx 0.11 from the
 # dolfinx-solver-real wheel (.venv-current). `test` runs the suite on both and fails if the second stack
@@ -58,13 +59,16 @@ case "$cmd" in
     # The FCLIB problems (../shared/fclib beside the clone, as on CI) must be there: their absence fails the
     # suite instead of skipping a validation row (DOLFINX_FRETTING_EXPECT_FCLIB=0 to run without them).
     export DOLFINX_FRETTING_EXPECT_FCLIB=${DOLFINX_FRETTING_EXPECT_FCLIB:-1}
+    # tests/test_docs.py builds the API reference with Sphinx (the docs extra, which setup.sh installs into
+    # .venv): without Sphinx it must fail, not skip. The reference is built on the debian stack only.
+    export DOLFINX_FRETTING_EXPECT_DOCS=1
     times=()
     status=0
     run_suite debian .venv/bin/python mpirun --oversubscribe -- "$@" || status=1
     if [ $current_ready = 1 ]; then
-      # test_stacks.py ran above (it starts both stacks in subprocesses): not twice.
-      run_suite current .venv-current/bin/python .venv-current/bin/mpiexec -- --ignore=tests/test_stacks.py "$@" \
-        || status=1
+      # test_stacks.py ran above (it starts both stacks in subprocesses): not twice; nor the docs build.
+      run_suite current .venv-current/bin/python .venv-current/bin/mpiexec -- --ignore=tests/test_stacks.py \
+        --ignore=tests/test_docs.py "$@" || status=1
     else
       times+=("current: NOT RUN (set-up failed)")
       status=1
@@ -74,10 +78,17 @@ case "$cmd" in
       loud "./tasks.sh test FAILED: ${times[*]/%/;}"
     fi
     exit $status ;;
+  docs)
+    # The reference is built and tested (tests/test_docs.py) on the debian stack; -W: a warning is an error,
+    # -n: every reference to the package must resolve.
+    scripts/setup.sh debian
+    .venv/bin/python -m sphinx -W -n --keep-going -b html docs docs/_build/html "$@"
+    echo "[docs] docs/_build/html/index.html" ;;
   bench)
     scripts/setup.sh "$stack"
     exec "$venv/bin/python" -m pytest -q -m slow tests "$@" ;;
   *)
-    echo "usage: [DOLFINX_FRETTING_STACK=debian|current] ./tasks.sh run [run options] | test [pytest options] | bench" >&2
+    echo "usage: [DOLFINX_FRETTING_STACK=debian|current] ./tasks.sh run [run options]" \
+         "| test [pytest options] | docs [sphinx-build options] | bench" >&2
     exit 2 ;;
 esac

@@ -27,9 +27,9 @@ solves ``K x = b`` and the construction of the small dense W by one of three rou
     ``MatFactorSetSchurIS``, MUMPS ICNTL(19); not wrapped by petsc4py 3.18 or 3.25, so through ctypes), returns
     the dense Schur complement S_K = K_SS - K_SR K_RR^-1 K_RS; since (K^-1)_SS = S_K^-1,
     ``W = H_S S_K^-1 H_S^T`` by a dense Cholesky of S_K. The factorisation is kept for later builds with the
-    same S (numeric refactorisation after :meth:`refactorize`). PETSc has no distributed Schur complement for
-    MUMPS: under MPI the route is refused when the operator is made. Measured against the selected inverse
-    in ``benchmarks/results/schur.md``.
+    same S (numeric refactorisation after :meth:`DelassusOperator.refactorize`). PETSc has no distributed
+    Schur complement for MUMPS: under MPI the route is refused when the operator is made. Measured against
+    the selected inverse in ``benchmarks/results/schur.md``.
 
 ``"auto"`` picks ``"selected_inverse"`` serially and ``"owned"`` under MPI (measured fastest in each:
 ``benchmarks/results/delassus.md``, ``benchmarks/results/delassus_owned_np2.md``).

@@ -113,7 +113,7 @@ class ContactSet:
 
     @property
     def rigid_modes(self) -> np.ndarray:
-        """(nc*dim, dim) matrix: local relative displacement per unit rigid translation of the body.
+        """Local relative displacement per unit rigid translation of the body, shape (nc*dim, dim).
 
         Its transpose sums local contact forces into the total global force on the body,
         ``F = rigid_modes.T @ r``.
@@ -848,7 +848,6 @@ class Contact:
         H_free: H without the columns of fixed dofs (what W is built from).
         held_rows: Rows of H (``dim c + k``, k >= 1) whose every dof is fixed: held tangential directions.
         mu: Friction coefficient per contact.
-        frame: The obstacle frame.
     """
 
     def __init__(self, V, surface: tuple, obstacle: RigidPlane | ElasticBody, mu: float | np.ndarray,

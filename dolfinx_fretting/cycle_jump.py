@@ -1,6 +1,6 @@
 """Error-controlled cycle jumping: simulate a cycle, extrapolate the wear gap over ``dN`` cycles, repeat.
 
-Pure NumPy, no mesh. Over many cycles the wear gap follows the cycle map
+Pure NumPy, no mesh. Over many cycles the wear gap follows the cycle map::
 
     g(N + 1) = g(N) + dg(g(N)),      dg_a = k sum_j p_a^j |dx_t,a^j|     (Archard summed over a cycle),
 
@@ -8,13 +8,13 @@ and a jump is its explicit Euler step of length ``dN``: ``g <- g + dN dg``, with
 simulated with the real k (that cycle is the first of the ``dN`` it stands for).
 
 **Stability.** On the loaded contacts A_j of increment j the gaps are closed, x_n = W_AA r_n + q_n = 0, and
-the wear gap enters q_n, so the pressure responds to a wear-gap perturbation as
+the wear gap enters q_n, so the pressure responds to a wear-gap perturbation as ::
 
     dp^j / dg = -T_A^-1 (W_AA^j)^-1          (T the tributary lengths; normal-normal block of W),
 
 (under normal force control, the uniform approach of the obstacle is an unknown too and the rigid mode
 is projected out: ``W^-1 - W^-1 e e^T W^-1 / (e^T W^-1 e)``). With the slip of each sliding contact held,
-a perturbation ``e`` of g changes the cycle's wear by ``-k L e``,
+a perturbation ``e`` of g changes the cycle's wear by ``-k L e``, ::
 
     L = sum_j S^j T^-1 (W_AA^j)^-1,          S^j = diag(|dx_t^j|) on the sliding contacts,
 

@@ -39,8 +39,8 @@ from .wear import ROW_FIELDS, commit_increment
 
 __all__ = ["run_increments", "ActivePatternCache", "N_ROW"]
 
-#: Columns of the per-increment output: the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then
-#: local iterations and local error.
+#: Number of columns of the per-increment output (the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then
+#: local iterations and local error).
 N_ROW = len(ROW_FIELDS) + 2
 
 
@@ -62,7 +62,7 @@ class ActivePatternCache:
         self.lu = np.zeros(shape_m)
         self.piv = np.zeros((n, m) if used else (1, 1), dtype=np.int64)
         self.lu_ok = np.zeros(n if used else 1, dtype=np.bool_)
-        #: Counters: exact pattern solves accepted, rejected, factorisations.
+        #: Counts of the exact pattern solves accepted and rejected, and of the factorisations.
         self.counts = np.zeros(3, dtype=np.int64)
 
 

@@ -1,6 +1,6 @@
 """Local frictional contact problem on the Delassus operator: projection, solvers, contact states.
 
-The local problem (paper eq. 28, FCLIB/Siconos form) is: find ``r`` and ``x`` with
+The local problem (paper eq. 28, FCLIB/Siconos form) is: find ``r`` and ``x`` with ::
 
     x = W r + q,    and for every contact alpha:  -(x^alpha + mu |x_t^alpha| e_n)  in  N_{K_mu}(r^alpha),
 
@@ -12,7 +12,7 @@ cone; its polar cone is ``K_mu° = {y : mu |y_t| <= -y_n}``.
 The solver is the paper's Algorithm 1, a Gauss-Seidel sweep over the contacts, with one correction: eq. (31)
 as printed builds the predictor from ``x^{alpha beta}``, which leaves out the contact's own term
 ``W_aa r^a``, so the exact solution is not a fixed point of that iteration. The predictor here uses the
-full current ``x^a = sum_b W_ab r^b + q^a``:
+full current ``x^a = sum_b W_ab r^b + q^a``::
 
     r* = r^a - rho_a (x^a + mu |x_t^a| e_n),      r^a <- Proj_{K_mu}(r*),
 
@@ -57,10 +57,11 @@ __all__ = [
     "solve",
 ]
 
-OPEN = 0   #: Contact state code: separated, r = 0.
-STICK = 1  #: Contact state code: closed, strictly inside the cone.
-SLIP = 2   #: Contact state code: closed, on the cone boundary.
+OPEN = 0   #: Contact state code of a separated contact (r = 0).
+STICK = 1  #: Contact state code of a closed contact strictly inside the cone.
+SLIP = 2   #: Contact state code of a closed contact on the cone boundary.
 
+#: The methods of :func:`solve`.
 METHODS = ("uzawa", "nsgs", "newton", "auto")
 
 # Sweeps between exact recomputations of x = W r + q, bounding the drift of the incremental update.
@@ -914,7 +915,7 @@ def natural_map_error(W: np.ndarray | sp.spmatrix, q: np.ndarray, r: np.ndarray,
                       dim: int) -> float:
     """Unit-free natural-map residual of a candidate solution ``r``.
 
-    With ``x = W r + q``, ``rho_a = 1/||W_aa||_2`` (:func:`block_rho`) and ``P`` the projection on ``K_mu``:
+    With ``x = W r + q``, ``rho_a = 1/||W_aa||_2`` (:func:`block_rho`) and ``P`` the projection on ``K_mu``::
 
         error = sqrt( sum_a || r^a - P(r^a - rho_a (x^a + mu_a |x_t^a| e_n)) ||^2 ) / max(S, ||r||)
 
@@ -1217,7 +1218,7 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     - ``"newton"``: semismooth Newton on the Alart-Curnier function (parameter ``rho_a = 1/||W_aa||_2``,
       times ``rho``), with a vanishing proximal regularization of the Jacobian (rank-deficient ``W``), a
       non-monotone Armijo line search on ``||F||^2``, and safeguards when it stalls: one restart from
-      ``r = 0`` if it started elsewhere, then NSGS sweeps (see :func:`_newton_driver`). One dense LU (sparse
+      ``r = 0`` if it started elsewhere, then NSGS sweeps (see ``_newton_driver``). One dense LU (sparse
       LU for a sparse ``W``) of the closed contacts' rows per step, ``O(m^3)`` dense: about ``m/8`` sweeps'
       worth. ``iterations`` counts Newton steps plus fallback sweeps.
     - ``"auto"`` (recommended): NSGS in windows of 10 sweeps while the error's rate over the last window
@@ -1236,7 +1237,7 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     one-contact solves ``r_a = max(0, r_a - x_a / W_aa)``, relaxed by ``rho``: the iterates of the
     full-dimension NSGS with ``mu = 0``); ``"newton"`` is a primal-dual active-set
     (semismooth) Newton on ``r - max(0, r - rho x)``, one Cholesky of the active block per step, with an
-    Armijo rule and projected Gauss-Seidel sweeps as the safeguard (see :func:`_lcp_newton`); ``"auto"``
+    Armijo rule and projected Gauss-Seidel sweeps as the safeguard (see ``_lcp_newton``); ``"auto"``
     is projected Gauss-Seidel, then that Newton by the same rule as for the full problem (``nc``
     unknowns). On FE contact the Newton needs a handful of steps where the sweeps need about a hundred,
     but below a few hundred contacts a step costs some tens of sweeps (benchmarks/results/

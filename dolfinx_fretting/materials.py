@@ -60,7 +60,7 @@ class LinearElastic:
 
     @property
     def plane_strain_modulus(self) -> float:
-        """E / (1 - nu^2): the contact modulus E* against a rigid flat."""
+        """The contact modulus E* = E / (1 - nu^2) against a rigid flat."""
         return self.E / (1 - self.nu**2)
 
 
@@ -274,7 +274,7 @@ def _radial_return(E, nu, sy0, H, eps, eps_p_old, p_old, sigma, eps_p, p, C, yie
                         C[i, a, b] += bulk - g2 / 3.0
 
 
-#: Public name of the numba kernel (see :func:`_radial_return`), for callers that preallocate outputs.
+#: Public name of the numba kernel ``_radial_return``, for callers that preallocate outputs.
 radial_return_kernel = _radial_return
 
 

@@ -341,8 +341,8 @@ class FrettingWriter:
 
     def most_loaded(self, result) -> tuple[int, Any]:
         """The increment of a cycle whose fields are drawn and its state: the most loaded instant (largest
-        normal + |tangential| contact force; a cycle often ends unloaded, as Example 1's face pressure does);
-        elastic–plastic problems: the cycle's end (the plastic history kept is the end's)."""
+        normal + ``|tangential|`` contact force; a cycle often ends unloaded, as Example 1's face pressure
+        does); elastic–plastic problems: the cycle's end (the plastic history kept is the end's)."""
         n = result.records["normal_force"].size
         if self.problem.body is not None or result.kept is None:
             return n - 1, result.final

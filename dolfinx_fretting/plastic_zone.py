@@ -5,7 +5,7 @@ where a point yields::
 
     K_T = K + E_P D E_P^T,   D = sum over yielded points of  w B^T (C_T - C_e) B   (p x p),
 
-with B the strain-displacement matrix of a point, w its weight (quadrature weight x |det J|) and E_P the
+with B the strain-displacement matrix of a point, w its weight (quadrature weight x ``|det J|``) and E_P the
 injection of P into all dofs. Given the entries Z = (K^-1)_XX of the elastic inverse on a set X of dofs
 that contains P and the contact dofs (one MUMPS selected inverse, once), the Woodbury identity gives the
 tangent's inverse and its Delassus matrix without a refactorisation::
@@ -112,14 +112,14 @@ def zone_update(law, B: np.ndarray, w: np.ndarray, dofpos: np.ndarray, comps: np
     Args:
         law: :class:`~dolfinx_fretting.materials.J2Plasticity`.
         B: (n, k, nd) strain-displacement matrices of the points (form components).
-        w: (n,) weights (quadrature weight x |det J|).
+        w: (n,) weights (quadrature weight x ``|det J|``).
         dofpos: (n, nd) positions in X of the dofs of each point's cell (-1: constrained, value 0).
         comps: (k,) Mandel components of the form components.
-        uX: (|X|,) displacement on X.
+        uX: ``(|X|,)`` displacement on X.
         eps_p_old, p_old: (n, 6), (n,) committed plastic state of the points.
         out: Preallocated outputs, updated in place: ``eps``, ``sigma``, ``eps_p`` (n, 6), ``p`` (n,),
-            ``dC`` (n, 6, 6): C_T - C_e (0 where elastic), ``yielded`` (n,) bool, ``g`` (|X|,): the plastic
-            forces F_int - K u of these points.
+            ``dC`` (n, 6, 6): C_T - C_e (0 where elastic), ``yielded`` (n,) bool, ``g`` ``(|X|,)``: the
+            plastic forces F_int - K u of these points.
     """
     _zone_update(float(law.E), float(law.nu), float(law.sigma_y0), float(law.H), B, w, dofpos, comps, uX,
                  eps_p_old, p_old, out["eps"], out["sigma"], out["eps_p"], out["p"], out["dC"], out["yielded"],
@@ -163,7 +163,7 @@ def zone_tangent_matrix(B: np.ndarray, w: np.ndarray, dofpos: np.ndarray, comps:
         dC: (n, 6, 6) C_T - C_e of the points.
         yielded: (n,) the points that contribute.
         P: (p,) sorted positions in X; must contain every unconstrained dof of a yielded point's cell.
-        nX: |X|.
+        nX: ``|X|``.
     """
     ppos = np.full(nX, -1, dtype=np.int64)
     ppos[P] = np.arange(P.size)
@@ -193,8 +193,8 @@ class LowRankTangent:
     Args:
         P: (p,) positions in X of the dofs where K_T differs from K.
         D: (p, p) the difference (symmetric).
-        Z: (|X|, |X|) entries of K^-1 on X.
-        HZ: (m, |X|) = H[:, X] Z, i.e. H K^-1 on the columns X.
+        Z: ``(|X|, |X|)`` entries of K^-1 on X.
+        HZ: ``(m, |X|)`` = H[:, X] Z, i.e. H K^-1 on the columns X.
         W: (m, m) elastic Delassus matrix H K^-1 H^T.
 
     Attributes:

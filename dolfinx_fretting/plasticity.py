@@ -196,7 +196,7 @@ class PlasticState:
         Returns:
             ``B`` (len(cells) * nq, k, nd): the form components of the strain at each point, ``B @ u_cell``,
             with ``u_cell`` the cell's dofs node-major (``[u_0x, u_0y, u_1x, ...]``, the dofmap's order);
-            ``w`` (len(cells) * nq,): quadrature weight x |det J|, so that ``sum w B^T C B`` is the
+            ``w`` (len(cells) * nq,): quadrature weight x ``|det J|``, so that ``sum w B^T C B`` is the
             element stiffness of the forms.
 
         Raises:
@@ -534,7 +534,7 @@ class ElastoplasticBody:
 
     #: Condense the iterations on the plastic zone (see the class docstring); False: refactorise.
     condensed = True
-    #: Largest plastic zone (dofs of X) kept condensed: Z = (K^-1)_XX is dense, |X|^2 doubles, and its
+    #: Largest plastic zone (dofs of X) kept condensed: Z = (K^-1)_XX is dense, ``|X|^2`` doubles, and its
     #: selected inverse costs ~1.3 s at 2600 dofs here (benchmarks/results/plastic.md).
     max_zone_dofs = 6000
     #: Layers of neighbour cells added around the cells that yield when the zone grows.

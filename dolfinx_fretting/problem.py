@@ -62,6 +62,7 @@ STATUS_NAMES = {0: "open", 1: "stick", 2: "slip"}
 #: counters (one declaration: the scene runner's history table reads its columns from here).
 SOLVER_COLUMNS = ("local_iterations", "local_error", "load_solves", "newton_iterations", "newton_delta_1",
                   "newton_delta_2", "cutbacks", "yielded_points")
+#: Per-increment columns: the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then the :data:`SOLVER_COLUMNS`.
 INCREMENT_COLUMNS = ROW_FIELDS + SOLVER_COLUMNS
 
 
@@ -88,7 +89,7 @@ def _finite(name: str, value: float, low: float | None = None, strict: bool = Fa
 
 @dataclass(frozen=True)
 class Archard:
-    """Archard's wear law (paper eq. 5): the wear gap grows by ``k p |dx_t|`` at every sliding contact.
+    """Archard's wear law, the paper's equation 5: the wear gap grows by ``k p |dx_t|`` where contacts slide.
 
     Give ``k`` (1/MPa with N, mm), or for two deformable bodies ``k_slave`` and ``k_master``: both see the
     same pressure and slip, the wear gap grows with their sum and each body wears its share.
@@ -115,7 +116,7 @@ class Archard:
 
     @property
     def k_total(self) -> float:
-        """The wear gap's coefficient: ``k`` or ``k_slave + k_master``."""
+        """The wear gap's coefficient, ``k`` or ``k_slave + k_master``."""
         return float(self.k) if self.k is not None else float(self.k_slave + self.k_master)
 
     @property
@@ -180,7 +181,7 @@ class LocalSolver:
 
 @dataclass(frozen=True)
 class Plasticity:
-    """An elastic–plastic body: Newton with the contact solve inside every iteration (paper Fig. 4).
+    """An elastic–plastic body: Newton with the contact solve inside every iteration (the paper's Figure 4).
 
     The constitutive update is the hook: ``law`` is any object with the elastic constants ``E`` and ``nu``
     (they make K, W and the elastic predictor) and a method
@@ -475,6 +476,8 @@ class FrettingProblem:
         self.delassus.factorize()
         self.timings["factorize_s"] = time.perf_counter() - t0
         self._vectors: list = []   # PETSc vectors of the loads (owned by this problem)
+        #: Names of the load vectors, in the order of :attr:`ContactState.load_factors`: ``"dirichlet
+        #: values"`` first if ``bcs`` prescribe non-zero values, then the keys of ``loads``, ``prescribed``.
         self.load_names: list[str] = []
         if base is not None:
             self._add_vector("dirichlet values", base)
@@ -1106,7 +1109,8 @@ class FrettingProblem:
 
     @property
     def pattern_counts(self) -> np.ndarray | None:
-        """Compiled cycles: exact pattern solves accepted, rejected, and LU factorisations (rank 0)."""
+        """Counts of the compiled cycles' exact pattern solves accepted and rejected, and of their LU
+        factorisations (rank 0)."""
         return None if self._kernel is None else self._kernel[2].counts
 
     def _compiled_cycle(self, state: ContactState, obstacle: np.ndarray, factors: np.ndarray,

@@ -64,7 +64,7 @@ MIN_MODULUS, MAX_MODULUS = 1e-3, 1e7
 #: the model is small-strain linear elasticity; past a few percent its answer is meaningless (and past the
 #: elastic limit of any real solid). Estimates: half-cylinder under a normal force P, the Hertz peak
 #: p0/E* = sqrt(P / (pi R E*)); under an approach d, sqrt(d / (2R)) (from the geometric half-width
-#: sqrt(2Rd), an overestimate); a rectangle, P / (width E') or d / height; a face pressure s, |s| / E.
+#: sqrt(2Rd), an overestimate); a rectangle, P / (width E') or d / height; a face pressure s, ``|s| / E``.
 MAX_ELASTIC_STRAIN = 0.1
 #: Largest mesh: elements along the refined contact zone of a half-cylinder, cells of a rectangle. Beyond,
 #: the mesh generator and the factorisation run for hours or exhaust memory (a hang, not a run): 206k dofs
@@ -275,7 +275,7 @@ class ContactSettings(_Section):
 
 
 class WearSettings(_Section):
-    """Wear law (Archard, paper eq. 4-5: wear gap rate = k p_n |slip rate|).
+    """Wear law (Archard, paper eq. 4-5: wear gap rate = ``k p_n |slip rate|``).
 
     ``acceleration`` is the paper's "hypothetical" wear coefficient made explicit: each simulated cycle
     stands for ``acceleration`` physical cycles, the wear coefficient used is ``k * acceleration``, and

@@ -1,6 +1,6 @@
 """Archard wear and the bookkeeping of a converged increment (pure NumPy/numba, no mesh).
 
-After an increment converges (paper eq. 5, backward Euler in the pressure):
+After an increment converges (paper eq. 5, backward Euler in the pressure)::
 
     g_w^a  <-  g_w^a + k p_n^a |dx_t^a|,      p_n^a = r_n^a / A^a,
 

@@ -10,16 +10,18 @@
 #   * Debian packages: DOLFINx 0.5.2 (python3-dolfinx), gmsh, h5py, OpenBLAS; libegl1 and libgl1-mesa-dri,
 #     with which VTK's wheel renders the pyvista pictures off screen (EGL, Mesa's software rasteriser).
 #   * A venv (.venv) made from /usr/bin/python3 with --system-site-packages, so it sees DOLFINx.
-#   * The package in editable mode with its extras (default: test,pictures), numpy pinned to Debian's build
-#     (constraints.txt): pip would otherwise pull numpy 2.x into the venv and shadow the numpy DOLFINx is
-#     compiled against. The pictures extra (pyvista, vtk) adds ~690 MB to the venv (vtk: 565 MB) and
-#     took 10-17 s to install here from a warm package cache.
+#   * The package in editable mode with its extras (default: test,pictures,docs), numpy pinned to Debian's
+#     build (constraints.txt): pip would otherwise pull numpy 2.x into the venv and shadow the numpy DOLFINx
+#     is compiled against. The pictures extra (pyvista, vtk) adds ~690 MB to the venv (vtk: 565 MB) and
+#     took 10-17 s to install here from a warm package cache. The docs extra (Sphinx, MyST, jupytext, furo;
+#     ~80 MB with their dependencies) builds the API reference (./tasks.sh docs, tests/test_docs.py).
 # current:
 #   * A venv (.venv-current) from Python 3.12 (the wheel needs >= 3.12; bookworm has none, pyenv's is used:
 #     `command -v python3.12`, else pyenv's newest 3.12, or DOLFINX_FRETTING_PYTHON312=/path/to/python3.12).
 #   * dolfinx-solver-real (DOLFINx 0.11, PETSc/petsc4py 3.25 with MUMPS, MPICH and its mpiexec in
-#     .venv-current/bin), gmsh, h5py and the package in editable mode with the same extras, every version
-#     pinned in constraints-current.txt (numpy 2). A C compiler for the form compiler's JIT (gcc).
+#     .venv-current/bin), gmsh, h5py and the package in editable mode with the extras test,pictures (the
+#     API reference is built on the debian stack), every version pinned in constraints-current.txt
+#     (numpy 2). A C compiler for the form compiler's JIT (gcc).
 #     About 1 GB; ~1-2 minutes the first time.
 #
 # Quick when everything is already there: each step checks first. Used by ./tasks.sh, .ci/run and the
@@ -27,7 +29,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$here"
-extras=${DOLFINX_FRETTING_EXTRAS:-test,pictures}
+extras=${DOLFINX_FRETTING_EXTRAS:-test,pictures,docs}
 stack=${1:-${DOLFINX_FRETTING_STACK:-debian}}
 
 missing_debian_packages() {
@@ -68,6 +70,7 @@ find_python312() {
 
 setup_current() {
   install_debian_packages gcc libc6-dev git libegl1 libgl1-mesa-dri
+  local extras=${DOLFINX_FRETTING_EXTRAS:-test,pictures}
   local venv=.venv-current
   if [ ! -x "$venv/bin/python" ]; then
     local py
