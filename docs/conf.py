@@ -97,7 +97,7 @@ nitpick_ignore_regex = [
     (r"py:.*", r"(dolfinx_fretting\.)?([A-Za-z0-9_]+\.)*_[A-Za-z][A-Za-z0-9_]*"),
 ]
 # The scenes' constrained number types (pydantic Annotated aliases), shown by name in the sections' fields.
-nitpick_ignore = [("py:class", name) for name in ("Length", "FiniteFloat", "Cycle")]
+nitpick_ignore = [("py:class", name) for name in ("Length", "FiniteFloat", "Cycle", "Mesh", "MeshTags_int32")]
 
 # The demos as pages: jupytext reads each script (its header says its format) and writes Markdown that MyST
 # renders. Written only when the text changed, so that an unchanged demo does not rebuild its page.

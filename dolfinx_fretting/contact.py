@@ -892,10 +892,10 @@ class Contact:
             raise ValueError(
                 f"Contact: direction n of contact {c} (node at {cs.coords[c].tolist()}) has every dof fixed by bcs: "
                 "the contact cannot move that way. Remove the node from the contact surface or the condition from bcs")
-        #: Rows (``dim c + k``) of the tangential directions held by ``bcs``: every dof of the row is fixed, as at
-        #: a node on a symmetry plane with its roller (the plane's normal is then one of the contact's tangents).
-        #: Their contact force is zero (by symmetry, in a half model); FrettingProblem gives them a positive
-        #: compliance so that the local problem stays well posed, and refuses an obstacle motion along them.
+        # Rows (dim c + k) of the tangential directions held by bcs: every dof of the row is fixed, as at a node on a
+        # symmetry plane with its roller (the plane's normal is then one of the contact's tangents). Their contact
+        # force is zero (by symmetry, in a half model); FrettingProblem gives them a positive compliance so that
+        # the local problem stays well posed, and refuses an obstacle motion along them.
         self.held_rows = np.flatnonzero(empty & ~normal_rows)
         mu_arr = np.broadcast_to(np.asarray(mu, dtype=float), (cs.nc,)).copy() if np.ndim(mu) == 0 else \
             np.asarray(mu, dtype=float)
