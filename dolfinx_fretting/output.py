@@ -37,11 +37,16 @@ import numpy as np
 from .io import CYCLE_FIELDS, HISTORY_FIELDS, RUN_DESCRIPTION, ResultWriter, profile_fields, write_json_atomic
 from .problem import INCREMENT_COLUMNS
 
-__all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT"]
+__all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT", "EXTENSIVE_COLUMNS",
+           "contact_measures"]
 
 #: What each kind of obstacle is, in words (pictures and ``compare`` label runs with it).
 OBSTACLE_TEXT = {"rigid_plane": "rigid plane",
                  "elastic_body": "elastic counter-body (two deformable bodies, small-sliding pairing)"}
+#: Columns that sum over the contacts (forces, energies, worn area or volume, loaded areas): a model of a fraction
+#: of the bodies (a half model about a symmetry plane) reports them divided by that fraction, the whole contact's.
+EXTENSIVE_COLUMNS = ("normal_force", "tangential_force", "dissipated_energy", "wear_area_increment", "wear_area",
+                     "contact_area", "stick_area")
 #: How the tangential load of a run is controlled (:attr:`RunDescription.tangential_control`).
 TANGENTIAL_CONTROLS = ("displacement", "force", "pressure", "none")
 
@@ -68,6 +73,8 @@ class RunDescription:
         hertz: (radius, E*) of a Hertz line-contact reference drawn on the profiles, or None.
         track_positions: Contact positions whose nodes' histories are drawn (empty: chosen automatically).
         loop_cycles: Cycles whose fretting loops are drawn.
+        model_fraction: The fraction of the bodies the model holds (0.5: a half model about a symmetry plane);
+            the tables' :data:`EXTENSIVE_COLUMNS` are the whole contact's (the model's divided by it).
     """
 
     name: str
@@ -86,8 +93,11 @@ class RunDescription:
     hertz: tuple[float, float] | None = None
     track_positions: tuple[float, ...] = ()
     loop_cycles: tuple[int, ...] = field(default_factory=tuple)
+    model_fraction: float = 1.0
 
     def __post_init__(self) -> None:
+        if not (np.isfinite(self.model_fraction) and 0 < self.model_fraction <= 1):
+            raise ValueError(f"RunDescription.model_fraction = {self.model_fraction}: expected 0 < fraction <= 1")
         if self.obstacle not in OBSTACLE_TEXT:
             raise ValueError(f"RunDescription.obstacle must be 'rigid_plane' or 'elastic_body', got {self.obstacle!r}")
         if self.tangential_control not in TANGENTIAL_CONTROLS:
@@ -151,7 +161,8 @@ class RunDescription:
                            "contact_profiles.csv": profile_fields(self.dim)},
                 "run": {k: data[k] for k in ("cycles", "preload_increments", "increments_per_cycle",
                                              "tangential_control", "tangential_amplitude", "pressure_face",
-                                             "wear_acceleration", "hertz", "track_positions", "loop_cycles")}}
+                                             "wear_acceleration", "hertz", "track_positions", "loop_cycles",
+                                             "model_fraction")}}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunDescription:
@@ -171,6 +182,35 @@ def read_description(folder: str | Path) -> RunDescription | None:
     except (OSError, ValueError):
         return None
     return RunDescription.from_json(data)
+
+
+def contact_measures(problem, state, model_fraction: float = 1.0) -> dict[str, float]:
+    """Sizes of a 3D contact for a summary: equivalent radii of the loaded and sticking areas, the loaded
+    extents along the sliding direction t1 and across it (t2), and the worn volume, all of the whole contact.
+
+    ``contact_radius = sqrt(A / pi)`` and ``stick_radius = sqrt(A_stick / pi)`` from the lumped areas (tributary
+    areas of the loaded, of the sticking nodes) divided by ``model_fraction``. A half model (0.5) is taken to be
+    cut by its symmetry plane t2 = 0 through the contact's centre: its extent across is twice the largest
+    |t2| of a loaded node. Empty for a 2D contact (its widths are in the history).
+    """
+    cs = problem.contact.contact_set
+    if cs.dim != 3 or state.status is None:
+        return {}
+    loaded = state.status > 0
+    sticking = state.status == 1
+    along = np.einsum("ij,ij->i", cs.coords, cs.frames[:, 1])
+    across = np.einsum("ij,ij->i", cs.coords, cs.frames[:, 2])
+    area = float(cs.tributary[loaded].sum()) / model_fraction
+    stick_area = float(cs.tributary[sticking].sum()) / model_fraction
+
+    def span(values: np.ndarray) -> float:
+        return float(values.max() - values.min()) if values.size else 0.0
+
+    return {"contact_radius": float(np.sqrt(area / np.pi)), "stick_radius": float(np.sqrt(stick_area / np.pi)),
+            "contact_extent_along": span(along[loaded]),
+            "contact_extent_across": (span(across[loaded]) if model_fraction == 1.0
+                                      else 2.0 * float(np.abs(across[loaded]).max(initial=0.0))),
+            "wear_volume": float(state.wear_gap @ cs.tributary) / model_fraction}
 
 
 def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_controlled: bool,
@@ -258,9 +298,16 @@ class FrettingWriter:
             return np.zeros(load_factors.shape[:-1]) if load_factors.ndim > 1 else 0.0
         return load_factors[..., self._pressure_index]
 
+    def _whole(self, values: dict[str, Any]) -> dict[str, Any]:
+        """The :data:`EXTENSIVE_COLUMNS` of a model of a fraction of the bodies as the whole contact's."""
+        fraction = self.description.model_fraction
+        if fraction == 1.0:
+            return values
+        return {k: (v / fraction if k in EXTENSIVE_COLUMNS else v) for k, v in values.items()}
+
     def history_row(self, state, *, stage: str, cycle: int = 0, step: int = 0) -> dict[str, Any]:
-        """The ``history.csv`` row of a committed state."""
-        values = state.record
+        """The ``history.csv`` row of a committed state (sums over the contacts: the whole contact's)."""
+        values = self._whole(state.record)
         return {"increment": state.increment, "cycle": cycle, "step": step, "stage": stage,
                 "normal_displacement": float(state.obstacle[0]), "tangential_displacement": float(state.obstacle[1]),
                 "face_pressure": float(self._face_pressure(state.load_factors)),
@@ -294,7 +341,7 @@ class FrettingWriter:
 
     def cycle_records(self, result) -> dict[str, np.ndarray]:
         """A cycle's per-increment columns with the obstacle's displacement and the face pressure."""
-        return {**result.records, "normal_displacement": result.obstacle[:, 0],
+        return {**self._whole(result.records), "normal_displacement": result.obstacle[:, 0],
                 "tangential_displacement": result.obstacle[:, 1],
                 "face_pressure": self._face_pressure(result.load_factors)}
 

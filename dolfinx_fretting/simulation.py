@@ -34,7 +34,7 @@ from mpi4py import MPI
 from .analytic import hertz_line_contact
 from .contact import Contact
 from .io import non_finite_keys
-from .output import FrettingWriter, RunDescription
+from .output import FrettingWriter, RunDescription, contact_measures
 from .loading import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
                       Displacement, Force, FrettingProblem, LocalSolver, Plasticity)
@@ -91,7 +91,7 @@ class ContactModel:
         self.scene = scene
         self.comm = comm
         try:
-            self.setup: SceneModel = build_scene_model(scene, comm)
+            self.setup: SceneModel = build_scene_model(scene, comm, applies_model_fraction=True)
         except (ValueError, KeyError) as exc:
             raise SimulationError(str(exc).strip("'\"")) from None
         s, sv, m = self.setup, scene.solver, scene.material
@@ -209,25 +209,30 @@ def _scene_identity(scene: Scene) -> str:
     return json.dumps(data, sort_keys=True)
 
 
+def _target(force_controlled: bool, value, model_fraction: float):
+    """A scene's obstacle target for the API: a force is the whole contact's, so a model of a fraction of the
+    bodies (a half model) is given that fraction of it; a displacement is the same for any fraction."""
+    return Force(np.asarray(value) * model_fraction) if force_controlled else Displacement(np.asarray(value))
+
+
 def _step_targets(step: LoadStep, model: ContactModel, normal_increments: int) -> dict[str, Any]:
     """The API's arguments of a scene's load step (the geometry's ramped loads follow the preload)."""
     loads = {PRESSURE_LOAD: step.pressure} if PRESSURE_LOAD in model.problem.load_names else {}
     for name in model.setup.ramped:
         loads[name] = min(1.0, step.increment / normal_increments) if step.stage == "normal" else 1.0
-    return {"normal": (Force if step.normal_force_controlled else Displacement)(step.normal),
-            "tangential": (Force if step.tangential_force_controlled else Displacement)(step.tangential),
-            "loads": loads}
+    fraction = model.setup.model_fraction
+    return {"normal": _target(step.normal_force_controlled, step.normal, fraction),
+            "tangential": _target(step.tangential_force_controlled, step.tangential, fraction), "loads": loads}
 
 
-def _cycle_path(scene: Scene, problem: FrettingProblem) -> CyclePath:
+def _cycle_path(scene: Scene, problem: FrettingProblem, model_fraction: float) -> CyclePath:
     """The targets of every cycle of the scene (the same each cycle: built once)."""
     steps = cycle_path(scene.loading, 1)
     first = steps[0]
     pressures = np.array([s.pressure for s in steps])
     loads = {PRESSURE_LOAD: pressures} if PRESSURE_LOAD in problem.load_names else {}
-    return CyclePath((Force if first.normal_force_controlled else Displacement)(np.array([s.normal for s in steps])),
-                     (Force if first.tangential_force_controlled else Displacement)(
-                         np.array([s.tangential for s in steps])), loads)
+    return CyclePath(_target(first.normal_force_controlled, [s.normal for s in steps], model_fraction),
+                     _target(first.tangential_force_controlled, [s.tangential for s in steps], model_fraction), loads)
 
 
 def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> RunDescription:
@@ -239,7 +244,8 @@ def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> R
         tangential_amplitude=float(lo.tangential_amplitude or 0.0),
         pressure_face=lo.pressure_face if lo.tangential_kind == "pressure" else None,
         wear_acceleration=scene.wear.acceleration, hertz=hertz[:2] if hertz is not None else None,
-        track_positions=tuple(scene.output.track_positions), loop_cycles=tuple(scene.output.loop_cycles))
+        track_positions=tuple(scene.output.track_positions), loop_cycles=tuple(scene.output.loop_cycles),
+        model_fraction=model.setup.model_fraction)
 
 
 class _Run:
@@ -264,7 +270,8 @@ class _Run:
             sizes, xdmf_started = None, False
         else:
             self.state, sizes, xdmf_started = self._restore(meta)
-        self.path = _cycle_path(scene, self.problem) if scene.loading.cycles > 0 else None
+        self.path = (_cycle_path(scene, self.problem, self.model.setup.model_fraction) if scene.loading.cycles > 0
+                     else None)
         self.writer = FrettingWriter(
             self.problem, out_dir, _description(scene, self.model, self.path), profiles=scene.output.contact_profiles,
             fields=scene.output.xdmf, von_mises=self.model.setup.von_mises, pressure_load=PRESSURE_LOAD,
@@ -577,7 +584,7 @@ class _Run:
             "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
             "wear_law": sc.wear.law, "wear_k": sc.wear.k_total, "wear_acceleration": sc.wear.acceleration,
             "wear_k_effective": problem._k(True), "equivalent_cycles": pr.cycle * sc.wear.acceleration,
-            "dissipated_energy": st.dissipated_energy, "material_model": sc.material.model,
+            "dissipated_energy": st.dissipated_energy / model.setup.model_fraction, "material_model": sc.material.model,
             "obstacle": "rigid plane (the flat is rigid)" if sc.contact.obstacle == "rigid_plane"
             else "elastic flat (two deformable bodies of the same material, small-sliding pairing)",
         }
@@ -610,6 +617,7 @@ class _Run:
                                               "stick_width", "max_wear_depth", "wear_area")})
             summary.update({k: int(r[k]) for k in ("n_open", "n_stick", "n_slip")})
             summary["edge_loaded"] = bool(r.get("edge_loaded", 0))
+            summary.update(contact_measures(problem, st, model.setup.model_fraction))
         if pr.last_cycle_row:
             summary["regime"] = pr.last_cycle_row["regime"]
         if model.setup.hertz is not None and pr.last_row:
