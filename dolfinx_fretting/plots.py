@@ -551,7 +551,8 @@ def plot_contact_maps(path: Path, run: RunDescription, prof: ContactProfiles) ->
             else:
                 f, unit = _length_unit(data) if quantity == "length" else (1.0, "MPa")
                 art = ax.tripcolor(tri, data * f, shading="gouraud", cmap="viridis")
-                fig.colorbar(art, ax=ax, fraction=0.046)
+                bar = fig.colorbar(art, ax=ax, fraction=0.046)
+                bar.formatter.set_useOffset(False)  # a nearly uniform field reads as its values, not "1e-5+2"
                 title = f"{name} ({unit})"
             ax.set_aspect("equal")
             ax.set_title(title, fontsize=9)

@@ -766,15 +766,22 @@ def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: boo
             plot_run(out, run.writer.description)
         except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
             run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
-        if scene.output.xdmf:  # pyvista pictures, in a child process: a VTK failure costs only them
+        if scene.output.xdmf and run.problem.contact.dim == 3:
+            run.say(f"[{scene.name}] pyvista pictures (deformed body, worn scar) are drawn for 2D runs only; the 3D "
+                    "contact is in contact_maps.png, contact.xdmf and fields.xdmf (ParaView)")
+        elif scene.output.xdmf:  # pyvista pictures, in a child process: a VTK failure costs only them
             from .pictures import draw_in_subprocess
             pictures = draw_in_subprocess(out, scene.contact.plane_point, scene.contact.plane_normal)
             run.say(f"[{scene.name}] {pictures}")
+    force = "N/mm" if run.problem.contact.dim == 2 else "N"
+    sizes = (f"contact width = {summary.get('contact_width', 0):.4g} mm, stick width = "
+             f"{summary.get('stick_width', 0):.4g} mm" if run.problem.contact.dim == 2 else
+             f"contact radius = {summary.get('contact_radius', 0):.4g} mm, stick radius = "
+             f"{summary.get('stick_radius', 0):.4g} mm")
     run.say(f"[{scene.name}] {'done' if error is None else 'FAILED'}: {summary['increments']} increments, "
-            f"{summary['cycles']} cycles, P = {summary.get('normal_force', 0):.6g} N/mm, "
-            f"Q = {summary.get('tangential_force', 0):.6g} N/mm, p_max = {summary.get('max_pressure', 0):.6g} MPa, "
-            f"contact width = {summary.get('contact_width', 0):.4g} mm, stick width = "
-            f"{summary.get('stick_width', 0):.4g} mm, max wear depth = {summary.get('max_wear_depth', 0):.4g} mm, "
+            f"{summary['cycles']} cycles, P = {summary.get('normal_force', 0):.6g} {force}, "
+            f"Q = {summary.get('tangential_force', 0):.6g} {force}, p_max = {summary.get('max_pressure', 0):.6g} MPa, "
+            f"{sizes}, max wear depth = {summary.get('max_wear_depth', 0):.4g} mm, "
             f"{summary['wall_time_s']:.2f} s -> {out}")
     run.problem.destroy()
     if run.signal_received:
