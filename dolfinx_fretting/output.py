@@ -191,7 +191,7 @@ def contact_measures(problem, state, model_fraction: float = 1.0) -> dict[str, f
     ``contact_radius = sqrt(A / pi)`` and ``stick_radius = sqrt(A_stick / pi)`` from the lumped areas (tributary
     areas of the loaded, of the sticking nodes) divided by ``model_fraction``. A half model (0.5) is taken to be
     cut by its symmetry plane t2 = 0 through the contact's centre: its extent across is twice the largest
-    |t2| of a loaded node. Empty for a 2D contact (its widths are in the history).
+    ``|t2|`` of a loaded node. Empty for a 2D contact (its widths are in the history).
     """
     cs = problem.contact.contact_set
     if cs.dim != 3 or state.status is None:
