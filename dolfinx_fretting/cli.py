@@ -5,12 +5,20 @@
 Exit codes: 0 done; 2 bad input (scene, options, output folder, a checkpoint that cannot be resumed), with a
 message and before any expensive work; 1 a run that failed (an increment, PETSc or MUMPS, a non-finite
 result), with a message. Never a traceback for either.
+
+Under MPI (``mpirun -n N dolfinx-fretting ...``) an error on any rank stops every rank: the ranks meet at the
+end (:func:`_finish`); a rank that failed alone (e.g. rank 0 could not write a table while the others went on
+to the next increment's collectives) waits :data:`MEET_SECONDS` for the others, then prints its message and
+calls ``MPI_Abort`` with its exit code. An unexpected exception (a bug) prints its traceback and aborts too.
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
+import time
+import traceback
 
 from .scenes import SceneError, builtin_scenes, load_scene
 
@@ -27,6 +35,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
                      help="override a scene value (TOML syntax, e.g. --set contact.mu=0.5); repeatable")
     run.add_argument("--quiet", action="store_true", help="print only errors")
+    run.add_argument("--verbose", action="store_true",
+                     help="also print the form compiler's build log (hidden by default)")
     run.add_argument("--resume", action="store_true",
                      help="continue the run checkpointed in --out (the scene may differ only in its solver and "
                           "output sections and in loading.cycles)")
@@ -63,30 +73,76 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--no-warm-up", dest="warm_up", action="store_false",
                     help="skip the untimed one-cycle run that loads the compiled kernels first")
     st.add_argument("--quiet", action="store_true", help="print only the final table")
+    st.add_argument("--verbose", action="store_true",
+                    help="also print the form compiler's build log (hidden by default)")
     st.add_argument("--overwrite", action="store_true",
                     help="replace the study --out holds (its table, picture and runs)")
     return p
 
 
-def _rank() -> int:
-    from mpi4py import MPI
+#: Seconds a rank that failed waits for the others at the end before it aborts them all: ranks that failed
+#: together (bad input, a collective solver failure) meet within a fraction of a second.
+MEET_SECONDS = 5.0
 
-    return MPI.COMM_WORLD.rank
+#: The message of this rank's failure (printed once by :func:`_finish`), or None.
+_failure: list[str] = []
 
 
 def _say_error(prefix: str, exc: BaseException | str) -> None:
-    if _rank() == 0:
-        print(f"{prefix}: {exc}", file=sys.stderr)
+    """Record this rank's error message; :func:`_finish` prints it once (every rank may hold the same one)."""
+    _failure.append(f"{prefix}: {exc}")
+
+
+def _quiet_form_compiler(verbose: bool) -> None:
+    """Keep the form compiler's build log (``INFO:root:running build_ext`` and the compiler command lines)
+    out of the run's output unless ``verbose``. FFCx 0.5 installs a root handler (``logging.basicConfig``)
+    and cffi lowers the root logger's threshold while it compiles, so the handlers' own level is what holds;
+    ``verbose`` makes sure there is a handler (newer FFCx installs none)."""
+    import ffcx  # noqa: F401 - FFCx 0.5's import installs the root handler this adjusts
+
+    if verbose:
+        logging.basicConfig()  # no-op if a handler exists
+        logging.getLogger().setLevel(logging.INFO)
+    for handler in logging.getLogger().handlers:
+        handler.setLevel(logging.INFO if verbose else logging.WARNING)
+
+
+def _finish(code: int, comm) -> int:
+    """Every rank's exit: print the failure once and return ``code``, or abort all ranks if this one failed
+    alone (the others would wait in their next collective forever)."""
+    message = _failure[-1] if _failure else None
+    if comm is None or comm.size == 1:
+        if message:
+            print(message, file=sys.stderr)
+        return code
+    request = _exit_comm.Ibarrier()
+    if code == 0:
+        request.Wait()  # a rank that finished waits for the others (an Abort elsewhere ends it)
+    else:
+        deadline = time.monotonic() + MEET_SECONDS
+        while not request.Test():
+            if time.monotonic() > deadline:
+                print(f"{message or 'dolfinx-fretting: failed'} (on rank {comm.rank} alone: stopping all "
+                      f"{comm.size} ranks)", file=sys.stderr, flush=True)
+                comm.Abort(code)
+            time.sleep(0.01)
+    outcomes = _exit_comm.allgather((code, message))
+    failed = [(c, m) for c, m in outcomes if c != 0]
+    if comm.rank == 0 and failed:
+        for text in dict.fromkeys(m for _, m in failed if m):  # the same message once, distinct ones each
+            print(text, file=sys.stderr)
+    return max(c for c, _ in outcomes) if failed else 0
+
+
+_exit_comm = None
 
 
 def _study(args: argparse.Namespace) -> int:
     """``dolfinx-fretting study``: the trade study; 2 for bad input, 1 if the reference run fails."""
     from mpi4py import MPI
 
-    from .study import format_markdown, parse_point, parse_sweep, plan_study, run_study
-
     from .outdir import OutputFolderError
-    from .study import check_study_folder
+    from .study import check_study_folder, format_markdown, parse_point, parse_sweep, plan_study, run_study
 
     try:
         sweep = parse_sweep(args.sweep) if args.sweep is not None else None
@@ -96,6 +152,7 @@ def _study(args: argparse.Namespace) -> int:
     except (SceneError, OutputFolderError) as exc:
         _say_error("dolfinx-fretting study", exc)
         return 2
+    _quiet_form_compiler(args.verbose)
     try:
         rows = run_study(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet, warm_up=args.warm_up,
                          overwrite=args.overwrite)
@@ -163,8 +220,30 @@ def _compare(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the process exit code (0 ok, 2 bad input, 1 failed run)."""
-    args = _parser().parse_args(argv)
+    """Entry point; returns the process exit code (0 ok, 2 bad input, 1 failed run), the same on every rank."""
+    global _exit_comm
+    args = _parser().parse_args(argv)  # the same arguments on every rank: argparse's exit is collective
+    _failure.clear()
+    if args.command not in ("run", "study"):
+        return _finish(_command(args), None)
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    if _exit_comm is None and comm.size > 1:
+        _exit_comm = comm.Dup()  # the end-of-run meeting never matches a collective of the run itself
+    try:
+        code = _command(args)
+    except Exception:  # noqa: BLE001 - a bug: its traceback, and no rank left waiting for this one
+        if comm.size == 1:
+            raise
+        traceback.print_exc()
+        print(f"dolfinx-fretting: unexpected error on rank {comm.rank}: stopping all {comm.size} ranks",
+              file=sys.stderr, flush=True)
+        comm.Abort(1)
+    return _finish(code, comm)
+
+
+def _command(args: argparse.Namespace) -> int:
     if args.command == "scenes":
         from .scenes import load_scene as _load
         for name in sorted(builtin_scenes()):
@@ -177,7 +256,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         scene = load_scene(args.scene, args.overrides)
     except SceneError as exc:
-        print(f"dolfinx-fretting: {exc}", file=sys.stderr)
+        _say_error("dolfinx-fretting", exc)
         return 2
     if args.command == "show":
         print(scene.model_dump_json(indent=2))
@@ -202,6 +281,7 @@ def _run(args: argparse.Namespace, scene) -> int:
     from .io import TableError
     from .simulation import RunInterrupted, SimulationError, run_scene
 
+    _quiet_form_compiler(args.verbose)
     try:
         run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet, resume=args.resume, overwrite=args.overwrite)
     except RunInterrupted as exc:  # the run said where it stopped; a checkpoint and the summary are on disk
