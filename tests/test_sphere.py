@@ -18,7 +18,7 @@ from dolfinx import fem  # noqa: E402
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 
-from _sphere_model import COMM, NU, P, R, contact_radii, pressed, sphere_model  # noqa: E402
+from _sphere_model import COMM, E, NU, P, R, contact_radii, pressed, sphere_model  # noqa: E402
 
 
 def test_hertz_sphere_on_a_rigid_plane():
@@ -219,6 +219,58 @@ class _no_warning:
     def __exit__(self, *exc):
         self._catch.__exit__(*exc)
         assert not [w for w in self.caught if "exceeds half an element" in str(w.message)]
+
+
+def _steady_cycle_energy(problem, state, tangential, increments=40, cycles=2):
+    """Whole-ball dissipated energy of the last of ``cycles`` cycles of a triangular ``tangential`` waveform
+    (a Force or a Displacement amplitude along x, half model: y held at 0), P held by force."""
+    wave = dfr.CyclePath.waveform(increments, tangential=1.0).tangential.value  # 0 -> +1 -> 0 -> -1 -> 0
+    kind = type(tangential)
+    path = dfr.CyclePath(normal=dfr.Force(np.full(increments, P / 2)),
+                         tangential=(kind(tangential.value * wave), dfr.Displacement(np.zeros(increments))))
+    for _ in range(cycles):
+        cycle = problem.run_cycle(state, path)
+        state = problem.commit(state, cycle)
+    return 2 * float(cycle.records["dissipated_energy"].sum()), cycle
+
+
+def test_mindlin_deresiewicz_energy_of_a_steady_partial_slip_cycle():
+    """Energy of a steady cycle Q = +-Q*, P held, identical spheres (Mindlin & Deresiewicz 1953; Johnson §7.3):
+    Mindlin's load-displacement curve delta(Q) = (3 mu P (2 - nu) / (8 a G)) [1 - (1 - Q/(mu P))^(2/3)] (Johnson
+    eq. 7.42 with both bodies' compliances) unloaded by Masing's rule (the unloading branch is the loading curve
+    of 2 Q* doubled) encloses W = (9 mu^2 P^2 / (10 a)) (2 (2 - nu) / G) [1 - (1 - phi)^(5/3)
+    - (5 phi / 6) (1 + (1 - phi)^(2/3))], phi = Q*/(mu P) (Johnson eq. 7.60; checked against the Masing loop
+    integrated numerically to 1e-12). The second cycle is the closed loop (the first starts from Q = 0).
+
+    phi = 0.8 on matching meshes a/h = 6, extent 9, growth 1.5 (47124 dofs): measured +1.6 % (a/h = 4: +7.2 %,
+    a/h = 8: +0.9 %); 40 or 80 increments a cycle agree to 1e-4. The issue's 5 %. (At phi = 0.5 the slip annulus,
+    0.21 a wide, holds one or two rings of nodes and the error jumps with them: +12.6, -2.7, +5.2 % at a/h = 4,
+    6, 8.)"""
+    mu, phi = 0.5, 0.8
+    body, problem, a, p0, h = sphere_model(6, 9.0, 1.5, flat=True, mu=mu)
+    energy, cycle = _steady_cycle_energy(problem, pressed(problem, P / 2), dfr.Force(phi * mu * P / 2))
+    assert cycle.records["n_stick"].min() > 0  # partial slip throughout
+    G = E / (2 * (1 + NU))
+    closed = (9 * mu**2 * P**2 / (10 * a) * (2 * (2 - NU) / G)
+              * (1 - (1 - phi) ** (5 / 3) - 5 * phi / 6 * (1 + (1 - phi) ** (2 / 3))))
+    assert energy == pytest.approx(closed, rel=0.05)
+    problem.destroy()
+
+
+def test_gross_slip_loop_grows_by_4_mu_P():
+    """Beyond the transition the loop is a parallelogram whose width grows with the stroke: dW/d(delta*) = 4 mu P
+    (a Coulomb slide at mu P over 4 d(delta*) a cycle). Coarse mesh a/h = 2, extent 4, growth 1.6; strokes 15
+    and 20 um (relative slip below half an element): measured 1 - 2e-5. The issue's 1 %."""
+    mu = 0.5
+    body, problem, a, p0, h = sphere_model(2, 4.0, 1.6, flat=True, mu=mu)
+    state = pressed(problem, P / 2)
+    energies = []
+    for stroke in (0.015, 0.02):
+        energy, cycle = _steady_cycle_energy(problem, state, dfr.Displacement(stroke))
+        assert cycle.records["n_stick"].min() == 0  # gross slip: some increment has every contact sliding
+        energies.append(energy)
+    assert (energies[1] - energies[0]) / 0.005 == pytest.approx(4 * mu * P, rel=0.01)
+    problem.destroy()
 
 
 def test_half_model_equals_full_model():
