@@ -450,8 +450,9 @@ class FrettingWriter:
             frame = problem.contact.frame
             dim = problem.contact.dim
             D = sum(state.obstacle[k] * frame[k] for k in range(dim))
-            nodes = fem.locate_dofs_topological(u.function_space, u.function_space.mesh.topology.dim,
-                                                self.shifted_cells)
+            # The cells' dofs from the dofmap (locate_dofs_topological on cells needs the cell-to-cell
+            # connectivity on DOLFINx 0.11, which a 3D mesh under MPI has not computed).
+            nodes = np.unique(dfx.cell_dofmap(u.function_space)[self.shifted_cells])
             u.x.array.reshape(-1, u.function_space.dofmap.index_map_bs)[nodes, :D.size] -= D
         self.tables.fields(t, functions)
 
