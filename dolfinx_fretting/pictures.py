@@ -24,7 +24,9 @@ only skip the pictures, never end a finished run; the same command redraws them 
 
     python -m dolfinx_fretting.pictures RESULTS_DIR [--plane PX,PY,NX,NY]
 
-Two-dimensional meshes only (every built-in scene); a 3D run's pictures are skipped with a message.
+In 3D (tetrahedra or hexahedra) the same two files hold a perspective view of the body (magnified, cut by
+its symmetry plane where it is a half model) beside the contact zone at true scale, and the worn contact
+surface (``contact.xdmf``'s triangles) with the wear magnified over the original surface.
 Nothing here uses MPI: it runs on rank 0 after the run.
 """
 
@@ -44,7 +46,8 @@ import numpy as np
 from .contact_output import read_profiles
 
 __all__ = ["Fields", "read_fields", "field_times", "contact_surface", "nice_factor", "deformed_plotter",
-           "worn_plotter", "write_pictures", "draw_in_subprocess", "PICTURES", "VM_TITLE", "main"]
+           "deformed_plotter_3d", "worn_plotter", "worn_plotter_3d", "write_pictures", "draw_in_subprocess",
+           "PICTURES", "VM_TITLE", "main"]
 
 #: Files written by :func:`write_pictures`.
 PICTURES = ("deformed_von_mises.png", "worn_profile.png")
@@ -52,7 +55,7 @@ PICTURES = ("deformed_von_mises.png", "worn_profile.png")
 VM_TITLE = "von Mises stress (MPa)"
 WEAR_TITLE = "wear depth (mm)"
 #: XDMF topology name -> (VTK cell type, nodes per cell); DOLFINx writes VTK node order.
-_CELL_TYPES = {"Triangle": (5, 3), "Quadrilateral": (9, 4)}
+_CELL_TYPES = {"Triangle": (5, 3), "Quadrilateral": (9, 4), "Tetrahedron": (10, 4), "Hexahedron": (12, 8)}
 #: Colour map of both pictures (perceptually uniform, readable in grey).
 CMAP = "viridis"
 _WINDOW = (1600, 720)
@@ -451,6 +454,110 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None, plan
     return pl, info
 
 
+def _contact_box_3d(folder: Path, f: Fields) -> tuple[np.ndarray, float]:
+    """Centre and half-size of the loaded contact (at the fields' increment, else the last kept one)."""
+    prof = read_profiles(folder)
+    size = float(np.max(f.points.max(axis=0) - f.points.min(axis=0)))
+    if prof is None or prof.position_2 is None:
+        return 0.5 * (f.points.min(axis=0) + f.points.max(axis=0)), 0.5 * size
+    row = prof.index(int(round(f.time)))
+    pressure = prof.values["pressure"][-1 if row is None else row]
+    loaded = pressure > 0 if (pressure > 0).any() else np.ones(pressure.size, bool)
+    xy = np.column_stack([prof.position[loaded], prof.position_2[loaded]])
+    spacing = float(np.median(np.diff(np.unique(prof.position)))) if prof.position.size > 1 else size / 50
+    half = max(float(np.abs(xy).max()), 3 * spacing) * 1.6
+    return np.array([0.0, 0.0, 0.0]), half
+
+
+def deformed_plotter_3d(folder: str | Path, f: Fields | None = None):
+    """The 3D deformed-body picture as an off-screen pyvista Plotter (not yet rendered): the whole mesh with
+    the displacement magnified, and the contact zone at true scale, coloured by von Mises stress, seen
+    obliquely from the side of the symmetry plane y = 0 (a half model shows its cut there).
+
+    Returns:
+        (plotter, info) with ``clim``, ``scale``, ``time`` as :func:`deformed_plotter`.
+    """
+    pv = _pyvista()
+    folder = Path(folder)
+    f = read_fields(folder) if f is None else f
+    if f.gdim != 3:
+        raise ValueError("deformed_plotter_3d draws 3D meshes; deformed_plotter draws 2D ones")
+    lo, hi = f.points.min(axis=0), f.points.max(axis=0)
+    size = float(np.max(hi - lo))
+    umax = float(np.linalg.norm(f.displacement, axis=1).max())
+    scale = nice_factor(0.04 * size / umax) if umax > 0 else 1.0
+    clim = (float(f.von_mises.min()), float(f.von_mises.max()))
+    if clim[1] <= clim[0]:
+        clim = (clim[0], clim[0] + 1.0)
+    centre, half = _contact_box_3d(folder, f)
+    pl = pv.Plotter(off_screen=True, shape=(1, 2), window_size=list(_WINDOW), border=False)
+    pl.set_background("white")
+    titles = (f"Deformed body coloured by von Mises stress, increment {f.time:g} (displacement x {scale:g})",
+              "contact zone, true scale")
+    for col, factor in enumerate((scale, 1.0)):
+        pl.subplot(0, col)
+        grid = _grid(pv, f, f.points + factor * f.displacement)
+        grid.cell_data[VM_TITLE] = f.von_mises
+        if col == 1:  # the cells around the contact only: the zone is a small part of the body
+            box = (centre[0] - half, centre[0] + half, centre[1] - half, centre[1] + half, centre[2] - half,
+                   centre[2] + half)
+            grid = grid.clip_box(box, invert=False)
+        actor = pl.add_mesh(grid, scalars=VM_TITLE, cmap=CMAP, clim=clim, show_edges=col == 1,
+                            edge_color="#404040", line_width=0.5, show_scalar_bar=False)
+        _scalar_bar(pl, VM_TITLE + " " * col, actor.mapper)
+        pl.add_text(titles[col], position="upper_left", font_size=11 if col == 0 else 10, color="black")
+        # Obliquely from -y (the symmetry plane's side), a little above the contact plane; framed to fit.
+        pl.view_vector((0.55, -1.0, 0.45), viewup=(0.0, 0.0, 1.0))
+        pl.reset_camera()
+        pl.camera.zoom(0.9)
+    return pl, {"clim": clim, "scale": scale, "time": f.time, "fields": f}
+
+
+def worn_plotter_3d(folder: str | Path, plane_normal):
+    """The worn contact surface in 3D (``contact.xdmf``'s last time): the surface moved by the magnified
+    wear gap along the plane normal (into the body), coloured by the wear gap, over the original surface's
+    wireframe. ``(None, info)`` when nothing wore.
+
+    Returns:
+        (plotter, info) with ``magnification``, ``max_wear`` (mm), ``cycle`` and ``increment``.
+    """
+    from .contact_output import read_contact_xdmf
+
+    pv = _pyvista()
+    folder = Path(folder)
+    data = read_contact_xdmf(folder / "contact.xdmf")
+    wear = np.asarray(data["point_data"][-1]["wear"], dtype=float)
+    info = {"cycle": int(data["cycles"][-1]), "increment": int(data["times"][-1]),
+            "max_wear": float(wear.max()) if wear.size else 0.0}
+    if not wear.size or wear.max() <= 0:
+        return None, info
+    n = np.asarray(plane_normal, dtype=float)
+    n = n / np.linalg.norm(n)
+    points = np.asarray(data["points"], dtype=float)
+    worn_zone = points[wear > 0]
+    width = float(np.max(worn_zone.max(axis=0) - worn_zone.min(axis=0))) or 1.0
+    mag = nice_factor(0.15 * width / wear.max())  # the deepest point at ~15 % of the scar's width
+    tri = np.asarray(data["cells"][1], dtype=np.int64)
+    faces = np.column_stack([np.full(tri.shape[0], 3), tri]).ravel()
+    worn = pv.PolyData(points + mag * wear[:, None] * n[None, :], faces=faces)
+    worn.point_data[WEAR_TITLE] = wear
+    original = pv.PolyData(points, faces=faces)
+    pl = pv.Plotter(off_screen=True, window_size=[_WINDOW[0], _WINDOW[1]])
+    pl.set_background("white")
+    actor = pl.add_mesh(worn, scalars=WEAR_TITLE, cmap=CMAP, clim=(0.0, float(wear.max())), show_scalar_bar=False,
+                        lighting=False)
+    pl.add_mesh(original, style="wireframe", color="#9a9a9a", line_width=1)
+    _scalar_bar(pl, WEAR_TITLE, actor.mapper)
+    cycle = f"cycle {info['cycle']}" if info["cycle"] > 0 else "the monotonic load"
+    pl.add_text(f"Worn contact surface after {cycle} (increment {info['increment']}): wear x {mag:g}, "
+                f"max wear gap {wear.max():.3g} mm\n(grey: the original surface)", position="upper_left",
+                font_size=11, color="black")
+    pl.view_vector(tuple(np.array([0.5, -1.0, 0.0]) - 0.8 * n), viewup=tuple(n))  # from below the plane
+    pl.reset_camera()
+    info.update(magnification=mag)
+    return pl, info
+
+
 def _plane_from_description(folder: Path) -> tuple[list[float], list[float]] | None:
     """The obstacle plane (point, normal) recorded in the folder's ``run.json``, if any."""
     from .io import read_run_description
@@ -513,6 +620,20 @@ def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> l
                      + (f": the deformed picture shows increment {loaded.time:g}, the last loaded one"
                         if loaded is not None else ""))
         f = loaded if loaded is not None else f
+    if f.gdim == 3:
+        pl, info = deformed_plotter_3d(folder, f)
+        pl.screenshot(str(folder / PICTURES[0]))
+        pl.close()
+        notes.append(f"wrote {folder / PICTURES[0]} (3D, displacement x {info['scale']:g}, von Mises "
+                     f"{info['clim'][0]:.4g}..{info['clim'][1]:.4g} MPa)")
+        pl, winfo = worn_plotter_3d(folder, plane_normal)
+        if pl is None:
+            notes.append(f"{PICTURES[1]} not drawn: no wear")
+        else:
+            pl.screenshot(str(folder / PICTURES[1]))
+            pl.close()
+            notes.append(f"wrote {folder / PICTURES[1]} (3D worn surface, wear x {winfo['magnification']:g})")
+        return notes
     two_bodies = _obstacle_is_a_body(folder)
     pl, info = deformed_plotter(folder, plane_point, plane_normal, f, draw_plane=not two_bodies)
     pl.screenshot(str(folder / PICTURES[0]))
@@ -538,7 +659,7 @@ def draw_in_subprocess(folder: str | Path, plane_point, plane_normal, timeout: f
     Returns:
         A one-line report: what was written, or that the pictures were skipped and why.
     """
-    p = ",".join(f"{v:.17g}" for v in (*list(plane_point)[:2], *list(plane_normal)[:2]))
+    p = ",".join(f"{v:.17g}" for v in (*list(plane_point), *list(plane_normal)))  # 4 numbers in 2D, 6 in 3D
     env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
     env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1]), env.get("PYTHONPATH", "")])
     try:
@@ -553,24 +674,27 @@ def draw_in_subprocess(folder: str | Path, plane_point, plane_normal, timeout: f
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m dolfinx_fretting.pictures DIR [--plane PX,PY,NX,NY]``: 0 drawn, 1 skipped or failed."""
+    """``python -m dolfinx_fretting.pictures DIR [--plane PX,PY,NX,NY | PX,PY,PZ,NX,NY,NZ]``: 0 drawn, 1 skipped
+    or failed, 2 a bad ``--plane``."""
     ap = argparse.ArgumentParser(prog="python -m dolfinx_fretting.pictures",
                                  description=__doc__.split("\n")[0])
     ap.add_argument("folder", type=Path, help="a run's output folder")
     ap.add_argument("--plane", default=None, metavar="PX,PY,NX,NY",
-                    help="the rigid plane's point and normal (default: from the folder's checkpoint)")
+                    help="the rigid plane's point and normal, 2D (or PX,PY,PZ,NX,NY,NZ in 3D; default: from the "
+                         "folder's run.json)")
     args = ap.parse_args(argv)
     point = normal = None
     if args.plane is not None:
         try:
             v = [float(t) for t in args.plane.split(",")]
-            if len(v) != 4 or not all(map(math.isfinite, v)) or v[2] == v[3] == 0:
+            half = len(v) // 2
+            if len(v) not in (4, 6) or not all(map(math.isfinite, v)) or not any(v[half:]):
                 raise ValueError
         except ValueError:
-            print(f"--plane: four finite numbers PX,PY,NX,NY with a non-zero normal, got {args.plane!r}",
-                  file=sys.stderr)
+            print(f"--plane: four (2D) or six (3D) finite numbers, a point and a non-zero normal, got "
+                  f"{args.plane!r}", file=sys.stderr)
             return 2
-        point, normal = v[:2], v[2:]
+        point, normal = v[:half], v[half:]
     try:
         import pyvista  # noqa: F401
     except Exception as exc:  # noqa: BLE001 - ImportError, or a VTK that cannot load

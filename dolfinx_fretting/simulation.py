@@ -766,10 +766,7 @@ def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: boo
             plot_run(out, run.writer.description)
         except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
             run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
-        if scene.output.xdmf and run.problem.contact.dim == 3:
-            run.say(f"[{scene.name}] pyvista pictures (deformed body, worn scar) are drawn for 2D runs only; the 3D "
-                    "contact is in contact_maps.png, contact.xdmf and fields.xdmf (ParaView)")
-        elif scene.output.xdmf:  # pyvista pictures, in a child process: a VTK failure costs only them
+        if scene.output.xdmf:  # pyvista pictures, in a child process: a VTK failure costs only them
             from .pictures import draw_in_subprocess
             pictures = draw_in_subprocess(out, scene.contact.plane_point, scene.contact.plane_normal)
             run.say(f"[{scene.name}] {pictures}")

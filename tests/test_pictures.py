@@ -166,3 +166,35 @@ def test_unloaded_last_time_draws_the_last_loaded_one(tiny_run, tmp_path):
     assert said.startswith(f"pictures: the last field time (increment {times[-1]:g}) carries no load: the "
                            f"deformed picture shows increment {times[-2]:g}, the last loaded one; wrote "), said
     assert (folder / PICTURES[0]).is_file()
+
+
+@pytest.fixture(scope="module")
+def sphere_run(tmp_path_factory):
+    """The 3D ball on a flat, coarse (h = 0.09 mm, 7344 dofs), three cycles with wear; the run draws its pictures."""
+    out = tmp_path_factory.mktemp("pictures3d") / "sphere"
+    summary = run_scene(load_scene("sphere-flat", ["geometry.contact_mesh_size=0.09", "loading.cycles=3",
+                                                   "loading.increments_per_cycle=16", "output.snapshot_cycles=[1, 3]",
+                                                   "output.progress=false", "wear.k=1e-6"]), out, quiet=True)
+    return out, summary
+
+
+def test_3d_run_draws_the_body_and_the_worn_surface(sphere_run):
+    out, summary = sphere_run
+    from PIL import Image
+
+    from dolfinx_fretting.pictures import deformed_plotter_3d, worn_plotter_3d
+
+    for name in PICTURES:  # drawn by the run (a child process), not blank
+        img = np.asarray(Image.open(out / name).convert("RGB"), dtype=float)
+        assert img.shape == (720, 1600, 3) and img.std() > 20, name
+        assert (np.abs(img - 255).sum(axis=2) > 30).mean() > 0.05, name
+    pl, info = deformed_plotter_3d(out)
+    pl.close()
+    vm = _last_von_mises(out)
+    assert info["fields"].gdim == 3 and tuple(info["clim"]) == (vm.min(), vm.max())
+    pl, winfo = worn_plotter_3d(out, [0.0, 0.0, 1.0])
+    pl.close()
+    # contact.xdmf's last time is the run's end: its deepest wear gap is the summary's (HDF5 doubles)
+    assert summary["max_wear_depth"] > 0
+    assert winfo["max_wear"] == pytest.approx(summary["max_wear_depth"], rel=1e-12)
+    assert winfo["cycle"] == 3
