@@ -158,7 +158,7 @@ def report(out: Path, cycles: int, folders: dict, times: dict, target: Path) -> 
                  f"{ep:.3e} vs {el:.3e} mm", verdict(ep > el)))
     r1 = g("partial", True, 1, 1, "max_wear") / g("partial", False, 1, 1, "max_wear")
     rc = g("partial", True, 1, cycles, "max_wear") / g("partial", False, 1, cycles, "max_wear")
-    rows.append(("Fig. 18", f"partial, real k: elastic-plastic's max wear gap falls behind elastic's gradually",
+    rows.append(("Fig. 18", "partial, real k: elastic-plastic's max wear gap falls behind elastic's gradually",
                  f"ratio elastic-plastic / elastic {r1:.3f} (cycle 1) -> {rc:.3f} (cycle {cycles})", verdict(rc < r1)))
     pe1, pec = g("partial", False, 1, 1, "peak"), g("partial", False, 1, cycles, "peak")
     rows.append(("Fig. 18", f"partial, real k, elastic: the pressure stays almost the same over {cycles} cycles",
