@@ -622,31 +622,22 @@ def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> l
         f = loaded if loaded is not None else f
     if f.gdim == 3:
         pl, info = deformed_plotter_3d(folder, f)
-        pl.screenshot(str(folder / PICTURES[0]))
-        pl.close()
-        notes.append(f"wrote {folder / PICTURES[0]} (3D, displacement x {info['scale']:g}, von Mises "
-                     f"{info['clim'][0]:.4g}..{info['clim'][1]:.4g} MPa)")
-        pl, winfo = worn_plotter_3d(folder, plane_normal)
-        if pl is None:
-            notes.append(f"{PICTURES[1]} not drawn: no wear")
-        else:
-            pl.screenshot(str(folder / PICTURES[1]))
-            pl.close()
-            notes.append(f"wrote {folder / PICTURES[1]} (3D worn surface, wear x {winfo['magnification']:g})")
-        return notes
-    two_bodies = _obstacle_is_a_body(folder)
-    pl, info = deformed_plotter(folder, plane_point, plane_normal, f, draw_plane=not two_bodies)
+        pl_worn, winfo = worn_plotter_3d(folder, plane_normal)
+        kind = "3D, "
+    else:
+        pl, info = deformed_plotter(folder, plane_point, plane_normal, f, draw_plane=not _obstacle_is_a_body(folder))
+        pl_worn, winfo = worn_plotter(folder, plane_normal, f, plane_point)
+        kind = ""
     pl.screenshot(str(folder / PICTURES[0]))
     pl.close()
-    notes.append(f"wrote {folder / PICTURES[0]} (displacement x {info['scale']:g}, von Mises "
+    notes.append(f"wrote {folder / PICTURES[0]} ({kind}displacement x {info['scale']:g}, von Mises "
                  f"{info['clim'][0]:.4g}..{info['clim'][1]:.4g} MPa)")
-    pl, winfo = worn_plotter(folder, plane_normal, f, plane_point)
-    if pl is None:
+    if pl_worn is None:
         notes.append(f"{PICTURES[1]} not drawn: no wear")
     else:
-        pl.screenshot(str(folder / PICTURES[1]))
-        pl.close()
-        notes.append(f"wrote {folder / PICTURES[1]} (wear x {winfo['magnification']:g})")
+        pl_worn.screenshot(str(folder / PICTURES[1]))
+        pl_worn.close()
+        notes.append(f"wrote {folder / PICTURES[1]} ({kind}wear x {winfo['magnification']:g})")
     return notes
 
 
