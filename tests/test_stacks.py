@@ -17,6 +17,7 @@ checked by the rest of the suite on that stack (tests/test_meshes.py).
 from __future__ import annotations
 
 import json
+import re
 import math
 import os
 import subprocess
@@ -69,6 +70,9 @@ RTOL = 1e-8
 #: one increment, ~4.5 local solves of ~120 sweeps). A count is not a result: the answers are held to RTOL
 #: like the others; 2e-2 (~2000 sweeps, four Newton iterations) still catches a changed iteration.
 COUNT_RTOL = {("cylinder-flat-plastic", "local_iterations"): 2e-2}
+#: Descriptions that quote such counts (``modelled.material``: "170 tangent update(s)" on one stack, 171 on the
+#: other, measured on a fresh machine): compared with their numbers masked.
+PROSE_WITH_COUNTS = {("cylinder-flat-plastic", "modelled.material")}
 
 _CHILD = r"""
 import json, sys
@@ -147,6 +151,8 @@ def test_same_summary_on_both_stacks(runs, case):
             assert isinstance(x, (int, float)) and isinstance(y, (int, float)), key
             assert math.isclose(x, y, rel_tol=RTOL, abs_tol=1e-300), (key, x, y, abs(x - y) / max(abs(x), abs(y)))
             compared += 1
+        elif (case, key) in PROSE_WITH_COUNTS:
+            assert re.sub(r"\d+", "#", x) == re.sub(r"\d+", "#", y), (key, x, y)
         elif (case, key) in COUNT_RTOL:
             assert abs(x - y) <= COUNT_RTOL[case, key] * max(abs(x), abs(y)), (key, x, y)
         else:
