@@ -42,6 +42,8 @@ def _parser() -> argparse.ArgumentParser:
                           "output sections and in loading.cycles)")
     run.add_argument("--overwrite", action="store_true",
                      help="replace the run --out holds (deletes its files, checkpoint included; other files stay)")
+    run.add_argument("--ignore-size", action="store_true",
+                     help="run even if the size estimate exceeds the memory available (refused by default)")
     show = sub.add_parser("show", help="print a scene with every default filled in, as validated")
     show.add_argument("scene")
     show.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
@@ -77,6 +79,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="also print the form compiler's build log (hidden by default)")
     st.add_argument("--overwrite", action="store_true",
                     help="replace the study --out holds (its table, picture and runs)")
+    st.add_argument("--ignore-size", action="store_true",
+                    help="run even if a run's size estimate exceeds the memory available (refused by default)")
     return p
 
 
@@ -142,12 +146,15 @@ def _study(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
     from .outdir import OutputFolderError
+    from .sizes import check_size
     from .study import check_study_folder, format_markdown, parse_point, parse_sweep, plan_study, run_study
 
     try:
         sweep = parse_sweep(args.sweep) if args.sweep is not None else None
         points = [parse_point(p) for p in args.point]
         plan = plan_study(args.scene, args.overrides, args.reference, sweep, points)
+        for point in plan:  # every run's size before the first starts (SizeError is a SceneError)
+            check_size(point.scene, MPI.COMM_WORLD, ignore=args.ignore_size)
         check_study_folder(args.out, overwrite=args.overwrite)
     except (SceneError, OutputFolderError) as exc:
         _say_error("dolfinx-fretting study", exc)
@@ -155,7 +162,7 @@ def _study(args: argparse.Namespace) -> int:
     _quiet_form_compiler(args.verbose)
     try:
         rows = run_study(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet, warm_up=args.warm_up,
-                         overwrite=args.overwrite)
+                         overwrite=args.overwrite, ignore_size=args.ignore_size)
     except OutputFolderError as exc:
         _say_error("dolfinx-fretting study", exc)
         return 2
@@ -283,10 +290,11 @@ def _run(args: argparse.Namespace, scene) -> int:
 
     _quiet_form_compiler(args.verbose)
     try:
-        run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet, resume=args.resume, overwrite=args.overwrite)
+        run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet, resume=args.resume, overwrite=args.overwrite,
+                  ignore_size=args.ignore_size)
     except RunInterrupted as exc:  # the run said where it stopped; a checkpoint and the summary are on disk
         return exc.exit_code
-    except (OutputFolderError, TableError) as exc:
+    except (OutputFolderError, TableError, SceneError) as exc:  # SceneError: the size check (sizes.SizeError)
         _say_error("dolfinx-fretting", exc)
         return 2
     except SimulationError as exc:

@@ -132,6 +132,12 @@ def _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_s
     return R, h, a, H
 
 
+def _refined_depth(R: float, h: float, a: float) -> float:
+    """Default depth t (mm) of the size-h sector under the refined arc (and in the flat): a/4, at least 2h, at
+    most R/2 (also read by :mod:`dolfinx_fretting.sizes` to count the nodes before meshing)."""
+    return min(max(a / 4.0, 2.0 * h), R / 2.0)
+
+
 # Half-cylinder ---------------------------------------------------------------------------------------------
 def half_cylinder(comm: MPI.Comm, radius: float, contact_mesh_size: float = 0.01,
                   contact_half_width: float | None = None, coarse_mesh_size: float | None = None,
@@ -192,7 +198,7 @@ def half_cylinder(comm: MPI.Comm, radius: float, contact_mesh_size: float = 0.01
         RuntimeError: if gmsh fails (raised on every rank).
     """
     R, h, a, H = _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_size)
-    t = min(max(a / 4.0, 2.0 * h), R / 2.0) if refined_depth is None else refined_depth
+    t = _refined_depth(R, h, a) if refined_depth is None else refined_depth
     _check("refined_depth", t, _is_real(t) and 0 < t <= R / 2.0,
            f"0 < refined_depth <= radius / 2 = {R / 2.0} mm")
     t = float(t)
@@ -254,7 +260,7 @@ def cylinder_on_flat(comm: MPI.Comm, radius: float, flat_width: float, flat_heig
         RuntimeError: if gmsh fails (raised on every rank).
     """
     R, h, a, H = _cylinder_sizes(radius, contact_mesh_size, contact_half_width, coarse_mesh_size)
-    t = min(max(a / 4.0, 2.0 * h), R / 2.0)
+    t = _refined_depth(R, h, a)
     _check("flat_width", flat_width, _is_real(flat_width) and flat_width > 2 * a,
            f"flat_width > 2 contact_half_width = {2 * a} mm")
     _check("flat_height", flat_height, _is_real(flat_height) and flat_height > t,

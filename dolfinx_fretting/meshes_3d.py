@@ -117,6 +117,18 @@ def _hexahedra(nx: int, ny: int, nz: int, offset: int = 0) -> np.ndarray:
     return offset + base[:, None] + np.asarray(corners)[None, :]
 
 
+def _grid_axes(contact_radius: float, step: float, *, zone: float, depth_zone: float, extent: float, growth: float,
+               half: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The grid coordinates x, y and depth of one body of :func:`sphere_on_flat_grid` (also read by
+    :mod:`dolfinx_fretting.sizes` to count the nodes before meshing)."""
+    a = float(contact_radius)
+    along = graded_coordinates(step, zone * a, extent * a, growth)
+    x = _mirror(along)
+    y = along if half else _mirror(along)
+    depth = graded_coordinates(step, depth_zone * a, extent * a, growth)
+    return x, y, depth
+
+
 def sphere_on_flat_grid(radius: float, contact_radius: float, contact_mesh_size: float, *, zone: float = 1.5,
                         depth_zone: float = 1.0, extent: float = 9.0, growth: float = 1.5, half: bool = True,
                         flat: bool = True, flat_mesh_size: float | None = None) -> dict[str, np.ndarray]:
@@ -134,11 +146,7 @@ def sphere_on_flat_grid(radius: float, contact_radius: float, contact_mesh_size:
     b = math.ceil(zone * a / h - 1e-9) * h
 
     def axes(step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        along = graded_coordinates(step, zone * a, L, growth)
-        x = _mirror(along)
-        y = along if half else _mirror(along)
-        depth = graded_coordinates(step, depth_zone * a, height, growth)
-        return x, y, depth
+        return _grid_axes(a, step, zone=zone, depth_zone=depth_zone, extent=extent, growth=growth, half=half)
 
     x, y, depth = axes(h)
     X, Y, D = np.meshgrid(x, y, depth, indexing="ij")

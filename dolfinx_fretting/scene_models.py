@@ -132,6 +132,59 @@ def _pressure_load(V, body: BodyMesh, face: str):
     return -ufl.dot(ufl.FacetNormal(V.mesh), ufl.TestFunction(V)) * ds(body.tags[face])
 
 
+def contact_modulus(scene: Scene) -> float:
+    """E* (MPa) of a built-in geometry's Hertz estimate: ``E/(1 - nu^2)`` on a rigid plane, half that for two
+    identical bodies."""
+    m = scene.material
+    return m.E / (1 - m.nu**2) / (2.0 if scene.contact.obstacle == "elastic_flat" else 1.0)
+
+
+def expected_contact_size(scene: Scene) -> float:
+    """The contact half-width (cylinder) or radius (sphere) a built-in geometry expects (mm), before any mesh.
+
+    Hertz under a normal force; under an approach d, the geometric ``sqrt(2 R d)`` (cylinder) or ``sqrt(R d)``
+    (sphere; against the flat the two bodies share d, ``sqrt(R d / 2)`` is then an underestimate by 2^(1/2) of
+    nothing: the mesh's uniform zone (1.5 a) holds either).
+    """
+    from .analytic import hertz_line_contact
+    from .meshes_3d import hertz_sphere
+
+    g, lo = scene.geometry, scene.loading
+    sphere = g.kind == "sphere"
+    if lo.normal_force is not None:
+        return float((hertz_sphere if sphere else hertz_line_contact)(lo.normal_force, g.radius,
+                                                                       contact_modulus(scene))[0])
+    return float(np.sqrt((1.0 if sphere else 2.0) * g.radius * lo.normal_displacement))
+
+
+def sphere_mesh_size(scene: Scene) -> float:
+    """The edge h (mm) of a sphere's cubes under the contact: ``geometry.contact_mesh_size`` if the scene sets
+    it, else a quarter of the expected contact radius a; at most a."""
+    g = scene.geometry
+    a = expected_contact_size(scene)
+    h = g.contact_mesh_size if "contact_mesh_size" in g.model_fields_set else a / 4.0
+    return min(h, a)
+
+
+def candidate_window(scene: Scene, zone: float, h: float) -> tuple[float, bool]:
+    """The initial candidate half-width (mm) of a half-cylinder or sphere scene, and whether it is automatic.
+
+    Automatic for elastic bodies without ``contact.candidate_half_width`` (an elastic-plastic body cannot grow
+    its window, and plasticity widens the contact beyond the elastic estimate, so it keeps the refined zone):
+    ``1.5 a + 3 h`` with a from :func:`expected_contact_size`, at most the refined ``zone``.
+
+    Args:
+        scene: The scene.
+        zone: Half-width of the mesh's refined (uniform) contact zone (mm).
+        h: Contact element size (mm).
+    """
+    given = scene.contact.candidate_half_width
+    automatic = given is None and scene.material.model == "elastic"
+    if automatic:
+        return float(min(zone, 1.5 * expected_contact_size(scene) + 3 * h)), True
+    return (given if given is not None else zone), False
+
+
 def build_scene_model(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD, *,
                       applies_model_fraction: bool = False) -> SceneModel:
     """Mesh the scene's geometry and write its model. Collective.
@@ -158,7 +211,6 @@ def build_scene_model(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD, *,
 def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
     """A half-cylinder on a rigid plane, or on an elastic flat (two bodies, one mesh)."""
     from . import meshes
-    from .analytic import hertz_line_contact
 
     g, m = scene.geometry, scene.material
     two_body = scene.contact.obstacle == "elastic_flat"
@@ -171,19 +223,8 @@ def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
     mesh_s = time.perf_counter() - t0
     V, form, von_mises, bcs, loads = _model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
     plane = _plane(scene, body)
-    E_star = m.E / (1 - m.nu**2) / (2.0 if two_body else 1.0)
-    # Automatic window (elastic bodies: an elastic-plastic body cannot grow its window, and plasticity widens
-    # the contact beyond the elastic estimate, so it keeps the refined zone): 1.5 a + 3 h, a from the
-    # Hertz estimate of the normal force, or the geometric sqrt(2 R d) under a prescribed approach.
-    automatic = scene.contact.candidate_half_width is None and m.model == "elastic"
-    if automatic:
-        lo = scene.loading
-        a = (hertz_line_contact(lo.normal_force, g.radius, E_star)[0] if lo.normal_force is not None
-             else float(np.sqrt(2 * g.radius * lo.normal_displacement)))
-        window = float(min(g.refined_half_width, 1.5 * a + 3 * g.contact_mesh_size))
-    else:
-        window = scene.contact.candidate_half_width if scene.contact.candidate_half_width is not None \
-            else g.refined_half_width
+    E_star = contact_modulus(scene)
+    window, automatic = candidate_window(scene, g.refined_half_width, g.contact_mesh_size)
     elastic_cells = display_cells = None
     if two_body:
         obstacle = ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal)
@@ -208,18 +249,12 @@ def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
     a half model about y = 0 by default (a roller there)."""
     from dolfinx import fem
 
-    from .meshes_3d import hertz_sphere, sphere_on_flat
+    from .meshes_3d import sphere_on_flat
 
-    g, m, lo = scene.geometry, scene.material, scene.loading
+    g, m = scene.geometry, scene.material
     two_body = scene.contact.obstacle == "elastic_flat"
-    E_star = m.E / (1 - m.nu**2) / (2.0 if two_body else 1.0)
-    # The expected contact radius: Hertz under the normal force; under an approach d, the geometric sqrt(R d)
-    # (rigid plane; against the flat the two bodies share d, sqrt(R d / 2) is then an underestimate by 2^(1/2)
-    # of nothing: the mesh's uniform zone (1.5 a) holds either).
-    a = (hertz_sphere(lo.normal_force, g.radius, E_star)[0] if lo.normal_force is not None
-         else float(np.sqrt(g.radius * lo.normal_displacement)))
-    h = g.contact_mesh_size if "contact_mesh_size" in g.model_fields_set else a / 4.0
-    h = min(h, a)
+    a = expected_contact_size(scene)
+    h = sphere_mesh_size(scene)
     t0 = time.perf_counter()
     body = sphere_on_flat(comm, g.radius, a, h, half=g.half_model, flat=two_body)
     mesh_s = time.perf_counter() - t0
@@ -230,10 +265,8 @@ def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
         bcs.append(fem.dirichletbc(fem.Function(V_y), fem.locate_dofs_topological((V.sub(1), V_y), 2, faces),
                                    V.sub(1)))
     plane = _plane(scene, body)
-    automatic = scene.contact.candidate_half_width is None and m.model == "elastic"
     zone = body.contact_half_width
-    window = (float(min(zone, 1.5 * a + 3 * h)) if automatic
-              else scene.contact.candidate_half_width if scene.contact.candidate_half_width is not None else zone)
+    window, automatic = candidate_window(scene, zone, h)
     elastic_cells = display_cells = None
     if two_body:
         obstacle = ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal)

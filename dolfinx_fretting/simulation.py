@@ -41,6 +41,7 @@ from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleR
 from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
 from .scene_models import PRESSURE_LOAD, SceneModel, build_scene_model
 from .scenes import Scene, describe_differences
+from .sizes import SizeEstimate, check_size
 
 __all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "run_scene", "read_checkpoint",
            "CHECKPOINT"]
@@ -251,8 +252,10 @@ def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> R
 class _Run:
     """One run of a scene: the load path, the checks, the outputs and the checkpoints. Collective."""
 
-    def __init__(self, scene: Scene, out_dir: Path, comm: MPI.Comm, quiet: bool, resume: bool):
+    def __init__(self, scene: Scene, out_dir: Path, comm: MPI.Comm, quiet: bool, resume: bool,
+                 size_estimate: SizeEstimate | None = None):
         self.scene = scene
+        self.size_estimate = size_estimate
         self.out = out_dir
         self.comm = comm
         self.rank0 = comm.rank == 0
@@ -627,6 +630,8 @@ class _Run:
         summary["contact_window"] = model.half_width
         summary["window_growths"] = pr.window_growths
         summary["modelled"] = self._modelled()
+        if self.size_estimate is not None:  # the estimate made before meshing, to compare with what was built
+            summary["size_estimate"] = self.size_estimate.as_dict()
         if error is not None:
             summary["error"] = error
         return summary
@@ -686,7 +691,7 @@ class _Run:
 
 
 def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False,
-              resume: bool = False, overwrite: bool = False) -> dict[str, Any]:
+              resume: bool = False, overwrite: bool = False, ignore_size: bool = False) -> dict[str, Any]:
     """Run a scene and write its outputs into ``out_dir``. Collective.
 
     Args:
@@ -697,26 +702,34 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
         resume: Continue from ``out_dir/checkpoint.npz`` (the scene may differ only in its ``solver`` and
             ``output`` sections and in ``loading.cycles``).
         overwrite: Delete the run ``out_dir`` holds first (its files only; :mod:`dolfinx_fretting.outdir`).
+        ignore_size: Run even if the size estimate (:func:`dolfinx_fretting.sizes.check_size`) exceeds the
+            memory available.
 
     Returns:
         The summary (also written to ``out_dir/summary.json``).
 
     Raises:
+        SizeError: before any work: the estimated model does not fit in the memory available (and not
+            ``ignore_size``); the message names the keys that set its size.
         OutputFolderError: before any work: ``out_dir`` is a file, not writable, locked by another run, or
             holds a run and neither ``resume`` nor ``overwrite`` is given.
         SimulationError: when an increment fails or a result is not finite; the outputs of the converged
             increments (of the last complete cycle in a cyclic run), a checkpoint to resume from and a summary
             with ``converged = false`` and the diagnostic are on disk.
     """
+    size = check_size(scene, comm, ignore=ignore_size)  # before any mesh: a typo in a size must not eat the machine
+    if comm.rank == 0 and not quiet:
+        print(f"[{scene.name}] {size.describe()}", flush=True)
     with claim_output_folder(out_dir, comm, resume=resume, overwrite=overwrite):  # before the mesh; held to the end
-        return _run_scene(scene, Path(out_dir), comm, quiet, resume)
+        return _run_scene(scene, Path(out_dir), comm, quiet, resume, size)
 
 
-def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: bool) -> dict[str, Any]:
+def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: bool,
+               size: SizeEstimate | None = None) -> dict[str, Any]:
     import signal
     import threading
 
-    run = _Run(scene, out, comm, quiet, resume)
+    run = _Run(scene, out, comm, quiet, resume, size)
     error = None
     # SIGINT / SIGTERM: finish the current increment or cycle, checkpoint, write the summary, then raise
     # RunInterrupted (handlers only in the main thread, where Python delivers signals; restored after).

@@ -419,7 +419,7 @@ def check_study_folder(out: str | Path, overwrite: bool = False) -> Path:
     return folder
 
 
-def _warm_up(point: StudyPoint, out: Path, comm) -> None:
+def _warm_up(point: StudyPoint, out: Path, comm, ignore_size: bool = False) -> None:
     """An untimed short run (one cycle) so that the first timed run does not pay for loading the kernels."""
     from .simulation import SimulationError, run_scene
 
@@ -428,13 +428,13 @@ def _warm_up(point: StudyPoint, out: Path, comm) -> None:
         sc.loading.cycles = 1
         sc.output.snapshot_cycles = [1]
     try:
-        run_scene(sc, out / "warmup", comm, quiet=True, overwrite=True)
+        run_scene(sc, out / "warmup", comm, quiet=True, overwrite=True, ignore_size=ignore_size)
     except SimulationError:
         pass  # a warm-up only loads code; the real runs report their own failures
 
 
 def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: bool = False,
-              warm_up: bool = True, overwrite: bool = False) -> list[dict[str, Any]]:
+              warm_up: bool = True, overwrite: bool = False, ignore_size: bool = False) -> list[dict[str, Any]]:
     """Run every point of ``plan`` (reference first), compute the errors and write the table and plot.
 
     Collective: every rank runs every scene; files are written and errors computed on rank 0 and the rows
@@ -448,6 +448,8 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         quiet: Print nothing but the final table.
         warm_up: Run the reference's first cycle once, untimed, before the timed runs.
         overwrite: Replace the study ``out`` holds (its runs are rerun in place).
+        ignore_size: Run each scene even if its size estimate exceeds the memory available
+            (:func:`dolfinx_fretting.sizes.check_size`); otherwise such a run fails like any other.
 
     Returns:
         The rows of ``study.csv`` (:data:`STUDY_FIELDS`), reference first.
@@ -478,7 +480,7 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
     runs_dir = out / "runs"
     say = (lambda m: print(m, flush=True)) if (rank0 and not quiet) else (lambda m: None)
     if warm_up:
-        _warm_up(plan[0], runs_dir, comm)
+        _warm_up(plan[0], runs_dir, comm, ignore_size)
     rows: list[dict[str, Any]] = []
     ref_folder = runs_dir / plan[0].label
     ref_time = math.nan
@@ -489,7 +491,7 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         t0 = time.perf_counter()
         failure = ""
         try:  # the study owns runs/: a point's folder from an earlier study is replaced
-            run_scene(point.scene, folder, comm, quiet=True, overwrite=True)
+            run_scene(point.scene, folder, comm, quiet=True, overwrite=True, ignore_size=ignore_size)
         except OutputFolderError:
             raise  # locked by another run: not a result of this point
         except (SimulationError, ValueError, DelassusError) as exc:  # ValueError: checks that need the mesh

@@ -29,7 +29,7 @@ DEMOS = sorted((ROOT / "demos").glob("demo_*.py"))
 #: The modules with a page in docs/reference (the issue's list, and those the others refer to).
 MODULES = ("problem", "contact", "output", "plots", "scenes", "local_solvers", "wear", "cycling",
            "cycle_jump", "plasticity", "plastic_zone", "materials", "compliance", "loading", "io",
-           "contact_output", "_dolfinx")
+           "contact_output", "_dolfinx", "sizes")
 
 
 @pytest.fixture(scope="module")

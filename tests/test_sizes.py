@@ -1,0 +1,208 @@
+"""The size estimate before meshing (dolfinx_fretting.sizes) against the models actually built, and the refusal
+of a model that would not fit in memory (before any mesh, with a message naming the keys and the numbers)."""
+
+from __future__ import annotations
+
+import functools
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from mpi4py import MPI
+
+from dolfinx_fretting import sizes
+from dolfinx_fretting.cli import main
+from dolfinx_fretting.scenes import SceneError, load_scene
+from dolfinx_fretting.sizes import SizeError, check_size, estimate, msh_node_count
+
+COMM = MPI.COMM_WORLD
+#: Quiet, short outputs for the runs of these tests.
+QUIET = ["output.xdmf=false", "output.plots=false", "output.progress=false"]
+
+#: Each built-in scene on its default mesh and on a coarser one.
+CASES = [
+    ("hertz", []), ("hertz", ["geometry.contact_mesh_size=0.02"]),
+    ("cylinder-flat", []), ("cylinder-flat", ["geometry.contact_mesh_size=0.02"]),
+    ("cylinder-flat-partial", []), ("cylinder-flat-partial", ["geometry.contact_mesh_size=0.04"]),
+    ("mccoll", []), ("mccoll", ["geometry.contact_mesh_size=0.02"]),
+    ("stromberg-block", []), ("stromberg-block", ["geometry.nx=25", "geometry.ny=20"]),
+    ("sphere-flat", []), ("sphere-flat", ["geometry.contact_mesh_size=0.09"]),
+]
+
+
+@pytest.mark.parametrize("name,overrides", CASES, ids=[" ".join([n, *o]) for n, o in CASES])
+def test_estimate_matches_the_built_model(name, overrides):
+    """Dofs and contacts estimated before meshing against the model built from the same scene."""
+    from dolfinx_fretting.simulation import ContactModel
+
+    scene = load_scene(name, overrides)
+    size = estimate(scene, COMM.size)
+    model = ContactModel(scene, COMM)
+    try:
+        dofs, contacts = model.problem.n_dofs, model.contact.nc
+    finally:
+        model.problem.destroy()
+    assert size.contacts == contacts  # the contact zones are structured: the window's nodes are counted exactly
+    if size.exact:  # rectangle and sphere: structured meshes, counted exactly
+        assert size.dofs == dofs
+    else:
+        # gmsh's unstructured part: a node density fitted on 18 meshes (h = 1.25-40 um) of gmsh 4.8 with
+        # residuals <= 1.4 %; 10 % leaves room for another gmsh release's frontal mesher (the 0.11 stack has 4.15).
+        assert size.dofs == pytest.approx(dofs, rel=0.10)
+    assert size.total_bytes > sizes.BASELINE_BYTES * COMM.size
+
+
+def test_estimate_is_pure_and_fast_for_a_typo():
+    """The estimate of a mesh 10^4 times too fine imports no DOLFINx and builds nothing (a fresh interpreter)."""
+    code = ("import sys; from dolfinx_fretting.scenes import load_scene; from dolfinx_fretting.sizes import estimate; "
+            "e = estimate(load_scene('cylinder-flat', ['geometry.contact_mesh_size=5e-5'])); "
+            "print(e.dofs, 'dolfinx' in sys.modules, 'gmsh' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=Path(__file__).resolve().parents[1]).stdout.split()
+    # 2 bodies x ~(2 x 9000 arc segments) x (2250 layers) structured nodes alone: > 8e7 dofs
+    assert int(out[0]) > 8e7
+    assert out[1:] == ["False", "False"]
+
+
+def _no_mesh(monkeypatch):
+    """Every mesher raises: a test that passes with this did not mesh."""
+    from dolfinx_fretting import meshes, meshes_3d, scene_models
+
+    import dolfinx_fretting.simulation as simulation
+
+    def refuse(function):
+        @functools.wraps(function)  # the signature stays readable (sizes reads the meshers' defaults from it)
+        def meshed(*args, **kwargs):
+            raise AssertionError(f"a mesh was built ({function.__name__})")
+        return meshed
+    for module, name in ((meshes, "cylinder_on_flat"), (meshes, "half_cylinder"), (meshes, "rectangle"),
+                         (meshes_3d, "sphere_on_flat"), (scene_models, "build_scene_model"),
+                         (simulation, "build_scene_model")):
+        monkeypatch.setattr(module, name, refuse(getattr(module, name)))
+
+
+def test_refusal_names_the_keys_and_the_numbers(tmp_path, monkeypatch):
+    """contact_mesh_size 5e-5 (a typo for 5e-2) on cylinder-flat: refused before any mesh, output folder untouched."""
+    from dolfinx_fretting.simulation import run_scene
+
+    _no_mesh(monkeypatch)
+    scene = load_scene("cylinder-flat", ["geometry.contact_mesh_size=5e-5"])
+    out = tmp_path / "run"
+    with pytest.raises(SizeError) as info:
+        run_scene(scene, out, COMM, quiet=True)
+    text = str(info.value)
+    available, _ = sizes.available_memory()
+    assert "geometry.contact_mesh_size = 5e-05" in text
+    assert "--ignore-size" in text and "ignore_size=True" in text
+    assert f"{available / 2**30:.3g} GB available" in text
+    size = estimate(scene)
+    assert f"peak memory ~{size.total_bytes / 2**30:.3g} GB" in text
+    assert "factor" in text and "W_build" in text  # the breakdown
+    assert not out.exists()  # refused before the folder was claimed
+
+
+def test_contact_mesh_size_1e_5_is_refused_before_meshing():
+    """The issue's typo (1e-5): the scene's own bound on the refined zone's elements refuses it first."""
+    with pytest.raises(SceneError, match=r"geometry.contact_mesh_size = 1e-05"):
+        load_scene("cylinder-flat", ["geometry.contact_mesh_size=1e-5"])
+
+
+class _Rank1Comm:
+    """A two-rank communicator seen from rank 1: its broadcast returns rank 0's value."""
+
+    size, rank = 2, 1
+
+    def __init__(self, root_value):
+        self.root_value = root_value
+
+    def bcast(self, obj, root=0):
+        return self.root_value
+
+
+def test_every_rank_decides_with_rank_0s_reading(monkeypatch):
+    """Rank 1 reads plenty of memory, rank 0 little: rank 1 refuses too (rank 0's reading is broadcast)."""
+    scene = load_scene("hertz")
+    monkeypatch.setattr(sizes, "available_memory", lambda: (10**15, "MemAvailable"))
+    check_size(scene, _Rank1Comm((10**15, "MemAvailable")))
+    with pytest.raises(SizeError, match="1 MB available"):
+        check_size(scene, _Rank1Comm((2**20, "MemAvailable")))
+
+
+def test_override_lets_a_small_run_through(tmp_path, monkeypatch):
+    """With 1 MB 'available' a small hertz run is refused; ignore_size=True runs it and records the estimate."""
+    from dolfinx_fretting.simulation import run_scene
+
+    monkeypatch.setattr(sizes, "available_memory", lambda: (2**20, "test"))
+    scene = load_scene("hertz", ["geometry.contact_mesh_size=0.04", "loading.tangential_increments=2", *QUIET])
+    with pytest.raises(SizeError):
+        run_scene(scene, tmp_path / "refused", COMM, quiet=True)
+    summary = run_scene(scene, tmp_path / "run", COMM, quiet=True, ignore_size=True)
+    recorded = json.loads((tmp_path / "run" / "summary.json").read_text())["size_estimate"]
+    assert recorded == json.loads(json.dumps(estimate(scene, COMM.size).as_dict()))
+    assert recorded["contacts"] == summary["contacts"]
+    assert recorded["dofs"] == pytest.approx(summary["dofs"], rel=0.10)  # gmsh mesh: see the first test
+
+
+def test_cli_refuses_with_exit_2_and_no_traceback(tmp_path, monkeypatch, capsys):
+    """`run` and `study` refuse the typo with exit code 2 and a message; --ignore-size is accepted by both."""
+    import dolfinx_fretting.study as study
+
+    _no_mesh(monkeypatch)
+    monkeypatch.setattr(study, "run_study", lambda *a, **k: pytest.fail("the study started"))
+    typo = ["--set", "geometry.contact_mesh_size=5e-5"]
+    assert main(["run", "cylinder-flat", "--out", str(tmp_path / "run"), *typo]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dolfinx-fretting: the model would need") and "Traceback" not in err
+    assert "geometry.contact_mesh_size = 5e-05" in err
+    # the study's default reference halves the contact elements: the reference of 1e-4 is refused at 5e-5
+    assert main(["study", "cylinder-flat", "--out", str(tmp_path / "study"), "--set",
+                 "geometry.contact_mesh_size=1e-4"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dolfinx-fretting study: the model would need") and "Traceback" not in err
+    assert "geometry.contact_mesh_size = 5e-05" in err
+
+
+def test_cli_prints_the_estimate_and_ignore_size_runs(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(sizes, "available_memory", lambda: (2**20, "test"))
+    args = ["run", "hertz", "--out", str(tmp_path / "run"), "--set", "geometry.contact_mesh_size=0.04",
+            "--set", "loading.tangential_increments=2", *[x for s in QUIET for x in ("--set", s)]]
+    assert main(args) == 2
+    capsys.readouterr()
+    assert main([*args, "--ignore-size"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith("[hertz] size estimate: ~") and "contacts" in first
+
+
+def _square_msh(path: Path, version: float, binary: bool) -> int:
+    """A small gmsh mesh written in the given format; returns gmsh's node count."""
+    import gmsh
+
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.occ.addRectangle(0, 0, 0, 1, 1)
+        gmsh.model.occ.synchronize()
+        gmsh.model.addPhysicalGroup(2, [1], 1)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.1)
+        gmsh.model.mesh.generate(2)
+        gmsh.option.setNumber("Mesh.MshFileVersion", version)
+        gmsh.option.setNumber("Mesh.Binary", int(binary))
+        gmsh.write(str(path))
+        return len(gmsh.model.mesh.getNodes()[0])
+    finally:
+        gmsh.finalize()
+
+
+@pytest.mark.parametrize("version,binary", [(4.1, False), (4.1, True), (2.2, False), (2.2, True)])
+def test_msh_header_node_count(tmp_path, version, binary):
+    """The node count read from a .msh file's $Nodes header, without reading the nodes, is gmsh's."""
+    if COMM.rank != 0:
+        pytest.skip("gmsh writes on rank 0")
+    path = tmp_path / "square.msh"
+    nodes = _square_msh(path, version, binary)
+    assert nodes > 100
+    assert msh_node_count(path) == nodes
+    (tmp_path / "bad.msh").write_text("not a mesh")
+    assert msh_node_count(tmp_path / "bad.msh") is None
