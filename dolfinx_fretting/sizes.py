@@ -20,8 +20,9 @@ anything:
   ``(nc dim)^2`` doubles, replicated on every rank, and the compiled loop's transposed copy), ``W_build`` (the
   selected-inverse request pattern, values and dense block of ``(K^-1)_SS``, freed once W is built),
   ``cycle_cache`` (the 2D compiled loop's contact-pattern LU factors, one ``(nc dim)^2`` block per increment of
-  a cycle) and ``plastic`` (the Gauss-point state of an elastic-plastic body, and the tangent's second
-  factor). The peak is the sum of the terms that live together: W's build working set and the cycle cache
+  a cycle) and ``plastic`` (the Gauss-point state of an elastic-plastic body, the dense ``(K^-1)_XX`` on its
+  plastic zone X, from the expected contact size and capped like the body caps it, and the tangent's second
+  factor past that cap). The peak is the sum of the terms that live together: W's build working set and the cycle cache
   never do.
 
 The calibration points and the estimate-to-measurement ratios of whole runs are in
@@ -60,8 +61,10 @@ GMSH_NODE_DENSITY = {"quadrilateral": (1.19, 0.74), "triangle": (1.18, 1.14)}
 #: envelope of the built-in geometries' measured points (2D: 53-62, 3D: 138-187 bytes).
 FACTOR_BYTES_2D = 64.0
 FACTOR_BYTES_3D = 190.0
-#: Resident memory of one rank before the mesh: Python, DOLFINx, PETSc, numba and the compiled kernels loaded.
-BASELINE_BYTES = 240 * 2**20
+#: Resident memory of one rank of a run on a tiny mesh: Python, DOLFINx, PETSc, gmsh, numba and its compiled
+#: kernels (the force-control solvers' alone weigh ~170 MB on the Debian stack). Measured 230-405 MB (DOLFINx
+#: 0.5.2), 270-315 MB (0.11): the largest, rounded up.
+BASELINE_BYTES = 420 * 2**20
 #: Resident memory per dof besides the factor and W: mesh, dofmaps, K (CSR), vectors; a gmsh mesh costs more
 #: (gmsh's own copy of the mesh lives until DOLFINx has it), hexahedra more again (K has ~80 entries a row).
 #: Measured 450-750 (gmsh), 280-370 (rectangle), 450-1000 (hexahedra) bytes.
@@ -71,6 +74,13 @@ MESH_BYTES_PER_DOF = {"gmsh": 750.0, "rectangle": 400.0, "hexahedra": 1100.0}
 #: triangles, 2 x 2 x 2 on hexahedra).
 PLASTIC_BYTES_PER_POINT = 8 * 40
 _GAUSS_POINTS = {"quadrilateral": 4, "triangle": 3, "hexahedron": 8}
+#: The plastic zone's dense algebra, bytes per (zone dofs)^2: Z = (K^-1)_XX and its selected-inverse request
+#: (pattern, read-back and values: 32), Z itself and the low-rank tangent's blocks (8 + ...). Measured 820 MB
+#: above the baseline on the elastic-plastic cylinder-flat at h = 5 um, whose zone reaches the cap below.
+ZONE_BYTES_PER_DOF_SQUARED = 40
+#: ``plasticity.ElastoplasticBody.max_zone_dofs`` and ``zone_margin`` (DOLFINx modules: restated here, a test
+#: holds them equal): past the cap the body refactorises K_T instead (a second factor, counted too).
+MAX_ZONE_DOFS, ZONE_MARGIN = 6000, 2
 
 _GB = 2.0**30
 
@@ -365,6 +375,25 @@ def _drivers(scene: Scene, memory: dict[str, int]) -> dict[str, Any]:
     return keys
 
 
+def _plastic_zone_dofs(scene: Scene, contacts: int | None) -> int:
+    """Dofs X of the plastic zone's dense algebra: the cells under the expected contact (2a wide, a deep, with
+    ``ZONE_MARGIN`` layers around) in each plastic body, and the contact's dofs; at most ``MAX_ZONE_DOFS``. A
+    mesh file or a rectangle (no expected contact size): the cap."""
+    g, dim = scene.geometry, scene.dim
+    if g.kind not in ("half_cylinder", "sphere"):
+        return MAX_ZONE_DOFS
+    from .scene_models import expected_contact_size, sphere_mesh_size
+
+    a = expected_contact_size(scene)
+    h = sphere_mesh_size(scene) if g.kind == "sphere" else g.contact_mesh_size
+    across = 2 * a / h + 2 * ZONE_MARGIN + 1
+    deep = a / h + ZONE_MARGIN + 1
+    nodes = across * deep * ((across / 2 if g.half_model else across) if dim == 3 else 1)
+    two_body = scene.contact.obstacle == "elastic_flat"
+    bodies = 2 if two_body and scene.material.plastic_body == "both" else 1
+    return int(min(MAX_ZONE_DOFS, bodies * nodes * dim + (contacts or 0) * dim))
+
+
 def _compiled_2d_cycles(scene: Scene, dim: int) -> bool:
     """The 2D compiled cycle loop runs (and keeps its per-increment pattern LU factors): see
     FrettingProblem.run_cycle (displacement or pressure control, Uzawa, elastic, kernel on, pattern reuse on)."""
@@ -406,8 +435,10 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
             cell = "hexahedron" if dim == 3 else ("quadrilateral" if g.quadrilateral or g.kind == "file" else
                                                   "triangle")
             cells = nodes * (1 if cell != "triangle" else 2)
-            # the Gauss-point state, and K_T's own factor when the tangent is refactorised
-            memory["plastic"] = int(cells * _GAUSS_POINTS[cell] * PLASTIC_BYTES_PER_POINT + one_factor)
+            zone = _plastic_zone_dofs(scene, contacts)
+            # the Gauss-point state, the zone's dense algebra, and K_T's own factor once the zone outgrows its cap
+            memory["plastic"] = int(cells * _GAUSS_POINTS[cell] * PLASTIC_BYTES_PER_POINT
+                                    + ZONE_BYTES_PER_DOF_SQUARED * zone**2 + (one_factor if zone >= MAX_ZONE_DOFS else 0))
     if contacts is not None:
         m = contacts * dim
         # S: the dofs H touches: the slave's, and as many of the master's (two bodies)
