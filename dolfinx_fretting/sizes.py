@@ -224,6 +224,14 @@ def _unstructured_nodes(regions, boundary, r_max: float, h: float, H: float, gro
     return float(c * np.sum(area[keep] / s[keep] ** 2) + b * np.sum(length[b_keep] / b_s[b_keep]))
 
 
+def _nodes_along(length: float, h: float, H: float, growth: float) -> float:
+    """Nodes along a line leaving the refined zone, spacing h + growth * distance up to H: the integral of
+    1 / spacing over ``length`` (closed form)."""
+    graded = min(length, (H - h) / growth) if growth > 0 else 0.0
+    nodes = math.log1p(growth * graded / h) / growth if growth > 0 else 0.0
+    return nodes + (length - graded) / (H if growth > 0 else h)
+
+
 def _default(function, name: str):
     return inspect.signature(function).parameters[name].default
 
@@ -260,8 +268,7 @@ def _half_cylinder(scene: Scene) -> tuple[int, int, bool]:
     contacts = 2 * int(within.sum()) - 1
     if window > a:  # beyond the refined arc the spacing grows with the distance from it
         length = R * (math.asin(min(window, R) / R) - theta)
-        ell = np.linspace(0.0, length, 2001)
-        contacts += 2 * int(np.trapz(1.0 / np.minimum(h + growth * ell, H), ell))
+        contacts += 2 * int(_nodes_along(length, h, H, growth))
     return int(round(nodes)), contacts, False
 
 
