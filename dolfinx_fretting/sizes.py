@@ -148,6 +148,9 @@ class SizeEstimate:
 
 
 def _size(n: float) -> str:
+    """Bytes in MB, GB or TB, three significant digits."""
+    if n >= 1000 * _GB:
+        return f"{n / 2**40:.3g} TB"
     return f"{n / _GB:.3g} GB" if n >= 0.1 * _GB else f"{n / 2**20:.3g} MB"
 
 
