@@ -27,7 +27,7 @@ __all__ = ["read_table", "read_profiles", "ContactProfiles", "write_contact_xdmf
            "XDMF_FIELDS", "STATE_NAMES"]
 
 #: Columns of the tables that hold text; every other column is numeric.
-_TEXT_COLUMNS = frozenset({"stage", "regime", "jump_bound"})
+_TEXT_COLUMNS = frozenset({"stage", "regime", "jump_bound", "plastic_regime"})
 #: Numeric columns that hold integers (counts, indices, state codes).
 _INT_COLUMNS = frozenset({"increment", "cycle", "step", "node", "state", "n_open", "n_stick", "n_slip",
                           "local_iterations", "load_solves", "jump"})
@@ -44,7 +44,7 @@ STATE_NAMES = {0: "open", 1: "stick", 2: "slip"}
 def read_table(path: str | Path) -> dict[str, np.ndarray]:
     """Read one of a run's CSV tables as a dict of columns.
 
-    Text columns (``stage``, ``regime``, ``jump_bound``) are arrays of ``str``, integer columns (``increment``, ``node``,
+    Text columns (``stage``, ``regime``, ``jump_bound``, ``plastic_regime``) are arrays of ``str``, integer columns (``increment``, ``node``,
     ``state``, ...) ``int64`` and the others ``float64``. The table may be incomplete: a last line without
     its newline (a write in progress or cut short) and lines with the wrong number of fields are skipped,
     and a value that is not a number reads as NaN (an integer column that holds one stays ``float64``).

@@ -41,8 +41,8 @@ rate linear in N). Its maximum over the contacts is the jump's error estimate; t
 bounds the accumulated error in the wear gap when errors do not cancel.
 
 
-**Elastic–plastic bodies** (functions for the runner, not yet called by it: see
-:func:`analyse_plastic_cycle`). A jump extrapolates the plastic state as it does the wear gap: the
+**Elastic–plastic bodies** (the runner, ``simulation._Run._jump``, calls :func:`analyse_plastic_cycle` after
+every simulated cycle). A jump extrapolates the plastic state as it does the wear gap: the
 displacement, plastic strain and accumulated plastic strain at the end of the simulated cycle plus dN - 1
 times the cycle's change, with the same error estimate on their rates. Three regimes, by the cycle's largest
 plastic flow (increase of the accumulated plastic strain p) and net plastic strain (change of eps_p over the
@@ -50,7 +50,10 @@ cycle) against a tolerance: *elastic shakedown* (no flow: nothing to extrapolate
 stability limit is the body's exact compliance), *plastic shakedown* (flow, but a closed loop of eps_p: p
 grows, and with it the yield stress under hardening) and *ratcheting* (eps_p drifts every cycle). The jump
 is bounded so that the extrapolated net plastic strain stays within a fraction of the yield strain and the
-hardening within the same fraction of the yield stress (:func:`plastic_jump_limit`).
+hardening within the same fraction of the yield stress (:func:`plastic_jump_limit`). Ratcheting is not
+refused: its jumps are held by that bound (at the rates of the paper's Example 2 to a few cycles), and the
+jump's error on the plastic strains (:func:`plastic_jump_error`) is accumulated and reported beside the wear
+gap's. In elastic shakedown the plastic state does not bound the jump: only the wear does.
 """
 
 from __future__ import annotations
@@ -237,11 +240,12 @@ def analyse_plastic_cycle(eps_p_start: np.ndarray, p_start: np.ndarray, eps_p_en
                           p_end: np.ndarray, tol: float, comm=None) -> PlasticCycle:
     """The plastic regime of a simulated cycle from the committed plastic state at its start and its end.
 
-    A runner would call it after each simulated cycle of an elastic–plastic body (with its quadrature-point
-    arrays, e.g. ``problem.plastic_state(state).eps_p``), extrapolate the plastic state over a jump with
-    :func:`extrapolate` (u, eps_p, p; sigma for output), bound the jump with :func:`plastic_jump_limit`
-    (``choose_jump(..., plastic_limit=...)``), add :func:`plastic_jump_error` to the jump's error and write
-    the regime into ``cycles.csv``; collective when ``comm`` has several ranks.
+    The runner calls it after each simulated cycle of an elastic–plastic body (with the committed
+    quadrature-point arrays of ``ContactState.plastic``), extrapolates the plastic state over a jump with
+    :func:`extrapolate` (u, sigma, eps_p, p: all linear in the cycle, so sigma = C (eps(u) - eps_p) still
+    holds), bounds the jump with :func:`plastic_jump_limit` (``choose_jump(..., plastic_limit=...)``), adds
+    :func:`plastic_jump_error` to the run's plastic error and writes the regime into ``cycles.csv``;
+    collective when ``comm`` has several ranks.
 
     Args:
         eps_p_start, p_start: Plastic strain (n, 6) and accumulated plastic strain (n,) at the cycle's start.

@@ -36,7 +36,8 @@ HISTORY_FIELDS = ["increment", "cycle", "step", "stage", "normal_displacement", 
 CYCLE_FIELDS = ["cycle", "equivalent_cycles", "jump", "jump_bound", "jump_stability_limit", "jump_error_estimate",
                 "wear_error_estimate", "dissipated_energy", "wear_area", "max_wear_depth",
                 "tangential_force_max", "tangential_force_min", "displacement_max", "displacement_min",
-                "energy_ratio", "min_stick", "regime", "max_pressure_end", "local_iterations", "wall_time_s"]
+                "energy_ratio", "min_stick", "regime", "max_pressure_end", "plastic_regime", "plastic_flow",
+                "plastic_net", "plastic_error_estimate", "local_iterations", "wall_time_s"]
 #: Columns of ``contact_profiles.csv`` (one row per contact node and kept increment).
 PROFILE_FIELDS = ["increment", "cycle", "step", "node", "position", "gap", "pressure", "shear", "slip",
                   "relative_tangential", "wear", "state"]

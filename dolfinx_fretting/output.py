@@ -226,7 +226,8 @@ def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_contro
         wear_acceleration: Factor on the wear coefficient (``equivalent_cycles``).
         wall: Wall time of the cycle (s).
         jump: The cycle jump that follows it (``jump``, ``bound``, ``stability_limit``, ``error``,
-            ``error_total``), or None.
+            ``error_total``, ``plastic_error_total``) and an elastic-plastic body's cycle (``plastic_regime``,
+            ``plastic_flow``, ``plastic_net``: :class:`~dolfinx_fretting.cycle_jump.PlasticCycle`), or None.
     """
     Q = records["tangential_force"]
     disp = records["tangential_displacement"] if displacement_controlled else records["mean_relative_tangential"]
@@ -250,6 +251,8 @@ def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_contro
             "energy_ratio": energy / loop_area if loop_area > 0 else 0.0, "min_stick": min_stick,
             "regime": "gross_slip" if gross else ("partial_slip" if loaded.any() else "open"),
             "max_pressure_end": float(records["max_pressure"][-1]),
+            "plastic_regime": jump.get("plastic_regime", "none"), "plastic_flow": jump.get("plastic_flow", 0.0),
+            "plastic_net": jump.get("plastic_net", 0.0), "plastic_error_estimate": jump.get("plastic_error_total", 0.0),
             "local_iterations": int(records["local_iterations"].sum()), "wall_time_s": round(wall, 6)}
 
 

@@ -33,11 +33,12 @@ from mpi4py import MPI
 
 from .analytic import hertz_line_contact
 from .contact import Contact
+from .cycle_jump import PlasticCycle
 from .io import non_finite_keys
 from .output import FrettingWriter, RunDescription, contact_measures
 from .loading import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
-                      Displacement, Force, FrettingProblem, LocalSolver, Plasticity)
+                      Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity)
 from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
 from .scene_models import PRESSURE_LOAD, SceneModel, build_scene_model
 from .scenes import Scene, describe_differences
@@ -174,10 +175,11 @@ class Progress:
     max_relative_tangential: float = 0.0              #: Largest |mean relative tangential position|.
     sliding_warned: bool = False
     newton_fallbacks: int = 0
+    plastic_regime: str = "none"                      #: The last simulated cycle's (elastic-plastic bodies).
     jump: dict[str, Any] = field(default_factory=lambda: {
         "rate": None, "last": 1, "free": 1, "simulated": 0, "jumps": 0, "largest": 1, "error": 0.0,
         "bound": "none", "stability_limit": math.inf, "monotone_limit": math.inf, "exceeded": 0,
-        "min_stability_limit": math.inf})
+        "min_stability_limit": math.inf, "plastic_error": 0.0, "plastic_net": 0.0, "plastic_flow": 0.0})
 
 
 def read_checkpoint(path: str | Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
@@ -268,6 +270,8 @@ class _Run:
         self.progress = Progress()
         #: Signal received (SIGINT, SIGTERM), acted on at the end of the current increment or cycle.
         self.signal_received = 0
+        #: The last simulated cycle's plastic changes (elastic-plastic jumps: the next jump's error needs them).
+        self._plastic_previous: PlasticCycle | None = None
         if meta is None:
             self.state = self.problem.initial_state()
             sizes, xdmf_started = None, False
@@ -469,11 +473,16 @@ class _Run:
             self.cycle_mode = "compiled" if result.compiled else "python"
             start = self.state
             new_state = self.problem.commit(start, result)
+            plastic = self._plastic_cycle(start, new_state)  # collective; None for elastic bodies
             jump = {}
             if jumping:
                 room = next(c for c in landings if c > cycle) - cycle if cycle < N else 1
                 new_state, jump = self._jump(cycle, start, new_state, result, room,
-                                             len(self.progress.window_growths) > growths)
+                                             len(self.progress.window_growths) > growths, plastic)
+            if plastic is not None:
+                jump = {**jump, "plastic_regime": plastic.regime, "plastic_flow": plastic.flow,
+                        "plastic_net": plastic.net}
+                self.progress.plastic_regime = plastic.regime
             self.state = new_state
             self.progress.newton_fallbacks += int(result.records.get("full_newton_fallbacks", np.zeros(1)).sum())
             self._check_small_sliding(result.records["mean_relative_tangential"])
@@ -496,6 +505,7 @@ class _Run:
                 self.say(f"[{sc.name}] cycle {cycle}/{N}: max wear depth {crow['max_wear_depth']:.4g} mm, "
                          f"energy {crow['dissipated_energy']:.4g}, {crow['regime']}, p_max(end) "
                          f"{crow['max_pressure_end']:.4g} MPa"
+                         + (f", {crow['plastic_regime']}" if plastic is not None else "")
                          + (f", jump {crow['jump']} ({crow['jump_bound']})" if jumping else ""))
             cycle = self.progress.cycle + 1
         if progress_bar is not None:
@@ -512,20 +522,59 @@ class _Run:
             raise _Stop()
 
     # Cycle jumps -----------------------------------------------------------------------------------
+    def _plastic_cycle(self, start: ContactState, new: ContactState) -> PlasticCycle | None:
+        """What a simulated cycle did to an elastic-plastic body's state: its regime (elastic shakedown,
+        plastic shakedown, ratcheting; ``material.shakedown_tolerance``) and changes. Collective; None for an
+        elastic body."""
+        from .cycle_jump import analyse_plastic_cycle
+
+        if new.plastic is None or start.plastic is None:
+            return None
+        a, b = start.plastic, new.plastic
+        return analyse_plastic_cycle(a.eps_p, a.p, b.eps_p, b.p, self.scene.material.shakedown_strain, self.comm)
+
+    def _plastic_bounds(self, plastic: PlasticCycle | None) -> tuple[float, float]:
+        """An elastic-plastic body's jump bound (:func:`~dolfinx_fretting.cycle_jump.plastic_jump_limit`) and the
+        error bound of the previous jump on its plastic strains (the larger of the equivalent plastic strain's
+        and the accumulated plastic strain's). Collective."""
+        from .cycle_jump import plastic_jump_error, plastic_jump_limit
+
+        if plastic is None:
+            return math.inf, 0.0
+        m, js = self.scene.material, self.progress.jump
+        limit = plastic_jump_limit(plastic, self.scene.wear.jump_plastic_fraction, m.yield_stress, m.E,
+                                   m.plastic_modulus)
+        previous, last = self._plastic_previous, js["last"]
+        if previous is not None:
+            error = max(plastic_jump_error(previous, plastic, last, self.comm))
+        else:  # resumed: the previous cycle's changes per point are not checkpointed; bound them by their maxima
+            error = (last - 1) * max(plastic.net + js.get("plastic_net", 0.0),
+                                     plastic.flow + js.get("plastic_flow", 0.0))
+        self._plastic_previous = plastic
+        return limit, error
+
     def _jump(self, cycle: int, start: ContactState, new: ContactState, result: CycleResult, room: int,
-              regrown: bool) -> tuple[ContactState, dict[str, Any]]:
+              regrown: bool, plastic: PlasticCycle | None = None) -> tuple[ContactState, dict[str, Any]]:
         """After simulated cycle ``cycle``: the error of the previous jump, the next jump dN and the wear gap
         extrapolated over its dN - 1 cycles (:mod:`dolfinx_fretting.cycle_jump`). Decided on rank 0,
         broadcast; raises SimulationError (before anything is committed) if a forced jump would wear more
-        than a contact element. ``regrown``: the candidate window grew during the cycle (new contact set)."""
-        from .cycle_jump import analyse_cycle, choose_jump, jump_error
+        than a contact element. ``regrown``: the candidate window grew during the cycle (new contact set).
+        ``plastic``: an elastic-plastic body's cycle (:meth:`_plastic_cycle`): the jump is bounded by the
+        plastic state's change too, and the plastic history is extrapolated with the wear gap."""
+        from .cycle_jump import analyse_cycle, choose_jump, extrapolate, jump_error
 
         sc, cs, js = self.scene, self.model.contact, self.progress.jump
         w = sc.wear
         h_e = self.model.setup.element_size
         k = self.problem._k(True)
         out_r, out_x, _, _, out_status = result.kept
-        if regrown:
+        plastic_limit, plastic_error = self._plastic_bounds(plastic)  # collective: before rank 0 decides
+        # The cycle after a jump of a still-flowing body is not a rate: it carries the plastic state's relaxation
+        # back onto its cyclic path (a fast mode, gone within a cycle), which a jump would amplify dN times,
+        # with a flip of sign (explicit Euler on a stiff mode). Jump from the cycle after it.
+        settling = (plastic is not None and plastic.regime != "elastic_shakedown" and js["last"] > 1
+                    and w.jump_forced is None)
+        if regrown:  # (the window grows only for elastic bodies: plastic is None here)
             # The contact set changed: no per-contact rate to compare with or to extrapolate from. The previous
             # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
             # stands for itself; jumps restart from one.
@@ -544,11 +593,13 @@ class _Run:
                               new.wear_gap, sc.loading.normal_force_controlled)
             err = jump_error(js["rate"], a.rate, js["last"]) if js["rate"] is not None else 0.0
             dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction, w.jump_pressure_change, w.jump_max,
-                                          js["free"], room)
+                                          js["free"], room, plastic_limit)
             if w.jump_forced is not None:
                 dN, bound, free = min(w.jump_forced, room), "forced", w.jump_forced
             if cycle == 1:  # it starts from the preload, not from a cycle: its wear is not the cycles' rate
                 dN, bound = 1, "first_cycle"
+            elif settling:
+                dN, bound, free = 1, "plastic_settling", js["free"]
             decided = (a.rate, err, dN, bound, free, a.stability_limit(k), a.monotone_limit(k))
         if self.comm.size > 1:
             decided = self.comm.bcast(decided, root=0)
@@ -565,14 +616,22 @@ class _Run:
                           increment=new.increment + extra * sc.loading.increments_per_cycle,
                           dissipated_energy=new.dissipated_energy
                           + extra * float(result.records["dissipated_energy"].sum()))
+            if plastic is not None:  # the plastic history follows the wear gap: end + (dN - 1) x the cycle's change
+                before, after = start.plastic, new.plastic
+                new = replace(new, plastic=PlasticHistory(*(extrapolate(getattr(before, name), getattr(after, name), dN)
+                                                            for name in ("u", "sigma", "eps_p", "p"))))
         js.update(rate=rate, last=dN, free=free, simulated=js["simulated"] + 1, jumps=js["jumps"] + (dN > 1),
                   largest=max(js["largest"], dN), error=js["error"] + err, bound=bound,
                   stability_limit=stab, monotone_limit=mono, exceeded=js["exceeded"] + (dN > stab),
                   min_stability_limit=min(js["min_stability_limit"], stab))
+        if plastic is not None:
+            js.update(plastic_error=js.get("plastic_error", 0.0) + plastic_error, plastic_net=plastic.net,
+                      plastic_flow=plastic.flow)
         if dN > stab and js["exceeded"] == 1:
             self.say(f"[{sc.name}] WARNING: cycle {cycle}: forced jump {dN} exceeds the stability limit "
                      f"{stab:.4g} cycles: expect oscillating edge spikes")
-        return new, {"jump": dN, "bound": bound, "stability_limit": stab, "error": err, "error_total": js["error"]}
+        return new, {"jump": dN, "bound": bound, "stability_limit": stab, "error": err, "error_total": js["error"],
+                     "plastic_error_total": js.get("plastic_error", 0.0)}
 
     # Outputs at the end ---------------------------------------------------------------------------------
     def summary(self, error: str | None) -> dict[str, Any]:
@@ -606,6 +665,8 @@ class _Run:
             summary.update({"max_equivalent_plastic_strain": float(gmax[0]), "max_von_mises": float(gmax[1]),
                             "newton_tangent": sc.solver.newton_tangent, "newton_full_fallbacks": pr.newton_fallbacks,
                             "tangent_refactorizations": problem.body.refactorizations})
+            if sc.loading.cycles > 0:  # elastic_shakedown, plastic_shakedown or ratcheting (cycles.csv: every cycle's)
+                summary["plastic_regime_last_cycle"] = pr.plastic_regime
         if sc.loading.cycles > 0:
             summary["cycle_path"] = getattr(self, "cycle_mode", "python")
             if sc.wear.cycle_jump:
@@ -650,6 +711,10 @@ class _Run:
                "jumps_past_stability_limit": js["exceeded"], "forced": sc.wear.jump_forced,
                "bounds": {"wear_fraction": sc.wear.jump_wear_fraction,
                           "pressure_change": sc.wear.jump_pressure_change, "max_jump": sc.wear.jump_max}}
+        if self.problem.body is not None:
+            out["plastic_error_estimate"] = js.get("plastic_error", 0.0)
+            out["bounds"]["plastic_fraction"] = sc.wear.jump_plastic_fraction
+            out["shakedown_strain"] = sc.material.shakedown_strain
         k = self.problem._k(True)
         if self.model.setup.hertz is not None and sc.loading.tangential_kind == "displacement" and k > 0:
             _, E_star, _ = self.model.setup.hertz
@@ -675,8 +740,9 @@ class _Run:
             "wear": (f"Archard, k = {sc.wear.k_total} 1/MPa x acceleration {sc.wear.acceleration}"
                      + (f" (cylinder {sc.wear.slave_share:.3g}, flat {1 - sc.wear.slave_share:.3g} of the wear gap)"
                         if two_body else "")
-                     + (", cycle jumps (wear gap extrapolated between simulated cycles)" if sc.wear.cycle_jump
-                        else "")
+                     + ((", cycle jumps (wear gap and plastic state extrapolated between simulated cycles)"
+                         if body is not None else ", cycle jumps (wear gap extrapolated between simulated cycles)")
+                        if sc.wear.cycle_jump else "")
                      if sc.wear.law == "archard" else "none (wear gap stays zero)"),
             "contact": f"{cs.nc} candidate nodes" + (f" within {window:.4g} mm of the first contact point"
                                                      + (" (automatic: Hertz estimate plus margin"
