@@ -182,6 +182,11 @@ class Progress:
         "min_stability_limit": math.inf, "plastic_error": 0.0, "plastic_net": 0.0, "plastic_flow": 0.0})
 
 
+#: Elastic-plastic jumps: a cycle after a jump is a rate to jump on if its plastic changes differ from those of
+#: the cycle before the jump by at most this fraction of themselves at every point (else one more cycle).
+SETTLED_RATE_CHANGE = 0.5
+
+
 def read_checkpoint(path: str | Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """A checkpoint's run progress (``cycle``, ``jump``, ``window_growths`` ...; plus the state's ``increment``)
     and the state's arrays (``wear_gap``, ``forces``, ``positions`` ...), for inspection."""
@@ -533,25 +538,31 @@ class _Run:
         a, b = start.plastic, new.plastic
         return analyse_plastic_cycle(a.eps_p, a.p, b.eps_p, b.p, self.scene.material.shakedown_strain, self.comm)
 
-    def _plastic_bounds(self, plastic: PlasticCycle | None) -> tuple[float, float]:
-        """An elastic-plastic body's jump bound (:func:`~dolfinx_fretting.cycle_jump.plastic_jump_limit`) and the
+    def _plastic_bounds(self, plastic: PlasticCycle | None) -> tuple[float, float, bool]:
+        """An elastic-plastic body's jump bound (:func:`~dolfinx_fretting.cycle_jump.plastic_jump_limit`), the
         error bound of the previous jump on its plastic strains (the larger of the equivalent plastic strain's
-        and the accumulated plastic strain's). Collective."""
+        and the accumulated plastic strain's), and whether this cycle's changes are a rate to jump on: within
+        half of themselves of the cycle before the jump at every point (:data:`SETTLED_RATE_CHANGE`).
+        Collective."""
         from .cycle_jump import plastic_jump_error, plastic_jump_limit
 
         if plastic is None:
-            return math.inf, 0.0
+            return math.inf, 0.0, True
         m, js = self.scene.material, self.progress.jump
         limit = plastic_jump_limit(plastic, self.scene.wear.jump_plastic_fraction, m.yield_stress, m.E,
                                    m.plastic_modulus)
         previous, last = self._plastic_previous, js["last"]
         if previous is not None:
-            error = max(plastic_jump_error(previous, plastic, last, self.comm))
+            change_eps, change_p = plastic_jump_error(previous, plastic, 2, self.comm)  # the change per cycle
+            error = (last - 1) * max(change_eps, change_p)
+            settled = (change_eps <= SETTLED_RATE_CHANGE * plastic.net
+                       and change_p <= SETTLED_RATE_CHANGE * plastic.flow)
         else:  # resumed: the previous cycle's changes per point are not checkpointed; bound them by their maxima
             error = (last - 1) * max(plastic.net + js.get("plastic_net", 0.0),
                                      plastic.flow + js.get("plastic_flow", 0.0))
+            settled = False
         self._plastic_previous = plastic
-        return limit, error
+        return limit, error, settled
 
     def _jump(self, cycle: int, start: ContactState, new: ContactState, result: CycleResult, room: int,
               regrown: bool, plastic: PlasticCycle | None = None) -> tuple[ContactState, dict[str, Any]]:
@@ -568,12 +579,13 @@ class _Run:
         h_e = self.model.setup.element_size
         k = self.problem._k(True)
         out_r, out_x, _, _, out_status = result.kept
-        plastic_limit, plastic_error = self._plastic_bounds(plastic)  # collective: before rank 0 decides
-        # The cycle after a jump of a still-flowing body is not a rate: it carries the plastic state's relaxation
-        # back onto its cyclic path (a fast mode, gone within a cycle), which a jump would amplify dN times,
-        # with a flip of sign (explicit Euler on a stiff mode). Jump from the cycle after it.
+        plastic_limit, plastic_error, settled = self._plastic_bounds(plastic)  # collective: before rank 0 decides
+        # The cycle after a jump of a still-flowing body may not be a rate: it carries the plastic state's
+        # relaxation back onto its cyclic path (a fast mode, gone within a cycle), which a jump would amplify dN
+        # times, with a flip of sign (explicit Euler on a stiff mode). Unless its changes are those of the
+        # cycle before the jump, jump from the cycle after it.
         settling = (plastic is not None and plastic.regime != "elastic_shakedown" and js["last"] > 1
-                    and w.jump_forced is None)
+                    and not settled and w.jump_forced is None)
         if regrown:  # (the window grows only for elastic bodies: plastic is None here)
             # The contact set changed: no per-contact rate to compare with or to extrapolate from. The previous
             # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
