@@ -179,7 +179,8 @@ class Progress:
     jump: dict[str, Any] = field(default_factory=lambda: {
         "rate": None, "last": 1, "free": 1, "simulated": 0, "jumps": 0, "largest": 1, "error": 0.0,
         "bound": "none", "stability_limit": math.inf, "monotone_limit": math.inf, "exceeded": 0,
-        "min_stability_limit": math.inf, "plastic_error": 0.0, "plastic_net": 0.0, "plastic_flow": 0.0})
+        "min_stability_limit": math.inf, "plastic_error": 0.0, "plastic_error_pending": 0.0, "plastic_net": 0.0,
+        "plastic_flow": 0.0})
 
 
 #: Elastic-plastic jumps: a cycle after a jump is a rate to jump on if its plastic changes differ from those of
@@ -277,6 +278,8 @@ class _Run:
         self.signal_received = 0
         #: The last simulated cycle's plastic changes (elastic-plastic jumps: the next jump's error needs them).
         self._plastic_previous: PlasticCycle | None = None
+        #: After a settling cycle: (the cycle the jump was taken from, the jump, the settling cycle).
+        self._plastic_pending: tuple[PlasticCycle, int, PlasticCycle] | None = None
         if meta is None:
             self.state = self.problem.initial_state()
             sizes, xdmf_started = None, False
@@ -319,6 +322,10 @@ class _Run:
         except ValueError as exc:
             raise SimulationError(f"--resume: {exc}") from None
         progress = dict(meta["progress"])
+        progress["jump"] = {**Progress().jump, **progress["jump"]}  # keys a checkpoint of an older version lacks
+        # a settling cycle's estimate awaited its successor's rate, whose per-point changes are not checkpointed
+        progress["jump"]["plastic_error"] += progress["jump"]["plastic_error_pending"]
+        progress["jump"]["plastic_error_pending"] = 0.0
         rate = progress["jump"].get("rate")
         progress["jump"]["rate"] = np.array(rate) if rate is not None else None
         self.progress = Progress(**progress)
@@ -538,31 +545,55 @@ class _Run:
         a, b = start.plastic, new.plastic
         return analyse_plastic_cycle(a.eps_p, a.p, b.eps_p, b.p, self.scene.material.shakedown_strain, self.comm)
 
-    def _plastic_bounds(self, plastic: PlasticCycle | None) -> tuple[float, float, bool]:
-        """An elastic-plastic body's jump bound (:func:`~dolfinx_fretting.cycle_jump.plastic_jump_limit`), the
-        error bound of the previous jump on its plastic strains (the larger of the equivalent plastic strain's
-        and the accumulated plastic strain's), and whether this cycle's changes are a rate to jump on: within
-        half of themselves of the cycle before the jump at every point (:data:`SETTLED_RATE_CHANGE`).
-        Collective."""
+    def _plastic_bounds(self, plastic: PlasticCycle | None) -> tuple[float, bool]:
+        """An elastic-plastic body's jump bound (:func:`~dolfinx_fretting.cycle_jump.plastic_jump_limit`) and
+        whether this cycle must settle (no jump from it); updates the plastic error estimate. Collective.
+
+        The cycle after a jump of a still-flowing body may not be a rate: it carries the plastic state's
+        relaxation back onto its cyclic path (a fast mode, gone within a cycle), which a jump would amplify dN
+        times, with a flip of sign (explicit Euler on a stiff mode). Unless its plastic changes are within
+        :data:`SETTLED_RATE_CHANGE` of themselves of the cycle before the jump at every point, it *settles*: the
+        run simulates the next cycle before jumping again.
+
+        The jump's error on the plastic strains (the larger of eps_p's equivalent and p's, per point) is, as for
+        the wear gap, ``(dN - 1) max |change after - change before|``, with "after" the first cycle that is a
+        rate: the settling cycle's successor, plus the settling cycle's own departure from it (the relaxation,
+        once). Until that successor is simulated the estimate holds the bound from the settling cycle itself
+        (``plastic_error_pending``), which is also what stays if the run ends or is resumed in between.
+        """
         from .cycle_jump import plastic_jump_error, plastic_jump_limit
 
         if plastic is None:
-            return math.inf, 0.0, True
+            return math.inf, False
         m, js = self.scene.material, self.progress.jump
         limit = plastic_jump_limit(plastic, self.scene.wear.jump_plastic_fraction, m.yield_stress, m.E,
                                    m.plastic_modulus)
-        previous, last = self._plastic_previous, js["last"]
-        if previous is not None:
-            change_eps, change_p = plastic_jump_error(previous, plastic, 2, self.comm)  # the change per cycle
-            error = (last - 1) * max(change_eps, change_p)
-            settled = (change_eps <= SETTLED_RATE_CHANGE * plastic.net
-                       and change_p <= SETTLED_RATE_CHANGE * plastic.flow)
-        else:  # resumed: the previous cycle's changes per point are not checkpointed; bound them by their maxima
-            error = (last - 1) * max(plastic.net + js.get("plastic_net", 0.0),
-                                     plastic.flow + js.get("plastic_flow", 0.0))
-            settled = False
-        self._plastic_previous = plastic
-        return limit, error, settled
+        previous, last, pending = self._plastic_previous, js["last"], self._plastic_pending
+        self._plastic_previous, self._plastic_pending = plastic, None
+        settling = False
+        if pending is not None:  # the cycle after a settling cycle: the jump's estimate from the settled rate
+            before, jump, settling_cycle = pending
+            error = ((jump - 1) * max(plastic_jump_error(before, plastic, 2, self.comm))
+                     + max(plastic_jump_error(plastic, settling_cycle, 2, self.comm)))
+            js.update(plastic_error=js["plastic_error"] + error, plastic_error_pending=0.0)
+        elif last > 1:  # the cycle after a jump
+            if previous is None:  # resumed: the changes per point are not checkpointed; bound them by their maxima
+                error = (last - 1) * max(plastic.net + js["plastic_net"], plastic.flow + js["plastic_flow"])
+                settled = False
+            else:
+                change_eps, change_p = plastic_jump_error(previous, plastic, 2, self.comm)  # per cycle
+                error = (last - 1) * max(change_eps, change_p)
+                settled = (change_eps <= SETTLED_RATE_CHANGE * plastic.net
+                           and change_p <= SETTLED_RATE_CHANGE * plastic.flow)
+            settling = (not settled and plastic.regime != "elastic_shakedown"
+                        and self.scene.wear.jump_forced is None)
+            if settling and previous is not None:
+                self._plastic_pending = (previous, last, plastic)
+                js["plastic_error_pending"] = error
+            else:
+                js["plastic_error"] += error
+        js.update(plastic_net=plastic.net, plastic_flow=plastic.flow)
+        return limit, settling
 
     def _jump(self, cycle: int, start: ContactState, new: ContactState, result: CycleResult, room: int,
               regrown: bool, plastic: PlasticCycle | None = None) -> tuple[ContactState, dict[str, Any]]:
@@ -579,13 +610,7 @@ class _Run:
         h_e = self.model.setup.element_size
         k = self.problem._k(True)
         out_r, out_x, _, _, out_status = result.kept
-        plastic_limit, plastic_error, settled = self._plastic_bounds(plastic)  # collective: before rank 0 decides
-        # The cycle after a jump of a still-flowing body may not be a rate: it carries the plastic state's
-        # relaxation back onto its cyclic path (a fast mode, gone within a cycle), which a jump would amplify dN
-        # times, with a flip of sign (explicit Euler on a stiff mode). Unless its changes are those of the
-        # cycle before the jump, jump from the cycle after it.
-        settling = (plastic is not None and plastic.regime != "elastic_shakedown" and js["last"] > 1
-                    and not settled and w.jump_forced is None)
+        plastic_limit, settling = self._plastic_bounds(plastic)  # collective: before rank 0 decides
         if regrown:  # (the window grows only for elastic bodies: plastic is None here)
             # The contact set changed: no per-contact rate to compare with or to extrapolate from. The previous
             # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
@@ -636,14 +661,11 @@ class _Run:
                   largest=max(js["largest"], dN), error=js["error"] + err, bound=bound,
                   stability_limit=stab, monotone_limit=mono, exceeded=js["exceeded"] + (dN > stab),
                   min_stability_limit=min(js["min_stability_limit"], stab))
-        if plastic is not None:
-            js.update(plastic_error=js.get("plastic_error", 0.0) + plastic_error, plastic_net=plastic.net,
-                      plastic_flow=plastic.flow)
         if dN > stab and js["exceeded"] == 1:
             self.say(f"[{sc.name}] WARNING: cycle {cycle}: forced jump {dN} exceeds the stability limit "
                      f"{stab:.4g} cycles: expect oscillating edge spikes")
         return new, {"jump": dN, "bound": bound, "stability_limit": stab, "error": err, "error_total": js["error"],
-                     "plastic_error_total": js.get("plastic_error", 0.0)}
+                     "plastic_error_total": js["plastic_error"] + js["plastic_error_pending"]}
 
     # Outputs at the end ---------------------------------------------------------------------------------
     def summary(self, error: str | None) -> dict[str, Any]:
@@ -724,7 +746,7 @@ class _Run:
                "bounds": {"wear_fraction": sc.wear.jump_wear_fraction,
                           "pressure_change": sc.wear.jump_pressure_change, "max_jump": sc.wear.jump_max}}
         if self.problem.body is not None:
-            out["plastic_error_estimate"] = js.get("plastic_error", 0.0)
+            out["plastic_error_estimate"] = js["plastic_error"] + js["plastic_error_pending"]
             out["bounds"]["plastic_fraction"] = sc.wear.jump_plastic_fraction
             out["shakedown_strain"] = sc.material.shakedown_strain
         k = self.problem._k(True)
