@@ -424,3 +424,40 @@ def test_plastic_jumps_after_elastic_shakedown_keep_the_plastic_state(tmp_path):
     from_two = cyc["cycle"] == 2
     assert max(eps_p, p) <= (cyc["jump"][from_two][0] - 1) * cyc["plastic_flow"][from_two][0] + 14 * 2e-7
     assert max(eps_p, p) <= jump["cycle_jump"]["plastic_error_estimate"]  # measured 1.85e-5 <= ...
+
+
+def test_plastic_jumps_resume_as_the_uninterrupted_run(tmp_path, monkeypatch):
+    """Gross slip, jumped, killed right after its checkpoint at the snapshot cycle 12 (inside a jump) and
+    resumed: the same cycles simulated, the same jumps, the same final wear and plastic state."""
+    from dolfinx_fretting import simulation
+
+    extra = [*GROSS, "wear.cycle_jump=true", "output.snapshot_cycles=[12, 30]", "output.contact_profiles=false"]
+    scene = load_scene("cylinder-flat", EP + ["loading.cycles=30", *extra])
+    straight = run_scene(scene, tmp_path / "s", quiet=True)
+    original = simulation._Run.checkpoint
+
+    def checkpoint_then_die(self):
+        original(self)
+        if self.progress.cycle >= 12:
+            raise _Crash("killed after the checkpoint")
+
+    monkeypatch.setattr(simulation._Run, "checkpoint", checkpoint_then_die)
+    with pytest.raises(_Crash):
+        run_scene(scene, tmp_path / "r", quiet=True)
+    monkeypatch.setattr(simulation._Run, "checkpoint", original)
+    meta = read_checkpoint(tmp_path / "r" / CHECKPOINT)[0]
+    assert meta["cycle"] > 12 and meta["jump"]["last"] > 1  # inside the jump from cycle 12
+    resumed = run_scene(scene, tmp_path / "r", quiet=True, resume=True)
+    assert resumed["resumed_from_cycle"] == meta["cycle"]
+    a, b = read_table(tmp_path / "s" / "cycles.csv"), read_table(tmp_path / "r" / "cycles.csv")
+    for column in ("cycle", "jump", "jump_bound", "plastic_regime"):
+        assert list(a[column]) == list(b[column]), column
+    end_s, end_r = read_checkpoint(tmp_path / "s" / CHECKPOINT)[1], read_checkpoint(tmp_path / "r" / CHECKPOINT)[1]
+    # The plastic history is checkpointed in full: the resumed run repeats the straight one to Newton's
+    # tolerance (1e-8 relative on the increments' displacements).
+    wear, eps_p, p = _plastic_differences(end_s, end_r)
+    assert wear <= 1e-8 * end_s["wear_gap"].max() and max(eps_p, p) <= 1e-8 * end_s["plastic_p_0"].max()
+    # The estimate accumulated before the kill is carried over (the first jump after the resume is then bounded
+    # by the cycles' maxima: the per-point changes are not checkpointed).
+    carried = meta["jump"]["plastic_error"] + meta["jump"]["plastic_error_pending"]
+    assert 0 < carried < resumed["cycle_jump"]["plastic_error_estimate"]
