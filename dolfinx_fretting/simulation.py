@@ -603,7 +603,8 @@ class _Run:
         than a contact element. ``regrown``: the candidate window grew during the cycle (new contact set).
         ``plastic``: an elastic-plastic body's cycle (:meth:`_plastic_cycle`): the jump is bounded by the
         plastic state's change too, and the plastic history is extrapolated with the wear gap."""
-        from .cycle_jump import analyse_cycle, choose_jump, extrapolate, jump_error
+        from .cycle_jump import analyse_cycle, choose_jump, extrapolate_plastic_history, jump_error
+        from .materials import elastic_stiffness
 
         sc, cs, js = self.scene, self.model.contact, self.progress.jump
         w = sc.wear
@@ -653,10 +654,11 @@ class _Run:
                           increment=new.increment + extra * sc.loading.increments_per_cycle,
                           dissipated_energy=new.dissipated_energy
                           + extra * float(result.records["dissipated_energy"].sum()))
-            if plastic is not None:  # the plastic history follows the wear gap: end + (dN - 1) x the cycle's change
-                before, after = start.plastic, new.plastic
-                new = replace(new, plastic=PlasticHistory(*(extrapolate(getattr(before, name), getattr(after, name), dN)
-                                                            for name in ("u", "sigma", "eps_p", "p"))))
+            if plastic is not None and plastic.regime != "elastic_shakedown":  # eps_p and p follow the wear gap
+                before, after, m = start.plastic, new.plastic, sc.material
+                sigma, eps_p, p = extrapolate_plastic_history(after.sigma, before.eps_p, after.eps_p, before.p,
+                                                              after.p, dN, elastic_stiffness(m.E, m.nu))
+                new = replace(new, plastic=PlasticHistory(after.u, sigma, eps_p, p))
         js.update(rate=rate, last=dN, free=free, simulated=js["simulated"] + 1, jumps=js["jumps"] + (dN > 1),
                   largest=max(js["largest"], dN), error=js["error"] + err, bound=bound,
                   stability_limit=stab, monotone_limit=mono, exceeded=js["exceeded"] + (dN > stab),

@@ -8,7 +8,8 @@ import pytest
 
 from dolfinx_fretting.contact_output import read_table
 from dolfinx_fretting.cycle_jump import (CycleAnalysis, analyse_cycle, analyse_plastic_cycle, choose_jump, extrapolate,
-                                         hertz_jump_limit, jump_error, plastic_jump_error, plastic_jump_limit)
+                                         extrapolate_plastic_history, hertz_jump_limit, jump_error,
+                                         plastic_jump_error, plastic_jump_limit)
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, read_checkpoint, run_scene
 
@@ -194,6 +195,23 @@ def test_plastic_extrapolation_and_its_error():
     worst = np.sqrt(2 / 3) * np.linalg.norm(missed, axis=1).max()
     assert err_eps == pytest.approx(2 * worst, rel=1e-9)  # twice the miss of a linear drift, as for the wear
     assert plastic_jump_error(start, end, 1) == (0.0, 0.0)
+
+
+def test_extrapolated_plastic_history_keeps_hookes_law_at_the_kept_strain():
+    """sigma = C (eps - eps_p) before the jump (eps the strain of the kept displacement) holds after it with the
+    extrapolated eps_p; p and eps_p take the Euler step."""
+    from dolfinx_fretting.materials import elastic_stiffness
+
+    rng = np.random.default_rng(7)
+    C = elastic_stiffness(115000.0, 0.342)
+    eps = rng.normal(scale=1e-3, size=(5, 6))
+    eps_p0, eps_p1 = rng.normal(scale=1e-3, size=(5, 6)), rng.normal(scale=1e-3, size=(5, 6))
+    p0 = rng.uniform(0, 1e-2, 5)
+    p1 = p0 + rng.uniform(0, 1e-4, 5)
+    sigma, eps_p, p = extrapolate_plastic_history((eps - eps_p1) @ C.T, eps_p0, eps_p1, p0, p1, 9, C)
+    assert np.allclose(eps_p, eps_p1 + 8 * (eps_p1 - eps_p0), rtol=1e-14, atol=0)
+    assert np.allclose(p, p1 + 8 * (p1 - p0), rtol=1e-14, atol=0)
+    assert np.allclose(sigma, (eps - eps_p) @ C.T, rtol=1e-12, atol=1e-9)  # MPa, stresses ~100 MPa
 
 
 # Scene keys ------------------------------------------------------------------------------------------------
@@ -449,6 +467,8 @@ def test_plastic_jumps_resume_as_the_uninterrupted_run(tmp_path, monkeypatch):
     assert meta["cycle"] > 12 and meta["jump"]["last"] > 1  # inside the jump from cycle 12
     resumed = run_scene(scene, tmp_path / "r", quiet=True, resume=True)
     assert resumed["resumed_from_cycle"] == meta["cycle"]
+    for key in ("simulated_cycles", "jumps", "largest_jump"):
+        assert resumed["cycle_jump"][key] == straight["cycle_jump"][key], key
     a, b = read_table(tmp_path / "s" / "cycles.csv"), read_table(tmp_path / "r" / "cycles.csv")
     for column in ("cycle", "jump", "jump_bound", "plastic_regime"):
         assert list(a[column]) == list(b[column]), column
