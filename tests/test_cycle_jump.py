@@ -416,7 +416,7 @@ def test_plastic_jumps_in_plastic_shakedown_stay_within_their_error_estimates(tm
     assert after_jump.size >= 2 and set(cyc["jump_bound"][after_jump]) <= {"plastic_settling", "landing"}
     wear, eps_p, p = _plastic_differences(end_every, end_jump)
     assert wear <= info["wear_error_estimate"]  # measured 5.1e-9 <= 2.9e-8
-    assert max(eps_p, p) <= info["plastic_error_estimate"]  # measured 6.7e-5, 3.3e-4 <= 2.8e-3
+    assert max(eps_p, p) <= info["plastic_error_estimate"]  # measured 6.7e-5, 3.3e-4 <= 3.1e-3
     assert info["plastic_error_estimate"] == pytest.approx(cyc["plastic_error_estimate"][-1], rel=1e-9)  # CSV digits
     # What the estimates stand for: the wear within 1 % of the depth, p within 2 % of its maximum (measured
     # 0.04 % and 0.9 %).
