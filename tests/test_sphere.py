@@ -363,3 +363,34 @@ def test_elastic_plastic_sphere_that_cannot_yield_is_the_elastic_run(tmp_path):
     for key in ("max_pressure", "contact_radius", "tangential_force", "max_wear_depth", "dissipated_energy",
                 "wear_volume"):
         assert yielding[key] == pytest.approx(elastic[key], rel=1e-7), key
+
+
+@pytest.mark.parametrize("p0_over_yield", [1.5, 1.7])
+def test_first_yield_under_a_hertz_sphere(tmp_path, p0_over_yield):
+    """Identical elastic-perfectly-plastic spheres pressed (the sphere-flat scene, P = 100 N, no tangential load):
+    von Mises yield begins below the surface when p0 = 1.60 sigma_y, nu = 0.3 (Johnson, *Contact Mechanics*,
+    1985, §6.2; the peak von Mises stress is 0.625 p0). p0 from Hertz with E* = E / (2 (1 - nu^2)). At
+    sigma_y = p0 / 1.5 nothing yields and the peak of the quadrature points' von Mises stress is 0.625 p0 within
+    3 % (measured +1.8 % at a/h = 3: contact_mesh_size 0.0622 mm, 13860 dofs); at p0 / 1.7 the body yields and
+    the return mapping caps the stress at sigma_y. The 6 % margins on either side of 1.60 exceed that error."""
+    from dolfinx_fretting.scenes import load_scene
+    from dolfinx_fretting.simulation import run_scene
+
+    base = load_scene("sphere-flat")
+    E, nu, R, P = base.material.E, base.material.nu, base.geometry.radius, base.loading.normal_force
+    E_star = E / (2 * (1 - nu**2))
+    a = (3 * P * R / (4 * E_star)) ** (1 / 3)
+    p0 = 3 * P / (2 * np.pi * a * a)
+    sigma_y = p0 / p0_over_yield
+    scene = load_scene("sphere-flat", ["material.model=elastoplastic", f"material.yield_stress={sigma_y!r}",
+                                       "material.hardening_modulus=0", "geometry.contact_mesh_size=0.0622",
+                                       "loading.cycles=0", "loading.tangential_displacement=0",
+                                       "loading.tangential_increments=1", "output.xdmf=false", "output.plots=false",
+                                       "output.progress=false"])
+    s = run_scene(scene, tmp_path / "run", COMM, quiet=True)
+    if p0_over_yield < 1.60:
+        assert s["max_equivalent_plastic_strain"] == 0.0
+        assert s["max_von_mises"] == pytest.approx(0.625 * p0, rel=0.03)
+    else:
+        assert s["max_equivalent_plastic_strain"] > 0.0
+        assert s["max_von_mises"] <= sigma_y * (1 + 1e-9)
