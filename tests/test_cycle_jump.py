@@ -316,27 +316,33 @@ class _Crash(RuntimeError):
     pass
 
 
-def test_resume_carries_the_jump_state(tmp_path, monkeypatch):
-    """A jumped run that dies right after its checkpoint at the snapshot cycle 200, resumed, takes the jumps of
-    the uninterrupted run: the growth allowance, the last rate and the error estimate survive the checkpoint."""
+def _kill_after_checkpoint(monkeypatch, scene, folder, cycle):
+    """Run ``scene`` into ``folder`` until its first checkpoint at or past ``cycle``, and die right after it (as a
+    killed process would); returns the checkpoint's progress."""
     from dolfinx_fretting import simulation
 
-    scene = load_scene("cylinder-flat", CYL + ["output.snapshot_cycles=[200, 400]", "output.loop_cycles=[200, 400]",
-                                               "wear.cycle_jump=true", "output.contact_profiles=false",
-                                               "loading.cycles=400"])
-    straight = run_scene(scene, tmp_path / "s", quiet=True)
     original = simulation._Run.checkpoint
 
     def checkpoint_then_die(self):
         original(self)
-        if self.progress.cycle >= 200:
+        if self.progress.cycle >= cycle:
             raise _Crash("killed after the checkpoint")
 
     monkeypatch.setattr(simulation._Run, "checkpoint", checkpoint_then_die)
     with pytest.raises(_Crash):
-        run_scene(scene, tmp_path / "r", quiet=True)
+        run_scene(scene, folder, quiet=True)
     monkeypatch.setattr(simulation._Run, "checkpoint", original)
-    meta = read_checkpoint(tmp_path / "r" / CHECKPOINT)[0]
+    return read_checkpoint(folder / CHECKPOINT)[0]
+
+
+def test_resume_carries_the_jump_state(tmp_path, monkeypatch):
+    """A jumped run that dies right after its checkpoint at the snapshot cycle 200, resumed, takes the jumps of
+    the uninterrupted run: the growth allowance, the last rate and the error estimate survive the checkpoint."""
+    scene = load_scene("cylinder-flat", CYL + ["output.snapshot_cycles=[200, 400]", "output.loop_cycles=[200, 400]",
+                                               "wear.cycle_jump=true", "output.contact_profiles=false",
+                                               "loading.cycles=400"])
+    straight = run_scene(scene, tmp_path / "s", quiet=True)
+    meta = _kill_after_checkpoint(monkeypatch, scene, tmp_path / "r", 200)
     assert meta["cycle"] > 200 and meta["jump"]["last"] > 1  # inside a jump that started at 200
     resumed = run_scene(scene, tmp_path / "r", quiet=True, resume=True)
     # the checkpoint was used: the resumed process covered the cycles after it only (not all 400)
@@ -447,23 +453,10 @@ def test_plastic_jumps_after_elastic_shakedown_keep_the_plastic_state(tmp_path):
 def test_plastic_jumps_resume_as_the_uninterrupted_run(tmp_path, monkeypatch):
     """Gross slip, jumped, killed right after its checkpoint at the snapshot cycle 12 (inside a jump) and
     resumed: the same cycles simulated, the same jumps, the same final wear and plastic state."""
-    from dolfinx_fretting import simulation
-
     extra = [*GROSS, "wear.cycle_jump=true", "output.snapshot_cycles=[12, 30]", "output.contact_profiles=false"]
     scene = load_scene("cylinder-flat", EP + ["loading.cycles=30", *extra])
     straight = run_scene(scene, tmp_path / "s", quiet=True)
-    original = simulation._Run.checkpoint
-
-    def checkpoint_then_die(self):
-        original(self)
-        if self.progress.cycle >= 12:
-            raise _Crash("killed after the checkpoint")
-
-    monkeypatch.setattr(simulation._Run, "checkpoint", checkpoint_then_die)
-    with pytest.raises(_Crash):
-        run_scene(scene, tmp_path / "r", quiet=True)
-    monkeypatch.setattr(simulation._Run, "checkpoint", original)
-    meta = read_checkpoint(tmp_path / "r" / CHECKPOINT)[0]
+    meta = _kill_after_checkpoint(monkeypatch, scene, tmp_path / "r", 12)
     assert meta["cycle"] > 12 and meta["jump"]["last"] > 1  # inside the jump from cycle 12
     resumed = run_scene(scene, tmp_path / "r", quiet=True, resume=True)
     assert resumed["resumed_from_cycle"] == meta["cycle"]
