@@ -87,6 +87,8 @@ def _parser() -> argparse.ArgumentParser:
 #: Seconds a rank that failed waits for the others at the end before it aborts them all: ranks that failed
 #: together (bad input, a collective solver failure) meet within a fraction of a second.
 MEET_SECONDS = 5.0
+#: Seconds between a lone failing rank's message and its MPI_Abort, for the launcher to forward the message.
+ABORT_GRACE_SECONDS = 1.0
 
 #: The message of this rank's failure (printed once by :func:`_finish`), or None.
 _failure: list[str] = []
@@ -128,6 +130,9 @@ def _finish(code: int, comm) -> int:
             if time.monotonic() > deadline:
                 print(f"{message or 'dolfinx-fretting: failed'} (on rank {comm.rank} alone: stopping all "
                       f"{comm.size} ranks)", file=sys.stderr, flush=True)
+                # MPICH's launcher may drop a line still in its pipe when the abort kills the job (a loaded
+                # machine lost this one in CI): give it time to forward the message first.
+                time.sleep(ABORT_GRACE_SECONDS)
                 comm.Abort(code)
             time.sleep(0.01)
     outcomes = _exit_comm.allgather((code, message))
