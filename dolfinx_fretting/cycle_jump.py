@@ -53,9 +53,11 @@ stability limit is the body's exact compliance), *plastic shakedown* (flow, but 
 grows, and with it the yield stress under hardening) and *ratcheting* (eps_p drifts every cycle). The jump
 is bounded so that the extrapolated net plastic strain stays within a fraction of the yield strain and the
 hardening within the same fraction of the yield stress (:func:`plastic_jump_limit`). Ratcheting is not
-refused: its jumps are held by that bound (at the rates of the paper's Example 2 to a few cycles), and the
-jump's error on the plastic strains (:func:`plastic_jump_error`) is accumulated and reported beside the wear
-gap's. In elastic shakedown the plastic state does not bound the jump: only the wear does.
+refused: its jumps are held by that bound (on the paper's Example 2 at 10 um, to 20-120 cycles once the first
+cycles' flow has decayed), and the jump's error on the plastic strains (:func:`plastic_jump_error`) is
+accumulated and reported beside the wear gap's. In elastic shakedown the plastic state does not bound the
+jump: only the wear does. After a jump of a flowing body the runner simulates a settling cycle before the
+next jump unless the plastic changes match those before the jump (``simulation._Run._plastic_bounds``).
 """
 
 from __future__ import annotations
