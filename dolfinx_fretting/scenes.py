@@ -416,12 +416,13 @@ class LoadingSettings(_Section):
     def _one_control_each(self) -> LoadingSettings:
         if (self.normal_displacement is None) == (self.normal_force is None):
             raise ValueError("loading: give exactly one of loading.normal_displacement (mm, > 0) and "
-                             "loading.normal_force (N/mm, > 0)")
+                             "loading.normal_force (N/mm in 2D, N in 3D; > 0)")
         given = [k for k in ("tangential_displacement", "tangential_force", "tangential_pressure")
                  if getattr(self, k) is not None]
         if len(given) > 1:
             raise ValueError("loading: give at most one of loading.tangential_displacement (mm), "
-                             f"loading.tangential_force (N/mm) and loading.tangential_pressure (MPa); got {given}")
+                             "loading.tangential_force (N/mm in 2D, N in 3D) and loading.tangential_pressure "
+                             f"(MPa); got {given}")
         if self.cycles > 0 and not given:
             raise ValueError(f"loading.cycles = {self.cycles}: a cyclic load needs its amplitude: one of "
                              "loading.tangential_displacement, loading.tangential_force, loading.tangential_pressure")
@@ -808,7 +809,8 @@ class Scene(_Section):
                                "carries no tangential force)")
         if Q is not None and Q != 0 and P is not None and abs(Q) >= mu * P:
             raise _range_error("loading.tangential_force", Q,
-                               f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} N/mm "
+                               f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} "
+                               f"{'N' if self.dim == 3 else 'N/mm'} "
                                "(at or beyond mu P the contact slides and no displacement gives Q)")
         two = c.obstacle == "elastic_flat"
         E_plane = m.E / (1 - m.nu**2)
@@ -1011,7 +1013,7 @@ def _format_validation_error(err: ValidationError, source: str) -> str:
         if e["type"] == "extra_forbidden":
             msg = f"unknown key {key!r}; allowed keys here: {', '.join(_allowed_keys(e['loc'][:-1]))}"
         elif e["type"] == "missing" and tuple(e["loc"]) == ("loading",):
-            msg = ("missing section [loading]: the normal load is required; give loading.normal_force (N/mm, > 0) "
+            msg = ("missing section [loading]: the normal load is required; give loading.normal_force (N/mm in 2D, N in 3D; > 0) "
                    "or loading.normal_displacement (mm, > 0)")
         elif e["type"] == "missing":
             msg = f"missing key {key!r}"
