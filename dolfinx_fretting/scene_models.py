@@ -132,13 +132,6 @@ def _pressure_load(V, body: BodyMesh, face: str):
     return -ufl.dot(ufl.FacetNormal(V.mesh), ufl.TestFunction(V)) * ds(body.tags[face])
 
 
-def contact_modulus(scene: Scene) -> float:
-    """E* (MPa) of a built-in geometry's Hertz estimate: ``E/(1 - nu^2)`` on a rigid plane, half that for two
-    identical bodies."""
-    m = scene.material
-    return m.E / (1 - m.nu**2) / (2.0 if scene.contact.obstacle == "elastic_flat" else 1.0)
-
-
 def expected_contact_size(scene: Scene) -> float:
     """The contact half-width (cylinder) or radius (sphere) a built-in geometry expects (mm), before any mesh.
 
@@ -153,7 +146,7 @@ def expected_contact_size(scene: Scene) -> float:
     sphere = g.kind == "sphere"
     if lo.normal_force is not None:
         return float((hertz_sphere if sphere else hertz_line_contact)(lo.normal_force, g.radius,
-                                                                       contact_modulus(scene))[0])
+                                                                       scene.contact_modulus)[0])
     return float(np.sqrt((1.0 if sphere else 2.0) * g.radius * lo.normal_displacement))
 
 
@@ -223,7 +216,7 @@ def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
     mesh_s = time.perf_counter() - t0
     V, form, von_mises, bcs, loads = _model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
     plane = _plane(scene, body)
-    E_star = contact_modulus(scene)
+    E_star = scene.contact_modulus
     window, automatic = candidate_window(scene, g.refined_half_width, g.contact_mesh_size)
     elastic_cells = display_cells = None
     if two_body:

@@ -644,7 +644,7 @@ def preset_values(scene: Scene) -> dict[str, Any]:
     (local 1e-12, force 1e-11, see ``Scene._plastic_tolerances``): the presets' tolerances were measured on
     elastic scenes.
     """
-    from .analytic import hertz_line_contact, plane_strain_modulus
+    from .analytic import hertz_line_contact
 
     name = scene.solver.preset
     if name is None:
@@ -653,18 +653,14 @@ def preset_values(scene: Scene) -> dict[str, Any]:
     g, lo, m = scene.geometry, scene.loading, scene.material
     out: dict[str, Any] = {}
     if g.kind == "half_cylinder" and lo.normal_force is not None:
-        # against the elastic flat (same material) the contact modulus halves
-        E_star = (plane_strain_modulus(m.E, m.nu, m.E, m.nu) if scene.contact.obstacle == "elastic_flat"
-                  else plane_strain_modulus(m.E, m.nu))
-        a, _ = hertz_line_contact(lo.normal_force, g.radius, E_star)
+        a, _ = hertz_line_contact(lo.normal_force, g.radius, scene.contact_modulus)
         out["geometry.contact_mesh_size"] = float(f"{a / p['contact_elements_per_half_width']:.3g}")
     elif g.kind == "sphere" and lo.normal_force is not None:
         # 3D: a quarter of these elements per contact radius (balanced: a/h = 4, the built-in default;
         # measured on Hertz: the peak pressure within 0.2 % from a/h = 3, tests/test_sphere.py)
         from .meshes_3d import hertz_sphere
 
-        E_star = m.E / (1 - m.nu**2) / (2.0 if scene.contact.obstacle == "elastic_flat" else 1.0)
-        a, _ = hertz_sphere(lo.normal_force, g.radius, E_star)
+        a, _ = hertz_sphere(lo.normal_force, g.radius, scene.contact_modulus)
         out["geometry.contact_mesh_size"] = float(f"{a / (p['contact_elements_per_half_width'] / 2.5):.3g}")
     elif g.kind == "rectangle":
         nx = int(p["rectangle_cells"])
@@ -812,9 +808,8 @@ class Scene(_Section):
                                f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} "
                                f"{'N' if self.dim == 3 else 'N/mm'} "
                                "(at or beyond mu P the contact slides and no displacement gives Q)")
-        two = c.obstacle == "elastic_flat"
         E_plane = m.E / (1 - m.nu**2)
-        E_star = E_plane / (2.0 if two else 1.0)
+        E_star = self.contact_modulus
         eps = MAX_ELASTIC_STRAIN
         if g.kind == "sphere":
             # Hertz (Johnson §4.2): p0 / E* = (6 P / (pi^3 R^2 E*))^(1/3); an approach d: a = sqrt(R d), a / R
@@ -882,6 +877,17 @@ class Scene(_Section):
     @property
     def dim(self) -> int:
         return len(self.contact.plane_normal)
+
+    @property
+    def contact_modulus(self) -> float:
+        """E* (MPa) of the built-in geometries' Hertz estimates: against a rigid plane ``E/(1 - nu^2)``;
+        against the elastic flat (same material) half that."""
+        from .analytic import plane_strain_modulus
+
+        m = self.material
+        if self.contact.obstacle == "elastic_flat":
+            return plane_strain_modulus(m.E, m.nu, m.E, m.nu)
+        return plane_strain_modulus(m.E, m.nu)
 
 
 #: Every key name of a scene (to tell keys from pydantic's union tags in an error's location).
