@@ -32,7 +32,15 @@ import scipy.sparse
 
 from .materials import radial_return_kernel
 
-__all__ = ["LowRankTangent", "point_strains", "rows_axpy", "zone_update", "zone_tangent_matrix"]
+__all__ = ["LowRankTangent", "point_strains", "rows_axpy", "zone_update", "zone_tangent_matrix", "MAX_ZONE_DOFS",
+           "ZONE_MARGIN"]
+
+#: Largest plastic zone (dofs of X) kept condensed: Z = (K^-1)_XX is dense, ``|X|^2`` doubles, and its
+#: selected inverse costs ~1.3 s at 2600 dofs here (benchmarks/results/plastic.md); past it the body
+#: refactorises K_T (``ElastoplasticBody.max_zone_dofs``; ``sizes`` counts the zone's memory with it).
+MAX_ZONE_DOFS = 6000
+#: Layers of neighbour cells added around the cells that yield when the zone grows.
+ZONE_MARGIN = 2
 
 
 @numba.njit(cache=True)

@@ -32,7 +32,8 @@ from . import _dolfinx as dfx
 from ._dolfinx import fem
 from .contact import constrained_global_dofs
 from .materials import J2Plasticity, return_mapping
-from .plastic_zone import LowRankTangent, point_strains, rows_axpy, zone_tangent_matrix, zone_update
+from .plastic_zone import (MAX_ZONE_DOFS, ZONE_MARGIN, LowRankTangent, point_strains, rows_axpy,
+                           zone_tangent_matrix, zone_update)
 
 __all__ = ["ElastoplasticBody", "NewtonError", "PlasticState", "PlasticZone", "condensation_unavailable",
            "is_radial_return", "mandel_strain"]
@@ -534,11 +535,10 @@ class ElastoplasticBody:
 
     #: Condense the iterations on the plastic zone (see the class docstring); False: refactorise.
     condensed = True
-    #: Largest plastic zone (dofs of X) kept condensed: Z = (K^-1)_XX is dense, ``|X|^2`` doubles, and its
-    #: selected inverse costs ~1.3 s at 2600 dofs here (benchmarks/results/plastic.md).
-    max_zone_dofs = 6000
-    #: Layers of neighbour cells added around the cells that yield when the zone grows.
-    zone_margin = 2
+    #: Largest plastic zone (dofs of X) kept condensed (:data:`~dolfinx_fretting.plastic_zone.MAX_ZONE_DOFS`).
+    max_zone_dofs = MAX_ZONE_DOFS
+    #: Layers of neighbour cells added around the yielding cells (:data:`~dolfinx_fretting.plastic_zone.ZONE_MARGIN`).
+    zone_margin = ZONE_MARGIN
 
     def __init__(self, problem, law: J2Plasticity, H, W: np.ndarray, face_load: PETSc.Vec | None,
                  tangent: str = "elastic", max_iter: int = 50, delta_1: float = 1e-8, delta_2: float = 1e-8,

@@ -78,9 +78,6 @@ _GAUSS_POINTS = {"quadrilateral": 4, "triangle": 3, "hexahedron": 8}
 #: (pattern, read-back and values: 32), Z itself and the low-rank tangent's blocks (8 + ...). Measured 820 MB
 #: above the baseline on the elastic-plastic cylinder-flat at h = 5 um, whose zone reaches the cap below.
 ZONE_BYTES_PER_DOF_SQUARED = 40
-#: ``plasticity.ElastoplasticBody.max_zone_dofs`` and ``zone_margin`` (DOLFINx modules: restated here, a test
-#: holds them equal): past the cap the body refactorises K_T instead (a second factor, counted too).
-MAX_ZONE_DOFS, ZONE_MARGIN = 6000, 2
 
 _GB = 2.0**30
 
@@ -385,13 +382,16 @@ def _drivers(scene: Scene, memory: dict[str, int]) -> dict[str, Any]:
     return keys
 
 
-def _plastic_zone_dofs(scene: Scene, contacts: int | None) -> int:
+def _plastic_zone_dofs(scene: Scene, contacts: int | None) -> tuple[int, bool]:
     """Dofs X of the plastic zone's dense algebra: the cells under the expected contact (2a wide, a deep, with
-    ``ZONE_MARGIN`` layers around) in each plastic body, and the contact's dofs; at most ``MAX_ZONE_DOFS``. A
-    mesh file or a rectangle (no expected contact size): the cap."""
+    ``plastic_zone.ZONE_MARGIN`` layers around) in each plastic body, and the contact's dofs; at most
+    ``plastic_zone.MAX_ZONE_DOFS``, past which the body refactorises K_T instead (a second factor). A mesh file
+    or a rectangle (no expected contact size): the cap. Returns (the zone's dofs, whether the cap is reached)."""
+    from .plastic_zone import MAX_ZONE_DOFS, ZONE_MARGIN  # (numba, as the elastic-plastic run itself)
+
     g, dim = scene.geometry, scene.dim
     if g.kind not in ("half_cylinder", "sphere"):
-        return MAX_ZONE_DOFS
+        return MAX_ZONE_DOFS, True
     from .scene_models import expected_contact_size, sphere_mesh_size
 
     a = expected_contact_size(scene)
@@ -401,7 +401,8 @@ def _plastic_zone_dofs(scene: Scene, contacts: int | None) -> int:
     nodes = across * deep * ((across / 2 if g.half_model else across) if dim == 3 else 1)
     two_body = scene.contact.obstacle == "elastic_flat"
     bodies = 2 if two_body and scene.material.plastic_body == "both" else 1
-    return int(min(MAX_ZONE_DOFS, bodies * nodes * dim + (contacts or 0) * dim))
+    zone = bodies * nodes * dim + (contacts or 0) * dim
+    return int(min(MAX_ZONE_DOFS, zone)), zone >= MAX_ZONE_DOFS
 
 
 def _compiled_2d_cycles(scene: Scene, dim: int) -> bool:
@@ -445,10 +446,10 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
             cell = "hexahedron" if dim == 3 else ("quadrilateral" if g.quadrilateral or g.kind == "file" else
                                                   "triangle")
             cells = nodes * (1 if cell != "triangle" else 2)
-            zone = _plastic_zone_dofs(scene, contacts)
+            zone, capped = _plastic_zone_dofs(scene, contacts)
             # the Gauss-point state, the zone's dense algebra, and K_T's own factor once the zone outgrows its cap
             memory["plastic"] = int(cells * _GAUSS_POINTS[cell] * PLASTIC_BYTES_PER_POINT
-                                    + ZONE_BYTES_PER_DOF_SQUARED * zone**2 + (one_factor if zone >= MAX_ZONE_DOFS else 0))
+                                    + ZONE_BYTES_PER_DOF_SQUARED * zone**2 + (one_factor if capped else 0))
     if contacts is not None:
         m = contacts * dim
         # S: the dofs H touches: the slave's, and as many of the master's (two bodies)

@@ -206,10 +206,3 @@ def test_msh_header_node_count(tmp_path, version, binary):
     assert msh_node_count(path) == nodes
     (tmp_path / "bad.msh").write_text("not a mesh")
     assert msh_node_count(tmp_path / "bad.msh") is None
-
-
-def test_plastic_zone_constants_are_the_bodys():
-    """sizes restates ElastoplasticBody's zone cap and margin (it may not import DOLFINx): they must agree."""
-    from dolfinx_fretting.plasticity import ElastoplasticBody
-
-    assert (sizes.MAX_ZONE_DOFS, sizes.ZONE_MARGIN) == (ElastoplasticBody.max_zone_dofs, ElastoplasticBody.zone_margin)
