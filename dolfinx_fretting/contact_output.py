@@ -44,8 +44,8 @@ STATE_NAMES = {0: "open", 1: "stick", 2: "slip"}
 def read_table(path: str | Path) -> dict[str, np.ndarray]:
     """Read one of a run's CSV tables as a dict of columns.
 
-    Text columns (``stage``, ``regime``, ``jump_bound``, ``plastic_regime``) are arrays of ``str``, integer columns (``increment``, ``node``,
-    ``state``, ...) ``int64`` and the others ``float64``. The table may be incomplete: a last line without
+    Text columns (``stage``, ``regime``, ``jump_bound``, ``plastic_regime``) are arrays of ``str``, integer
+    columns (``increment``, ``node``, ``state``, ...) ``int64`` and the others ``float64``. The table may be incomplete: a last line without
     its newline (a write in progress or cut short) and lines with the wrong number of fields are skipped,
     and a value that is not a number reads as NaN (an integer column that holds one stays ``float64``).
     Well-formed tables stream through numpy's C parser (a 720 000-row ``history.csv`` in about a second,

@@ -68,7 +68,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["CycleAnalysis", "PlasticCycle", "analyse_cycle", "analyse_plastic_cycle", "choose_jump",
-           "extrapolate", "extrapolate_plastic_history", "jump_error", "hertz_jump_limit", "plastic_jump_error", "plastic_jump_limit"]
+           "extrapolate", "extrapolate_plastic_history", "jump_error", "hertz_jump_limit", "plastic_jump_error",
+           "plastic_jump_limit"]
 
 _OPEN = 0
 _SLIP = 2
@@ -246,9 +247,9 @@ def analyse_plastic_cycle(eps_p_start: np.ndarray, p_start: np.ndarray, eps_p_en
 
     The runner calls it after each simulated cycle of an elastic–plastic body (with the committed
     quadrature-point arrays of ``ContactState.plastic``), extrapolates the plastic history over a jump with
-    :func:`extrapolate_plastic_history`, bounds the jump with :func:`plastic_jump_limit` (``choose_jump(..., plastic_limit=...)``), adds
-    :func:`plastic_jump_error` to the run's plastic error and writes the regime into ``cycles.csv``;
-    collective when ``comm`` has several ranks.
+    :func:`extrapolate_plastic_history`, bounds the jump with :func:`plastic_jump_limit`
+    (``choose_jump(..., plastic_limit=...)``), adds :func:`plastic_jump_error` to the run's plastic error and
+    writes the regime into ``cycles.csv``; collective when ``comm`` has several ranks.
 
     Args:
         eps_p_start, p_start: Plastic strain (n, 6) and accumulated plastic strain (n,) at the cycle's start.

@@ -1019,8 +1019,8 @@ def _format_validation_error(err: ValidationError, source: str) -> str:
         if e["type"] == "extra_forbidden":
             msg = f"unknown key {key!r}; allowed keys here: {', '.join(_allowed_keys(e['loc'][:-1]))}"
         elif e["type"] == "missing" and tuple(e["loc"]) == ("loading",):
-            msg = ("missing section [loading]: the normal load is required; give loading.normal_force (N/mm in 2D, N in 3D; > 0) "
-                   "or loading.normal_displacement (mm, > 0)")
+            msg = ("missing section [loading]: the normal load is required; give loading.normal_force "
+                   "(N/mm in 2D, N in 3D; > 0) or loading.normal_displacement (mm, > 0)")
         elif e["type"] == "missing":
             msg = f"missing key {key!r}"
         elif e["type"] != "value_error" and key:
