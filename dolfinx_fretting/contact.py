@@ -15,14 +15,16 @@ by position along the surface, so the local problem is the same whatever the par
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 
-__all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "find_candidates", "find_pairs", "tangent_frame",
-           "constrained_dofs", "constrained_global_dofs", "pair_with_faces"]
+__all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates", "find_pairs",
+           "tangent_frame", "constrained_dofs", "constrained_global_dofs", "pair_with_faces", "pair_with_segments",
+           "paired_contact_set"]
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
@@ -101,6 +103,10 @@ class ContactSet:
     #: Two deformable bodies: the size of each contact's master facet (2D: the segment's length; 3D: the mean
     #: edge length), the scale of the small-sliding limit (relative slip below half of it).
     master_sizes: np.ndarray | None = None
+    #: Two deformable bodies: each contact's facet in :attr:`master_surface` (the pairing, with
+    #: :attr:`master_weights`), and the master surface the pairing was searched on.
+    master_faces: np.ndarray | None = None
+    master_surface: MasterSurface | None = None
 
     @property
     def two_body(self) -> bool:
@@ -377,11 +383,12 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     fdim = msh.topology.dim - 1
     if gdim != 2:
         raise ValueError(f"two-body contact needs a 2D or 3D mesh; the mesh is {gdim}D")
-    bs = V.dofmap.index_map_bs
     imap = V.dofmap.index_map
     seg_nodes, seg_x, seg_inside = _boundary_segments(V, master_facets)
     if seg_nodes.shape[0] == 0:
         raise ValueError("contact: the master surface has no facet")
+    ref = tangent_frame([0.0, 1.0]) if reference_frame is None else np.asarray(reference_frame, dtype=float)
+    surface = MasterSurface(seg_nodes, seg_x, np.full(seg_nodes.shape[0], 2), seg_inside, ref)
 
     slave_facets = np.asarray(slave_facets, dtype=np.int32)
     nodes = fem.locate_dofs_topological(V, fdim, slave_facets)
@@ -397,49 +404,160 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     if gnodes.size == 0:
         raise ValueError("contact: no slave node on the contact surface")
 
-    # Closest point of every master segment to every slave node (dense: nc x n_segments, both small).
-    A, B = seg_x[:, 0], seg_x[:, 1]
-    d = B - A
-    L2 = np.einsum("ij,ij->i", d, d)
-    rel = coords[:, None, :] - A[None, :, :]
-    xi = np.clip(np.einsum("sij,ij->si", rel, d) / L2[None, :], 0.0, 1.0)
-    P = A[None] + xi[..., None] * d[None]
-    dist = np.linalg.norm(coords[:, None, :] - P, axis=2)
-    best = np.argmin(dist, axis=1)
-    rows = np.arange(gnodes.size)
-    xi, P = xi[rows, best], P[rows, best]
-    # Outward normal of the master segment: perpendicular to it, away from its cell's centroid.
-    tang = d[best] / np.sqrt(L2[best])[:, None]
-    normal = np.stack([-tang[:, 1], tang[:, 0]], axis=1)
-    flip = np.einsum("ij,ij->i", seg_inside[best] - A[best], normal) > 0
-    normal[flip] *= -1
-    frames = np.stack([tangent_frame(nv) for nv in normal])
-    gaps = np.einsum("ij,ij->i", coords - P, normal)
-
+    pairs = surface.pair(coords)
+    frames = surface.frames(pairs["normal"])
+    gaps = np.einsum("ij,ij->i", coords - pairs["point"], pairs["normal"])
     abscissa = np.einsum("ij,ij->i", coords, frames[:, 1])  # position along the master's tangent
     closest = coords[np.lexsort((coords[:, 0], np.abs(abscissa), gaps))[0]]  # ties: nearest x = 0 (partition-free)
     keep = np.ones(gnodes.size, dtype=bool)
     if half_width is not None:
         keep = np.abs(np.einsum("ij,ij->i", coords - closest, frames[:, 1])) <= half_width * (1 + 1e-12)
     order = np.flatnonzero(keep)[np.argsort(abscissa[keep], kind="stable")]
-    gnodes, coords, gaps, trib, frames, xi, P, abscissa = (
-        a[order] for a in (gnodes, coords, gaps, trib, frames, xi, P, abscissa))
-    masters = seg_nodes[best[order]]
-    weights = np.stack([1.0 - xi, xi], axis=1)
+    return paired_contact_set(surface, gnodes[order], coords[order], trib[order], abscissa[order],
+                              pairs["face"][order], pairs["weights"][order], imap.size_global * gdim)
 
-    nc = gnodes.size
-    # Rows (n, t) of contact c: frame . (e_slave - w_A e_A - w_B e_B); 3 nodes x gdim columns each.
-    node_cols = np.column_stack([gnodes, masters])                       # (nc, 3)
-    node_coef = np.column_stack([np.ones(nc), -weights])                 # (nc, 3)
-    vals = frames[:, :, None, :] * node_coef[:, None, :, None]           # (nc, dim, 3, dim)
-    cols = bs * node_cols[:, None, :, None] + np.arange(gdim)[None, None, None, :]
+
+def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords: np.ndarray, tributary: np.ndarray,
+                       abscissa: np.ndarray, faces: np.ndarray, weights: np.ndarray, n_dofs: int) -> ContactSet:
+    """The contact set of slave nodes paired with points of ``surface`` (pure NumPy; the same on every rank).
+
+    The pairing (each contact's facet and its weights on the facet's nodes) may have been searched in any
+    configuration (:meth:`MasterSurface.pair`); the master point, its normal, the frame and the gap are those of
+    the reference configuration at the same facet and weights, so that ``x = H u + g0`` is the linearised
+    relative position of the slave node and that material point of the master:
+
+        x^s = frame . (u_s - sum_i w_i u_i) + g0,    g0 = (X_s - sum_i w_i X_i) . n.
+
+    Args:
+        surface: The master surface.
+        global_nodes, coords, tributary, abscissa: The slave nodes (global block index, reference coordinates,
+            tributary measure, position along the surface), in the contacts' order.
+        faces, weights: Each contact's facet of ``surface`` and its weights on the facet's nodes (0 on padding).
+        n_dofs: Global number of displacement dofs (the columns of H).
+    """
+    dim = surface.dim
+    faces = np.asarray(faces, dtype=np.int64)
+    point, normal = surface.reference_geometry(faces, weights)
+    frames = surface.frames(normal)
+    gaps = np.einsum("ij,ij->i", coords - point, normal)
+    masters = surface.nodes[faces]
+    nc = global_nodes.size
+    # Rows (n, t1[, t2]) of contact c: frame . (e_slave - sum_i w_i e_master_i); (1 + nodes per facet) x dim
+    # columns each; a triangle's padding (-1) points at the slave node with weight 0.
+    node_cols = np.column_stack([global_nodes, np.where(masters >= 0, masters, global_nodes[:, None])])
+    node_coef = np.column_stack([np.ones(nc), -np.where(masters >= 0, weights, 0.0)])
+    vals = frames[:, :, None, :] * node_coef[:, None, :, None]           # (nc, dim, nodes, dim)
+    cols = dim * node_cols[:, None, :, None] + np.arange(dim)[None, None, None, :]
     cols = np.broadcast_to(cols, vals.shape)
-    rws = np.broadcast_to(np.arange(nc * gdim).reshape(nc, gdim, 1, 1), vals.shape)
-    H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nc * gdim, imap.size_global * bs))
-    H.eliminate_zeros()  # weight 0 at a segment end
-    return ContactSet(dim=gdim, global_nodes=gnodes, coords=coords, frames=frames, gap0=gaps,
-                      tributary=trib, abscissa=abscissa, H=H, master_nodes=masters, master_weights=weights,
-                      master_points=P, master_sizes=np.sqrt(L2[best[order]]))
+    rws = np.broadcast_to(np.arange(nc * dim).reshape(nc, dim, 1, 1), vals.shape)
+    H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nc * dim, n_dofs))
+    H.eliminate_zeros()  # zero weights (a node facing a master node or edge) touch no column
+    return ContactSet(dim=dim, global_nodes=global_nodes, coords=coords, frames=frames, gap0=gaps,
+                      tributary=tributary, abscissa=abscissa, H=H, master_nodes=masters,
+                      master_weights=np.asarray(weights, dtype=float), master_points=point,
+                      master_sizes=surface.sizes[faces], master_faces=faces, master_surface=surface)
+
+
+def pair_with_segments(points: np.ndarray, segments_x: np.ndarray,
+                       inside: np.ndarray) -> dict[str, np.ndarray]:
+    """Pair each point with the closest point of a set of 2D segments (pure NumPy; :func:`pair_with_faces` in 2D).
+
+    Args:
+        points: (n, 2) the slave nodes.
+        segments_x: (f, 2, 2) the segments' end points.
+        inside: (f, 2) a point inside the body behind each segment (its cell's centroid), to orient the normals.
+
+    Returns:
+        ``face`` (n,) the closest segment (the first among equally close ones), ``weights`` (n, 2) on its ends,
+        ``point`` (n, 2), ``normal`` (n, 2) the segment's unit normal, pointing out of the body, ``distance`` (n,).
+    """
+    A, B = segments_x[:, 0], segments_x[:, 1]
+    d = B - A
+    L2 = np.einsum("ij,ij->i", d, d)
+    rel = points[:, None, :] - A[None, :, :]   # dense (points x segments): both are a contact surface's, small
+    xi = np.clip(np.einsum("sij,ij->si", rel, d) / L2[None, :], 0.0, 1.0)
+    P = A[None] + xi[..., None] * d[None]
+    dist = np.linalg.norm(points[:, None, :] - P, axis=2)
+    best = np.argmin(dist, axis=1)
+    rows = np.arange(points.shape[0])
+    xi, P = xi[rows, best], P[rows, best]
+    tang = d[best] / np.sqrt(L2[best])[:, None]
+    normal = np.stack([-tang[:, 1], tang[:, 0]], axis=1)
+    flip = np.einsum("ij,ij->i", inside[best] - A[best], normal) > 0
+    normal[flip] *= -1
+    return {"face": best, "weights": np.column_stack([1.0 - xi, xi]), "point": P, "normal": normal,
+            "distance": dist[rows, best]}
+
+
+@dataclass(frozen=True)
+class MasterSurface:
+    """The master body's contact facets, replicated on every rank (pure data): what pairings are searched on.
+
+    Attributes:
+        nodes: (f, k) global nodes of each facet (2D: a segment's two; 3D: four, a triangle's fourth -1),
+            in the order of the facet's interpolation (:func:`_canonical_face` in 3D).
+        x: (f, k, dim) the nodes' reference coordinates (a triangle's fourth repeats its third).
+        nv: (f,) nodes per facet (2, 3 or 4).
+        inside: (f, dim) a point inside the master behind each facet (its cell's centroid).
+        reference_frame: (dim, dim) the obstacle frame; in 3D its t1 projected on a facet is the contact's t1.
+    """
+
+    nodes: np.ndarray
+    x: np.ndarray
+    nv: np.ndarray
+    inside: np.ndarray
+    reference_frame: np.ndarray
+
+    @property
+    def dim(self) -> int:
+        return int(self.x.shape[2])
+
+    @property
+    def sizes(self) -> np.ndarray:
+        """Each facet's size: a segment's length, a face's mean edge length (the scale of re-pairing)."""
+        edges = np.linalg.norm(np.roll(self.x, -1, axis=1) - self.x, axis=2)
+        if self.dim == 2:
+            return edges[:, 0]
+        # Round the facet: a triangle's fourth vertex repeats its third, so its edges 2-3 (length 0) and 3-0
+        # (the edge 2-0) add up to its perimeter too.
+        return edges.sum(axis=1) / self.nv
+
+    def pair(self, points: np.ndarray, x: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """Pair points with the closest point of the facets placed at ``x`` (default: the reference
+        configuration): see :func:`pair_with_segments` and :func:`pair_with_faces` (``weights`` has ``k``
+        columns)."""
+        x = self.x if x is None else x
+        if self.dim == 2:
+            return pair_with_segments(points, x, self.inside)
+        return pair_with_faces(points, x, self.nv, self.inside)
+
+    def reference_geometry(self, faces: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(point, unit outward normal) at the given facets and weights, in the reference configuration."""
+        X = self.x[faces]
+        point = np.einsum("mi,mij->mj", weights, X)
+        if self.dim == 2:
+            tang = X[:, 1] - X[:, 0]
+            normal = np.stack([-tang[:, 1], tang[:, 0]], axis=1)
+        else:
+            normal = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+            quad = self.nv[faces] == 4
+            if quad.any():
+                w = weights[quad]   # bilinear weights (1-xi)(1-eta), xi(1-eta), xi eta, (1-xi) eta
+                _, _, dxi, deta = _bilinear(X[quad], w[:, 1] + w[:, 2], w[:, 2] + w[:, 3])
+                normal[quad] = np.cross(dxi, deta)
+        normal = normal / np.linalg.norm(normal, axis=1)[:, None]
+        flip = np.einsum("ij,ij->i", self.inside[faces] - point, normal) > 0
+        normal[flip] *= -1
+        return point, normal
+
+    def frames(self, normal: np.ndarray) -> np.ndarray:
+        """The contacts' frames (n, t1[, t2]) for unit normals: 2D ``t1 = (n_y, -n_x)``; 3D the reference
+        frame's t1 projected on the facet, ``t2 = n x t1`` (on a flat master: the reference frame)."""
+        if self.dim == 2:
+            return np.stack([normal, np.column_stack([normal[:, 1], -normal[:, 0]])], axis=1)
+        t1 = self.reference_frame[1] - (normal @ self.reference_frame[1])[:, None] * normal
+        t1 /= np.linalg.norm(t1, axis=1)[:, None]
+        return np.stack([normal, t1, np.cross(normal, t1)], axis=1)
 
 
 # Node-to-face (3D) ------------------------------------------------------------------------------------------
@@ -669,12 +787,12 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
     comm = msh.comm
     gdim = 3
     fdim = msh.topology.dim - 1
-    bs = V.dofmap.index_map_bs
     imap = V.dofmap.index_map
     ref = tangent_frame([0.0, 0.0, 1.0]) if reference_frame is None else np.asarray(reference_frame, dtype=float)
     face_nodes, face_x, face_nv, face_inside = _boundary_faces(V, master_facets)
     if face_nodes.shape[0] == 0:
         raise ValueError("contact: the master surface has no facet")
+    surface = MasterSurface(face_nodes, face_x, face_nv, face_inside, ref)
 
     slave_facets = np.asarray(slave_facets, dtype=np.int32)
     nodes = fem.locate_dofs_topological(V, fdim, slave_facets)
@@ -693,13 +811,8 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
     order = np.lexsort(coords.T[::-1])
     gnodes, coords, trib = gnodes[order], coords[order], trib[order]
 
-    pairs = pair_with_faces(coords, face_x, face_nv, face_inside)
-    normal, P = pairs["normal"], pairs["point"]
-    t1 = ref[1] - (normal @ ref[1])[:, None] * normal
-    t1 /= np.linalg.norm(t1, axis=1)[:, None]
-    frames = np.stack([normal, t1, np.cross(normal, t1)], axis=1)
-    gaps = np.einsum("ij,ij->i", coords - P, normal)
-
+    pairs = surface.pair(coords)
+    gaps = np.einsum("ij,ij->i", coords - pairs["point"], pairs["normal"])
     in_plane = coords @ ref[1:].T
     distance = np.linalg.norm(in_plane, axis=1)
     closest = coords[np.lexsort((coords[:, 1], coords[:, 0], distance, gaps))[0]]  # ties: nearest the axis
@@ -710,39 +823,35 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
         raise ValueError("contact: no slave node within the candidate window")
     sel = np.flatnonzero(keep)
     sel = sel[_in_plane_order(in_plane[sel], np.ptp(coords, axis=0).max())]  # along t1, then t2 (as find_candidates)
-    gnodes, coords, gaps, trib, frames, in_plane = (a[sel] for a in (gnodes, coords, gaps, trib, frames, in_plane))
-    face = pairs["face"][sel]
-    masters = face_nodes[face]
-    weights = pairs["weights"][sel]
-    X = face_x[face]
-    sizes = np.array([np.mean([np.linalg.norm(x[(i + 1) % k] - x[i]) for i in range(k)])
-                      for x, k in zip(X, face_nv[face])])
-
-    nc = gnodes.size
-    # Rows (n, t1, t2) of contact c: frame . (e_slave - sum_i w_i e_master_i); 5 nodes x 3 columns each.
-    node_cols = np.column_stack([gnodes, np.where(masters >= 0, masters, gnodes[:, None])])   # (nc, 5)
-    node_coef = np.column_stack([np.ones(nc), -np.where(masters >= 0, weights, 0.0)])           # (nc, 5)
-    vals = frames[:, :, None, :] * node_coef[:, None, :, None]                                  # (nc, 3, 5, 3)
-    cols = bs * node_cols[:, None, :, None] + np.arange(gdim)[None, None, None, :]
-    cols = np.broadcast_to(cols, vals.shape)
-    rws = np.broadcast_to(np.arange(nc * gdim).reshape(nc, gdim, 1, 1), vals.shape)
-    H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nc * gdim, imap.size_global * bs))
-    H.eliminate_zeros()  # zero weights (a node facing a master node or edge) touch no column
-    return ContactSet(dim=gdim, global_nodes=gnodes, coords=coords, frames=frames, gap0=gaps, tributary=trib,
-                      abscissa=in_plane[:, 0].copy(), H=H, master_nodes=masters, master_weights=weights,
-                      master_points=P[sel], master_sizes=sizes)
-
+    return paired_contact_set(surface, gnodes[sel], coords[sel], trib[sel], in_plane[sel, 0].copy(),
+                              pairs["face"][sel], pairs["weights"][sel], imap.size_global * gdim)
 
 
 # The public contact object ---------------------------------------------------------------------------------
+#: Sliding models of two deformable bodies (:class:`ElasticBody`).
+SLIDING = ("small", "finite")
+
 @dataclass(frozen=True)
 class ElasticBody:
     """A deformable counter-body (the *master*) meshed in the same mesh as the body (the *slave*). 2D or 3D.
 
-    Each slave node of the contact surface is paired once, in the reference configuration, with the closest
-    point of the master surface (small sliding, see :func:`find_pairs`): node-to-segment in 2D, node-to-face in
-    3D (triangles and quadrilaterals, linear and bilinear weights). The contacts' frames are the master's:
-    n its outward normal at the paired point, in 3D t1 the obstacle frame's t1 projected on the facet.
+    Each slave node of the contact surface is paired with the closest point of the master surface:
+    node-to-segment in 2D, node-to-face in 3D (triangles and quadrilaterals, linear and bilinear weights). The
+    contacts' frames are the master's: n its outward normal at the paired point, in 3D t1 the obstacle frame's
+    t1 projected on the facet.
+
+    Sliding (``sliding``):
+
+    - ``"small"`` (default): the pairing is made once, in the reference configuration, and kept (see
+      :func:`find_pairs`); right while the relative slip stays below half a master element (the problem warns
+      past it).
+    - ``"finite"``: the slave nodes are paired anew, in the current configuration, whenever a node's paired
+      master point has moved more than ``repair_slip`` master elements away from the point facing it (checked
+      after every committed increment). K is not refactorised: the problem computes K⁻¹ once on the dofs of
+      both contact surfaces (the slave nodes and the master facets within ``reach`` of them) and forms W and the
+      load responses of each pairing from it (:mod:`dolfinx_fretting.sliding`); the master's share of the wear
+      is then kept on the master's nodes, so the scar on the master follows its material points. Elastic
+      bodies only; cycles run increment by increment (not in the compiled loop).
 
     The obstacle's rigid motion ``D`` of :class:`~dolfinx_fretting.problem.FrettingProblem` translates the
     master body as a whole (as if the supports that hold it moved with it; a rigid translation of a body
@@ -755,17 +864,36 @@ class ElasticBody:
         cells: Local cells of the master body (optional): the displacement recovered by
             :meth:`~dolfinx_fretting.problem.FrettingProblem.displacement` then includes the master's rigid
             motion ``D`` on its nodes.
+        sliding: ``"small"`` or ``"finite"`` (above).
+        repair_slip: Finite sliding: re-pair when a paired point is this many master elements (facet sizes) away
+            from the point facing its slave node, in the contact plane; > 0 and <= 1.
+        reach: Finite sliding: how far (length units, in the reference configuration) a slave node may slide
+            over the master: the master facets within ``reach`` of a slave candidate enter the surface
+            compliance. None: every facet of the master surface. A pairing that would need a facet beyond it
+            raises an error.
     """
 
     surface: tuple
     normal: np.ndarray
     cells: np.ndarray | None = None
+    sliding: str = "small"
+    repair_slip: float = 0.25
+    reach: float | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.normal, dtype=float)
         if n.ndim != 1 or n.size not in (2, 3) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
             raise ValueError(f"ElasticBody.normal = {self.normal!r}: expected a finite non-zero 2- or 3-vector")
         object.__setattr__(self, "normal", n / np.linalg.norm(n))
+        if self.sliding not in SLIDING:
+            raise ValueError(f"ElasticBody.sliding = {self.sliding!r}: allowed {', '.join(map(repr, SLIDING))}")
+        if not (isinstance(self.repair_slip, (int, float)) and np.isfinite(self.repair_slip)
+                and 0 < self.repair_slip <= 1):
+            raise ValueError(f"ElasticBody.repair_slip = {self.repair_slip!r}: allowed a finite number > 0 and <= 1 "
+                             "(master elements)")
+        if self.reach is not None and not (isinstance(self.reach, (int, float)) and np.isfinite(self.reach)
+                                           and self.reach > 0):
+            raise ValueError(f"ElasticBody.reach = {self.reach!r}: allowed None or a finite length > 0")
 
     @property
     def frame(self) -> np.ndarray:
@@ -878,6 +1006,15 @@ class Contact:
             master_tags, master_marker = obstacle.surface
             cs = find_pairs(V, self.facets, np.asarray(master_tags.find(master_marker), dtype=np.int32), window,
                             exclude_nodes=self.fixed_nodes, reference_frame=obstacle.frame)
+        self._use(cs)
+        mu_arr = np.broadcast_to(np.asarray(mu, dtype=float), (cs.nc,)).copy() if np.ndim(mu) == 0 else \
+            np.asarray(mu, dtype=float)
+        if mu_arr.shape != (cs.nc,) or not np.all(np.isfinite(mu_arr)) or np.any(mu_arr < 0):
+            raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact, {cs.nc})")
+        self.mu = mu_arr
+
+    def _use(self, cs: ContactSet) -> None:
+        """Hold ``cs``: its H without the fixed columns and its held rows (see the class's docstring)."""
         self.contact_set: ContactSet = cs
         H = cs.H.tocsc(copy=True)
         free = np.ones(H.shape[1], dtype=bool)
@@ -897,11 +1034,15 @@ class Contact:
         # force is zero (by symmetry, in a half model); FrettingProblem gives them a positive compliance so that
         # the local problem stays well posed, and refuses an obstacle motion along them.
         self.held_rows = np.flatnonzero(empty & ~normal_rows)
-        mu_arr = np.broadcast_to(np.asarray(mu, dtype=float), (cs.nc,)).copy() if np.ndim(mu) == 0 else \
-            np.asarray(mu, dtype=float)
-        if mu_arr.shape != (cs.nc,) or not np.all(np.isfinite(mu_arr)) or np.any(mu_arr < 0):
-            raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact, {cs.nc})")
-        self.mu = mu_arr
+
+    def with_pairing(self, cs: ContactSet) -> Contact:
+        """The same contact with the same slave nodes paired anew (finite sliding: :class:`ElasticBody`'s
+        ``sliding = "finite"``): a shallow copy holding ``cs``. Not collective."""
+        if not (cs.two_body and np.array_equal(cs.global_nodes, self.contact_set.global_nodes)):
+            raise ValueError("Contact.with_pairing: the pairing must be of the same slave nodes, in the same order")
+        other = copy.copy(self)
+        other._use(cs)
+        return other
 
     @property
     def frame(self) -> np.ndarray:
