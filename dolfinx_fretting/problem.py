@@ -48,7 +48,8 @@ import numpy as np
 from mpi4py import MPI
 
 from . import local_solvers
-from .contact import Contact, ElasticBody, constrained_global_dofs
+from . import sliding
+from .contact import Contact, ContactSet, ElasticBody, constrained_global_dofs
 from .loading import LoadControlError, find_displacement, waveform
 from .wear import ROW, ROW_FIELDS, commit_increment
 
@@ -250,6 +251,12 @@ class ContactState:
         status: Contact status codes of the last increment (0 open, 1 stick, 2 slip).
         warm: Compiled cycles: the forces of every increment of the last cycle (rank 0 only; None elsewhere).
         plastic: This rank's committed plastic history (elastic–plastic problems), else None.
+        pairing: Finite sliding (:class:`~dolfinx_fretting.contact.ElasticBody`): the contact set of the
+            pairing the per-contact arrays refer to (same slave nodes, frames and H of the paired master points),
+            else None.
+        master_wear: Finite sliding: the master's worn depth at the surface compliance's nodes
+            (:attr:`FrettingProblem.sliding`; 0 at slave nodes); the master's share of ``wear_gap`` is this,
+            interpolated at each contact's paired point. None otherwise (the share is carried per contact).
     """
 
     forces: np.ndarray
@@ -267,6 +274,8 @@ class ContactState:
     status: np.ndarray | None = None
     warm: np.ndarray | None = None
     plastic: PlasticHistory | None = None
+    pairing: ContactSet | None = None
+    master_wear: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -492,9 +501,19 @@ class FrettingProblem:
         self._fixed_factor = [i for i, n in enumerate(self.load_names) if n == "dirichlet values"]
         self.body = None
         t0 = time.perf_counter()
+        #: Finite sliding: K^-1 on both contact surfaces' dofs (:class:`~dolfinx_fretting.sliding.SurfaceCompliance`),
+        #: from which each pairing's W and load responses are formed; None with small sliding or a rigid plane.
+        self.sliding: sliding.SurfaceCompliance | None = None
+        if isinstance(contact.obstacle, ElasticBody) and contact.obstacle.sliding == "finite":
+            if plasticity is not None:
+                raise ValueError("FrettingProblem: finite sliding (ElasticBody(sliding='finite')) is for elastic bodies; "
+                                 "an elastic-plastic problem keeps the pairing fixed (sliding='small')")
+            self.sliding = self._surface_compliance()
         self._build_contact_operators()
         self.timings["delassus_s"] = time.perf_counter() - t0
         self._kernel = None
+        self._reference_pairing = self.contact.contact_set
+        self._repairs = 0
         #: Two bodies: warn (once) when the relative slip exceeds half a master element (see
         #: :meth:`relative_slip_ratio`); set False when the caller reports it itself.
         self.sliding_warning = True
@@ -543,13 +562,17 @@ class FrettingProblem:
         return _plain_vector(f, self.K)
 
     def _build_contact_operators(self) -> None:
-        """W on the free dofs (one copy broadcast from rank 0) and each load's contact response."""
+        """W on the free dofs (one copy broadcast from rank 0) and each load's contact response (finite sliding:
+        formed from the surface compliance, no communication)."""
         cs = self.contact.contact_set
-        W = self.delassus.build(self.contact.H_free)
-        self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
-        self.responses = np.zeros((len(self._vectors), cs.nc * cs.dim))
-        for i, f in enumerate(self._vectors):
-            self.responses[i] = self._local_response(f)
+        if self.sliding is not None:
+            self.W, self.responses = self.sliding.operators(cs)
+        else:
+            W = self.delassus.build(self.contact.H_free)
+            self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
+            self.responses = np.zeros((len(self._vectors), cs.nc * cs.dim))
+            for i, f in enumerate(self._vectors):
+                self.responses[i] = self._local_response(f)
         self._hold_directions()
         # Point stiffness of the closest node: a safe first guess of the load-displacement slope.
         k = int(np.argmin(cs.gap0))
@@ -609,14 +632,43 @@ class FrettingProblem:
                     f"Displacement(0) along {names[k]} (in 3D, tangential=(Force(Q), Displacement(0.0)) for a "
                     "force along t1 alone)")
 
-    def _local_response(self, f) -> np.ndarray:
-        """``H K^-1 f`` with the full H (prescribed values at fixed dofs count), replicated. Collective."""
+    def _local_response(self, f, H=None) -> np.ndarray:
+        """``H K^-1 f`` with the full H (prescribed values at fixed dofs count; default the contact set's),
+        replicated. Collective."""
+        H = self.contact.contact_set.H if H is None else H
         u = f.duplicate()
         self.delassus.solve(f, u)
         rstart, rend = u.getOwnershipRange()
-        part = self.contact.contact_set.H[:, rstart:rend] @ u.getArray(readonly=True)
+        part = H[:, rstart:rend] @ u.getArray(readonly=True)
         u.destroy()
         return self.comm.allreduce(part, op=MPI.SUM)
+
+    def _surface_compliance(self) -> sliding.SurfaceCompliance:
+        """K^-1 on the dofs of both contact surfaces and the loads' responses there (finite sliding). Collective."""
+        import scipy.sparse as sp
+
+        cs = self.contact.contact_set
+        faces, nodes = sliding.surface_nodes(cs, self.contact.obstacle.reach)
+        dim = cs.dim
+        dofs = (dim * nodes[:, None] + np.arange(dim)).ravel()
+        S = sp.csr_matrix((np.ones(dofs.size), (np.arange(dofs.size), dofs)), shape=(dofs.size, self.n_dofs))
+        free = np.ones(self.n_dofs)
+        free[self.contact.fixed_global] = 0.0
+        S_free = sp.csr_matrix(S @ sp.diags(free))
+        S_free.eliminate_zeros()
+        C = self.delassus.build(S_free)
+        C = self.comm.bcast(C if self.comm.rank == 0 else None, root=0)
+        responses = np.array([self._local_response(f, S) for f in self._vectors]).reshape(len(self._vectors),
+                                                                                          dofs.size)
+        return sliding.SurfaceCompliance(nodes, dim, C, responses, faces,
+                                         sliding.master_node_areas(cs.master_surface, nodes))
+
+    def _activate(self, state: ContactState) -> None:
+        """Finite sliding: hold ``state``'s pairing (its contact set, W and load responses) if another is held."""
+        if state.pairing is None or state.pairing is self.contact.contact_set:
+            return
+        self.contact = self.contact.with_pairing(state.pairing)
+        self._build_contact_operators()
 
     def _make_plastic_body(self) -> None:
         from .materials import J2Plasticity
@@ -667,8 +719,14 @@ class FrettingProblem:
             st = self.body.state
             plastic = PlasticHistory(np.zeros_like(self.body.u.x.array), np.zeros_like(st.sigma),
                                      np.zeros_like(st.eps_p), np.zeros_like(st.p))
+        if self.sliding is not None:  # start from the reference pairing
+            self.contact = self.contact.with_pairing(self._reference_pairing)
+            self._build_contact_operators()
+            cs = self.contact.contact_set
         return ContactState(np.zeros(m), y, np.zeros(m), np.zeros(cs.nc), np.zeros(cs.dim), factors,
-                            targets=np.zeros(cs.dim), force_controlled=np.zeros(cs.dim, dtype=bool), plastic=plastic)
+                            targets=np.zeros(cs.dim), force_controlled=np.zeros(cs.dim, dtype=bool), plastic=plastic,
+                            pairing=cs if self.sliding is not None else None,
+                            master_wear=np.zeros(self.sliding.nodes.size) if self.sliding is not None else None)
 
     def _q(self, d: np.ndarray, factors: np.ndarray, y_prev: np.ndarray, gw: np.ndarray,
            q_body: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -711,6 +769,7 @@ class FrettingProblem:
         Raises:
             ConvergenceError: the local solver, a force control or (elastic–plastic) Newton failed.
         """
+        self._activate(state)
         targets, controlled = self._targets(state, normal, tangential)
         factors = self._factors(state, loads)
         if self.body is not None:
@@ -894,21 +953,65 @@ class FrettingProblem:
         if isinstance(result, CycleResult):
             self._check_sliding(result.final)
             return result.final
+        self._activate(state)
         cs = self.contact.contact_set
         states = np.empty(cs.nc, dtype=np.int8)
         row = np.empty(len(ROW_FIELDS))
         gw = state.wear_gap.copy()
         commit_increment(result.forces, result.slip, result.positions, self.contact.mu, cs.dim, cs.tributary,
                          cs.abscissa, self._k(result.in_cycle), gw, states, row)
+        master_wear = state.master_wear
+        if self.sliding is not None and self.wear is not None:
+            # The master's share of the wear stays on the master's nodes (it follows its material points).
+            master_share = (1.0 - self.wear.slave_share) * (gw - state.wear_gap)
+            added = sliding.spread_wear(cs, self.sliding, master_share)
+            master_wear = state.master_wear + added
+            gw = gw - master_share + sliding.interpolate_master(cs, self.sliding, added)
         record = {**dict(zip(ROW_FIELDS, row.tolist())), **_solver_columns(result)}
         new = replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=gw,
                       obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
                       dissipated_energy=state.dissipated_energy + row[ROW["dissipated_energy"]],
                       local_iterations=state.local_iterations + result.iterations, record=record, status=states,
                       targets=result.targets, force_controlled=result.force_controlled,
-                      plastic=result.plastic if result.plastic is not None else state.plastic)
+                      plastic=result.plastic if result.plastic is not None else state.plastic, master_wear=master_wear)
+        if self.sliding is not None:
+            return self._repair(new)
         self._check_sliding(new)
         return new
+
+    def _surface_state(self, state: ContactState) -> tuple[np.ndarray, np.ndarray]:
+        """Finite sliding: (the surface nodes' displacement, the master's translation D) of ``state``."""
+        cs = state.pairing
+        frame = self.contact.frame
+        D = sum(state.obstacle[k] * frame[k] for k in range(cs.dim))
+        return self.sliding.displacement(cs, state.forces, state.load_factors), D
+
+    def _repair(self, state: ContactState) -> ContactState:
+        """Finite sliding: pair the slave nodes anew once a paired point has moved more than
+        ``ElasticBody.repair_slip`` master elements from its slave node, and carry ``state`` into the new
+        pairing (:func:`~dolfinx_fretting.sliding.carry_state`). Not collective (replicated data)."""
+        cs = state.pairing
+        u, D = self._surface_state(state)
+        if sliding.offsets(cs, self.sliding, u, D).max(initial=0.0) <= self.contact.obstacle.repair_slip:
+            return state
+        new = sliding.repair(cs, self.sliding, u, D)
+        carried = sliding.carry_state(cs, new, self.sliding, u, D, state.forces, state.wear_gap, state.master_wear)
+        self._repairs += 1
+        loaded = state.forces[0::cs.dim] > 0
+        beyond = sliding.offsets(new, self.sliding, u, D)[loaded]
+        if beyond.size and beyond.max() > self.contact.obstacle.repair_slip and self.sliding_warning \
+                and not getattr(self, "_reach_warned", False):
+            self._reach_warned = True
+            if self.comm.rank == 0:
+                warnings.warn(f"finite sliding: a loaded contact is {beyond.max():.3g} master elements from the closest "
+                              "master point within reach: it has slid beyond ElasticBody.reach (or off the master "
+                              "surface)", RuntimeWarning, stacklevel=3)
+        return replace(state, pairing=new, **carried)
+
+    @property
+    def repairs(self) -> int:
+        """Finite sliding: how many times the slave nodes were paired anew (by this problem, all states)."""
+        return self._repairs
 
     def relative_slip_ratio(self, state: ContactState) -> float:
         """Two deformable bodies: the largest accumulated relative tangential displacement of a contact over its
@@ -918,13 +1021,15 @@ class FrettingProblem:
         cs = self.contact.contact_set
         if cs.master_sizes is None:
             return 0.0
+        if self.sliding is not None:  # how far the paired points have moved since the pairing
+            return float(sliding.offsets(state.pairing, self.sliding, *self._surface_state(state)).max(initial=0.0))
         y_t = state.positions.reshape(cs.nc, cs.dim)[:, 1:]
         return float((np.linalg.norm(y_t, axis=1) / cs.master_sizes).max(initial=0.0))
 
     def _check_sliding(self, state: ContactState) -> None:
         """Warn once (RuntimeWarning, rank 0) when the relative slip of two bodies exceeds half a master facet,
         unless :attr:`sliding_warning` is False (a driver that reports it itself)."""
-        if not self.sliding_warning or getattr(self, "_sliding_warned", False):
+        if not self.sliding_warning or getattr(self, "_sliding_warned", False) or self.sliding is not None:
             return
         ratio = self.relative_slip_ratio(state)
         if ratio > 0.5:
@@ -1068,8 +1173,10 @@ class FrettingProblem:
                 raise ValueError(f"CyclePath.loads[{name!r}]: expected {n} finite factors")
             factors[:, self.load_names.index(name)] = values
         self._check_held(obstacle, forced)
+        self._activate(state)
+        # Finite sliding pairs anew between increments: increment by increment.
         compiled = (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
-                    and not forced.any())
+                    and not forced.any() and self.sliding is None)
         if compiled:
             return self._compiled_cycle(state, obstacle, factors, keep)
         return self._stepwise_cycle(state, obstacle, forced, factors, keep, check)
@@ -1179,6 +1286,9 @@ class FrettingProblem:
         positions are recomputed (y = W r + q_abs exactly). All or nothing. Collective."""
         if self.body is not None:
             raise ValueError("the candidate window of an elastic-plastic problem cannot change")
+        if self.sliding is not None:
+            raise ValueError("the candidate window of a finite-sliding problem cannot change (its surface compliance "
+                             "is built for the contact's window): give Contact a window wide enough for the run")
         old_contact, old_W, old_resp = self.contact, self.W, self.responses
         try:
             self.contact = old_contact.with_window(window)
@@ -1221,6 +1331,7 @@ class FrettingProblem:
         from petsc4py import PETSc
 
         u = out if out is not None else fem.Function(self.V, name="displacement")
+        self._activate(state)
         if self.body is not None:
             u.x.array[:] = state.plastic.u
             u.x.scatter_forward()
@@ -1258,6 +1369,7 @@ class FrettingProblem:
         """Per contact node (replicated): ``coordinates``, ``global_node``, ``pressure`` and ``shear``
         (force / tributary measure; shear has dim-1 components), ``gap``, ``slip`` (last increment's slip
         increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip)."""
+        self._activate(state)
         cs = self.contact.contact_set
         dim = cs.dim
         r = state.forces.reshape(cs.nc, dim)
@@ -1269,8 +1381,29 @@ class FrettingProblem:
                 "gap": y[:, 0].copy(), "slip": x[:, 1:].copy(), "relative_tangential": y[:, 1:].copy(),
                 "wear": state.wear_gap.copy(), "status": status.copy()}
 
+    def body_wear(self, state: ContactState) -> dict[str, np.ndarray]:
+        """Two bodies: each body's worn depth. ``slave`` per contact node; ``master`` and
+        ``master_coordinates`` (reference) at the master's points: with finite sliding the master's nodes
+        (:attr:`sliding`), with small sliding each contact's paired point (the pairing is fixed, so the
+        master's share is carried per contact)."""
+        self._activate(state)
+        cs = self.contact.contact_set
+        if not cs.two_body:
+            raise ValueError("body_wear: the obstacle is rigid (the wear gap is the body's: contact_fields)")
+        if self.sliding is None:
+            share = self.wear.slave_share if self.wear is not None else 1.0
+            return {"slave": share * state.wear_gap, "master": (1 - share) * state.wear_gap,
+                    "master_coordinates": cs.master_points.copy()}
+        on_master = self.sliding.master_areas > 0
+        surface = cs.master_surface
+        flat_nodes, first = np.unique(surface.nodes.ravel(), return_index=True)
+        x = surface.x.reshape(-1, surface.dim)[first[np.searchsorted(flat_nodes, self.sliding.nodes[on_master])]]
+        return {"slave": state.wear_gap - sliding.interpolate_master(cs, self.sliding, state.master_wear),
+                "master": state.master_wear[on_master].copy(), "master_coordinates": x}
+
     def total_force(self, state: ContactState) -> np.ndarray:
         """Total contact force on the body in the obstacle frame (n, t1[, t2])."""
+        self._activate(state)
         F = self.contact.contact_set.total_force(state.forces)
         return np.array([F @ self.contact.frame[k] for k in range(self.dim)])
 
@@ -1294,6 +1427,10 @@ class FrettingProblem:
             arrays["targets"] = state.targets if state.targets is not None else state.obstacle
             arrays["force_controlled"] = (state.force_controlled if state.force_controlled is not None
                                           else np.zeros(self.dim, dtype=bool))
+            if state.pairing is not None:  # finite sliding: the pairing and the master's wear
+                arrays["pairing_faces"] = state.pairing.master_faces
+                arrays["pairing_weights"] = state.pairing.master_weights
+                arrays["master_wear"] = state.master_wear
             for i, parts in enumerate(plastic or []):
                 for name, a in zip(("u", "sigma", "eps_p", "p"), parts):
                     arrays[f"plastic_{name}_{i}"] = a
@@ -1332,12 +1469,23 @@ class FrettingProblem:
             i = self.comm.rank
             plastic = PlasticHistory(*(data[f"plastic_{k}_{i}"].copy() for k in ("u", "sigma", "eps_p", "p")))
         warm = data["warm"] if data["warm"].size and self.comm.rank == 0 else None
+        pairing = master_wear = None
+        if ("pairing_faces" in data) != (self.sliding is not None):
+            raise ValueError(f"{path}: a state saved with{'' if 'pairing_faces' in data else 'out'} finite sliding "
+                             f"loads into a problem with{'' if self.sliding is not None else 'out'} it")
+        if self.sliding is not None:
+            from .contact import paired_contact_set
+
+            ref = self._reference_pairing
+            pairing = paired_contact_set(ref.master_surface, ref.global_nodes, ref.coords, ref.tributary,
+                                         ref.abscissa, data["pairing_faces"], data["pairing_weights"], ref.H.shape[1])
+            master_wear = data["master_wear"].copy()
         state = ContactState(*(data[k].copy() for k in self._ARRAYS), increment=int(info["increment"]),
                              dissipated_energy=float(info["dissipated_energy"]),
                              local_iterations=int(info["local_iterations"]), record=info["record"],
                              status=data["status"].copy() if data["status"].size else None, warm=warm,
                              targets=data["targets"].copy(), force_controlled=data["force_controlled"].copy(),
-                             plastic=plastic)
+                             plastic=plastic, pairing=pairing, master_wear=master_wear)
         return state, info["meta"]
 
     def destroy(self) -> None:

@@ -23,9 +23,10 @@ def elasticity(V):
 
 
 def sphere_model(a_over_h, extent, growth, *, flat, half=True, mu=0.0, wear=None, window=1.4, flat_mesh_size=None,
-                 comm=COMM):
+                 comm=COMM, sliding="small", reach=None):
     """The sphere's cap (top clamped) on a rigid plane z = 0 or on an identical flat (bottom clamped), sized
-    from Hertz's a for P; a half model has rollers (u_y = 0) on y = 0. Returns (body, problem, a, p0, h)."""
+    from Hertz's a for P; a half model has rollers (u_y = 0) on y = 0; ``sliding`` and ``reach`` (in units of a)
+    as :class:`~dolfinx_fretting.contact.ElasticBody`'s. Returns (body, problem, a, p0, h)."""
     E_star = E / (1 - NU**2) / (2.0 if flat else 1.0)
     a, p0 = m3.hertz_sphere(P, R, E_star)
     h = a / a_over_h
@@ -41,7 +42,8 @@ def sphere_model(a_over_h, extent, growth, *, flat, half=True, mu=0.0, wear=None
         bcs = clamp + [fem.dirichletbc(fem.Function(V1), fem.locate_dofs_topological((V.sub(1), V1), 2, sym),
                                        V.sub(1))]
     surface = (body.facet_tags, body.tags["surface"])
-    obstacle = (dfr.ElasticBody((body.facet_tags, body.tags["flat_top"]), [0.0, 0.0, 1.0]) if flat
+    obstacle = (dfr.ElasticBody((body.facet_tags, body.tags["flat_top"]), [0.0, 0.0, 1.0], sliding=sliding,
+                                reach=None if reach is None else reach * a) if flat
                 else dfr.RigidPlane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
     contact = dfr.Contact(V, surface, obstacle, mu=mu, bcs=bcs, window=window * a + h)
     problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=wear)

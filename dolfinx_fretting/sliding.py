@@ -1,0 +1,220 @@
+"""Finite sliding of two deformable bodies: pairings formed anew from one surface compliance (pure NumPy).
+
+With small sliding (:class:`~dolfinx_fretting.contact.ElasticBody`'s default) each slave node keeps the master
+point it faced in the reference configuration. When the bodies slide by more than a fraction of an element
+(the paper's gross-slip stroke is two elements) the master's displacement is then read at a point that no longer
+faces the node. Here the slave nodes are paired again, in the current configuration, without refactorising K:
+
+- :class:`SurfaceCompliance` holds ``C = S K^-1 S^T`` on the dofs ``S`` of both contact surfaces (the slave
+  candidates and the master nodes within reach) and each load's response ``S K^-1 f_l``, computed once. A
+  pairing's H touches surface dofs only, ``H = L S``, so its Delassus matrix and load responses are
+  ``W = L C L^T`` and ``L S K^-1 f_l``; the surface displacement of a state is ``C L^T r + sum_l s_l S K^-1 f_l``.
+- :func:`offsets` measures, from that displacement, how far each paired master point has moved from the point
+  facing its slave node; :func:`repair` searches the closest master points again in the current configuration
+  (the master moved by its rigid translation D as well) and builds the new contact set
+  (:func:`~dolfinx_fretting.contact.paired_contact_set`); :func:`carry_state` expresses a state in it.
+- The master's share of the wear lives on the master's nodes (:func:`master_node_areas`, :func:`spread_wear`)
+  and is interpolated at each pairing, so the scar on the master stays where it was worn.
+
+Nothing here touches DOLFINx or MPI: every rank holds the same arrays and computes the same pairing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .contact import ContactSet, MasterSurface, paired_contact_set
+
+__all__ = ["SurfaceCompliance", "surface_nodes", "master_node_areas", "offsets", "repair", "carry_state",
+           "interpolate_master", "spread_wear"]
+
+
+def surface_nodes(cs: ContactSet, reach: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The master facets a slave node may slide onto, and the surface nodes of the compliance.
+
+    Args:
+        cs: The reference pairing (:func:`~dolfinx_fretting.contact.find_pairs`).
+        reach: Sliding reach (length), or None for the whole master surface.
+
+    Returns:
+        (the facets of ``cs.master_surface`` within ``reach`` of a slave node, sorted; the global block nodes of
+        the slave candidates and of those facets, sorted).
+    """
+    surface = cs.master_surface
+    nf = surface.nodes.shape[0]
+    if reach is None:
+        faces = np.arange(nf)
+    else:
+        centre = np.array([x[:k].mean(axis=0) for x, k in zip(surface.x, surface.nv)]).reshape(-1, surface.dim)
+        radius = np.array([np.linalg.norm(x[:k] - c, axis=1).max() for x, k, c in zip(surface.x, surface.nv, centre)])
+        # distance from each facet's centre to the nearest slave node, in chunks of facets (slaves x facets)
+        nearest = np.empty(nf)
+        for lo in range(0, nf, 512):
+            d = np.linalg.norm(centre[lo:lo + 512, None, :] - cs.coords[None], axis=2)
+            nearest[lo:lo + 512] = d.min(axis=1)
+        faces = np.flatnonzero(nearest - radius <= reach)
+    masters = surface.nodes[faces].ravel()
+    nodes = np.union1d(cs.global_nodes, masters[masters >= 0])
+    return faces, nodes
+
+
+def master_node_areas(surface: MasterSurface, nodes: np.ndarray) -> np.ndarray:
+    """Tributary measure (length in 2D, area in 3D) of each of ``nodes`` on the whole master surface: a share
+    of each facet's measure per vertex (half a segment; a third of a triangle; a quadrilateral's area by its
+    two triangles, a quarter each). 0 for a node of no master facet."""
+    X = surface.x
+    if surface.dim == 2:
+        measure = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+    else:
+        tri = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1)
+        quad = tri + 0.5 * np.linalg.norm(np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0]), axis=1)
+        measure = np.where(surface.nv == 4, quad, tri)
+    share = measure / surface.nv
+    valid = surface.nodes >= 0
+    owners = surface.nodes[valid]
+    where = np.searchsorted(nodes, owners)
+    inside = (where < nodes.size) & (nodes[np.minimum(where, nodes.size - 1)] == owners)
+    areas = np.zeros(nodes.size)
+    np.add.at(areas, where[inside], np.broadcast_to(share[:, None], surface.nodes.shape)[valid][inside])
+    return areas
+
+
+@dataclass(frozen=True)
+class SurfaceCompliance:
+    """K⁻¹ on the dofs of both contact surfaces, from which every pairing's operators are formed.
+
+    Attributes:
+        nodes: Global block nodes of the surfaces (sorted); the dofs are ``dim * node + k``.
+        dim: Components per node.
+        C: ``S K^-1 S^T`` on the free dofs (rows and columns of fixed dofs are zero), shape (m, m),
+            ``m = dim * nodes.size``.
+        responses: ``S K^-1 f_l`` per load (prescribed values at the fixed dofs), shape (n_loads, m).
+        faces: The master facets within reach (:func:`surface_nodes`).
+        master_areas: Tributary measure of each node on the master surface (0 at slave nodes).
+    """
+
+    nodes: np.ndarray
+    dim: int
+    C: np.ndarray
+    responses: np.ndarray
+    faces: np.ndarray
+    master_areas: np.ndarray
+
+    @property
+    def dofs(self) -> np.ndarray:
+        return (self.dim * self.nodes[:, None] + np.arange(self.dim)).ravel()
+
+    def restrict(self, cs: ContactSet) -> sp.csr_matrix:
+        """L: H's columns at the surface dofs (``H = L S``)."""
+        return sp.csr_matrix(cs.H[:, self.dofs])
+
+    def operators(self, cs: ContactSet) -> tuple[np.ndarray, np.ndarray]:
+        """(W, the load responses) of the pairing ``cs``: ``L C L^T`` and ``L S K^-1 f_l``."""
+        L = self.restrict(cs)
+        LC = np.asarray(L @ self.C)
+        W = np.asarray(L @ LC.T)
+        W = 0.5 * (W + W.T)  # exactly symmetric, as the factorisation's W
+        responses = np.zeros((self.responses.shape[0], L.shape[0]))
+        if responses.size:
+            responses[:] = np.asarray(L @ self.responses.T).T
+        return W, responses
+
+    def displacement(self, cs: ContactSet, forces: np.ndarray, factors: np.ndarray) -> np.ndarray:
+        """The surface nodes' displacement (nodes, dim) under the contact forces of pairing ``cs`` and the loads
+        at ``factors``: ``C L^T r + sum_l s_l S K^-1 f_l`` (without the master's rigid translation)."""
+        L = self.restrict(cs)
+        u = self.C @ (L.T @ forces)
+        if self.responses.shape[0]:
+            u = u + factors @ self.responses
+        return u.reshape(-1, self.dim)
+
+    def rows(self, global_nodes: np.ndarray) -> np.ndarray:
+        """Row of each global node in :attr:`nodes` (-1 for padding)."""
+        where = np.searchsorted(self.nodes, np.maximum(global_nodes, 0))
+        return np.where(global_nodes >= 0, where, -1)
+
+
+def _master_motion(compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Displacement of master nodes at ``rows`` (any shape; -1 padding takes the previous column's) plus D."""
+    rows = rows.copy()
+    if rows.ndim == 2 and rows.shape[1] > 1:
+        for j in range(1, rows.shape[1]):
+            pad = rows[:, j] < 0
+            rows[pad, j] = rows[pad, j - 1]
+    return u[rows] + D
+
+
+def offsets(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """How far each contact's paired master point has moved from its slave node, in the contact plane, in
+    master elements: ``|t . ((X_s + u_s) - sum_i w_i (X_i + u_i + D))| / size``."""
+    slave = cs.coords + u[compliance.rows(cs.global_nodes)]
+    moved = _master_motion(compliance, u, D, compliance.rows(cs.master_nodes))
+    master = np.einsum("ci,cij->cj", cs.master_weights, cs.master_surface.x[cs.master_faces] + moved)
+    tangential = np.einsum("ckj,cj->ck", cs.frames[:, 1:], slave - master)
+    return np.linalg.norm(tangential, axis=1) / cs.master_sizes
+
+
+def repair(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> ContactSet:
+    """Pair the slave nodes of ``cs`` anew with the closest points of the master facets within reach, both moved
+    by their displacement in the contact plane (surface displacement ``u``, the master translated by ``D``;
+    their components along the obstacle's normal are left out). A node that has
+    slid beyond the reach pairs with the nearest facet within it; its :func:`offsets` then stay large (the
+    problem reports it).
+    """
+    surface = cs.master_surface
+    # The motion in the contact plane only (the obstacle frame's tangents): the approach along n is micrometres
+    # and does not change which points face each other, and leaving it out keeps a flat master's facets flat,
+    # so that a node on a symmetry plane pairs with a point on it exactly (the closest point of a facet warped by
+    # the indentation would lie a rounding-sized step off it, and the roller would no longer hold the pair).
+    n = surface.reference_frame[0]
+    u = u - np.outer(u @ n, n)
+    D = D - (D @ n) * n
+    faces = compliance.faces
+    rows = compliance.rows(surface.nodes[faces])
+    current = surface.x[faces] + _master_motion(compliance, u, D, rows)
+    slave = cs.coords + u[compliance.rows(cs.global_nodes)]
+    pairs = MasterSurface(surface.nodes[faces], current, surface.nv[faces], surface.inside[faces] + D,
+                          surface.reference_frame).pair(slave)
+    chosen = faces[pairs["face"]]
+    return paired_contact_set(surface, cs.global_nodes, cs.coords, cs.tributary, cs.abscissa, chosen,
+                              pairs["weights"], cs.H.shape[1])
+
+
+def interpolate_master(cs: ContactSet, compliance: SurfaceCompliance, master_wear: np.ndarray) -> np.ndarray:
+    """The master's wear depth at each contact's paired point (weights of the pairing)."""
+    rows = compliance.rows(cs.master_nodes)
+    return np.einsum("ci,ci->c", cs.master_weights, np.where(rows >= 0, master_wear[np.maximum(rows, 0)], 0.0))
+
+
+def spread_wear(cs: ContactSet, compliance: SurfaceCompliance, depth: np.ndarray) -> np.ndarray:
+    """The master's wear depth added at its nodes when each contact's paired point wears by ``depth``: the
+    worn measure ``depth_c A_c`` (A_c the slave node's tributary measure) shared among the facet's nodes by the
+    pairing's weights and divided by each node's own measure, so the worn volume is kept exactly."""
+    rows = compliance.rows(cs.master_nodes)
+    volume = np.zeros(compliance.nodes.size)
+    share = cs.master_weights * (depth * cs.tributary)[:, None]
+    valid = rows >= 0
+    np.add.at(volume, rows[valid], share[valid])
+    areas = compliance.master_areas
+    if np.any((volume != 0) & (areas <= 0)):
+        raise RuntimeError("finite sliding: wear reached a node of no master facet")
+    return np.divide(volume, areas, out=np.zeros_like(volume), where=areas > 0)
+
+
+def carry_state(old: ContactSet, new: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray,
+                forces: np.ndarray, wear_gap: np.ndarray, master_wear: np.ndarray) -> dict[str, np.ndarray]:
+    """A committed state's contact arrays expressed in the pairing ``new``: the forces turned into the new
+    frames (the same vectors), the wear gap with the master's share read at the new points, and the relative
+    positions of the committed configuration as the new pairing measures them, ``L u - frames D + g0 + w``
+    (their tangential rows are where the next increment's slip is measured from)."""
+    dim = new.dim
+    r = forces.reshape(-1, dim)
+    r_new = np.einsum("ckj,cj->ck", new.frames, np.einsum("ckj,ck->cj", old.frames, r)).ravel()
+    wear = wear_gap - interpolate_master(old, compliance, master_wear) + interpolate_master(new, compliance,
+                                                                                          master_wear)
+    positions = np.asarray(compliance.restrict(new) @ u.ravel()) - new.rigid_modes @ D
+    positions[0::dim] += new.gap0 + wear
+    return {"forces": r_new, "wear_gap": wear, "positions": positions}
