@@ -220,7 +220,7 @@ def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
     window, automatic = candidate_window(scene, g.refined_half_width, g.contact_mesh_size)
     elastic_cells = display_cells = None
     if two_body:
-        obstacle = ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal)
+        obstacle = _elastic_flat(scene, body, plane, g.refined_half_width)
         display_cells = body.cell_tags.find(body.regions["cylinder"])
         if m.model == "elastoplastic" and m.plastic_body != "both":
             other = "flat" if m.plastic_body == "cylinder" else "cylinder"
@@ -229,11 +229,12 @@ def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
         obstacle = plane
     label = ("two identical elastic bodies: E* = E/(2(1-nu^2))" if two_body
              else "rigid plane, frictionless: E* = E/(1-nu^2)")
-    text = ", each paired with a point of the elastic flat (node-to-segment, fixed pairing)" if two_body \
-        else ", against a rigid plane"
+    text = f", each paired with a point of the elastic flat (node-to-segment, {_PAIRING[scene.contact.sliding]})" \
+        if two_body else ", against a rigid plane"
     return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, g.contact_mesh_size, window,
                       g.refined_half_width, automatic, True, elastic_cells, display_cells,
-                      (g.radius, E_star, label), two_body, text, von_mises, {"mesh_s": mesh_s})
+                      (g.radius, E_star, label), two_body and scene.contact.sliding == "small", text, von_mises,
+                      {"mesh_s": mesh_s})
 
 
 def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
@@ -262,19 +263,33 @@ def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
     window, automatic = candidate_window(scene, zone, h)
     elastic_cells = display_cells = None
     if two_body:
-        obstacle = ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal)
+        obstacle = _elastic_flat(scene, body, plane, zone)
         display_cells = body.cell_tags.find(body.regions["sphere"])
         if m.model == "elastoplastic" and m.plastic_body != "both":
             other = "flat" if m.plastic_body == "cylinder" else "sphere"
             elastic_cells = body.cell_tags.find(body.regions[other])
     else:
         obstacle = plane
-    text = (", each paired with the closest point of the elastic flat's faces (node-to-face, fixed pairing)"
-            if two_body else ", against a rigid plane") + (", half model (roller on y = 0)" if g.half_model else "")
+    text = (f", each paired with the closest point of the elastic flat's faces (node-to-face, "
+            f"{_PAIRING[scene.contact.sliding]})" if two_body else ", against a rigid plane") + (", half model (roller on y = 0)" if g.half_model else "")
     # hertz = None: the driver's reference is the line contact's; the sphere's is meshes_3d.hertz_sphere.
     return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, h, window, zone, automatic, True,
-                      elastic_cells, display_cells, None, two_body, text, von_mises, {"mesh_s": mesh_s},
+                      elastic_cells, display_cells, None, two_body and scene.contact.sliding == "small", text,
+                      von_mises, {"mesh_s": mesh_s},
                       model_fraction=0.5 if g.half_model else 1.0)
+
+
+#: How each sliding model pairs the two bodies, in the model's description.
+_PAIRING = {"small": "fixed pairing", "finite": "paired anew as the bodies slide"}
+
+
+def _elastic_flat(scene: Scene, body, plane, zone: float) -> ElasticBody:
+    """The flat as the master body; finite sliding reaches over the refined zone (where the mesh is fine
+    enough for contact at all) plus the tangential stroke."""
+    c, lo = scene.contact, scene.loading
+    reach = zone + 2 * abs(lo.tangential_displacement or 0.0)
+    return ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal, sliding=c.sliding,
+                       repair_slip=c.repair_slip, reach=reach)
 
 
 def _rectangle(scene: Scene, comm: MPI.Comm) -> SceneModel:

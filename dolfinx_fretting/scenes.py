@@ -260,15 +260,21 @@ class ContactSettings(_Section):
 
     ``obstacle = "elastic_flat"`` meshes a flat block under the half-cylinder (same material, bottom fixed)
     and pairs each contact node of the cylinder (the slave surface) with a point of the flat's top (the
-    master surface) once, in the reference configuration (small sliding: fretting slip is micrometres;
-    the run warns when the relative slip exceeds half an element). Loads move the flat rigidly, as they move
-    the rigid plane: relative motions, forces and wear are those of the paper's load on the cylinder's top.
+    master surface): once, in the reference configuration, with ``sliding = "small"`` (fretting slip is
+    micrometres; the run warns when the relative slip exceeds half an element), or anew as the bodies slide with
+    ``sliding = "finite"`` (:class:`~dolfinx_fretting.contact.ElasticBody`). Loads move the flat rigidly, as they
+    move the rigid plane: relative motions, forces and wear are those of the paper's load on the cylinder's top.
     """
 
     #: Coulomb friction coefficient. At most 100: measured coefficients stay below ~10 (clean metals in
     #: vacuum); beyond, the cone is a wall and the tangential problem is meaningless.
     mu: float = Field(0.9, ge=0, le=100)
     obstacle: Literal["rigid_plane", "elastic_flat"] = "rigid_plane"
+    #: Two bodies: "small" (the pairing is fixed) or "finite" (paired anew when a paired point has moved
+    #: ``repair_slip`` elements from its node; elastic bodies; cycles run increment by increment).
+    sliding: Literal["small", "finite"] = "small"
+    #: Finite sliding: re-pair past this many contact elements of offset (0 < repair_slip <= 1).
+    repair_slip: float = Field(0.25, gt=0, le=1)
     #: A point of the rigid plane (mm) and its unit normal pointing from the plane into the body.
     plane_point: list[FiniteFloat] = Field(default_factory=lambda: [0.0, 0.0], min_length=2, max_length=3)
     plane_normal: list[FiniteFloat] = Field(default_factory=lambda: [0.0, 1.0], min_length=2, max_length=3)
@@ -743,6 +749,12 @@ class Scene(_Section):
             if lo.pressure_face in ("top", c.surface):
                 raise _range_error("loading.pressure_face", lo.pressure_face,
                                    "a face that is neither fixed (top) nor the contact surface")
+        if c.sliding == "finite" and c.obstacle != "elastic_flat":
+            raise _range_error("contact.sliding", c.sliding, "'small' unless contact.obstacle = 'elastic_flat' (finite "
+                               "sliding re-pairs two deformable bodies)")
+        if c.sliding == "finite" and self.material.model != "elastic":
+            raise _range_error("contact.sliding", c.sliding, "'small' with material.model = "
+                               f"{self.material.model!r} (finite sliding is for elastic bodies)")
         if g.kind == "half_cylinder" and c.candidate_half_width is not None and c.candidate_half_width > g.radius:
             raise _range_error("contact.candidate_half_width", c.candidate_half_width,
                                f"0 < candidate_half_width <= geometry.radius = {g.radius} mm")

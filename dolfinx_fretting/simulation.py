@@ -98,6 +98,9 @@ class ContactModel:
             raise SimulationError(str(exc).strip("'\"")) from None
         s, sv, m = self.setup, scene.solver, scene.material
         self.half_width = s.window if window is None else window
+        if scene.contact.sliding == "finite" and s.window_limit is not None and self.half_width is not None:
+            # the surface compliance is built for one window: the whole zone the window could grow to
+            self.half_width = max(self.half_width, s.window_limit)
         try:
             all_bcs = s.bcs + [bc for conditions in s.prescribed.values() for bc in conditions]
             contact = Contact(s.V, s.surface, s.obstacle, scene.contact.mu, all_bcs, self.half_width)
@@ -152,8 +155,8 @@ class ContactModel:
     @property
     def window_can_grow(self) -> bool:
         s = self.setup
-        return (self.problem.body is None and s.window_limit is not None and self.half_width is not None
-                and self.half_width < s.window_limit)
+        return (self.problem.body is None and self.problem.sliding is None and s.window_limit is not None
+                and self.half_width is not None and self.half_width < s.window_limit)
 
     def grow_window(self, state: ContactState) -> ContactState:
         """Widen the window by half (at least 3 elements, at most its limit); the state carried over."""
@@ -684,15 +687,21 @@ class _Run:
             "wear_k_effective": problem._k(True), "equivalent_cycles": pr.cycle * sc.wear.acceleration,
             "dissipated_energy": st.dissipated_energy / model.setup.model_fraction, "material_model": sc.material.model,
             "obstacle": "rigid plane (the flat is rigid)" if sc.contact.obstacle == "rigid_plane"
-            else "elastic flat (two deformable bodies of the same material, small-sliding pairing)",
+            else f"elastic flat (two deformable bodies of the same material, {sc.contact.sliding}-sliding pairing)",
         }
         if model.contact.two_body:
             share = problem.wear.slave_share if problem.wear is not None else 1.0
+            worn = problem.body_wear(st)
             summary.update({"wear_k_slave": sc.wear.k_total * share, "wear_k_master": sc.wear.k_total * (1 - share),
-                            "max_wear_depth_slave": share * float(st.wear_gap.max(initial=0.0)),
-                            "max_wear_depth_master": (1 - share) * float(st.wear_gap.max(initial=0.0)),
+                            "max_wear_depth_slave": float(worn["slave"].max(initial=0.0)),
+                            "max_wear_depth_master": float(worn["master"].max(initial=0.0)),
                             "max_relative_tangential": pr.max_relative_tangential,
-                            "small_sliding_warning": pr.sliding_warned})
+                            "small_sliding_warning": pr.sliding_warned, "sliding": sc.contact.sliding})
+            if problem.sliding is not None:
+                loaded = worn["master"] > 0
+                along = worn["master_coordinates"][loaded] @ problem.contact.frame[1]
+                summary.update({"repairs": problem.repairs,
+                                "master_scar_width": float(np.ptp(along)) if along.size else 0.0})
         if problem.body is not None:
             ps = problem.plastic_state(st)
             local = np.array([ps.p.max(initial=0.0), ps.von_mises().max(initial=0.0)])

@@ -37,6 +37,11 @@ CASES = {
                "loading.increments_per_cycle=8", "contact.candidate_half_width=0.05"],
     # 3D: the half ball on an elastic flat (node-to-face pairs, rollers on the symmetry plane), coarse mesh.
     "sphere-flat": ["geometry.contact_mesh_size=0.09", "loading.cycles=2", "loading.increments_per_cycle=16"],
+    # Finite sliding: the bodies paired anew as they slide (both wearing in mccoll, the master's wear on its nodes).
+    "mccoll:finite": ["geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=2",
+                      "loading.increments_per_cycle=8", "contact.sliding='finite'"],
+    "sphere-flat:finite": ["geometry.contact_mesh_size=0.09", "loading.cycles=1", "loading.increments_per_cycle=16",
+                           "contact.sliding='finite'"],
 }
 KEYS = ("normal_force", "tangential_force", "max_pressure", "max_wear_depth", "wear_area", "dissipated_energy",
         "contact_width", "stick_width")
@@ -56,19 +61,21 @@ def shared_dir():
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_parallel_run_matches_serial(shared_dir, name):
     overrides = CASES[name] + ["output.plots=false", "output.history_every=1", "output.progress=false"]
-    parallel = run_scene(load_scene(name, overrides), shared_dir / "par", COMM, quiet=True)
+    scene = name.split(":")[0]  # "scene:variant" keys: the same scene with other overrides
+    parallel = run_scene(load_scene(scene, overrides), shared_dir / "par", COMM, quiet=True)
     serial = None
     if COMM.rank == 0:
-        serial = run_scene(load_scene(name, overrides + ["output.xdmf=false"]), shared_dir / "ser", MPI.COMM_SELF,
+        serial = run_scene(load_scene(scene, overrides + ["output.xdmf=false"]), shared_dir / "ser", MPI.COMM_SELF,
                            quiet=True)
     serial = COMM.bcast(serial, root=0)
     assert parallel["contacts"] == serial["contacts"] and parallel["increments"] == serial["increments"]
-    extra = [k for k in ("max_equivalent_plastic_strain", "wear_volume", "contact_radius", "stick_radius") if k in serial]
+    extra = [k for k in ("max_equivalent_plastic_strain", "wear_volume", "contact_radius", "stick_radius",
+                         "max_wear_depth_master", "master_scar_width") if k in serial]
     for key in KEYS + tuple(extra):
         # The same contact set and local problems; W and the fields differ only by the rounding of a
         # differently ordered factorisation (measured ~1e-13): 1e-8 relative.
         assert parallel[key] == pytest.approx(serial[key], rel=1e-8, abs=1e-12), key
-    for key in ("n_open", "n_stick", "n_slip", "plastic_regime_last_cycle"):
+    for key in ("n_open", "n_stick", "n_slip", "plastic_regime_last_cycle", "repairs"):
         assert parallel.get(key) == serial.get(key), key
     if "cycle_jump" in serial:  # the same jumps
         for key in ("simulated_cycles", "jumps", "largest_jump"):
@@ -82,7 +89,7 @@ def test_parallel_run_matches_serial(shared_dir, name):
         rows = (shared_dir / "par" / "history.csv").read_text().strip().splitlines()
         jumped = 0  # the increments of the cycles a jump stood for are counted, not simulated (no rows)
         if "cycle_jump" in parallel:
-            per_cycle = load_scene(name, overrides).loading.increments_per_cycle
+            per_cycle = load_scene(scene, overrides).loading.increments_per_cycle
             jumped = (parallel["cycles"] - parallel["cycle_jump"]["simulated_cycles"]) * per_cycle
         assert len(rows) == 1 + parallel["increments"] - jumped
 
