@@ -273,6 +273,51 @@ def test_gross_slip_loop_grows_by_4_mu_P():
     problem.destroy()
 
 
+def _steady_energy_along(problem, state, path_xy, cycles=3):
+    """Whole-ball energy of the last of ``cycles`` cycles of the obstacle's tangential path (n, 2) (x, y), P held
+    by force; returns (energy, the last cycle's state)."""
+    n = path_xy.shape[0]
+    path = dfr.CyclePath(normal=dfr.Force(np.full(n, P)), tangential=dfr.Displacement(path_xy))
+    for _ in range(cycles):
+        cycle = problem.run_cycle(state, path)
+        state = problem.commit(state, cycle)
+    return float(cycle.records["dissipated_energy"].sum()), state
+
+
+def test_strokes_in_any_direction_and_turning_strokes_dissipate_mu_P_along_the_slip_path():
+    """The whole ball (no symmetry plane), coarse mesh a/h = 2, mu = 0.5, gross slip:
+
+    - a circular stroke, the obstacle at delta (cos 2 pi t, sin 2 pi t) over n = 32 increments: the friction force
+      turns with the slip at |Q| = mu P (the 3D Coulomb cone; the slip is never along a fixed axis), along the
+      obstacle's motion, and the steady
+      cycle dissipates mu P times the slip path, an n-gon whose radius is delta less the elastic part, so
+      dW/d delta = mu P 2 n sin(pi / n) (= 0.998 x 2 pi mu P);
+    - a rectilinear stroke at 30 degrees from x: dW/d delta = 4 mu P, as along x.
+    Strokes 15 and 20 um, 3 cycles each; 1 % (measured: circle +0.56 %, oblique -3.8e-5; the rectilinear stroke
+    along x measures 2e-5 in the half model's test)."""
+    mu, n = 0.5, 32
+    body, problem, a, p0, h = sphere_model(2, 4.0, 1.6, flat=True, mu=mu, half=False)
+    state = pressed(problem, P)
+    t = np.arange(1, n + 1) / n
+    circle = np.column_stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])
+    wave = dfr.CyclePath.waveform(n, tangential=1.0).tangential.value
+    oblique = np.outer(wave, [np.cos(np.pi / 6), np.sin(np.pi / 6)])
+    for shape, slope in ((circle, mu * P * 2 * n * np.sin(np.pi / n)), (oblique, 4 * mu * P)):
+        energies = []
+        for stroke in (0.015, 0.02):
+            energy, final = _steady_energy_along(problem, state, stroke * shape)
+            energies.append(energy)
+            if shape is circle:   # sliding everywhere at the cone's edge, the force turning with the stroke
+                Q = problem.total_force(final)[1:]
+                assert np.linalg.norm(Q) == pytest.approx(mu * P, rel=1e-3)
+                # along the obstacle's last step (the flat drags the ball), up to the slip's lag behind it
+                # (measured cos = 0.992)
+                step = (shape[-1] - shape[-2]) / np.linalg.norm(shape[-1] - shape[-2])
+                assert np.dot(Q, step) > 0.97 * np.linalg.norm(Q)
+        assert (energies[1] - energies[0]) / 0.005 == pytest.approx(slope, rel=0.01)
+    problem.destroy()
+
+
 def test_half_model_equals_full_model():
     """The half model (rollers on y = 0, P/2) and the full model (P) of the same coarse mesh through the same
     friction and wear history: forces, energy and worn volume halve, every node's pressure, shear, slip and wear
