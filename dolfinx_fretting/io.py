@@ -44,7 +44,11 @@ PROFILE_FIELDS = ["increment", "cycle", "step", "node", "position", "gap", "pres
 #: The columns a 3D contact adds to ``contact_profiles.csv``: the position along t2 and the t2 components (the
 #: 2D columns ``position``, ``shear``, ``slip``, ``relative_tangential`` hold the t1 components).
 PROFILE_FIELDS_3D = ("position_2", "shear_2", "slip_2", "relative_tangential_2")
-_TABLES = {"history": HISTORY_FIELDS, "cycles": CYCLE_FIELDS, "contact_profiles": PROFILE_FIELDS}
+#: Columns of ``flat_profiles.csv``: the master body's worn depth at its nodes (finite sliding, where the
+#: master's wear is kept on its own nodes), at the end of each profiled cycle; ``position_2`` is 0 in 2D.
+FLAT_PROFILE_FIELDS = ["increment", "cycle", "node", "position", "position_2", "wear"]
+_TABLES = {"history": HISTORY_FIELDS, "cycles": CYCLE_FIELDS, "contact_profiles": PROFILE_FIELDS,
+           "flat_profiles": FLAT_PROFILE_FIELDS}
 
 
 def profile_fields(dim: int) -> list[str]:
@@ -148,6 +152,7 @@ class ResultWriter:
         out_dir: Output folder (created).
         comm: Communicator; tables and pictures are written by its rank 0.
         profiles: Write ``contact_profiles.csv``.
+        flat_profiles: Write ``flat_profiles.csv`` (with ``profiles``).
         resume_sizes: Byte sizes of the tables at the checkpoint to resume from: the tables are
             truncated to them and appended to. ``None``: new tables.
         xdmf_started: The XDMF file already holds the mesh (resume).
@@ -155,7 +160,8 @@ class ResultWriter:
     """
 
     def __init__(self, out_dir: str | Path, comm: MPI.Comm, profiles: bool = True,
-                 resume_sizes: dict[str, int] | None = None, xdmf_started: bool = False, dim: int = 2):
+                 resume_sizes: dict[str, int] | None = None, xdmf_started: bool = False, dim: int = 2,
+                 flat_profiles: bool = False):
         self.out = Path(out_dir)
         self.comm = comm
         self.rank0 = comm.rank == 0
@@ -164,7 +170,8 @@ class ResultWriter:
         comm.barrier()
         self._files: dict[str, Any] = {}
         self._columns = {**_TABLES, "contact_profiles": profile_fields(dim)}
-        names = ["history", "cycles"] + (["contact_profiles"] if profiles else [])
+        names = ["history", "cycles"] + (["contact_profiles"] if profiles else []) + \
+            (["flat_profiles"] if profiles and flat_profiles else [])
         # A table shorter than the checkpoint records (or missing) has lost rows: truncate() would extend it
         # with NUL bytes (or a new table would start without them). Checked on rank 0, raised on every rank.
         problem = None
@@ -218,6 +225,14 @@ class ResultWriter:
                                 *columns])
         fmt = "%d,%d,%d,%d," + ",".join(["%.10g"] * (len(columns) - 1)) + ",%d"
         self._write("contact_profiles", [fmt % tuple(r) for r in data.tolist()])
+
+    def flat_block(self, increment: int, cycle: int, positions: np.ndarray, wear: np.ndarray) -> None:
+        """Append the master's worn depth at its nodes (``positions`` (n, 2): along t1 and t2)."""
+        if "flat_profiles" not in self._files:
+            return
+        n = wear.size
+        data = np.column_stack([np.full(n, increment), np.full(n, cycle), np.arange(n), positions, wear])
+        self._write("flat_profiles", ["%d,%d,%d,%.10g,%.10g,%.10g" % tuple(r) for r in data.tolist()])
 
     def flush(self) -> None:
         for f in self._files.values():

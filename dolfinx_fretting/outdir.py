@@ -37,7 +37,7 @@ LOCK_NAME = ".dolfinx_fretting.lock"
 #: The checkpoint a cyclic run writes (``simulation.CHECKPOINT``).
 CHECKPOINT_NAME = "checkpoint.npz"
 #: The tables a run appends to (``io.ResultWriter``).
-TABLE_NAMES = ("history.csv", "cycles.csv", "contact_profiles.csv")
+TABLE_NAMES = ("history.csv", "cycles.csv", "contact_profiles.csv", "flat_profiles.csv")
 #: Files whose presence means the folder holds a run.
 RUN_MARKERS = ("summary.json", "run.json", CHECKPOINT_NAME, *TABLE_NAMES)
 #: Every file a run writes into its folder (``io``, ``simulation``, ``contact_output``, ``plots``, ``pictures``),

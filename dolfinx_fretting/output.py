@@ -18,6 +18,8 @@ What goes where (the columns are declared once, in :mod:`dolfinx_fretting.io`):
 - ``history.csv``: one row per increment (:data:`~dolfinx_fretting.io.HISTORY_FIELDS`);
 - ``cycles.csv``: one row per cycle (:data:`~dolfinx_fretting.io.CYCLE_FIELDS`, :func:`cycle_row`);
 - ``contact_profiles.csv``: one row per contact node of every written increment;
+- ``flat_profiles.csv``: finite sliding only, the master's worn depth at its nodes at the end of each profiled
+  cycle (its wear lives there, not on the contacts);
 - ``fields.xdmf``: displacement, von Mises stress (and the equivalent plastic strain), collective;
 - ``worn_profiles.csv``: each body's worn depth at the end;
 - ``run.json``: the :class:`RunDescription`, which plots, pictures and ``compare`` read instead of the scene.
@@ -290,7 +292,8 @@ class FrettingWriter:
         self._pressure_index = names.index(pressure_load) if pressure_load in names else None
         resume = resume or {}
         self.tables = ResultWriter(self.folder, self.comm, profiles=profiles, resume_sizes=resume.get("sizes"),
-                                   xdmf_started=bool(resume.get("xdmf_started", False)), dim=problem.contact.dim)
+                                   xdmf_started=bool(resume.get("xdmf_started", False)), dim=problem.contact.dim,
+                                   flat_profiles=getattr(problem, "surface_compliance", None) is not None)
         self._functions = None
         if self.comm.rank == 0:
             write_json_atomic(self.folder / RUN_DESCRIPTION, self.description.to_json())
@@ -383,6 +386,7 @@ class FrettingWriter:
             for j in range(n):
                 self.write_profile(start.increment + j + 1, cycle, j + 1, out_x[j], out_y[j], out_r[j], out_gw[j],
                                    out_status[j])
+            self.write_flat_profile(start.increment + n, cycle, result.final)
         if profiles if fields is None else fields:
             j, shown = self.most_loaded(result)
             self.write_fields(float(start.increment + j + 1), shown)
@@ -416,6 +420,18 @@ class FrettingWriter:
             columns += [np.einsum("ij,ij->i", cs.coords, cs.frames[:, 2]), forces[2::dim] / cs.tributary,
                         slip[2::dim], positions[2::dim]]
         self.tables.profile_block(increment, cycle, step, [*columns, status])
+
+    def write_flat_profile(self, increment: int, cycle: int, state) -> None:
+        """Finite sliding: append the master's worn depth at its nodes (``flat_profiles.csv``, rank 0): there the
+        master's wear lives on its own nodes, not on the contacts (with small sliding it is the wear gap's share
+        in ``contact_profiles.csv``)."""
+        if self.problem.surface_compliance is None or self.comm.rank != 0:
+            return
+        worn = self.problem.body_wear(state)
+        frame = self.problem.contact.frame
+        x = worn["master_coordinates"]
+        along = np.column_stack([x @ frame[1], x @ frame[2] if x.shape[1] == 3 else np.zeros(x.shape[0])])
+        self.tables.flat_block(increment, cycle, along, worn["master"])
 
     # Fields ----------------------------------------------------------------------------------------------
     def write_fields(self, t: float, state) -> None:
@@ -471,14 +487,23 @@ class FrettingWriter:
         import csv
 
         cs = self.problem.contact.contact_set
-        wear = self.problem.wear
-        share = wear.slave_share if wear is not None else 1.0
         gw = state.wear_gap
-        master_x = cs.master_points[:, 0] if cs.two_body else np.full(cs.nc, np.nan)
+        rows = []
+        if not cs.two_body:
+            rows = zip(cs.abscissa, gw, gw, np.full(cs.nc, np.nan), np.zeros(cs.nc))
+        else:
+            worn = self.problem.body_wear(state)
+            flat_x = worn["master_coordinates"] @ self.problem.contact.frame[1]
+            if self.problem.surface_compliance is None:   # the flat's share placed at each contact's paired point
+                rows = zip(cs.abscissa, gw, worn["slave"], flat_x, worn["master"])
+            else:   # finite sliding: the cylinder's rows, then the flat's nodes (blank where a body has none)
+                blank, blank_flat = np.full(cs.nc, np.nan), np.full(flat_x.size, np.nan)
+                rows = [*zip(cs.abscissa, gw, worn["slave"], blank, blank),
+                        *zip(blank_flat, blank_flat, blank_flat, flat_x, worn["master"])]
         with open(self.folder / "worn_profiles.csv", "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["position", "wear_gap", "cylinder_wear", "flat_position", "flat_wear"])
-            for values in zip(cs.abscissa, gw, share * gw, master_x, (1 - share) * gw):
+            for values in rows:
                 w.writerow([f"{v:.12g}" for v in values])
 
     def write_summary(self, summary: dict[str, Any]) -> None:

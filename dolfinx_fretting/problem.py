@@ -255,7 +255,7 @@ class ContactState:
             pairing the per-contact arrays refer to (same slave nodes, frames and H of the paired master points),
             else None.
         master_wear: Finite sliding: the master's worn depth at the surface compliance's nodes
-            (:attr:`FrettingProblem.sliding`; 0 at slave nodes); the master's share of ``wear_gap`` is this,
+            (:attr:`FrettingProblem.surface_compliance`; 0 at slave nodes); the master's share of ``wear_gap`` is this,
             interpolated at each contact's paired point. None otherwise (the share is carried per contact).
     """
 
@@ -501,14 +501,16 @@ class FrettingProblem:
         self._fixed_factor = [i for i, n in enumerate(self.load_names) if n == "dirichlet values"]
         self.body = None
         t0 = time.perf_counter()
-        #: Finite sliding: K^-1 on both contact surfaces' dofs (:class:`~dolfinx_fretting.sliding.SurfaceCompliance`),
-        #: from which each pairing's W and load responses are formed; None with small sliding or a rigid plane.
-        self.sliding: sliding.SurfaceCompliance | None = None
+        #: Finite sliding: K^-1 on both contact surfaces' dofs
+        #: (:class:`~dolfinx_fretting.sliding.SurfaceCompliance`), from which each pairing's W and load responses
+        #: are formed; None with small sliding or a rigid plane. :attr:`contact` is then a copy of the given
+        #: Contact holding the pairing of the state last solved or committed (:meth:`Contact.with_pairing`).
+        self.surface_compliance: sliding.SurfaceCompliance | None = None
         if isinstance(contact.obstacle, ElasticBody) and contact.obstacle.sliding == "finite":
             if plasticity is not None:
-                raise ValueError("FrettingProblem: finite sliding (ElasticBody(sliding='finite')) is for elastic bodies; "
-                                 "an elastic-plastic problem keeps the pairing fixed (sliding='small')")
-            self.sliding = self._surface_compliance()
+                raise ValueError("FrettingProblem: finite sliding (ElasticBody(sliding='finite')) is for elastic "
+                                 "bodies; an elastic-plastic problem keeps the pairing fixed (sliding='small')")
+            self.surface_compliance = self._surface_compliance()
         self._build_contact_operators()
         self.timings["delassus_s"] = time.perf_counter() - t0
         self._kernel = None
@@ -565,8 +567,8 @@ class FrettingProblem:
         """W on the free dofs (one copy broadcast from rank 0) and each load's contact response (finite sliding:
         formed from the surface compliance, no communication)."""
         cs = self.contact.contact_set
-        if self.sliding is not None:
-            self.W, self.responses = self.sliding.operators(cs)
+        if self.surface_compliance is not None:
+            self.W, self.responses = self.surface_compliance.operators(cs)
         else:
             W = self.delassus.build(self.contact.H_free)
             self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
@@ -707,8 +709,10 @@ class FrettingProblem:
 
     # States -------------------------------------------------------------------------------------------------
     def initial_state(self) -> ContactState:
-        """The unloaded, unworn state (obstacle at its initial position, every load factor 0)."""
-        cs = self.contact.contact_set
+        """The unloaded, unworn state (obstacle at its initial position, every load factor 0; finite sliding:
+        the reference configuration's pairing)."""
+        finite = self.surface_compliance is not None
+        cs = self._reference_pairing if finite else self.contact.contact_set
         m = cs.nc * cs.dim
         y = np.zeros(m)
         y[0::cs.dim] = cs.gap0
@@ -719,14 +723,10 @@ class FrettingProblem:
             st = self.body.state
             plastic = PlasticHistory(np.zeros_like(self.body.u.x.array), np.zeros_like(st.sigma),
                                      np.zeros_like(st.eps_p), np.zeros_like(st.p))
-        if self.sliding is not None:  # start from the reference pairing
-            self.contact = self.contact.with_pairing(self._reference_pairing)
-            self._build_contact_operators()
-            cs = self.contact.contact_set
         return ContactState(np.zeros(m), y, np.zeros(m), np.zeros(cs.nc), np.zeros(cs.dim), factors,
                             targets=np.zeros(cs.dim), force_controlled=np.zeros(cs.dim, dtype=bool), plastic=plastic,
-                            pairing=cs if self.sliding is not None else None,
-                            master_wear=np.zeros(self.sliding.nodes.size) if self.sliding is not None else None)
+                            pairing=cs if finite else None,
+                            master_wear=np.zeros(self.surface_compliance.nodes.size) if finite else None)
 
     def _q(self, d: np.ndarray, factors: np.ndarray, y_prev: np.ndarray, gw: np.ndarray,
            q_body: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -961,12 +961,12 @@ class FrettingProblem:
         commit_increment(result.forces, result.slip, result.positions, self.contact.mu, cs.dim, cs.tributary,
                          cs.abscissa, self._k(result.in_cycle), gw, states, row)
         master_wear = state.master_wear
-        if self.sliding is not None and self.wear is not None:
+        if self.surface_compliance is not None and self.wear is not None:
             # The master's share of the wear stays on the master's nodes (it follows its material points).
             master_share = (1.0 - self.wear.slave_share) * (gw - state.wear_gap)
-            added = sliding.spread_wear(cs, self.sliding, master_share)
+            added = sliding.spread_wear(cs, self.surface_compliance, master_share)
             master_wear = state.master_wear + added
-            gw = gw - master_share + sliding.interpolate_master(cs, self.sliding, added)
+            gw = gw - master_share + sliding.interpolate_master(cs, self.surface_compliance, added)
         record = {**dict(zip(ROW_FIELDS, row.tolist())), **_solver_columns(result)}
         new = replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=gw,
                       obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
@@ -974,7 +974,7 @@ class FrettingProblem:
                       local_iterations=state.local_iterations + result.iterations, record=record, status=states,
                       targets=result.targets, force_controlled=result.force_controlled,
                       plastic=result.plastic if result.plastic is not None else state.plastic, master_wear=master_wear)
-        if self.sliding is not None:
+        if self.surface_compliance is not None:
             return self._repair(new)
         self._check_sliding(new)
         return new
@@ -984,7 +984,7 @@ class FrettingProblem:
         cs = state.pairing
         frame = self.contact.frame
         D = sum(state.obstacle[k] * frame[k] for k in range(cs.dim))
-        return self.sliding.displacement(cs, state.forces, state.load_factors), D
+        return self.surface_compliance.displacement(cs, state.forces, state.load_factors), D
 
     def _repair(self, state: ContactState) -> ContactState:
         """Finite sliding: pair the slave nodes anew once a paired point has moved more than
@@ -992,20 +992,21 @@ class FrettingProblem:
         pairing (:func:`~dolfinx_fretting.sliding.carry_state`). Not collective (replicated data)."""
         cs = state.pairing
         u, D = self._surface_state(state)
-        if sliding.offsets(cs, self.sliding, u, D).max(initial=0.0) <= self.contact.obstacle.repair_slip:
+        if sliding.offsets(cs, self.surface_compliance, u, D).max(initial=0.0) <= self.contact.obstacle.repair_slip:
             return state
-        new = sliding.repair(cs, self.sliding, u, D)
-        carried = sliding.carry_state(cs, new, self.sliding, u, D, state.forces, state.wear_gap, state.master_wear)
+        new = sliding.repair(cs, self.surface_compliance, u, D)
+        carried = sliding.carry_state(cs, new, self.surface_compliance, u, D, state.forces, state.wear_gap,
+                                      state.master_wear)
         self._repairs += 1
         loaded = state.forces[0::cs.dim] > 0
-        beyond = sliding.offsets(new, self.sliding, u, D)[loaded]
+        beyond = sliding.offsets(new, self.surface_compliance, u, D)[loaded]
         if beyond.size and beyond.max() > self.contact.obstacle.repair_slip and self.sliding_warning \
                 and not getattr(self, "_reach_warned", False):
             self._reach_warned = True
             if self.comm.rank == 0:
-                warnings.warn(f"finite sliding: a loaded contact is {beyond.max():.3g} master elements from the closest "
-                              "master point within reach: it has slid beyond ElasticBody.reach (or off the master "
-                              "surface)", RuntimeWarning, stacklevel=3)
+                warnings.warn(f"finite sliding: a loaded contact is {beyond.max():.3g} master elements from the "
+                              "closest master point within reach: it has slid beyond ElasticBody.reach (or off the "
+                              "master surface)", RuntimeWarning, stacklevel=3)
         return replace(state, pairing=new, **carried)
 
     @property
@@ -1021,15 +1022,16 @@ class FrettingProblem:
         cs = self.contact.contact_set
         if cs.master_sizes is None:
             return 0.0
-        if self.sliding is not None:  # how far the paired points have moved since the pairing
-            return float(sliding.offsets(state.pairing, self.sliding, *self._surface_state(state)).max(initial=0.0))
+        if self.surface_compliance is not None:  # how far the paired points have moved since the pairing
+            offsets = sliding.offsets(state.pairing, self.surface_compliance, *self._surface_state(state))
+            return float(offsets.max(initial=0.0))
         y_t = state.positions.reshape(cs.nc, cs.dim)[:, 1:]
         return float((np.linalg.norm(y_t, axis=1) / cs.master_sizes).max(initial=0.0))
 
     def _check_sliding(self, state: ContactState) -> None:
         """Warn once (RuntimeWarning, rank 0) when the relative slip of two bodies exceeds half a master facet,
         unless :attr:`sliding_warning` is False (a driver that reports it itself)."""
-        if not self.sliding_warning or getattr(self, "_sliding_warned", False) or self.sliding is not None:
+        if not self.sliding_warning or getattr(self, "_sliding_warned", False) or self.surface_compliance is not None:
             return
         ratio = self.relative_slip_ratio(state)
         if ratio > 0.5:
@@ -1176,7 +1178,7 @@ class FrettingProblem:
         self._activate(state)
         # Finite sliding pairs anew between increments: increment by increment.
         compiled = (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
-                    and not forced.any() and self.sliding is None)
+                    and not forced.any() and self.surface_compliance is None)
         if compiled:
             return self._compiled_cycle(state, obstacle, factors, keep)
         return self._stepwise_cycle(state, obstacle, forced, factors, keep, check)
@@ -1286,7 +1288,7 @@ class FrettingProblem:
         positions are recomputed (y = W r + q_abs exactly). All or nothing. Collective."""
         if self.body is not None:
             raise ValueError("the candidate window of an elastic-plastic problem cannot change")
-        if self.sliding is not None:
+        if self.surface_compliance is not None:
             raise ValueError("the candidate window of a finite-sliding problem cannot change (its surface compliance "
                              "is built for the contact's window): give Contact a window wide enough for the run")
         old_contact, old_W, old_resp = self.contact, self.W, self.responses
@@ -1390,15 +1392,15 @@ class FrettingProblem:
         cs = self.contact.contact_set
         if not cs.two_body:
             raise ValueError("body_wear: the obstacle is rigid (the wear gap is the body's: contact_fields)")
-        if self.sliding is None:
+        if self.surface_compliance is None:
             share = self.wear.slave_share if self.wear is not None else 1.0
             return {"slave": share * state.wear_gap, "master": (1 - share) * state.wear_gap,
                     "master_coordinates": cs.master_points.copy()}
-        on_master = self.sliding.master_areas > 0
+        on_master = self.surface_compliance.master_areas > 0
         surface = cs.master_surface
         flat_nodes, first = np.unique(surface.nodes.ravel(), return_index=True)
-        x = surface.x.reshape(-1, surface.dim)[first[np.searchsorted(flat_nodes, self.sliding.nodes[on_master])]]
-        return {"slave": state.wear_gap - sliding.interpolate_master(cs, self.sliding, state.master_wear),
+        x = surface.x.reshape(-1, surface.dim)[first[np.searchsorted(flat_nodes, self.surface_compliance.nodes[on_master])]]
+        return {"slave": state.wear_gap - sliding.interpolate_master(cs, self.surface_compliance, state.master_wear),
                 "master": state.master_wear[on_master].copy(), "master_coordinates": x}
 
     def total_force(self, state: ContactState) -> np.ndarray:
@@ -1470,10 +1472,10 @@ class FrettingProblem:
             plastic = PlasticHistory(*(data[f"plastic_{k}_{i}"].copy() for k in ("u", "sigma", "eps_p", "p")))
         warm = data["warm"] if data["warm"].size and self.comm.rank == 0 else None
         pairing = master_wear = None
-        if ("pairing_faces" in data) != (self.sliding is not None):
+        if ("pairing_faces" in data) != (self.surface_compliance is not None):
             raise ValueError(f"{path}: a state saved with{'' if 'pairing_faces' in data else 'out'} finite sliding "
-                             f"loads into a problem with{'' if self.sliding is not None else 'out'} it")
-        if self.sliding is not None:
+                             f"loads into a problem with{'' if self.surface_compliance is not None else 'out'} it")
+        if self.surface_compliance is not None:
             from .contact import paired_contact_set
 
             ref = self._reference_pairing

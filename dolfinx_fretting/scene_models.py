@@ -164,7 +164,9 @@ def candidate_window(scene: Scene, zone: float, h: float) -> tuple[float, bool]:
 
     Automatic for elastic bodies without ``contact.candidate_half_width`` (an elastic-plastic body cannot grow
     its window, and plasticity widens the contact beyond the elastic estimate, so it keeps the refined zone):
-    ``1.5 a + 3 h`` with a from :func:`expected_contact_size`, at most the refined ``zone``.
+    ``1.5 a + 3 h`` with a from :func:`expected_contact_size`, at most the refined ``zone``. Finite sliding
+    cannot grow its window either (its surface compliance is built for one): the zone, or the given width if
+    wider.
 
     Args:
         scene: The scene.
@@ -172,6 +174,8 @@ def candidate_window(scene: Scene, zone: float, h: float) -> tuple[float, bool]:
         h: Contact element size (mm).
     """
     given = scene.contact.candidate_half_width
+    if scene.contact.sliding == "finite":  # the surface compliance is built for one window: the whole zone
+        return float(max(zone, given or 0.0)), False
     automatic = given is None and scene.material.model == "elastic"
     if automatic:
         return float(min(zone, 1.5 * expected_contact_size(scene) + 3 * h)), True

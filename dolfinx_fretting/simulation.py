@@ -98,9 +98,6 @@ class ContactModel:
             raise SimulationError(str(exc).strip("'\"")) from None
         s, sv, m = self.setup, scene.solver, scene.material
         self.half_width = s.window if window is None else window
-        if scene.contact.sliding == "finite" and s.window_limit is not None and self.half_width is not None:
-            # the surface compliance is built for one window: the whole zone the window could grow to
-            self.half_width = max(self.half_width, s.window_limit)
         try:
             all_bcs = s.bcs + [bc for conditions in s.prescribed.values() for bc in conditions]
             contact = Contact(s.V, s.surface, s.obstacle, scene.contact.mu, all_bcs, self.half_width)
@@ -155,7 +152,7 @@ class ContactModel:
     @property
     def window_can_grow(self) -> bool:
         s = self.setup
-        return (self.problem.body is None and self.problem.sliding is None and s.window_limit is not None
+        return (self.problem.body is None and self.problem.surface_compliance is None and s.window_limit is not None
                 and self.half_width is not None and self.half_width < s.window_limit)
 
     def grow_window(self, state: ContactState) -> ContactState:
@@ -697,7 +694,7 @@ class _Run:
                             "max_wear_depth_master": float(worn["master"].max(initial=0.0)),
                             "max_relative_tangential": pr.max_relative_tangential,
                             "small_sliding_warning": pr.sliding_warned, "sliding": sc.contact.sliding})
-            if problem.sliding is not None:
+            if problem.surface_compliance is not None:
                 loaded = worn["master"] > 0
                 along = worn["master_coordinates"][loaded] @ problem.contact.frame[1]
                 summary.update({"repairs": problem.repairs,

@@ -411,7 +411,7 @@ def _compiled_2d_cycles(scene: Scene, dim: int) -> bool:
     sv, lo = scene.solver, scene.loading
     return (dim == 2 and lo.cycles > 0 and sv.cycle_kernel and sv.pattern_reuse and sv.local_method == "uzawa"
             and scene.material.model == "elastic" and not lo.normal_force_controlled
-            and not lo.tangential_force_controlled)
+            and not lo.tangential_force_controlled and scene.contact.sliding == "small")
 
 
 def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
@@ -457,6 +457,12 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
         memory["W"] = int(8 * m * m * (ranks + 1))  # W on every rank, and the compiled loop's transposed copy
         # the request pattern (int32 + float64), its CSR read-back (a copy), and the dense block of (K^-1)_SS
         memory["W_build"] = int(s * s * (12 + 12 + 8) + 8 * m * s)
+        if scene.contact.sliding == "finite":
+            # K^-1 on both surfaces, kept on every rank: the slave's dofs and the master's within reach (taken as
+            # twice W's build set: the flat's nodes under the contact and under the stroke); its build replaces W's
+            surface = 2 * s
+            memory["surface_compliance"] = int(8 * surface * surface * ranks)
+            memory["W_build"] = int(surface * surface * (12 + 12 + 8) + 8 * m * surface)
         if _compiled_2d_cycles(scene, dim):
             memory["cycle_cache"] = int(8 * m * m * scene.loading.increments_per_cycle)
     return SizeEstimate(g.kind, nodes, dofs, contacts, dim, ranks, exact, memory, _drivers(scene, memory),

@@ -59,7 +59,8 @@ CASES: dict[str, tuple[str, list[str]]] = {
         "output.snapshot_cycles=[1]"]),
     "mccoll-grow": ("mccoll", [
         "geometry.contact_mesh_size=0.02", "loading.normal_increments=2", "loading.cycles=2",
-        "loading.increments_per_cycle=8", "contact.candidate_half_width=0.05", "output.snapshot_cycles=[2]"]),
+        "loading.increments_per_cycle=8", "contact.candidate_half_width=0.05", "contact.sliding='small'",
+        "output.snapshot_cycles=[2]"]),
 }
 
 #: What each case is there for (stored with it; the test names it in a failure).
