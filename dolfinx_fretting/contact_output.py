@@ -180,6 +180,18 @@ class ContactProfiles:
         return ContactProfiles(self.increments, self.cycles, self.steps, np.arange(cols.size), self.position[cols],
                                {k: v[:, cols] for k, v in self.values.items()})
 
+    def section_across(self, position: float = 0.0) -> ContactProfiles:
+        """A 3D contact's nodes on the line along t2 nearest to ``position`` (a profile across the sliding
+        direction), as 2D profiles whose position is along t2."""
+        if self.position_2 is None:
+            raise ValueError("section_across: a 2D contact has no direction across the sliding one")
+        levels = np.unique(self.position)
+        level = levels[np.argmin(np.abs(levels - position))]
+        cols = np.flatnonzero(self.position == level)
+        cols = cols[np.argsort(self.position_2[cols], kind="stable")]
+        return ContactProfiles(self.increments, self.cycles, self.steps, np.arange(cols.size), self.position_2[cols],
+                               {k: v[:, cols] for k, v in self.values.items()})
+
     def nearest_node(self, position: float, position_2: float = 0.0) -> int:
         """Column of the contact node nearest to ``position`` (mm along the surface; in 3D the point
         (``position``, ``position_2``) of the contact plane)."""

@@ -567,8 +567,10 @@ def plot_contact_maps(path: Path, run: RunDescription, prof: ContactProfiles) ->
     return _save(fig, path)
 
 
-def _plot_profiles(out: Path, run: RunDescription, prof: ContactProfiles, hist: _History) -> Path | None:
-    """``profiles.png``: pressure and shear at the end of the preload and at the last kept increment."""
+def _plot_profiles(out: Path, run: RunDescription, prof: ContactProfiles, hist: _History,
+                   name: str = "profiles.png", direction: str = "") -> Path | None:
+    """``profiles.png`` (or ``name``): pressure and shear at the end of the preload and at the last kept increment,
+    along ``prof``'s positions (``direction`` names them in the title, 3D)."""
     from .analytic import hertz_pressure
     from .io import plot_profiles
 
@@ -590,8 +592,8 @@ def _plot_profiles(out: Path, run: RunDescription, prof: ContactProfiles, hist: 
         two_bodies = run.obstacle == "elastic_body"
         reference = ("Hertz" + (", two identical bodies" if two_bodies else ", rigid flat, frictionless")
                      + ", end of preload", xs, hertz_pressure(xs, P, radius, E_star))
-    path = out / "profiles.png"
-    plot_profiles(path, prof.position, curves, reference, title=f"{run.name}: contact tractions")
+    path = out / name
+    plot_profiles(path, prof.position, curves, reference, title=f"{run.name}: contact tractions{direction}")
     return path
 
 
@@ -636,12 +638,17 @@ def plot_run(out: Path, run: RunDescription | None = None) -> list[Path]:
                       RuntimeWarning, stacklevel=2)
         return written
 
+    along = ""
     if prof is not None and prof.dim == 3:
         full = prof
         attempt("contact_maps.png", lambda: plot_contact_maps(out / "contact_maps.png", run, full))
+        attempt("profiles_across.png", lambda: _plot_profiles(out, run, full.section_across(0.0), hist,
+                                                              "profiles_across.png", " across the sliding direction "
+                                                              "(along t2, through x = 0)"))
         prof = prof.section(0.0)
+        along = " along the sliding direction (t1, through y = 0)"
     if prof is not None:
-        attempt("profiles.png", lambda: _plot_profiles(out, run, prof, hist))
+        attempt("profiles.png", lambda: _plot_profiles(out, run, prof, hist, direction=along))
     if run.cycles > 0:
         if prof is not None:
             attempt("wear_first_cycle.png",

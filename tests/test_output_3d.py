@@ -7,6 +7,7 @@ exactly) and dragged obliquely until it slides, through the public API; its stat
 """
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -110,4 +111,11 @@ def test_plot_run_draws_the_contact_maps(written):
         warnings.simplefilter("always")
         pictures = {p.name for p in dfr.plot_run(folder)}
     assert not [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
-    assert {"contact_maps.png", "profiles.png"} <= pictures
+    assert {"contact_maps.png", "profiles.png", "profiles_across.png"} <= pictures
+    # The section across the sliding direction: the nodes of the line x = 0, ordered along t2.
+    _, fields, frame, _ = written
+    across = read_profiles(Path(folder) / "contact_profiles.csv").section_across(0.0)
+    along_t1, along_t2 = fields["coordinates"] @ frame[1], fields["coordinates"] @ frame[2]
+    level = along_t1[np.argmin(np.abs(along_t1))]
+    expected = np.sort(along_t2[np.abs(along_t1 - level) < 1e-12])
+    assert across.position.size >= 3 and np.allclose(across.position, expected, atol=1e-9)
