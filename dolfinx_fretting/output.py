@@ -402,8 +402,10 @@ class FrettingWriter:
             return n - 1, result.final
         j = int(np.argmax(result.records["normal_force"] + np.abs(result.records["tangential_force"])))
         out_r, _, out_y, _, _ = result.kept
+        # finite sliding: the increment's arrays are in its own pairing's frames
+        pairing = result.kept_pairings[j] if result.kept_pairings is not None else result.final.pairing
         return j, replace(result.final, forces=out_r[j], positions=out_y[j], obstacle=result.obstacle[j],
-                          load_factors=result.load_factors[j])
+                          load_factors=result.load_factors[j], pairing=pairing)
 
     def write_profile(self, increment: int, cycle: int, step: int, slip: np.ndarray, positions: np.ndarray,
                       forces: np.ndarray, wear_gap: np.ndarray, status: np.ndarray) -> None:

@@ -362,6 +362,8 @@ class CycleResult:
         final: The state the cycle ends in (committed by :meth:`FrettingProblem.commit`).
         kept: With ``keep=True``: per increment (forces, slip, positions, wear gap, status), arrays (n, ...).
         compiled: True when the compiled loop ran it.
+        kept_pairings: Finite sliding with ``keep=True``: the pairing each kept increment's arrays refer to
+            (:attr:`ContactState.pairing`), else None.
     """
 
     records: dict[str, np.ndarray]
@@ -370,6 +372,7 @@ class CycleResult:
     final: ContactState
     kept: tuple[np.ndarray, ...] | None
     compiled: bool
+    kept_pairings: tuple[ContactSet, ...] | None = None
 
 
 def _solver_columns(result: IncrementResult, newton_iterations: int | None = None,
@@ -1185,7 +1188,7 @@ class FrettingProblem:
 
     def _stepwise_cycle(self, state, obstacle, forced, factors, keep, check) -> CycleResult:
         n = obstacle.shape[0]
-        rows, kept = [], []
+        rows, kept, pairings = [], [], []
         current = state
         names = [nm for nm in self.load_names if nm != "dirichlet values"]
         obstacle = obstacle.copy()
@@ -1201,10 +1204,12 @@ class FrettingProblem:
             obstacle[j] = current.obstacle
             if keep:
                 kept.append((current.forces, current.slip, current.positions, current.wear_gap, current.status))
+                pairings.append(current.pairing)
         records = {k: np.array([r[k] for r in rows]) for k in INCREMENT_COLUMNS}
         records["full_newton_fallbacks"] = np.array([r["full_newton_fallbacks"] for r in rows])
         kept_arrays = tuple(np.array([k[i] for k in kept]) for i in range(5)) if keep else None
-        return CycleResult(records, obstacle, factors, current, kept_arrays, False)
+        return CycleResult(records, obstacle, factors, current, kept_arrays, False,
+                           tuple(pairings) if keep and current.pairing is not None else None)
 
     def _kernel_data(self, n: int):
         """W transposed, the Uzawa steps and the contact-pattern cache of cycles of ``n`` increments (rank 0)."""

@@ -752,6 +752,10 @@ class Scene(_Section):
         if c.sliding == "finite" and c.obstacle != "elastic_flat":
             raise _range_error("contact.sliding", c.sliding, "'small' unless contact.obstacle = 'elastic_flat' (finite "
                                "sliding re-pairs two deformable bodies)")
+        if c.sliding == "finite" and self.wear.cycle_jump:
+            raise _range_error("contact.sliding", c.sliding, "'small' with wear.cycle_jump = true (a jump extrapolates "
+                               "each contact's wear gap; with finite sliding the flat's wear lives on its own nodes "
+                               "and is not extrapolated): use wear.acceleration instead")
         if c.sliding == "finite" and self.material.model != "elastic":
             raise _range_error("contact.sliding", c.sliding, "'small' with material.model = "
                                f"{self.material.model!r} (finite sliding is for elastic bodies)")

@@ -252,6 +252,8 @@ def test_finite_sliding_is_refused_where_it_does_not_apply():
     with pytest.raises(SceneError, match="contact.sliding"):
         load_scene("cylinder-flat", ["contact.sliding='finite'", "material.model='elastoplastic'",
                                      "material.yield_stress=840", "material.hardening_modulus=7230"])
+    with pytest.raises(SceneError, match="wear.cycle_jump"):
+        load_scene("mccoll", ["wear.cycle_jump=true", "wear.acceleration=1"])
     with pytest.raises(ValueError, match="ElasticBody.sliding"):
         dfr.ElasticBody((None, 1), [0.0, 1.0], sliding="large")
     with pytest.raises(ValueError, match="ElasticBody.repair_slip"):
