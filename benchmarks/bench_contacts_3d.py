@@ -402,6 +402,9 @@ def run_size(h: float, args, caps: dict[str, int], previous_ratios: dict[str, fl
     t0 = time.perf_counter()
     model = ContactModel(scene, COMM)
     rec["model_s"] = time.perf_counter() - t0
+    rec["load_average"] = list(os.getloadavg())
+    # The model's own build of W (route auto = selected inverse), without the load responses around it.
+    rec["W_setup_build_s"] = model.problem.delassus.last_build_time
     cs = model.contact
     d = model.problem.delassus
     nc, m = cs.nc, cs.nc * DIM
@@ -455,6 +458,20 @@ def run_size(h: float, args, caps: dict[str, int], previous_ratios: dict[str, fl
     return rec
 
 
+def machine_limits(prep_method: str, a_over_h: tuple[float, ...]) -> list[dict]:
+    """The size estimate (no mesh built) of the scene on finer meshes: where this machine's memory ends."""
+    a = 0.187  # the scene's Hertz radius (mm): only picks the sizes; each estimate reads its own
+    available, _ = sizes.available_memory()
+    rows = []
+    for k in a_over_h:
+        h = round(a / k, 5)
+        est = sizes.estimate(scene_for(h, prep_method))
+        m = est.contacts * DIM
+        rows.append({"h_mm": h, "dofs": est.dofs, "contacts": est.contacts, "factor_bytes": est.memory["factor"],
+                     "W_bytes": 8 * m * m, "total_bytes": est.total_bytes, "fits": est.total_bytes < available})
+    return rows
+
+
 # Report -------------------------------------------------------------------------------------------------------
 def fit(ncs: list[int], values: list[float]) -> float | None:
     """Exponent p of value ~ nc^p (log-log least squares), over at least three sizes."""
@@ -503,9 +520,12 @@ def markdown(command: str, info: dict, records: list[dict], args) -> str:
     L += ["## The models and W's build by each route", "",
           "Build times of W (s) by route; `owned` and `schur` include their own factorisation of K (in brackets). "
           "`max diff`: max |W_route - W_selected_inverse| / max |W|.", "",
-          "| h (mm) | dofs | contacts | W dense | MUMPS | factorise | selected_inverse | block | owned | schur | "
-          "columns | max diff | one K solve | dense W v |",
-          "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+          "`set-up W`: the model's own build of W at set-up (route `auto` = selected inverse; the first build "
+          "on that factor). `one K solve`: the cost of one product W v done matrix-free "
+          "(H K^-1 H^T v); `dense W v`: the same product on the dense W.", "",
+          "| h (mm) | dofs | contacts | W dense | MUMPS | factorise | set-up W | selected_inverse | block | owned | "
+          "schur | columns | max diff | one K solve | dense W v |",
+          "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in done:
         R = r["routes"]
 
@@ -519,7 +539,7 @@ def markdown(command: str, info: dict, records: list[dict], args) -> str:
                 return "**failed**"
             return "–"
         L.append(f"| {r['h_mm']:g} | {r['dofs']} | {r['contacts']} | {r['W_dense_mb']:.1f} MB | "
-                 f"{r['mumps_memory_mb']} MB | {r['factorize_s']:.3g} | "
+                 f"{r['mumps_memory_mb']} MB | {r['factorize_s']:.3g} | {r.get('W_setup_build_s', r['W_auto_s']):.3g} | "
                  + " | ".join(cell(x) for x in ("selected_inverse", "block", "owned", "schur", "columns"))
                  + f" | {max(R['rel_diff'].values(), default=float('nan')):.1e} | {ms(R['one_solve_s'])} | "
                    f"{ms(r['dense_matvec_s'])} |")
@@ -557,11 +577,27 @@ def markdown(command: str, info: dict, records: list[dict], args) -> str:
                      + f" | {P['max_pairwise_dr']:.1e} |")
         L.append("")
 
+    L += ["Time per sweep (uzawa and nsgs, from zero, both problems pooled: total time / total sweeps) against "
+          "the dense W's size; one sweep reads W once (O(m^2)). `load`: the 1-min load average when the size "
+          "started (2 cores).", "",
+          "| contacts | W dense | uzawa per sweep | nsgs per sweep | load |", "|---:|---:|---:|---:|---:|"]
+    for r in done:
+        cells = []
+        for m in ("uzawa", "nsgs"):
+            xs = [x for x in r["local"] if x["method"] == m and x["start"] == "zero"]
+            sweeps = sum(x["sweeps"] for x in xs)
+            cells.append(ms(sum(x["time_s"] for x in xs) / sweeps) if sweeps else "–")
+        load = r.get("load_average")
+        L.append(f"| {r['contacts']} | {r['W_dense_mb']:.1f} MB | {cells[0]} | {cells[1]} | "
+                 f"{'–' if load is None else f'{load[0]:.1f}'} |")
+    L.append("")
     ncs = [r["contacts"] for r in done]
     L += ["## Scaling with nc (exponent p of time ~ nc^p, log-log fit over the sizes run)", ""]
     if len(done) >= 3:
         fits = []
         for label, vals in [("factorisation of K", [r["factorize_s"] for r in done]),
+                            ("W at set-up (selected inverse)", [r.get("W_setup_build_s", r["W_auto_s"])
+                                                                for r in done]),
                             ("W by selected inverse", [r["routes"]["build_s"].get("selected_inverse") for r in done]),
                             ("W by block", [r["routes"]["build_s"].get("block") for r in done]),
                             ("one K solve (matrix-free W v)", [r["routes"]["one_solve_s"] for r in done]),
@@ -613,6 +649,18 @@ def markdown(command: str, info: dict, records: list[dict], args) -> str:
             L.append(f"| {r['contacts']} | {t['cutoff_over_h']:g} | {t['kept_share']:.3f} | {ms(t['time_s'])} | "
                      f"{t['sweeps']}{'' if t['converged'] else ' ✗'} | {t['dr_vs_dense']:.1e} | "
                      f"{t['normal_force_rel_err']:.1e} |")
+    limits = info.get("limits") or []
+    if limits:
+        L += ["", "## How far this machine goes (the size estimate alone, no model built)", "",
+              "`dolfinx_fretting.sizes.estimate` on finer meshes of the same scene: the MUMPS factor of K against "
+              f"the dense W (one copy), and the estimated peak against the {info['memory_available_gb']:.1f} GB "
+              "available at start.", "",
+              "| h (mm) | dofs | contacts | factor | W (one copy) | factor / W | peak | fits |",
+              "|---:|---:|---:|---:|---:|---:|---:|---|"]
+        for x in limits:
+            L.append(f"| {x['h_mm']:g} | {x['dofs']} | {x['contacts']} | {x['factor_bytes'] / 2**30:.2f} GB | "
+                     f"{x['W_bytes'] / 2**30:.3f} GB | {x['factor_bytes'] / x['W_bytes']:.0f} | "
+                     f"{x['total_bytes'] / 2**30:.1f} GB | {'yes' if x['fits'] else 'no'} |")
     L += ["", "Raw numbers (every route, method, start and the estimate) are in the .json file next to this one.", ""]
     return "\n".join(L)
 
@@ -636,7 +684,16 @@ def main(argv=None) -> int:
     ap.add_argument("--prep-method", default="auto", choices=local_solvers.METHODS,
                     help="local method of the package's own increments that make the problems")
     ap.add_argument("--out", type=Path, default=HERE / "results" / "contacts_3d", help="stem of OUT.md, OUT.json")
+    ap.add_argument("--render", type=Path, default=None,
+                    help="only rewrite OUT.md from this results .json (its command, machine and numbers)")
     args = ap.parse_args(argv)
+    if args.render is not None:
+        data = json.loads(args.render.read_text())
+        saved = argparse.Namespace(**data["settings"])
+        out = args.render.with_suffix(".md")
+        out.write_text(markdown(data["command"], data["machine"], data["results"], saved))
+        log(f"wrote {out} from {args.render}")
+        return 0
     argv_used = sys.argv[1:] if argv is None else argv
     command = ("OPENBLAS_NUM_THREADS=" + os.environ.get("OPENBLAS_NUM_THREADS", "<unset>") + " nice -n 5 "
                ".venv/bin/python benchmarks/bench_contacts_3d.py" + "".join(" " + shlex.quote(a) for a in argv_used))
@@ -653,6 +710,7 @@ def main(argv=None) -> int:
         local_solvers.solve(sp.csc_matrix(Wt), np.array([-1.0, 0.5, 0.2, -1.0, 0.1, 0.0]), 0.8, DIM, method=method)
     info["jit_warmup_s"] = time.perf_counter() - t0
 
+    info["limits"] = machine_limits(args.prep_method, (16, 20, 24, 28, 32, 40))
     t_all = time.perf_counter()
     records = []
     previous_ratios: dict[str, float] = {}
