@@ -654,6 +654,11 @@ class FrettingProblem:
 
         cs = self.contact.contact_set
         faces, nodes = sliding.surface_nodes(cs, self.contact.obstacle.reach)
+        paired = cs.master_nodes[cs.master_nodes >= 0]
+        if not np.isin(paired, nodes).all():  # before the build: the reference pairing must lie within reach
+            raise ValueError(f"ElasticBody.reach = {self.contact.obstacle.reach!r}: too short for the reference "
+                             "pairing itself (a slave candidate's closest master facet lies beyond it); allowed a "
+                             "reach at least the candidates' largest initial gap, or None")
         dim = cs.dim
         dofs = (dim * nodes[:, None] + np.arange(dim)).ravel()
         S = sp.csr_matrix((np.ones(dofs.size), (np.arange(dofs.size), dofs)), shape=(dofs.size, self.n_dofs))

@@ -132,8 +132,16 @@ class SurfaceCompliance:
         return u.reshape(-1, self.dim)
 
     def rows(self, global_nodes: np.ndarray) -> np.ndarray:
-        """Row of each global node in :attr:`nodes` (-1 for padding)."""
-        where = np.searchsorted(self.nodes, np.maximum(global_nodes, 0))
+        """Row of each global node in :attr:`nodes` (-1 for padding).
+
+        Raises:
+            ValueError: a node is not on the surfaces (a pairing with a master facet outside the reach).
+        """
+        where = np.minimum(np.searchsorted(self.nodes, np.maximum(global_nodes, 0)), self.nodes.size - 1)
+        missing = (global_nodes >= 0) & (self.nodes[where] != global_nodes)
+        if missing.any():
+            raise ValueError(f"finite sliding: node {int(global_nodes[missing].flat[0])} is paired but lies outside "
+                             "the surface compliance: ElasticBody.reach is shorter than the pairing needs")
         return np.where(global_nodes >= 0, where, -1)
 
 

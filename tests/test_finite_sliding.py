@@ -260,6 +260,11 @@ def test_finite_sliding_is_refused_where_it_does_not_apply():
         dfr.ElasticBody((None, 1), [0.0, 1.0], sliding="finite", repair_slip=0.0)
 
 
+def test_a_reach_shorter_than_the_reference_pairing_is_refused(cylinder_on_flat):
+    with pytest.raises(ValueError, match="ElasticBody.reach"):
+        _problem(cylinder_on_flat, "finite", reach=1e-6)
+
+
 def test_the_scene_runs_with_finite_sliding(tmp_path):
     """mccoll (both bodies wearing) with contact.sliding = 'finite': the summary reports the repairs and the
     flat's scar; the worn volumes add up to the wear-energy identity through the runner (1e-9)."""
