@@ -312,7 +312,12 @@ def _boundary_segments(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
         np.zeros((0, 2), dtype=np.int64)
     gathered = comm.allgather((gpairs, np.asarray(ends).reshape(-1, 2, gdim),
                                np.asarray(centroids).reshape(-1, gdim)))
-    return tuple(np.concatenate([g[k] for g in gathered]) for k in range(3))
+    nodes, xs, centroids = (np.concatenate([g[k] for g in gathered]) for k in range(3))
+    # A partition-free order (by the segment's midpoint), so that ties between segments, and the segment
+    # indices a checkpoint stores, are the same on any number of ranks.
+    mid = xs.mean(axis=1)
+    order = np.lexsort(mid.T[::-1]) if mid.size else np.zeros(0, dtype=np.int64)
+    return nodes[order], xs[order], centroids[order]
 
 
 def _vertex_geometry(msh, vertices: np.ndarray) -> np.ndarray:

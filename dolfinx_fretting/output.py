@@ -212,7 +212,7 @@ def contact_measures(problem, state, model_fraction: float = 1.0) -> dict[str, f
             "contact_extent_along": span(along[loaded]),
             "contact_extent_across": (span(across[loaded]) if model_fraction == 1.0
                                       else 2.0 * float(np.abs(across[loaded]).max(initial=0.0))),
-            "wear_volume": float(state.wear_gap @ cs.tributary) / model_fraction}
+            "wear_volume": problem.worn_measure(state) / model_fraction}
 
 
 def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_controlled: bool,
@@ -401,11 +401,12 @@ class FrettingWriter:
         if self.problem.body is not None or result.kept is None:
             return n - 1, result.final
         j = int(np.argmax(result.records["normal_force"] + np.abs(result.records["tangential_force"])))
-        out_r, _, out_y, _, _ = result.kept
+        out_r, out_x, out_y, out_gw, out_status = result.kept
         # finite sliding: the increment's arrays are in its own pairing's frames
         pairing = result.kept_pairings[j] if result.kept_pairings is not None else result.final.pairing
-        return j, replace(result.final, forces=out_r[j], positions=out_y[j], obstacle=result.obstacle[j],
-                          load_factors=result.load_factors[j], pairing=pairing)
+        return j, replace(result.final, forces=out_r[j], slip=out_x[j], positions=out_y[j], wear_gap=out_gw[j],
+                          status=out_status[j], obstacle=result.obstacle[j], load_factors=result.load_factors[j],
+                          pairing=pairing)
 
     def write_profile(self, increment: int, cycle: int, step: int, slip: np.ndarray, positions: np.ndarray,
                       forces: np.ndarray, wear_gap: np.ndarray, status: np.ndarray) -> None:

@@ -566,7 +566,7 @@ class FrettingProblem:
             return None
         return _plain_vector(f, self.K)
 
-    def _build_contact_operators(self) -> None:
+    def _build_contact_operators(self, keep_slope: bool = False) -> None:
         """W on the free dofs (one copy broadcast from rank 0) and each load's contact response (finite sliding:
         formed from the surface compliance, no communication)."""
         cs = self.contact.contact_set
@@ -579,10 +579,12 @@ class FrettingProblem:
             for i, f in enumerate(self._vectors):
                 self.responses[i] = self._local_response(f)
         self._hold_directions()
-        # Point stiffness of the closest node: a safe first guess of the load-displacement slope.
-        k = int(np.argmin(cs.gap0))
-        blk = self.W[k * cs.dim:(k + 1) * cs.dim, k * cs.dim:(k + 1) * cs.dim]
-        self._stiffness = np.array([1.0 / blk[c, c] for c in range(cs.dim)])
+        if not (keep_slope and hasattr(self, "_stiffness")):
+            # Point stiffness of the closest node: a safe first guess of the load-displacement slope (kept when
+            # only the pairing changes, so that a force-controlled run does not depend on which state was read)
+            k = int(np.argmin(cs.gap0))
+            blk = self.W[k * cs.dim:(k + 1) * cs.dim, k * cs.dim:(k + 1) * cs.dim]
+            self._stiffness = np.array([1.0 / blk[c, c] for c in range(cs.dim)])
         self._kernel = None
 
     def _hold_directions(self) -> None:
@@ -670,6 +672,8 @@ class FrettingProblem:
         C = self.comm.bcast(C if self.comm.rank == 0 else None, root=0)
         responses = np.array([self._local_response(f, S) for f in self._vectors]).reshape(len(self._vectors),
                                                                                           dofs.size)
+        # rank 0's sums on every rank: each rank decides the re-pairings from these, so they must be the same bits
+        responses = self.comm.bcast(responses if self.comm.rank == 0 else None, root=0)
         return sliding.SurfaceCompliance(nodes, dim, C, responses, faces,
                                          sliding.master_node_areas(cs.master_surface, nodes))
 
@@ -678,7 +682,7 @@ class FrettingProblem:
         if state.pairing is None or state.pairing is self.contact.contact_set:
             return
         self.contact = self.contact.with_pairing(state.pairing)
-        self._build_contact_operators()
+        self._build_contact_operators(keep_slope=True)
 
     def _make_plastic_body(self) -> None:
         from .materials import J2Plasticity
@@ -975,6 +979,8 @@ class FrettingProblem:
             added = sliding.spread_wear(cs, self.surface_compliance, master_share)
             master_wear = state.master_wear + added
             gw = gw - master_share + sliding.interpolate_master(cs, self.surface_compliance, added)
+            # the worn area of both bodies: the flat's wear left behind by the slide is no longer under a contact
+            row[ROW["wear_area"]] = self.worn_measure(replace(state, wear_gap=gw, master_wear=master_wear))
         record = {**dict(zip(ROW_FIELDS, row.tolist())), **_solver_columns(result)}
         new = replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=gw,
                       obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
@@ -1000,11 +1006,21 @@ class FrettingProblem:
         pairing (:func:`~dolfinx_fretting.sliding.carry_state`). Not collective (replicated data)."""
         cs = state.pairing
         u, D = self._surface_state(state)
-        if sliding.offsets(cs, self.surface_compliance, u, D).max(initial=0.0) <= self.contact.obstacle.repair_slip:
+        moved = sliding.offsets(cs, self.surface_compliance, u, D).max(initial=0.0)
+        if moved <= self.contact.obstacle.repair_slip:
             return state
+        if moved > 1.0 and self.sliding_warning and not getattr(self, "_stride_warned", False):
+            self._stride_warned = True
+            if self.comm.rank == 0:
+                warnings.warn(f"finite sliding: an increment moved a paired point {moved:.3g} master elements (more than "
+                              "one): it was solved on a pairing that no longer faced its nodes; take smaller "
+                              "increments", RuntimeWarning, stacklevel=3)
         new = sliding.repair(cs, self.surface_compliance, u, D)
-        carried = sliding.carry_state(cs, new, self.surface_compliance, u, D, state.forces, state.wear_gap,
-                                      state.master_wear)
+        if np.array_equal(new.master_faces, cs.master_faces) and np.allclose(new.master_weights, cs.master_weights,
+                                                                             rtol=0.0, atol=1e-12):
+            return state   # e.g. a node facing past the master's end: its closest point does not move
+        carried = sliding.carry_state(cs, new, self.surface_compliance, u, D, state.forces, state.slip,
+                                      state.wear_gap, state.master_wear)
         self._repairs += 1
         loaded = state.forces[0::cs.dim] > 0
         beyond = sliding.offsets(new, self.surface_compliance, u, D)[loaded]
@@ -1182,8 +1198,8 @@ class FrettingProblem:
             if values.shape != (n,) or not np.all(np.isfinite(values)):
                 raise ValueError(f"CyclePath.loads[{name!r}]: expected {n} finite factors")
             factors[:, self.load_names.index(name)] = values
-        self._check_held(obstacle, forced)
         self._activate(state)
+        self._check_held(obstacle, forced)
         # Finite sliding pairs anew between increments: increment by increment.
         compiled = (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
                     and not forced.any() and self.surface_compliance is None)
@@ -1381,8 +1397,7 @@ class FrettingProblem:
         """Per contact node (replicated): ``coordinates``, ``global_node``, ``pressure`` and ``shear``
         (force / tributary measure; shear has dim-1 components), ``gap``, ``slip`` (last increment's slip
         increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip)."""
-        self._activate(state)
-        cs = self.contact.contact_set
+        cs = state.pairing if state.pairing is not None else self.contact.contact_set
         dim = cs.dim
         r = state.forces.reshape(cs.nc, dim)
         y = state.positions.reshape(cs.nc, dim)
@@ -1396,10 +1411,9 @@ class FrettingProblem:
     def body_wear(self, state: ContactState) -> dict[str, np.ndarray]:
         """Two bodies: each body's worn depth. ``slave`` per contact node; ``master`` and
         ``master_coordinates`` (reference) at the master's points: with finite sliding the master's nodes
-        (:attr:`sliding`), with small sliding each contact's paired point (the pairing is fixed, so the
-        master's share is carried per contact)."""
-        self._activate(state)
-        cs = self.contact.contact_set
+        (:attr:`surface_compliance`), with small sliding each contact's paired point (the pairing is fixed, so
+        the master's share is carried per contact). Reads ``state`` only (the problem's pairing is not changed)."""
+        cs = state.pairing if state.pairing is not None else self.contact.contact_set
         if not cs.two_body:
             raise ValueError("body_wear: the obstacle is rigid (the wear gap is the body's: contact_fields)")
         if self.surface_compliance is None:
@@ -1413,10 +1427,20 @@ class FrettingProblem:
         return {"slave": state.wear_gap - sliding.interpolate_master(cs, self.surface_compliance, state.master_wear),
                 "master": state.master_wear[on_master].copy(), "master_coordinates": x}
 
+    def worn_measure(self, state: ContactState) -> float:
+        """The worn area (2D, mm^2 per mm) or volume (3D) of ``state``: the wear gap times the tributary measures;
+        with finite sliding the slave's part per contact plus the master's on its own nodes (the master's wear
+        left behind by the slide is under no contact)."""
+        cs = state.pairing if state.pairing is not None else self.contact.contact_set
+        if self.surface_compliance is None:
+            return float(state.wear_gap @ cs.tributary)
+        slave = state.wear_gap - sliding.interpolate_master(cs, self.surface_compliance, state.master_wear)
+        return float(slave @ cs.tributary + state.master_wear @ self.surface_compliance.master_areas)
+
     def total_force(self, state: ContactState) -> np.ndarray:
         """Total contact force on the body in the obstacle frame (n, t1[, t2])."""
-        self._activate(state)
-        F = self.contact.contact_set.total_force(state.forces)
+        cs = state.pairing if state.pairing is not None else self.contact.contact_set
+        F = cs.total_force(state.forces)
         return np.array([F @ self.contact.frame[k] for k in range(self.dim)])
 
     # Checkpoints --------------------------------------------------------------------------------------------
@@ -1441,8 +1465,10 @@ class FrettingProblem:
                                           else np.zeros(self.dim, dtype=bool))
             if state.pairing is not None:  # finite sliding: the pairing and the master's wear
                 arrays["pairing_faces"] = state.pairing.master_faces
+                arrays["pairing_nodes"] = state.pairing.master_nodes
                 arrays["pairing_weights"] = state.pairing.master_weights
                 arrays["master_wear"] = state.master_wear
+                arrays["repairs"] = np.array(self._repairs)
             for i, parts in enumerate(plastic or []):
                 for name, a in zip(("u", "sigma", "eps_p", "p"), parts):
                     arrays[f"plastic_{name}_{i}"] = a
@@ -1492,6 +1518,11 @@ class FrettingProblem:
             pairing = paired_contact_set(ref.master_surface, ref.global_nodes, ref.coords, ref.tributary,
                                          ref.abscissa, data["pairing_faces"], data["pairing_weights"], ref.H.shape[1])
             master_wear = data["master_wear"].copy()
+            if (not np.array_equal(pairing.master_nodes, data["pairing_nodes"])
+                    or master_wear.shape != (self.surface_compliance.nodes.size,)):
+                raise ValueError(f"{path}: the saved pairing or master wear does not fit this problem's master surface")
+            self.surface_compliance.rows(pairing.master_nodes)   # within reach, or a message
+            self._repairs = int(data["repairs"])
         state = ContactState(*(data[k].copy() for k in self._ARRAYS), increment=int(info["increment"]),
                              dissipated_energy=float(info["dissipated_energy"]),
                              local_iterations=int(info["local_iterations"]), record=info["record"],

@@ -224,7 +224,7 @@ def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
     window, automatic = candidate_window(scene, g.refined_half_width, g.contact_mesh_size)
     elastic_cells = display_cells = None
     if two_body:
-        obstacle = _elastic_flat(scene, body, plane, g.refined_half_width)
+        obstacle = _elastic_flat(scene, body, plane, g.refined_half_width, g.contact_mesh_size)
         display_cells = body.cell_tags.find(body.regions["cylinder"])
         if m.model == "elastoplastic" and m.plastic_body != "both":
             other = "flat" if m.plastic_body == "cylinder" else "cylinder"
@@ -267,7 +267,7 @@ def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
     window, automatic = candidate_window(scene, zone, h)
     elastic_cells = display_cells = None
     if two_body:
-        obstacle = _elastic_flat(scene, body, plane, zone)
+        obstacle = _elastic_flat(scene, body, plane, zone, h)
         display_cells = body.cell_tags.find(body.regions["sphere"])
         if m.model == "elastoplastic" and m.plastic_body != "both":
             other = "flat" if m.plastic_body == "cylinder" else "sphere"
@@ -287,11 +287,13 @@ def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
 _PAIRING = {"small": "fixed pairing", "finite": "paired anew as the bodies slide"}
 
 
-def _elastic_flat(scene: Scene, body, plane, zone: float) -> ElasticBody:
-    """The flat as the master body; finite sliding reaches over the refined zone (where the mesh is fine
-    enough for contact at all) plus the tangential stroke."""
+def _elastic_flat(scene: Scene, body, plane, zone: float, h: float) -> ElasticBody:
+    """The flat as the master body. Finite sliding reaches, from every cylinder (or ball) candidate, twice a
+    prescribed stroke plus three elements (the relative slip stays below the stroke); under force control, whose
+    stroke is not known beforehand, the refined zone (where the mesh is fine enough for contact at all)."""
     c, lo = scene.contact, scene.loading
-    reach = zone + 2 * abs(lo.tangential_displacement or 0.0)
+    stroke = lo.tangential_displacement
+    reach = 2 * abs(stroke) + 3 * h if stroke is not None else zone
     return ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal, sliding=c.sliding,
                        repair_slip=c.repair_slip, reach=reach)
 

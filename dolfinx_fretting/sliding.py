@@ -108,8 +108,16 @@ class SurfaceCompliance:
         return (self.dim * self.nodes[:, None] + np.arange(self.dim)).ravel()
 
     def restrict(self, cs: ContactSet) -> sp.csr_matrix:
-        """L: H's columns at the surface dofs (``H = L S``)."""
-        return sp.csr_matrix(cs.H[:, self.dofs])
+        """L: H's columns at the surface dofs (``H = L S``).
+
+        Raises:
+            ValueError: H touches a dof outside the surfaces (a pairing beyond the reach).
+        """
+        L = sp.csr_matrix(cs.H[:, self.dofs])
+        if L.nnz != cs.H.nnz:
+            raise ValueError("finite sliding: the pairing touches nodes outside the surface compliance: "
+                             "ElasticBody.reach is shorter than the pairing needs")
+        return L
 
     def operators(self, cs: ContactSet) -> tuple[np.ndarray, np.ndarray]:
         """(W, the load responses) of the pairing ``cs``: ``L C L^T`` and ``L S K^-1 f_l``."""
@@ -157,7 +165,17 @@ def _master_motion(compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray, 
 
 def offsets(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> np.ndarray:
     """How far each contact's paired master point has moved from its slave node, in the contact plane, in
-    master elements: ``|t . ((X_s + u_s) - sum_i w_i (X_i + u_i + D))| / size``."""
+    master elements: ``|t . ((X_s + u_s) - sum_i w_i (X_i + u_i + D))| / size``.
+
+    Args:
+        cs: The pairing.
+        compliance: The surface compliance (its node rows).
+        u: (nodes, dim) displacement of the surface nodes (:meth:`SurfaceCompliance.displacement`).
+        D: The master's rigid translation.
+
+    Returns:
+        (nc,) the offsets, in master facet sizes.
+    """
     slave = cs.coords + u[compliance.rows(cs.global_nodes)]
     moved = _master_motion(compliance, u, D, compliance.rows(cs.master_nodes))
     master = np.einsum("ci,cij->cj", cs.master_weights, cs.master_surface.x[cs.master_faces] + moved)
@@ -171,6 +189,15 @@ def repair(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.n
     their components along the obstacle's normal are left out). A node that has
     slid beyond the reach pairs with the nearest facet within it; its :func:`offsets` then stay large (the
     problem reports it).
+
+    Args:
+        cs: The current pairing (its slave nodes are kept, in order).
+        compliance: The surface compliance (the facets within reach, the node rows).
+        u: (nodes, dim) displacement of the surface nodes.
+        D: The master's rigid translation.
+
+    Returns:
+        The new pairing's contact set (:func:`~dolfinx_fretting.contact.paired_contact_set`).
     """
     surface = cs.master_surface
     # The motion in the contact plane only (the obstacle frame's tangents): the approach along n is micrometres
@@ -192,7 +219,16 @@ def repair(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.n
 
 
 def interpolate_master(cs: ContactSet, compliance: SurfaceCompliance, master_wear: np.ndarray) -> np.ndarray:
-    """The master's wear depth at each contact's paired point (weights of the pairing)."""
+    """The master's wear depth at each contact's paired point (weights of the pairing).
+
+    Args:
+        cs: The pairing.
+        compliance: The surface compliance (the node rows of ``master_wear``).
+        master_wear: The master's depth at the compliance's nodes.
+
+    Returns:
+        (nc,) the depth at each paired point.
+    """
     rows = compliance.rows(cs.master_nodes)
     return np.einsum("ci,ci->c", cs.master_weights, np.where(rows >= 0, master_wear[np.maximum(rows, 0)], 0.0))
 
@@ -200,7 +236,19 @@ def interpolate_master(cs: ContactSet, compliance: SurfaceCompliance, master_wea
 def spread_wear(cs: ContactSet, compliance: SurfaceCompliance, depth: np.ndarray) -> np.ndarray:
     """The master's wear depth added at its nodes when each contact's paired point wears by ``depth``: the
     worn measure ``depth_c A_c`` (A_c the slave node's tributary measure) shared among the facet's nodes by the
-    pairing's weights and divided by each node's own measure, so the worn volume is kept exactly."""
+    pairing's weights and divided by each node's own measure, so the worn volume is kept exactly.
+
+    Args:
+        cs: The pairing.
+        compliance: The surface compliance (node rows, the master's node measures).
+        depth: (nc,) the master's wear depth added at each paired point.
+
+    Returns:
+        The depth added at the compliance's nodes.
+
+    Raises:
+        RuntimeError: wear at a node of no master facet.
+    """
     rows = compliance.rows(cs.master_nodes)
     volume = np.zeros(compliance.nodes.size)
     share = cs.master_weights * (depth * cs.tributary)[:, None]
@@ -213,16 +261,20 @@ def spread_wear(cs: ContactSet, compliance: SurfaceCompliance, depth: np.ndarray
 
 
 def carry_state(old: ContactSet, new: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray,
-                forces: np.ndarray, wear_gap: np.ndarray, master_wear: np.ndarray) -> dict[str, np.ndarray]:
-    """A committed state's contact arrays expressed in the pairing ``new``: the forces turned into the new
-    frames (the same vectors), the wear gap with the master's share read at the new points, and the relative
+                forces: np.ndarray, slip: np.ndarray, wear_gap: np.ndarray,
+                master_wear: np.ndarray) -> dict[str, np.ndarray]:
+    """A committed state's contact arrays expressed in the pairing ``new``: the forces and the last slip turned
+    into the new frames (the same vectors), the wear gap with the master's share read at the new points, and the relative
     positions of the committed configuration as the new pairing measures them, ``L u - frames D + g0 + w``
     (their tangential rows are where the next increment's slip is measured from)."""
     dim = new.dim
-    r = forces.reshape(-1, dim)
-    r_new = np.einsum("ckj,cj->ck", new.frames, np.einsum("ckj,ck->cj", old.frames, r)).ravel()
+
+    def turned(values: np.ndarray) -> np.ndarray:   # the same vectors in the new frames
+        v = values.reshape(-1, dim)
+        return np.einsum("ckj,cj->ck", new.frames, np.einsum("ckj,ck->cj", old.frames, v)).ravel()
+
     wear = wear_gap - interpolate_master(old, compliance, master_wear) + interpolate_master(new, compliance,
                                                                                           master_wear)
     positions = np.asarray(compliance.restrict(new) @ u.ravel()) - new.rigid_modes @ D
     positions[0::dim] += new.gap0 + wear
-    return {"forces": r_new, "wear_gap": wear, "positions": positions}
+    return {"forces": turned(forces), "slip": turned(slip), "wear_gap": wear, "positions": positions}

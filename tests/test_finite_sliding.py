@@ -134,6 +134,9 @@ def test_repaired_delassus_is_the_factorised_one(cylinder_on_flat):
     direct.contact = direct.contact.with_pairing(state.pairing)
     direct._build_contact_operators()
     assert np.abs(problem.W - direct.W).max() <= 1e-9 * np.abs(direct.W).max()
+    assert problem.responses.shape == direct.responses.shape   # the scene's loads (none besides the obstacle)
+    if direct.responses.size:
+        assert np.abs(problem.responses - direct.responses).max() <= 1e-9 * np.abs(direct.responses).max()
 
 
 def test_a_cylinder_sliding_over_the_flat_keeps_its_hertz_pressure(cylinder_on_flat):
@@ -232,7 +235,9 @@ def _tangential_compliance(model):
 
 
 def test_a_checkpoint_keeps_the_pairing_and_the_master_wear(cylinder_on_flat, tmp_path):
-    """save_state / load_state of a re-paired, worn state: the next increment is the same (1e-12)."""
+    """save_state / load_state of a re-paired, worn state: the next increment is the same, to the force
+    control's tolerance (1e-8: its root finder starts from the slope the previous solve left, so two solves of
+    one state agree to the tolerance, not to the bit; measured 1.7e-10)."""
     problem = _problem(cylinder_on_flat, "finite", wear=dfr.Archard(k_slave=1e-6, k_master=1e-6))
     state = _pressed(problem)
     for d in np.linspace(0.0, 0.05, 6)[1:]:
@@ -243,7 +248,7 @@ def test_a_checkpoint_keeps_the_pairing_and_the_master_wear(cylinder_on_flat, tm
     a = problem.commit(state, problem.solve(state, tangential=0.06))
     b = problem.commit(loaded, problem.solve(loaded, tangential=0.06))
     for name in ("forces", "positions", "wear_gap", "master_wear"):
-        assert np.allclose(getattr(a, name), getattr(b, name), rtol=0, atol=1e-12 * np.abs(getattr(a, name)).max())
+        assert np.allclose(getattr(a, name), getattr(b, name), rtol=0, atol=1e-8 * np.abs(getattr(a, name)).max())
 
 
 def test_finite_sliding_is_refused_where_it_does_not_apply():
@@ -273,6 +278,9 @@ def test_the_scene_runs_with_finite_sliding(tmp_path):
                                         "output.plots=false", "output.xdmf=false"]), tmp_path, quiet=True)
     assert s["sliding"] == "finite" and s["repairs"] > 0
     assert s["master_scar_width"] > s["contact_width"]
+    # Both bodies' worn area (the flat's left behind by the slide included) = (k / mu) x energy: the runner's
+    # summary sums the preload's and every cycle's energy with the wear acceleration (x25) of each cycle.
+    assert s["wear_area"] == pytest.approx(s["wear_k_effective"] / 0.9 * s["dissipated_energy"], rel=1e-9)
 
 
 # 3D ---------------------------------------------------------------------------------------------------------

@@ -289,9 +289,10 @@ def test_strokes_in_any_direction_and_turning_strokes_dissipate_mu_P_along_the_s
 
     - a circular stroke, the obstacle at delta (cos 2 pi t, sin 2 pi t) over n = 32 increments: the friction force
       turns with the slip at |Q| = mu P (the 3D Coulomb cone; the slip is never along a fixed axis), along the
-      obstacle's motion, and the steady
-      cycle dissipates mu P times the slip path, an n-gon whose radius is delta less the elastic part, so
-      dW/d delta = mu P 2 n sin(pi / n) (= 0.998 x 2 pi mu P);
+      obstacle's motion, and the steady cycle dissipates mu P times the slip path, an n-gon that follows the
+      obstacle's up to the elastic part e (the contact's tangential compliance times mu P, about 1.4 um here,
+      lagging along the path), so dW/d delta = mu P 2 n sin(pi / n) (= 0.998 x 2 pi mu P) up to terms of order
+      (e / delta)^2 ~ 1 %;
     - a rectilinear stroke at 30 degrees from x: dW/d delta = 4 mu P, as along x.
     Strokes 15 and 20 um, 3 cycles each; 1 % (measured: circle +0.56 %, oblique -3.8e-5; the rectilinear stroke
     along x measures 2e-5 in the half model's test)."""
