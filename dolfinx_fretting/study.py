@@ -145,15 +145,26 @@ def _tolerance(local_tol: float, scene: Scene) -> list[str]:
     return out
 
 
+def _contact_mesh_size(scene: Scene) -> float:
+    """The contact element size the scene's mesh will have (mm): ``geometry.contact_mesh_size``, except for a
+    sphere that does not set it, whose cubes are sized from the Hertz contact radius (a/4), not from the
+    key's 2D default."""
+    if scene.geometry.kind == "sphere":
+        from .scene_models import sphere_mesh_size
+
+        return sphere_mesh_size(scene)
+    return scene.geometry.contact_mesh_size
+
+
 def default_reference(scene: Scene) -> list[str]:
     """Overrides that make the fine reference of ``scene``: contact elements halved (``contact_mesh_size``
-    of a half-cylinder; ``nx`` and ``ny`` of a rectangle doubled), twice the increments per cycle,
+    of a half-cylinder or a sphere; ``nx`` and ``ny`` of a rectangle doubled), twice the increments per cycle,
     ``local_tol`` 1e-12 (or the scene's, if tighter; ``force_tol`` 100 times it under force control) and no
     wear acceleration (its cycles multiplied by it, so that the physical cycle count is the scene's)."""
     g, lo = scene.geometry, scene.loading
     ref = []
-    if g.kind == "half_cylinder":
-        ref.append(f"geometry.contact_mesh_size={g.contact_mesh_size / 2:.10g}")
+    if g.kind in ("half_cylinder", "sphere"):
+        ref.append(f"geometry.contact_mesh_size={_contact_mesh_size(scene) / 2:.10g}")
     else:
         ref += [f"geometry.nx={2 * g.nx}", f"geometry.ny={2 * g.ny}"]
     if lo.cycles > 0:
@@ -181,15 +192,15 @@ def sweep_entries(sweep: Sequence[tuple[str, list[str]]]) -> list[Entry]:
 
 def default_sweep(reference: Scene) -> list[Entry]:
     """The sweep when none is given, around the reference: contact elements 2x and 4x coarser (a
-    half-cylinder's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together), a half and a quarter of
+    half-cylinder's or a sphere's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together), a half and a quarter of
     the increments per cycle (multiples of 4; of the tangential increments for a monotonic load), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it
     under force control) and (cyclic scenes with wear) wear accelerations that divide the physical cycle
     count (up to three of 2, 5, 10, 20, 50, 100, ...)."""
     g, lo = reference.geometry, reference.loading
     entries: list[Entry] = []
     for f in (2, 4):
-        if g.kind == "half_cylinder":
-            h = f"{g.contact_mesh_size * f:.6g}"
+        if g.kind in ("half_cylinder", "sphere"):
+            h = f"{_contact_mesh_size(reference) * f:.6g}"
             entries.append(("geometry.contact_mesh_size", h, [f"geometry.contact_mesh_size={h}"]))
         else:
             nx, ny = max(1, g.nx // f), max(1, g.ny // f)
