@@ -7,7 +7,8 @@ compares every point's outputs with the reference's:
 * ``err_max_wear``: relative error of the maximum wear depth at the end of the run (``summary.json``);
 * ``err_wear_l2``: relative L2 error of the worn profile (wear gap along the surface at the end of the
   last cycle, ``contact_profiles.csv``), both profiles interpolated linearly on the union of their node
-  positions and taken as zero outside their own contact window, integrated by the trapezoid rule;
+  positions and taken as zero outside their own contact window, integrated by the trapezoid rule; for a 3D
+  contact the worn map over the contact plane (:func:`map_l2_error`);
 * ``err_peak_pressure``: relative error of the peak contact pressure, the largest nodal pressure over the
   kept increments of the last cycle (of the whole run for a monotonic scene);
 * ``err_energy``: relative error of the energy dissipated over the *physical* cycles: preload energy plus
@@ -43,7 +44,8 @@ from .scenes import Scene, SceneError, load_scene
 
 __all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
            "default_sweep", "sweep_entries", "plan_study", "run_study", "point_errors", "profile_l2_error", "write_study_table",
-           "read_study_csv", "format_markdown", "plot_study"]
+           "read_study_csv", "format_markdown", "plot_study",
+           "map_l2_error", "wear_l2_error"]
 
 #: Error columns of the study table (relative errors against the reference run).
 ERROR_FIELDS = ("err_max_wear", "err_wear_l2", "err_peak_pressure", "err_energy")
@@ -330,6 +332,42 @@ def profile_l2_error(x: np.ndarray, w: np.ndarray, x_ref: np.ndarray, w_ref: np.
     return num / den
 
 
+def map_l2_error(xy: np.ndarray, w: np.ndarray, xy_ref: np.ndarray, w_ref: np.ndarray, n: int = 301) -> float:
+    """Relative L2 distance of two maps sampled at different points of a plane (a 3D contact's wear).
+
+    Both are interpolated linearly on a Delaunay triangulation of their own points (zero outside their hull:
+    no contact node, no wear there) and compared on one ``n x n`` grid over the bounding box of all points:
+    ||w - w_ref|| / ||w_ref||. Returns 0 when both are zero everywhere and NaN when only the reference is.
+
+    Args:
+        xy, xy_ref: Point coordinates, shape (m, 2) and (m_ref, 2).
+        w, w_ref: Values at the points.
+        n: Grid points per side.
+    """
+    from scipy.interpolate import LinearNDInterpolator
+
+    xy, xy_ref = np.asarray(xy, dtype=float), np.asarray(xy_ref, dtype=float)
+    lo = np.minimum(xy.min(axis=0), xy_ref.min(axis=0))
+    hi = np.maximum(xy.max(axis=0), xy_ref.max(axis=0))
+    gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n))
+    grid = np.column_stack([gx.ravel(), gy.ravel()])
+    a = LinearNDInterpolator(xy, np.asarray(w, dtype=float), fill_value=0.0)(grid)
+    b = LinearNDInterpolator(xy_ref, np.asarray(w_ref, dtype=float), fill_value=0.0)(grid)
+    den = math.sqrt(float(np.sum(b * b)))
+    num = math.sqrt(float(np.sum((a - b) ** 2)))
+    if den == 0.0:
+        return 0.0 if num == 0.0 else math.nan
+    return num / den
+
+
+def wear_l2_error(position: np.ndarray, wear: np.ndarray, position_ref: np.ndarray, wear_ref: np.ndarray) -> float:
+    """The worn profile's relative L2 error: :func:`profile_l2_error` along a 2D contact (positions of shape
+    (m,)), :func:`map_l2_error` over a 3D contact's plane (positions of shape (m, 2))."""
+    if np.ndim(position) == 2 and np.ndim(position_ref) == 2:
+        return map_l2_error(position, wear, position_ref, wear_ref)
+    return profile_l2_error(position, wear, position_ref, wear_ref)
+
+
 @dataclass
 class _Outcome:
     """What the errors are computed from, read back from a run's output folder."""
@@ -372,7 +410,9 @@ def _outcome(folder: Path) -> _Outcome:
         pressure = prof.values["pressure"][rows]
         # np.max, not nanmax: a NaN pressure must show (it makes the point non-finite, below)
         peak = float(np.max(pressure)) if pressure.size else None
-        position, wear = prof.position, prof.values["wear"][rows[-1]]
+        # 3D: the nodes' (t1, t2) positions on the contact plane (the wear is a map, not a profile along t1)
+        position = prof.position if prof.position_2 is None else np.column_stack([prof.position, prof.position_2])
+        wear = prof.values["wear"][rows[-1]]
     converged, error = s.get("converged") is True, str(s.get("error", ""))
     # Never a converged point with a non-finite number: the summary's own flag (written as null), the values
     # the errors come from, and the worn profile.
@@ -400,7 +440,7 @@ def point_errors(folder: str | Path, reference_folder: str | Path) -> dict[str, 
     p, r = _outcome(Path(folder)), _outcome(Path(reference_folder))
     l2 = math.nan
     if p.wear is not None and r.wear is not None:
-        l2 = profile_l2_error(p.position, p.wear, r.position, r.wear)
+        l2 = wear_l2_error(p.position, p.wear, r.position, r.wear)
     return {"err_max_wear": _rel(p.max_wear_depth, r.max_wear_depth), "err_wear_l2": l2,
             "err_peak_pressure": _rel(p.peak_pressure, r.peak_pressure), "err_energy": _rel(p.energy, r.energy),
             "max_wear_depth": p.max_wear_depth, "peak_pressure": p.peak_pressure, "dissipated_energy": p.energy,

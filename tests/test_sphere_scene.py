@@ -87,3 +87,18 @@ def test_window_edge_message_of_a_sphere_names_keys_it_accepts():
     load_scene("sphere-flat", ["contact.candidate_half_width=0.5"])  # the advice is accepted
     with pytest.raises(SceneError, match="geometry.contact_half_width is not a key"):
         load_scene("sphere-flat", ["geometry.contact_half_width=0.5"])
+
+
+def test_study_reads_a_3d_wear_map(runs):
+    # The study compares a 3D run's worn map over the contact plane: its outcome holds the nodes' (x, y).
+    import numpy as np
+
+    from dolfinx_fretting.study import _outcome, point_errors
+
+    folder, _ = runs[True]
+    outcome = _outcome(folder)
+    prof = read_profiles(folder)
+    assert outcome.position.shape == (prof.position.size, 2)
+    np.testing.assert_array_equal(outcome.position[:, 1], prof.position_2)
+    errors = point_errors(folder, folder)
+    assert errors["err_wear_l2"] == 0.0 and errors["err_max_wear"] == 0.0
