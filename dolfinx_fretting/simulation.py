@@ -356,11 +356,18 @@ class _Run:
         model, cs = self.model, self.model.contact
         if model.window_can_grow:
             raise _WindowTooSmall(where)
+        if self.scene.geometry.kind == "sphere":
+            # A sphere has no geometry.contact_half_width (refused): its uniform zone is 1.5 a of the mesh, and
+            # the window may reach past it onto the graded cells.
+            advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm; the mesh's uniform zone "
+                      f"ends at {model.setup.window_limit:.4g} mm, beyond it the cells grow)")
+        else:
+            advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) and "
+                      "geometry.contact_half_width (the refined zone, now "
+                      f"{self.scene.geometry.refined_half_width} mm)")
         raise SimulationError(
             f"{where}: the outermost contact candidates (x = {cs.abscissa[0]:.4g} .. {cs.abscissa[-1]:.4g} mm) "
-            "carry load: the contact reaches the edge of the candidate window and would be truncated; widen "
-            f"contact.candidate_half_width (now {model.half_width:.4g} mm) and geometry.contact_half_width "
-            f"(the refined zone, now {self.scene.geometry.refined_half_width} mm)")
+            f"carry load: the contact reaches the edge of the candidate window and would be truncated; {advice}")
 
     def _check_wear_step(self, cycle: int, gw_old: np.ndarray, gw_new: np.ndarray) -> None:
         """Refuse a cycle that wears more than the contact element size at some contact: the wear gap is

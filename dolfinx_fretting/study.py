@@ -7,7 +7,8 @@ compares every point's outputs with the reference's:
 * ``err_max_wear``: relative error of the maximum wear depth at the end of the run (``summary.json``);
 * ``err_wear_l2``: relative L2 error of the worn profile (wear gap along the surface at the end of the
   last cycle, ``contact_profiles.csv``), both profiles interpolated linearly on the union of their node
-  positions and taken as zero outside their own contact window, integrated by the trapezoid rule;
+  positions and taken as zero outside their own contact window, integrated by the trapezoid rule; for a 3D
+  contact the worn map over the contact plane (:func:`map_l2_error`);
 * ``err_peak_pressure``: relative error of the peak contact pressure, the largest nodal pressure over the
   kept increments of the last cycle (of the whole run for a monotonic scene);
 * ``err_energy``: relative error of the energy dissipated over the *physical* cycles: preload energy plus
@@ -43,7 +44,8 @@ from .scenes import Scene, SceneError, load_scene
 
 __all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
            "default_sweep", "sweep_entries", "plan_study", "run_study", "point_errors", "profile_l2_error", "write_study_table",
-           "read_study_csv", "format_markdown", "plot_study"]
+           "read_study_csv", "format_markdown", "plot_study",
+           "map_l2_error", "wear_l2_error"]
 
 #: Error columns of the study table (relative errors against the reference run).
 ERROR_FIELDS = ("err_max_wear", "err_wear_l2", "err_peak_pressure", "err_energy")
@@ -145,15 +147,26 @@ def _tolerance(local_tol: float, scene: Scene) -> list[str]:
     return out
 
 
+def _contact_mesh_size(scene: Scene) -> float:
+    """The contact element size the scene's mesh will have (mm): ``geometry.contact_mesh_size``, except for a
+    sphere that does not set it, whose cubes are sized from the Hertz contact radius (a/4), not from the
+    key's 2D default."""
+    if scene.geometry.kind == "sphere":
+        from .scene_models import sphere_mesh_size
+
+        return sphere_mesh_size(scene)
+    return scene.geometry.contact_mesh_size
+
+
 def default_reference(scene: Scene) -> list[str]:
     """Overrides that make the fine reference of ``scene``: contact elements halved (``contact_mesh_size``
-    of a half-cylinder; ``nx`` and ``ny`` of a rectangle doubled), twice the increments per cycle,
+    of a half-cylinder or a sphere; ``nx`` and ``ny`` of a rectangle doubled), twice the increments per cycle,
     ``local_tol`` 1e-12 (or the scene's, if tighter; ``force_tol`` 100 times it under force control) and no
     wear acceleration (its cycles multiplied by it, so that the physical cycle count is the scene's)."""
     g, lo = scene.geometry, scene.loading
     ref = []
-    if g.kind == "half_cylinder":
-        ref.append(f"geometry.contact_mesh_size={g.contact_mesh_size / 2:.10g}")
+    if g.kind in ("half_cylinder", "sphere"):
+        ref.append(f"geometry.contact_mesh_size={_contact_mesh_size(scene) / 2:.10g}")
     else:
         ref += [f"geometry.nx={2 * g.nx}", f"geometry.ny={2 * g.ny}"]
     if lo.cycles > 0:
@@ -181,15 +194,15 @@ def sweep_entries(sweep: Sequence[tuple[str, list[str]]]) -> list[Entry]:
 
 def default_sweep(reference: Scene) -> list[Entry]:
     """The sweep when none is given, around the reference: contact elements 2x and 4x coarser (a
-    half-cylinder's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together), a half and a quarter of
+    half-cylinder's or a sphere's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together), a half and a quarter of
     the increments per cycle (multiples of 4; of the tangential increments for a monotonic load), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it
     under force control) and (cyclic scenes with wear) wear accelerations that divide the physical cycle
     count (up to three of 2, 5, 10, 20, 50, 100, ...)."""
     g, lo = reference.geometry, reference.loading
     entries: list[Entry] = []
     for f in (2, 4):
-        if g.kind == "half_cylinder":
-            h = f"{g.contact_mesh_size * f:.6g}"
+        if g.kind in ("half_cylinder", "sphere"):
+            h = f"{_contact_mesh_size(reference) * f:.6g}"
             entries.append(("geometry.contact_mesh_size", h, [f"geometry.contact_mesh_size={h}"]))
         else:
             nx, ny = max(1, g.nx // f), max(1, g.ny // f)
@@ -319,6 +332,42 @@ def profile_l2_error(x: np.ndarray, w: np.ndarray, x_ref: np.ndarray, w_ref: np.
     return num / den
 
 
+def map_l2_error(xy: np.ndarray, w: np.ndarray, xy_ref: np.ndarray, w_ref: np.ndarray, n: int = 301) -> float:
+    """Relative L2 distance of two maps sampled at different points of a plane (a 3D contact's wear).
+
+    Both are interpolated linearly on a Delaunay triangulation of their own points (zero outside their hull:
+    no contact node, no wear there) and compared on one ``n x n`` grid over the bounding box of all points:
+    ||w - w_ref|| / ||w_ref||. Returns 0 when both are zero everywhere and NaN when only the reference is.
+
+    Args:
+        xy, xy_ref: Point coordinates, shape (m, 2) and (m_ref, 2).
+        w, w_ref: Values at the points.
+        n: Grid points per side.
+    """
+    from scipy.interpolate import LinearNDInterpolator
+
+    xy, xy_ref = np.asarray(xy, dtype=float), np.asarray(xy_ref, dtype=float)
+    lo = np.minimum(xy.min(axis=0), xy_ref.min(axis=0))
+    hi = np.maximum(xy.max(axis=0), xy_ref.max(axis=0))
+    gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n))
+    grid = np.column_stack([gx.ravel(), gy.ravel()])
+    a = LinearNDInterpolator(xy, np.asarray(w, dtype=float), fill_value=0.0)(grid)
+    b = LinearNDInterpolator(xy_ref, np.asarray(w_ref, dtype=float), fill_value=0.0)(grid)
+    den = math.sqrt(float(np.sum(b * b)))
+    num = math.sqrt(float(np.sum((a - b) ** 2)))
+    if den == 0.0:
+        return 0.0 if num == 0.0 else math.nan
+    return num / den
+
+
+def wear_l2_error(position: np.ndarray, wear: np.ndarray, position_ref: np.ndarray, wear_ref: np.ndarray) -> float:
+    """The worn profile's relative L2 error: :func:`profile_l2_error` along a 2D contact (positions of shape
+    (m,)), :func:`map_l2_error` over a 3D contact's plane (positions of shape (m, 2))."""
+    if np.ndim(position) == 2 and np.ndim(position_ref) == 2:
+        return map_l2_error(position, wear, position_ref, wear_ref)
+    return profile_l2_error(position, wear, position_ref, wear_ref)
+
+
 @dataclass
 class _Outcome:
     """What the errors are computed from, read back from a run's output folder."""
@@ -361,7 +410,9 @@ def _outcome(folder: Path) -> _Outcome:
         pressure = prof.values["pressure"][rows]
         # np.max, not nanmax: a NaN pressure must show (it makes the point non-finite, below)
         peak = float(np.max(pressure)) if pressure.size else None
-        position, wear = prof.position, prof.values["wear"][rows[-1]]
+        # 3D: the nodes' (t1, t2) positions on the contact plane (the wear is a map, not a profile along t1)
+        position = prof.position if prof.position_2 is None else np.column_stack([prof.position, prof.position_2])
+        wear = prof.values["wear"][rows[-1]]
     converged, error = s.get("converged") is True, str(s.get("error", ""))
     # Never a converged point with a non-finite number: the summary's own flag (written as null), the values
     # the errors come from, and the worn profile.
@@ -389,7 +440,7 @@ def point_errors(folder: str | Path, reference_folder: str | Path) -> dict[str, 
     p, r = _outcome(Path(folder)), _outcome(Path(reference_folder))
     l2 = math.nan
     if p.wear is not None and r.wear is not None:
-        l2 = profile_l2_error(p.position, p.wear, r.position, r.wear)
+        l2 = wear_l2_error(p.position, p.wear, r.position, r.wear)
     return {"err_max_wear": _rel(p.max_wear_depth, r.max_wear_depth), "err_wear_l2": l2,
             "err_peak_pressure": _rel(p.peak_pressure, r.peak_pressure), "err_energy": _rel(p.energy, r.energy),
             "max_wear_depth": p.max_wear_depth, "peak_pressure": p.peak_pressure, "dissipated_energy": p.energy,

@@ -10,8 +10,8 @@ import pytest
 from dolfinx_fretting.analytic import hertz_line_contact, plane_strain_modulus
 from dolfinx_fretting.cli import main
 from dolfinx_fretting.scenes import PRESETS, SceneError, load_scene
-from dolfinx_fretting.study import (ERROR_FIELDS, parse_point, parse_sweep, plan_study, profile_l2_error,
-                                    read_study_csv, run_study)
+from dolfinx_fretting.study import (ERROR_FIELDS, map_l2_error, parse_point, parse_sweep, plan_study,
+                                    profile_l2_error, read_study_csv, run_study, wear_l2_error)
 
 #: A coarse, short cylinder-flat (17 contacts, 2 cycles): every run takes about a second.
 TINY = ["loading.cycles=2", "geometry.contact_mesh_size=0.04", "geometry.coarse_mesh_size=1.0"]
@@ -112,6 +112,34 @@ def test_profile_l2_error_closed_forms():
                             np.array([0.0, 1.0]), np.array([0.0, 1.0])) == 0.0
 
 
+def _grid_points(nx, ny):
+    x, y = np.meshgrid(np.linspace(-0.3, 0.3, nx), np.linspace(0.0, 0.3, ny))
+    return np.column_stack([x.ravel(), y.ravel()])
+
+
+def test_wear_map_l2_error_of_a_3d_contact():
+    # A 3D contact's wear is a map over the plane (half model: y >= 0). The same linear map on two node sets
+    # of one rectangle is the same map: linear interpolation is exact, error 0 to rounding. Treated as a
+    # profile along x (what the study did), the nodes sharing an x carry different values and the two
+    # sets disagree.
+    coarse, fine = _grid_points(7, 4), _grid_points(13, 7)
+    def linear(p):
+        return 1.0 + 2.0 * p[:, 0] + 5.0 * p[:, 1]
+    assert wear_l2_error(coarse, linear(coarse), fine, linear(fine)) < 1e-12
+    assert profile_l2_error(coarse[:, 0], linear(coarse), fine[:, 0], linear(fine)) > 0.05
+    # twice the map: error 1 exactly; zero everywhere against zero: 0; against a zero reference: NaN
+    assert map_l2_error(fine, 2 * linear(fine), coarse, linear(coarse)) == pytest.approx(1.0, rel=1e-12)
+    assert map_l2_error(fine, 0 * linear(fine), coarse, 0 * linear(coarse)) == 0.0
+    assert math.isnan(map_l2_error(fine, linear(fine), coarse, 0 * linear(coarse)))
+    # a map known on half of the rectangle is zero beyond it (no contact node, no wear)
+    half = coarse[coarse[:, 0] <= 0.0]
+    err = map_l2_error(half, np.ones(len(half)), coarse, np.ones(len(coarse)))
+    assert err == pytest.approx(np.sqrt(0.5), rel=0.01)
+    # 2D positions (shape (m,)) still go to the profile error
+    x = np.array([0.0, 1.0])
+    assert wear_l2_error(x, 2 * x, x, x) == profile_l2_error(x, 2 * x, x, x) == pytest.approx(1.0)
+
+
 def test_study_plan_validation():
     # an acceleration that does not divide the physical cycles: refused before any run, naming the key
     with pytest.raises(SceneError, match="wear.acceleration = 3 does not divide"):
@@ -135,6 +163,22 @@ def test_study_plan_validation():
     assert ref.solver.local_tol == 1e-12 and ref.solver.force_tol == 1e-10
     accs = [p for p in plan if p.key == "wear.acceleration"]
     assert [p.value for p in accs] == ["2"] and accs[0].scene.loading.cycles == 1
+
+
+def test_study_default_plan_of_a_sphere():
+    # The sphere's mesh is sized from its Hertz contact radius a (cubes of a/4 unless the scene sets
+    # contact_mesh_size; it has no nx, ny): the default reference halves that size and the default sweep takes
+    # 2x and 4x the reference's. Before, both wrote geometry.nx, which a sphere refuses.
+    from dolfinx_fretting.meshes_3d import hertz_sphere
+
+    plan = plan_study("sphere-flat", ["loading.cycles=2"])
+    scene = load_scene("sphere-flat")
+    a, _ = hertz_sphere(scene.loading.normal_force, scene.geometry.radius, scene.contact_modulus)
+    ref = plan[0].scene
+    assert ref.geometry.contact_mesh_size == pytest.approx(a / 8, rel=1e-9)
+    assert ref.loading.increments_per_cycle == 2 * scene.loading.increments_per_cycle
+    sizes = [p.scene.geometry.contact_mesh_size for p in plan if p.key == "geometry.contact_mesh_size"]
+    assert sizes == pytest.approx([a / 4, a / 2], rel=1e-5)
 
 
 def test_study_cli_bad_input(capsys, tmp_path):
