@@ -103,8 +103,8 @@ class ContactSet:
     #: Two deformable bodies: the size of each contact's master facet (2D: the segment's length; 3D: the mean
     #: edge length), the scale of the small-sliding limit (relative slip below half of it).
     master_sizes: np.ndarray | None = None
-    #: Two deformable bodies: each contact's facet in :attr:`master_surface` (the pairing, with
-    #: :attr:`master_weights`), and the master surface the pairing was searched on.
+    #: Two deformable bodies: each contact's facet in ``master_surface`` (the pairing, with
+    #: ``master_weights``), and the master surface the pairing was searched on.
     master_faces: np.ndarray | None = None
     master_surface: MasterSurface | None = None
 

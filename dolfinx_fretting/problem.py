@@ -506,8 +506,9 @@ class FrettingProblem:
         t0 = time.perf_counter()
         #: Finite sliding: K^-1 on both contact surfaces' dofs
         #: (:class:`~dolfinx_fretting.sliding.SurfaceCompliance`), from which each pairing's W and load responses
-        #: are formed; None with small sliding or a rigid plane. :attr:`contact` is then a copy of the given
-        #: Contact holding the pairing of the state last solved or committed (:meth:`Contact.with_pairing`).
+        #: are formed; None with small sliding or a rigid plane. ``self.contact`` is then a copy of the given
+        #: Contact holding the pairing of the state last solved or committed
+        #: (:meth:`~dolfinx_fretting.contact.Contact.with_pairing`).
         self.surface_compliance: sliding.SurfaceCompliance | None = None
         if isinstance(contact.obstacle, ElasticBody) and contact.obstacle.sliding == "finite":
             if plasticity is not None:
