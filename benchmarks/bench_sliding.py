@@ -76,7 +76,7 @@ def main() -> None:
     work.mkdir(parents=True, exist_ok=True)
     results = {scene: run(scene, SCENES[scene], work) for scene in args.scenes}
     load = os.getloadavg()
-    header = [f"# Fixed pairing against finite sliding (two elastic bodies)", "",
+    header = ["# Fixed pairing against finite sliding (two elastic bodies)", "",
               f"Command: `OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sliding.py "
               f"--scenes {' '.join(args.scenes)}`", "",
               f"Date: {datetime.datetime.now().isoformat(timespec='seconds')}; machine: {platform.machine()}, "

@@ -15,7 +15,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from mpi4py import MPI
+from mpi4py import MPI  # noqa: F401  (before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs)
 
 import dolfinx_fretting as dfr
 from dolfinx_fretting import sliding
