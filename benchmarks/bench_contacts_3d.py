@@ -47,6 +47,8 @@ import sys
 import time
 from pathlib import Path
 
+from _machine import cpu_model  # benchmarks/ is on sys.path when a script runs
+
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
@@ -88,14 +90,7 @@ def machine_info() -> dict:
     import numba
     import scipy
 
-    cpu = platform.processor() or "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_model()
     available, source = sizes.available_memory()
     return {"cpu": cpu, "logical_cpus": os.cpu_count(), "host": platform.node(),
             "os": f"{platform.system()} {platform.release()}",

@@ -40,6 +40,8 @@ import sys
 import time
 from pathlib import Path
 
+from _machine import cpu_model  # benchmarks/ is on sys.path when a script runs
+
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
@@ -67,16 +69,6 @@ def tmax(t: float) -> float:
 
 
 # Machine -----------------------------------------------------------------------------------------------
-def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
 def _mumps_version() -> str:
     for header in ("/usr/include/dmumps_c.h", "/usr/include/mumps/dmumps_c.h"):
         try:
@@ -102,7 +94,7 @@ def machine_info() -> dict:
     except OSError:
         blas = "unknown"
     return {
-        "cpu": _cpu_model(),
+        "cpu": cpu_model(),
         "logical_cpus": os.cpu_count(),
         "host": platform.node(),
         "os": f"{platform.system()} {platform.release()}",

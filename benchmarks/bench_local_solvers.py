@@ -25,6 +25,8 @@ import sys
 import time
 from pathlib import Path
 
+from _machine import cpu_model  # benchmarks/ is on sys.path when a script runs
+
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
@@ -120,14 +122,7 @@ def fmt_siconos(s):
 
 
 def machine_info() -> list[str]:
-    cpu = platform.processor() or "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_model()
     import numba
     import scipy
     return [f"- date: {datetime.datetime.now().isoformat(timespec='seconds')}",

@@ -47,13 +47,14 @@ import datetime
 import json
 import math
 import os
-import platform
 import re
 import shlex
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+from _machine import cpu_model  # benchmarks/ is on sys.path when a script runs
 
 import numpy as np
 
@@ -128,14 +129,7 @@ def describe(key: str, value: str) -> str:
 # Machine and timing ---------------------------------------------------------------------------------------
 def machine() -> dict:
     """Date, processor, cores, memory and load average of this machine."""
-    model = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    model = cpu_model()
     mem = ""
     try:
         kb = int(re.search(r"MemTotal:\s+(\d+)", Path("/proc/meminfo").read_text()).group(1))
