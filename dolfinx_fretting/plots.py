@@ -12,8 +12,9 @@ Pictures (all in the output folder):
   (with the frictionless Hertz pressure for a half-cylinder).
 * 3D contacts: ``contact_maps.png``, maps over the contact plane of the pressure, the shear and slip
   magnitudes, the contact state and the wear depth at the end of the preload and at the last kept increment;
-  the other pictures show the profiles along the sliding direction through the line of nodes nearest to
-  t2 = 0 (the plane of symmetry of a half model).
+  ``profiles_across.png``, the pressure and shear across the sliding direction (along t2, through the line of
+  nodes nearest to t1 = 0); the other pictures show the profiles along the sliding direction through the line
+  of nodes nearest to t2 = 0 (the plane of symmetry of a half model).
 * cyclic runs only:
 
   - ``wear_first_cycle.png`` (paper Fig. 6): wear gap and contact pressure along the surface at the
