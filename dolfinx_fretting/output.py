@@ -469,9 +469,7 @@ class FrettingWriter:
             von_mises.interpolate(self._von_mises_expr)
             functions.append(von_mises)
         if self.shifted_cells is not None:
-            frame = problem.contact.frame
-            dim = problem.contact.dim
-            D = sum(state.obstacle[k] * frame[k] for k in range(dim))
+            D = problem.obstacle_translation(state.obstacle)
             # The cells' dofs from the dofmap (locate_dofs_topological on cells needs the cell-to-cell
             # connectivity on DOLFINx 0.11, which a 3D mesh under MPI has not computed).
             nodes = np.unique(dfx.cell_dofmap(u.function_space)[self.shifted_cells])
@@ -489,7 +487,7 @@ class FrettingWriter:
             return
         import csv
 
-        cs = self.problem.contact.contact_set
+        cs = self.problem.contact_set_of(state)
         gw = state.wear_gap
         rows = []
         if not cs.two_body:

@@ -678,6 +678,17 @@ class FrettingProblem:
         return sliding.SurfaceCompliance(nodes, dim, C, responses, faces,
                                          sliding.master_node_areas(cs.master_surface, nodes))
 
+    def contact_set_of(self, state: ContactState) -> ContactSet:
+        """The contact set ``state``'s per-contact arrays refer to (its pairing under finite sliding), without
+        switching the problem to it (reading a state changes nothing)."""
+        return state.pairing if state.pairing is not None else self.contact.contact_set
+
+    def obstacle_translation(self, obstacle: np.ndarray) -> np.ndarray:
+        """The obstacle's rigid translation D (global frame) from its components ``obstacle`` in the obstacle
+        frame (:attr:`ContactState.obstacle`: approach along n, then t1[, t2])."""
+        frame = self.contact.frame
+        return sum(obstacle[k] * frame[k] for k in range(frame.shape[0]))
+
     def _activate(self, state: ContactState) -> None:
         """Finite sliding: hold ``state``'s pairing (its contact set, W and load responses) if another is held."""
         if state.pairing is None or state.pairing is self.contact.contact_set:
@@ -745,10 +756,7 @@ class FrettingProblem:
            q_body: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(q for the local problem, q_abs) of an increment; ``q_body`` replaces the loads' response."""
         cs = self.contact.contact_set
-        frame = self.contact.frame
-        D = d[0] * frame[0]
-        for k in range(1, cs.dim):
-            D = D + d[k] * frame[k]
+        D = self.obstacle_translation(d)
         if q_body is None:  # sum_l s_l q_l, in load order (one load: s q, as the compiled loop adds it)
             q_body = np.zeros(cs.nc * cs.dim) if not len(self.load_names) else factors[0] * self.responses[0]
             for i in range(1, len(self.load_names)):
@@ -996,10 +1004,8 @@ class FrettingProblem:
 
     def _surface_state(self, state: ContactState) -> tuple[np.ndarray, np.ndarray]:
         """Finite sliding: (the surface nodes' displacement, the master's translation D) of ``state``."""
-        cs = state.pairing
-        frame = self.contact.frame
-        D = sum(state.obstacle[k] * frame[k] for k in range(cs.dim))
-        return self.surface_compliance.displacement(cs, state.forces, state.load_factors), D
+        u = self.surface_compliance.displacement(state.pairing, state.forces, state.load_factors)
+        return u, self.obstacle_translation(state.obstacle)
 
     def _repair(self, state: ContactState) -> ContactState:
         """Finite sliding: pair the slave nodes anew once a paired point has moved more than
@@ -1385,8 +1391,7 @@ class FrettingProblem:
             return u
         from ._dolfinx import cell_dofmap
 
-        frame = self.contact.frame
-        D = sum(state.obstacle[k] * frame[k] for k in range(self.dim))
+        D = self.obstacle_translation(state.obstacle)
         # The cells' nodes from the dofmap (DOLFINx 0.11 wants a cell-to-cell connectivity for
         # locate_dofs_topological on cells of a 3D mesh).
         nodes = np.unique(cell_dofmap(self.V)[np.asarray(obstacle.cells, dtype=np.int32)])
@@ -1398,7 +1403,7 @@ class FrettingProblem:
         """Per contact node (replicated): ``coordinates``, ``global_node``, ``pressure`` and ``shear``
         (force / tributary measure; shear has dim-1 components), ``gap``, ``slip`` (last increment's slip
         increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip)."""
-        cs = state.pairing if state.pairing is not None else self.contact.contact_set
+        cs = self.contact_set_of(state)
         dim = cs.dim
         r = state.forces.reshape(cs.nc, dim)
         y = state.positions.reshape(cs.nc, dim)
@@ -1414,7 +1419,7 @@ class FrettingProblem:
         ``master_coordinates`` (reference) at the master's points: with finite sliding the master's nodes
         (:attr:`surface_compliance`), with small sliding each contact's paired point (the pairing is fixed, so
         the master's share is carried per contact). Reads ``state`` only (the problem's pairing is not changed)."""
-        cs = state.pairing if state.pairing is not None else self.contact.contact_set
+        cs = self.contact_set_of(state)
         if not cs.two_body:
             raise ValueError("body_wear: the obstacle is rigid (the wear gap is the body's: contact_fields)")
         if self.surface_compliance is None:
@@ -1432,7 +1437,7 @@ class FrettingProblem:
         """The worn area (2D, mm^2 per mm) or volume (3D) of ``state``: the wear gap times the tributary measures;
         with finite sliding the slave's part per contact plus the master's on its own nodes (the master's wear
         left behind by the slide is under no contact)."""
-        cs = state.pairing if state.pairing is not None else self.contact.contact_set
+        cs = self.contact_set_of(state)
         if self.surface_compliance is None:
             return float(state.wear_gap @ cs.tributary)
         slave = state.wear_gap - sliding.interpolate_master(cs, self.surface_compliance, state.master_wear)
@@ -1440,7 +1445,7 @@ class FrettingProblem:
 
     def total_force(self, state: ContactState) -> np.ndarray:
         """Total contact force on the body in the obstacle frame (n, t1[, t2])."""
-        cs = state.pairing if state.pairing is not None else self.contact.contact_set
+        cs = self.contact_set_of(state)
         F = cs.total_force(state.forces)
         return np.array([F @ self.contact.frame[k] for k in range(self.dim)])
 

@@ -275,7 +275,8 @@ def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
     else:
         obstacle = plane
     text = (f", each paired with the closest point of the elastic flat's faces (node-to-face, "
-            f"{_PAIRING[scene.contact.sliding]})" if two_body else ", against a rigid plane") + (", half model (roller on y = 0)" if g.half_model else "")
+            f"{_PAIRING[scene.contact.sliding]})" if two_body else ", against a rigid plane") \
+        + (", half model (roller on y = 0)" if g.half_model else "")
     # hertz = None: the driver's reference is the line contact's; the sphere's is meshes_3d.hertz_sphere.
     return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, h, window, zone, automatic, True,
                       elastic_cells, display_cells, None, two_body and scene.contact.sliding == "small", text,

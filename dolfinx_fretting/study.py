@@ -325,11 +325,14 @@ def profile_l2_error(x: np.ndarray, w: np.ndarray, x_ref: np.ndarray, w_ref: np.
     grid = np.union1d(x, x_ref)
     a = np.interp(grid, x[o], w[o], left=0.0, right=0.0)
     b = np.interp(grid, x_ref[oref], w_ref[oref], left=0.0, right=0.0)
-    den = math.sqrt(_trapezoid(b * b, grid))
-    num = math.sqrt(_trapezoid((a - b) ** 2, grid))
-    if den == 0.0:
-        return 0.0 if num == 0.0 else math.nan
-    return num / den
+    return _relative(math.sqrt(_trapezoid((a - b) ** 2, grid)), math.sqrt(_trapezoid(b * b, grid)))
+
+
+def _relative(difference: float, reference: float) -> float:
+    """difference / reference: 0 when both are zero, NaN when only the reference is."""
+    if reference == 0.0:
+        return 0.0 if difference == 0.0 else math.nan
+    return difference / reference
 
 
 def map_l2_error(xy: np.ndarray, w: np.ndarray, xy_ref: np.ndarray, w_ref: np.ndarray, n: int = 301) -> float:
@@ -353,11 +356,7 @@ def map_l2_error(xy: np.ndarray, w: np.ndarray, xy_ref: np.ndarray, w_ref: np.nd
     grid = np.column_stack([gx.ravel(), gy.ravel()])
     a = LinearNDInterpolator(xy, np.asarray(w, dtype=float), fill_value=0.0)(grid)
     b = LinearNDInterpolator(xy_ref, np.asarray(w_ref, dtype=float), fill_value=0.0)(grid)
-    den = math.sqrt(float(np.sum(b * b)))
-    num = math.sqrt(float(np.sum((a - b) ** 2)))
-    if den == 0.0:
-        return 0.0 if num == 0.0 else math.nan
-    return num / den
+    return _relative(math.sqrt(float(np.sum((a - b) ** 2))), math.sqrt(float(np.sum(b * b))))
 
 
 def wear_l2_error(position: np.ndarray, wear: np.ndarray, position_ref: np.ndarray, wear_ref: np.ndarray) -> float:
