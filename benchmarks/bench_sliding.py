@@ -80,7 +80,9 @@ def main() -> None:
               f"Command: `OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sliding.py "
               f"--scenes {' '.join(args.scenes)}`", "",
               f"Date: {datetime.datetime.now().isoformat(timespec='seconds')}; machine: {platform.machine()}, "
-              f"{os.cpu_count()} cores; load average at the end {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}.", ""]
+              f"{os.cpu_count()} cores; load average at the end {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}.", "",
+              "What these numbers decide (which scenes re-pair): `benchmarks/README.md`, \"Fixed pairing against "
+              "finite sliding\".", ""]
     body = [line for scene, result in results.items() for line in table(scene, result)]
     Path(args.out + ".md").write_text("\n".join(header + body) + "\n")
     Path(args.out + ".json").write_text(json.dumps(results, indent=1) + "\n")
