@@ -62,17 +62,43 @@ def _is_timing(key: str) -> bool:
 # 4.0e-7 in max_pressure and 1.5e-6 in dissipated_energy (the coarse zone's nodes move).
 RTOL = 1e-8
 
-#: Iteration counts allowed to differ between the stacks, relative, by (case, key). The elastic-plastic run's
-#: Newton iterates (condensed on the plastic zone: dense LU and products of the two numpy/OpenBLAS builds)
-#: differ by rounding, ~1e-13, between the stacks, and the local solver, stopping at its tolerance, takes a
-#: sweep more or less here and there: measured 108382 vs 108380 sweeps (2e-5), with every result within
-#: 7e-14, and on a fresh machine's clean clone 108381 vs 107814 (5.2e-3: about one Newton iteration more in
-#: one increment, ~4.5 local solves of ~120 sweeps). A count is not a result: the answers are held to RTOL
-#: like the others; 2e-2 (~2000 sweeps, four Newton iterations) still catches a changed iteration.
-COUNT_RTOL = {("cylinder-flat-plastic", "local_iterations"): 2e-2}
-#: Descriptions that quote such counts (``modelled.material``: "170 tangent update(s)" on one stack, 171 on the
-#: other, measured on a fresh machine): compared with their numbers masked.
-PROSE_WITH_COUNTS = {("cylinder-flat-plastic", "modelled.material")}
+#: Integers that come out of floating-point arithmetic are compared with a tolerance (issue 22: an exact
+#: comparison of such a count failed on an AVX-512 machine, whose numpy 2 rounds its vectorised maths otherwise).
+#: Each rule: (pattern of the summary key, relative tolerance, absolute tolerance, why). The first that matches
+#: applies; an integer no rule names is an input or a structural count (cycles, increments of the path, dofs of
+#: the same gmsh mesh, ranks; the candidates, which ``contact.find_candidates`` keeps within the window with a
+#: relative margin of 1e-12, far above rounding) and must be equal.
+COUNT_RULES: list[tuple[str, float, float, str]] = [
+    # The elastic-plastic run's Newton iterates (condensed on the plastic zone: dense LU and products of the two
+    # numpy/OpenBLAS builds) differ by rounding, ~1e-13, and the local solver, stopping at its tolerance, takes
+    # a sweep more or less here and there: measured 108382 vs 108380 sweeps (2e-5), with every result within
+    # 7e-14, and on a fresh machine's clean clone 108381 vs 107814 (5.2e-3: about one Newton iteration more in
+    # one increment, ~4.5 local solves of ~120 sweeps). A count is not a result: the answers are held to RTOL;
+    # 2e-2 (~2000 sweeps, four Newton iterations) still catches a changed iteration.
+    (r"(local_iterations|newton_full_fallbacks|tangent_refactorizations|pattern_solves\..*)", 2e-2, 1.0,
+     "iterations of a solver that stops at a tolerance"),
+    # A node whose deciding value lies within rounding of its threshold (|r_t| = mu r_n between stick and slip;
+    # zero gap and zero force between open and closed; an offset of exactly repair_slip elements) falls on either
+    # side, with the same forces to rounding. More than one such node would move the answers past RTOL.
+    (r"(n_open|n_stick|n_slip|repairs)", 0.0, 1.0, "a state classification: one node at its threshold"),
+    # The size estimate integrates a model of gmsh's node density over a grid and rounds it to whole nodes
+    # (sizes._unstructured_nodes): the same integral on another numpy build differs by rounding, so the nodes by
+    # at most one after rounding, the dofs by dim, and the memory terms that grow with them by ~1/nodes. 3e-3 is
+    # two nodes of the smallest case (931) and ~1 % of the estimate's own accuracy (10 %).
+    (r"size_estimate\.(nodes|dofs|total_bytes|memory\..*)", 3e-3, 0.0, "an estimate rounded to whole nodes"),
+]
+#: Descriptions (``modelled.*``) are prose that quotes counts (``modelled.material``: "170 tangent update(s)" on
+#: one stack, 171 on the other, measured on a fresh machine): compared with their numbers masked; the numbers
+#: that are results are compared in their own keys above.
+PROSE_WITH_COUNTS = r"modelled\..*"
+
+
+def _count_rule(key: str) -> tuple[float, float, str] | None:
+    for pattern, rel, absolute, why in COUNT_RULES:
+        if re.fullmatch(pattern, key):
+            return rel, absolute, why
+    return None
+
 
 _CHILD = r"""
 import json, sys
@@ -151,10 +177,11 @@ def test_same_summary_on_both_stacks(runs, case):
             assert isinstance(x, (int, float)) and isinstance(y, (int, float)), key
             assert math.isclose(x, y, rel_tol=RTOL, abs_tol=1e-300), (key, x, y, abs(x - y) / max(abs(x), abs(y)))
             compared += 1
-        elif (case, key) in PROSE_WITH_COUNTS:
+        elif isinstance(x, str) and re.fullmatch(PROSE_WITH_COUNTS, key):
             assert re.sub(r"\d+", "#", x) == re.sub(r"\d+", "#", y), (key, x, y)
-        elif (case, key) in COUNT_RTOL:
-            assert abs(x - y) <= COUNT_RTOL[case, key] * max(abs(x), abs(y)), (key, x, y)
+        elif isinstance(x, int) and not isinstance(x, bool) and _count_rule(key) is not None:
+            rel, absolute, why = _count_rule(key)
+            assert abs(x - y) <= max(rel * max(abs(x), abs(y)), absolute), (key, x, y, why)
         else:
             assert x == y, (key, x, y)
     assert compared >= 10
