@@ -124,7 +124,7 @@ def local_problems(model: ContactModel) -> list[dict]:
     out = []
 
     def record(name: str, before, result) -> None:
-        q, _ = problem._q(result.obstacle, result.load_factors, before.positions, before.wear_gap)
+        q, _ = problem.operators.q(result.obstacle, result.load_factors, before.positions, before.wear_gap)
         out.append({"name": name, "q": q, "warm": before.forces.copy(), "package_r": result.forces.copy(),
                     "package_error": float(result.error)})
 
@@ -168,7 +168,7 @@ def build_routes(model: ContactModel, routes: list[str], columns_limit: float, r
     this size's factorisation, exceeds ``route_limit`` (s) (``columns``: nc dim solves of the timed one against
     ``columns_limit``), or when the extra factor it holds (``owned``, ``schur``) would not fit in ``room_bytes``.
     """
-    d = model.problem.delassus
+    d = model.problem.operators.delassus
     H = model.problem.contact.H_free
     m = H.shape[0]
     rec: dict = {"build_s": {}, "own_factorize_s": {}, "skipped": {}, "errors": {}, "rel_diff": {},
@@ -182,7 +182,7 @@ def build_routes(model: ContactModel, routes: list[str], columns_limit: float, r
                                      f"--columns-limit {columns_limit:g} s")
             continue
         if route != "columns" and route in previous_ratios:
-            guess = previous_ratios[route] * model.problem.delassus.stats["factorize_time"]
+            guess = previous_ratios[route] * model.problem.operators.delassus.stats["factorize_time"]
             if guess > route_limit:
                 rec["skipped"][route] = (f"estimated {guess:.0f} s ({previous_ratios[route]:.2f} factorisations on "
                                          f"the previous size) > --route-limit {route_limit:g} s")
@@ -393,9 +393,9 @@ def run_size(h: float, args, caps: dict[str, int], previous_ratios: dict[str, fl
     rec["model_s"] = time.perf_counter() - t0
     rec["load_average"] = list(os.getloadavg())
     # The model's own build of W (route auto = selected inverse), without the load responses around it.
-    rec["W_setup_build_s"] = model.problem.delassus.last_build_time
+    rec["W_setup_build_s"] = model.problem.operators.delassus.last_build_time
     cs = model.contact
-    d = model.problem.delassus
+    d = model.problem.operators.delassus
     nc, m = cs.nc, cs.nc * DIM
     rec.update(dofs=model.n_dofs, contacts=nc, m=m, W_dense_mb=8.0 * m * m / 2**20,
                mesh_s=model.timings.get("mesh_s"), assemble_s=model.timings.get("assemble_s"),

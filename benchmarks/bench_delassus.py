@@ -137,7 +137,7 @@ def run_case(case: dict, repeat: int, columns_limit: float, col_rate: float | No
     t0 = time.perf_counter()
     model = ContactModel(scene_for(case), COMM)  # also factorises once and builds W by "auto" (warm-up)
     setup = tmax(time.perf_counter() - t0)
-    d = model.problem.delassus
+    d = model.problem.operators.delassus
     H = model.contact.H
     m = H.shape[0]
     S = np.unique(H.tocsr().indices).size

@@ -114,7 +114,7 @@ def block_columns(d: DelassusOperator, H: sp.csr_matrix, J: np.ndarray) -> np.nd
 
 
 def shared(model: ContactModel, route: str) -> tuple[np.ndarray, dict]:
-    d = DelassusOperator(model.problem.K, COMM, method=route, options_prefix="bench_shared_")
+    d = DelassusOperator(model.problem.operators.K, COMM, method=route, options_prefix="bench_shared_")
     COMM.barrier()
     t0 = time.perf_counter()
     d.factorize()
@@ -132,7 +132,7 @@ def owned(model: ContactModel, route: str) -> tuple[np.ndarray, dict]:
     J = owned_rows(m)
     COMM.barrier()
     t0 = time.perf_counter()
-    Kseq = gather_K(model.problem.K)
+    Kseq = gather_K(model.problem.operators.K)
     t1 = time.perf_counter()
     d = DelassusOperator(Kseq, MPI.COMM_SELF, method="block", options_prefix="bench_owned_")
     d.factorize()
@@ -177,7 +177,7 @@ def run_rebuilds(case: str, repeat: int) -> dict:
     tangent does every iteration), by the package's routes ``selected_inverse`` (shared) and ``owned``
     (each rank refreshes and refactorises its own copy): the time of build() after refactorize()."""
     model = ContactModel(scene_for(case), COMM)
-    d, H = model.problem.delassus, model.contact.H
+    d, H = model.problem.operators.delassus, model.contact.H
     rec = {"case": case, "dofs": model.n_dofs, "contacts": model.contact.nc}
     times: dict[str, list[float]] = {"selected_inverse": [], "owned": []}
     for r in times:  # warm-up: the owned copy is gathered and factorised here

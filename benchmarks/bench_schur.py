@@ -85,7 +85,7 @@ def run_case(case: dict, repeat: int) -> dict:
     from dolfinx_fretting.simulation import ContactModel
 
     model = ContactModel(scene_for(case), MPI.COMM_SELF)
-    d = model.problem.delassus
+    d = model.problem.operators.delassus
     H = model.contact.H
     rec: dict = {"case": case["label"], "dofs": model.n_dofs, "contacts": model.contact.nc, "rows_H": H.shape[0],
                  "dofs_touched": int(np.unique(H.tocsr().indices).size)}
@@ -113,7 +113,7 @@ def run_case(case: dict, repeat: int) -> dict:
     for _ in range(repeat):
         # PETSc skips a refactorisation when K's object state is unchanged: mark it changed (as new values
         # would), so that both the main factor and the Schur route's own factor are recomputed numerically.
-        model.problem.K.stateIncrease()
+        model.problem.operators.K.stateIncrease()
         d.refactorize()
         refact.append(d.last_factorize_time)
         d.build(H, method="selected_inverse")

@@ -74,9 +74,9 @@ from dolfinx_fretting.scenes import load_scene
 from dolfinx_fretting.simulation import ContactModel
 scene = load_scene(sys.argv[1], sys.argv[2:])
 m = ContactModel(scene, MPI.COMM_WORLD)
-F = m.problem.delassus.factor
+F = m.problem.operators.delassus.factor
 print(json.dumps({"dofs": m.problem.n_dofs, "contacts": m.contact.nc, "infog22_MB": F.getMumpsInfog(22),
-                  "nnz": m.problem.K.getInfo()["nz_used"]}))
+                  "nnz": m.problem.operators.K.getInfo()["nz_used"]}))
 m.problem.destroy()
 """
 

@@ -55,7 +55,7 @@ out = {}
 for case in ({"kind": "rectangle", "n": 320, "label": "rect 320"},
              {"kind": "half_cylinder", "h": 0.0025, "label": "hertz h=0.0025"}):
     m = ContactModel(scene_for(case), MPI.COMM_SELF)
-    d, H = m.problem.delassus, m.contact.H
+    d, H = m.problem.operators.delassus, m.contact.H
     f, w = [], []
     for _ in range(3):
         d.factorize(); f.append(d.last_factorize_time)

@@ -67,9 +67,9 @@ else:
 # wear, cycling) stay usable without importing DOLFINx.
 _API = {
     "RigidPlane": "contact", "ElasticBody": "contact", "Contact": "contact",
-    "FrettingProblem": "problem", "ContactState": "problem", "IncrementResult": "problem",
-    "CyclePath": "problem", "CycleResult": "problem", "Archard": "problem", "Displacement": "problem",
-    "Force": "problem", "LocalSolver": "problem", "Plasticity": "problem", "ConvergenceError": "problem",
+    "FrettingProblem": "problem", "ContactState": "state", "IncrementResult": "state",
+    "CycleResult": "state", "ConvergenceError": "state", "CyclePath": "loading", "Displacement": "loading",
+    "Force": "loading", "Archard": "laws", "LocalSolver": "settings", "Plasticity": "settings",
     "J2Plasticity": "materials", "FrettingWriter": "output", "RunDescription": "output", "plot_run": "plots",
 }
 __all__ = sorted(_API)

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from .problem import INCREMENT_COLUMNS
+from .state import INCREMENT_COLUMNS
 
 __all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys", "TableError", "HISTORY_FIELDS",
            "CYCLE_FIELDS", "PROFILE_FIELDS", "PROFILE_FIELDS_3D", "profile_fields", "plot_profiles",

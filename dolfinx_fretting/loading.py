@@ -1,4 +1,4 @@
-"""Load paths and load control.
+"""Load paths and load control of the public problem.
 
 Loads reach the contact through the obstacle's rigid motion ``D`` (a vector in global coordinates):
 moving a rigid plane by ``D`` against a body held on its far face is the same as moving that face by
@@ -10,14 +10,13 @@ makes that component an unknown found so that the total contact force matches th
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Mapping
 
 import numpy as np
 
-from .scenes import LoadingSettings
-
-__all__ = ["LoadStep", "waveform", "preload_path", "monotonic_path", "cycle_path", "find_displacement",
+__all__ = ["Displacement", "Force", "CyclePath", "waveform", "find_displacement", "tangential_item",
            "LoadControlError"]
 
 
@@ -26,24 +25,81 @@ class LoadControlError(RuntimeError):
 
 
 @dataclass(frozen=True)
-class LoadStep:
-    """Targets of one increment along the plane's normal (n) and first tangent (t).
+class Displacement:
+    """A prescribed obstacle displacement component (or per-increment array of them, in a :class:`CyclePath`)."""
 
-    ``normal``/``tangential`` are displacements (mm) where the matching ``*_force_controlled`` flag is
-    false, forces (N/mm in 2D) where it is true; ``pressure`` is the face pressure (MPa).
-    ``cycle`` is 0 in the preload and monotonic stages, 1, 2, ... in the cyclic stage, where ``step`` is
-    the increment's position in its cycle (1 .. increments_per_cycle).
+    value: Any
+
+
+@dataclass(frozen=True)
+class Force:
+    """A prescribed total contact force component on the body (the obstacle position becomes unknown)."""
+
+    value: Any
+
+
+
+@dataclass(frozen=True)
+class CyclePath:
+    """The targets of the increments of one load cycle (``n`` increments).
+
+    ``normal`` and ``tangential`` are :class:`Displacement` or :class:`Force` of arrays: ``normal`` of shape
+    (n,), ``tangential`` (n,) in 2D or (n, 2) in 3D (components along t1, t2; (n,) in 3D: along t1, t2 at 0);
+    in 3D ``tangential`` may also be a pair of items of shape (n,) with their own controls, e.g.
+    ``(Force(Q), Displacement(zeros))`` in a half model. ``loads`` maps load names to (n,) factors. Names and
+    components not given keep the state's values.
     """
 
-    increment: int
-    stage: str
-    normal: float
-    tangential: float
-    normal_force_controlled: bool
-    tangential_force_controlled: bool
-    pressure: float = 0.0
-    cycle: int = 0
-    step: int = 0
+    normal: Displacement | Force | None = None
+    tangential: Displacement | Force | tuple | None = None
+    loads: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def increments(self) -> int:
+        for item in (self.normal, self.tangential):
+            if isinstance(item, tuple):
+                item = item[0]
+            if item is not None:
+                return int(np.shape(item.value)[0])
+        for v in self.loads.values():
+            return int(np.shape(v)[0])
+        raise ValueError("CyclePath: no target given")
+
+    @classmethod
+    def waveform(cls, increments: int, shape: str = "triangular", *, normal: Displacement | Force | float | None = None,
+                 tangential: Displacement | Force | float | None = None,
+                 loads: Mapping[str, float] | None = None) -> CyclePath:
+        """A periodic path: ``normal`` held, ``tangential`` and ``loads`` amplitudes times the waveform
+        (:func:`dolfinx_fretting.loading.waveform`: ``"triangular"`` 0 → A → 0 → −A → 0, or ``"sinusoidal"``)."""
+        wave = waveform(shape, increments)
+
+        def held(item):
+            if item is None:
+                return None
+            kind = type(item) if isinstance(item, (Displacement, Force)) else Displacement
+            value = item.value if isinstance(item, (Displacement, Force)) else item
+            return kind(np.full(increments, float(value)))
+
+        def waved(item):
+            if item is None:
+                return None
+            if isinstance(item, tuple):
+                return tuple(waved(i) for i in item)
+            kind = type(item) if isinstance(item, (Displacement, Force)) else Displacement
+            amp = np.asarray(item.value if isinstance(item, (Displacement, Force)) else item, dtype=float)
+            return kind(np.multiply.outer(wave, amp) if amp.ndim else amp * wave)
+
+        return cls(held(normal), waved(tangential), {k: a * wave for k, a in (loads or {}).items()})
+
+
+
+def tangential_item(values: np.ndarray, forced: np.ndarray):
+    """The ``tangential`` argument of :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` for these values and controls: one
+    Displacement or Force of all components, or one item per component when the controls differ."""
+    if forced.all() or not forced.any():
+        return (Force if forced.all() else Displacement)(values)
+    return tuple((Force if f else Displacement)(float(v)) for v, f in zip(values, forced))
+
 
 
 def waveform(kind: str, n: int) -> np.ndarray:
@@ -62,51 +118,6 @@ def waveform(kind: str, n: int) -> np.ndarray:
         w[np.isclose(t, 0.5) | np.isclose(t, 1.0)] = 0.0  # exact zeros at the half and full cycle
         return w
     raise ValueError(f"loading.waveform = {kind!r}: allowed 'triangular', 'sinusoidal'")
-
-
-def _normal_target(loading: LoadingSettings) -> float:
-    return loading.normal_force if loading.normal_force_controlled else loading.normal_displacement
-
-
-def preload_path(loading: LoadingSettings) -> list[LoadStep]:
-    """The normal preload: a linear ramp of the normal target with no tangential load.
-
-    During the preload the tangential component is held: zero displacement, or zero force when the
-    tangential load is force controlled (the body is free to slide sideways).
-    """
-    n_target = _normal_target(loading)
-    t_fc = loading.tangential_force_controlled
-    ni = loading.normal_increments
-    return [LoadStep(i, "normal", n_target * i / ni, 0.0, loading.normal_force_controlled, t_fc)
-            for i in range(1, ni + 1)]
-
-
-def _tangential_step(loading: LoadingSettings, increment: int, stage: str, value: float, cycle: int = 0,
-                     step: int = 0) -> LoadStep:
-    pressure = value if loading.tangential_kind == "pressure" else 0.0
-    tangential = 0.0 if loading.tangential_kind in ("pressure", "none") else value
-    return LoadStep(increment, stage, _normal_target(loading), tangential, loading.normal_force_controlled,
-                    loading.tangential_force_controlled, pressure, cycle, step)
-
-
-def monotonic_path(loading: LoadingSettings) -> Iterator[LoadStep]:
-    """Preload, then a linear ramp of the tangential load to its value (``cycles = 0``)."""
-    steps = preload_path(loading)
-    yield from steps
-    inc = len(steps)
-    target = loading.tangential_amplitude
-    nt = loading.tangential_increments if target != 0.0 else 0
-    for i in range(1, nt + 1):
-        inc += 1
-        yield _tangential_step(loading, inc, "tangential", target * i / nt)
-
-
-def cycle_path(loading: LoadingSettings, cycle: int) -> list[LoadStep]:
-    """The increments of cycle ``cycle`` (1-based) of a cyclic load, numbered after the preload."""
-    n = loading.increments_per_cycle
-    wave = loading.tangential_amplitude * waveform(loading.waveform, n)
-    first = loading.normal_increments + (cycle - 1) * n
-    return [_tangential_step(loading, first + j + 1, "cycle", float(wave[j]), cycle, j + 1) for j in range(n)]
 
 
 def find_displacement(force: Callable[[float], float], target: float, d0: float, stiffness: float,

@@ -122,7 +122,7 @@ class J2Plasticity:
 
     def update(self, strain: np.ndarray, eps_p: np.ndarray, p: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The constitutive update of :class:`dolfinx_fretting.problem.Plasticity`: the radial return with
+        """The constitutive update of :class:`dolfinx_fretting.settings.Plasticity`: the radial return with
         its consistent tangent (:func:`return_mapping`); returns ``(stress, eps_p, p, tangent, yielded)``."""
         return return_mapping(self, strain, eps_p, p, tangent=True)
 

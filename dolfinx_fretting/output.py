@@ -37,7 +37,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .io import CYCLE_FIELDS, HISTORY_FIELDS, RUN_DESCRIPTION, ResultWriter, profile_fields, write_json_atomic
-from .problem import INCREMENT_COLUMNS
+from .state import INCREMENT_COLUMNS
 
 __all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT", "EXTENSIVE_COLUMNS",
            "contact_measures"]
@@ -114,7 +114,7 @@ class RunDescription:
         Args:
             problem: The :class:`~dolfinx_fretting.problem.FrettingProblem`.
             name: The run's name.
-            path: The :class:`~dolfinx_fretting.problem.CyclePath` of its cycles (sets the increments per cycle
+            path: The :class:`~dolfinx_fretting.loading.CyclePath` of its cycles (sets the increments per cycle
                 and the tangential control), or None.
             cycles: Cycles asked for.
             preload_increments: Increments before the first cycle.
@@ -221,7 +221,7 @@ def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_contro
 
     Args:
         cycle: The cycle's number.
-        records: Per-increment arrays of the cycle: the :data:`~dolfinx_fretting.problem.INCREMENT_COLUMNS` and
+        records: Per-increment arrays of the cycle: the :data:`~dolfinx_fretting.state.INCREMENT_COLUMNS` and
             ``tangential_displacement`` (the obstacle's).
         displacement_controlled: The loop's abscissa is the obstacle's displacement (else the mean relative
             tangential displacement of the loaded contacts).
@@ -360,7 +360,7 @@ class FrettingWriter:
         Args:
             cycle: The cycle's number.
             start: The state the cycle started from.
-            result: The :class:`~dolfinx_fretting.problem.CycleResult` (solved with ``keep=True`` for profiles).
+            result: The :class:`~dolfinx_fretting.state.CycleResult` (solved with ``keep=True`` for profiles).
             history: Write the cycle's increments into ``history.csv``.
             profiles: Write the contact profiles (and, unless ``fields`` is False, the fields).
             fields: Write the fields (default: with the profiles).
@@ -428,7 +428,7 @@ class FrettingWriter:
         """Finite sliding: append the master's worn depth at its nodes (``flat_profiles.csv``, rank 0): there the
         master's wear lives on its own nodes, not on the contacts (with small sliding it is the wear gap's share
         in ``contact_profiles.csv``)."""
-        if self.problem.surface_compliance is None or self.comm.rank != 0:
+        if self.problem.operators.surface_compliance is None or self.comm.rank != 0:
             return
         worn = self.problem.body_wear(state)
         frame = self.problem.contact.frame
@@ -495,7 +495,7 @@ class FrettingWriter:
         else:
             worn = self.problem.body_wear(state)
             flat_x = worn["master_coordinates"] @ self.problem.contact.frame[1]
-            if self.problem.surface_compliance is None:   # the flat's share placed at each contact's paired point
+            if self.problem.operators.surface_compliance is None:   # the flat's share placed at each contact's paired point
                 rows = zip(cs.abscissa, gw, worn["slave"], flat_x, worn["master"])
             else:   # finite sliding: the cylinder's rows, then the flat's nodes (blank where a body has none)
                 blank, blank_flat = np.full(cs.nc, np.nan), np.full(flat_x.size, np.nan)

@@ -304,7 +304,7 @@ class PlasticZone:
 
     def __init__(self, body: ElastoplasticBody):
         self.body = body
-        state, problem = body.state, body.problem
+        state, operators = body.state, body.operators
         self.comm = body.comm
         V = state.V
         bs = V.dofmap.index_map_bs
@@ -316,7 +316,7 @@ class PlasticZone:
         self.cell_gdofs = (bs * gnodes[:, :, None] + comp).reshape(ncells, -1)
         cell_ldofs = (bs * nodes[:, :, None].astype(np.int64) + comp).reshape(ncells, -1)
         # Constrained dofs (value 0, not in X).
-        self.cell_fixed = np.isin(self.cell_gdofs, constrained_global_dofs(V, problem.bcs))
+        self.cell_fixed = np.isin(self.cell_gdofs, constrained_global_dofs(V, operators.bcs))
         self.S = np.unique(body.H.indices).astype(np.int64)  # the contact's dofs
         self.comps = np.asarray(state.comps, dtype=np.int64)
         self.rstart, self.rend = body.rstart, body.rend
@@ -364,9 +364,9 @@ class PlasticZone:
         if X.size > body.max_zone_dofs:
             raise _ZoneTooLarge(f"the plastic zone needs {X.size} dofs, more than max_zone_dofs = "
                                 f"{body.max_zone_dofs}")
-        N = body.problem.K.getSize()[0]
+        N = body.operators.K.getSize()[0]
         EX = sp.csr_matrix((np.ones(X.size), (np.arange(X.size), X)), shape=(X.size, N))
-        self.Z = np.ascontiguousarray(body.problem.delassus.build(EX))  # (K^-1)_XX, replicated
+        self.Z = np.ascontiguousarray(body.operators.delassus.build(EX))  # (K^-1)_XX, replicated
         self.X = X
         self.HX = body.H[:, X].tocsr()
         self.HZ = np.ascontiguousarray((self.HX @ self.Z))
@@ -410,7 +410,7 @@ class PlasticZone:
         for vec, c in self._load_terms:
             if id(vec) not in self._responses:
                 a = vec.duplicate()
-                self.body.problem.delassus.solve(vec, a)
+                self.body.operators.delassus.solve(vec, a)
                 self._responses[id(vec)] = (vec, a.getArray(readonly=True).copy())
                 a.destroy()
             owned += c * self._responses[id(vec)][1]
@@ -514,7 +514,7 @@ class ElastoplasticBody:
     assembled and refactorised (numeric only) and W rebuilt by selected inverse at each tangent.
 
     Args:
-        problem: The elastic problem (space, K, Dirichlet conditions, its factorisation and W).
+        operators: The elastic problem's operators (space, K, Dirichlet conditions, its factorisation).
         law: The J2 material.
         H: Contact operator (replicated, global dofs).
         W: Delassus matrix of the elastic K.
@@ -540,12 +540,13 @@ class ElastoplasticBody:
     #: Layers of neighbour cells added around the yielding cells (:data:`~dolfinx_fretting.plastic_zone.ZONE_MARGIN`).
     zone_margin = ZONE_MARGIN
 
-    def __init__(self, problem, law: J2Plasticity, H, W: np.ndarray, face_load: PETSc.Vec | None,
+    def __init__(self, operators, law: J2Plasticity, H, W: np.ndarray, face_load: PETSc.Vec | None,
                  tangent: str = "elastic", max_iter: int = 50, delta_1: float = 1e-8, delta_2: float = 1e-8,
                  quadrature_degree: int = 2, elastic_cells: np.ndarray | None = None):
         self.MPI = MPI
-        self.problem = problem
-        self.comm = problem.comm
+        #: The problem's :class:`~dolfinx_fretting.operators.ContactOperators` (K, its factorisation, the bcs).
+        self.operators = operators
+        self.comm = operators.comm
         self.H = H.tocsr()
         self.HT = self.H.T.tocsr()
         self.W_elastic = W
@@ -554,13 +555,13 @@ class ElastoplasticBody:
         self.max_iter = max_iter
         self.delta_1 = delta_1
         self.delta_2 = delta_2
-        self.state = PlasticState(problem.V, law, quadrature_degree, elastic_cells)
-        V = problem.V
+        self.state = PlasticState(operators.V, law, quadrature_degree, elastic_cells)
+        V = operators.V
         self.u = fem.Function(V, name="displacement")        # committed
         self._trial = fem.Function(V)
         self._work = (fem.Function(V), fem.Function(V))  # u_pred and the contact correction, reused
-        self._rhs = problem.K.createVecRight()
-        self._z = problem.K.createVecRight()
+        self._rhs = operators.K.createVecRight()
+        self._z = operators.K.createVecRight()
         self._fint = dfx.vector_for_form(self.state.residual_form)
         self.rstart, self.rend = self._rhs.getOwnershipRange()
         self._HS = self.H[:, self.rstart:self.rend].tocsr()
@@ -653,7 +654,7 @@ class ElastoplasticBody:
 
     def _assembled_residual(self, pressure: float) -> PETSc.Vec:
         """R = F_int - s f of the last state update into self._rhs."""
-        self.state.assemble_residual(self._fint, self.problem.bcs)
+        self.state.assemble_residual(self._fint, self.operators.bcs)
         n = self.rend - self.rstart
         self._rhs.getArray()[:] = self._fint.getArray(readonly=True)[:n]
         if self.face_load is not None and pressure != 0.0:
@@ -676,20 +677,20 @@ class ElastoplasticBody:
     def _operator(self, refresh: bool):
         """(factorised operator, W) of the iteration matrix; ``refresh``: refactorise the current tangent."""
         if self.tangent == "elastic" or ((self._KT is None or self._W_tangent is None) and not refresh):
-            return self.problem.delassus, self.W_elastic
+            return self.operators.delassus, self.W_elastic
         if self.tangent == "consistent" and not refresh:
-            return self.problem.delassus, self.W_elastic
+            return self.operators.delassus, self.W_elastic
         if not refresh:
             return self._tangent_op, self._W_tangent
         from .compliance import DelassusOperator
 
         if self._KT is None:
-            self._KT = self.state.create_tangent(self.problem.bcs)
+            self._KT = self.state.create_tangent(self.operators.bcs)
             self._tangent_op = DelassusOperator(self._KT, self.comm, method="auto",
                                                 options_prefix="dolfinx_fretting_tangent_")
             self._tangent_op.factorize()
         else:
-            self.state.assemble_tangent(self._KT, self.problem.bcs)
+            self.state.assemble_tangent(self._KT, self.operators.bcs)
             self._tangent_op.refactorize()
         W = self._tangent_op.build(self.H)
         self._W_tangent = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
@@ -737,7 +738,7 @@ class ElastoplasticBody:
         for it in range(self.max_iter):
             op, W = self._operator(refresh)
             if it == 0:
-                first_is_K = op is self.problem.delassus
+                first_is_K = op is self.operators.delassus
             # u_pred = u_i - K^-1 R
             z = self._work[0]
             self._solve_into(op, R, z)
@@ -746,7 +747,7 @@ class ElastoplasticBody:
             solved = local_solve(self._H_dot(u_pred), W)
             # u_new = u_pred + K^-1 H^T r
             self._z.getArray()[:] = self._contact_force(solved.forces)
-            dfx.set_bc(self._z, self.problem.bcs, scale=0.0)
+            dfx.set_bc(self._z, self.operators.bcs, scale=0.0)
             c = self._work[1]
             self._solve_into(op, self._z, c)
             u_new = c
@@ -816,7 +817,7 @@ class ElastoplasticBody:
         arr[z.own_local] += c[z.own]
         if self.face_load is not None and s != 0.0:
             b.axpy(s, self.face_load)
-        dfx.set_bc(b, self.problem.bcs, scale=0.0)
+        dfx.set_bc(b, self.operators.bcs, scale=0.0)
         self._solve_into(self._whole_body_solver(), b, out)
 
     def _whole_body_solver(self):
@@ -825,10 +826,10 @@ class ElastoplasticBody:
         a third of a MUMPS solve on these meshes (no per-call set-up; measured 0.7 vs 1.8 ms at 9918 dofs),
         and K never changes. Under MPI the problem's (distributed MUMPS) factor."""
         if self.comm.size > 1:
-            return self.problem.delassus
+            return self.operators.delassus
         if self._serial_ksp is None:
             ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-            ksp.setOperators(self.problem.K)
+            ksp.setOperators(self.operators.K)
             ksp.setType("preonly")
             pc = ksp.getPC()
             pc.setType("cholesky")

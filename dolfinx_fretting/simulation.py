@@ -36,7 +36,7 @@ from .contact import Contact
 from .cycle_jump import PlasticCycle
 from .io import non_finite_keys
 from .output import FrettingWriter, RunDescription, contact_measures
-from .loading import LoadStep, cycle_path, monotonic_path, preload_path
+from .scene_paths import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
                       Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity)
 from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
@@ -124,7 +124,7 @@ class ContactModel:
                                        petsc_options=sv.petsc_options, delassus_method=sv.delassus_method,
                                        solver=solver, plasticity=plasticity,
                                        options_prefix="dolfinx_fretting_delassus_")
-        self.timings = {**s.timings, **self.problem.timings}
+        self.timings = {**s.timings, **self.problem.operators.timings}
 
     # What tests and benchmarks read -----------------------------------------------------------------
     @property
@@ -138,7 +138,7 @@ class ContactModel:
 
     @property
     def W(self) -> np.ndarray:
-        return self.problem.W
+        return self.problem.operators.W
 
     @property
     def plastic(self):
@@ -152,7 +152,7 @@ class ContactModel:
     @property
     def window_can_grow(self) -> bool:
         s = self.setup
-        return (self.problem.body is None and self.problem.surface_compliance is None and s.window_limit is not None
+        return (self.problem.body is None and self.problem.operators.surface_compliance is None and s.window_limit is not None
                 and self.half_width is not None and self.half_width < s.window_limit)
 
     def grow_window(self, state: ContactState) -> ContactState:
@@ -296,7 +296,7 @@ class _Run:
         self.resumed_from_cycle = self.progress.cycle if meta is not None else None
         self.last_checkpoint = time.perf_counter()
         self.say(f"[{scene.name}] {self.problem.n_dofs} dofs, {self.model.contact.nc} contact candidates, "
-                 f"W by {self.problem.delassus.method} in {self.model.timings['delassus_s']:.3f} s"
+                 f"W by {self.problem.operators.delassus.method} in {self.model.timings['delassus_s']:.3f} s"
                  + (f"; resumed after increment {self.state.increment} (cycle {self.progress.cycle})"
                     if meta is not None else ""))
 
@@ -616,7 +616,7 @@ class _Run:
         sc, cs, js = self.scene, self.model.contact, self.progress.jump
         w = sc.wear
         h_e = self.model.setup.element_size
-        k = self.problem._k(True)
+        k = self.problem.wear_coefficient(True)
         out_r, out_x, _, _, out_status = result.kept
         plastic_limit, settling = self._plastic_bounds(plastic)  # collective: before rank 0 decides
         if regrown:  # (the window grows only for elastic bodies: plastic is None here)
@@ -634,7 +634,7 @@ class _Run:
                          "error_total": js["error"]}
         decided = None
         if self.rank0:
-            a = analyse_cycle(self.problem.W, cs.dim, cs.tributary, out_status, out_x, out_r, start.wear_gap,
+            a = analyse_cycle(self.problem.operators.W, cs.dim, cs.tributary, out_status, out_x, out_r, start.wear_gap,
                               new.wear_gap, sc.loading.normal_force_controlled)
             err = jump_error(js["rate"], a.rate, js["last"]) if js["rate"] is not None else 0.0
             dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction, w.jump_pressure_change, w.jump_max,
@@ -682,13 +682,13 @@ class _Run:
         problem = self.problem
         summary: dict[str, Any] = {
             "scene": sc.name, "dofs": problem.n_dofs, "contacts": model.contact.nc,
-            "delassus_method": problem.delassus.method, **{k: round(v, 6) for k, v in model.timings.items()},
+            "delassus_method": problem.operators.delassus.method, **{k: round(v, 6) for k, v in model.timings.items()},
             "increments": st.increment, "cycles": pr.cycle, "converged": error is None,
             "resumed_from_cycle": self.resumed_from_cycle,
             "cycles_this_run": pr.cycle - (self.resumed_from_cycle or 0),
             "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
             "wear_law": sc.wear.law, "wear_k": sc.wear.k_total, "wear_acceleration": sc.wear.acceleration,
-            "wear_k_effective": problem._k(True), "equivalent_cycles": pr.cycle * sc.wear.acceleration,
+            "wear_k_effective": problem.wear_coefficient(True), "equivalent_cycles": pr.cycle * sc.wear.acceleration,
             "dissipated_energy": st.dissipated_energy / model.setup.model_fraction, "material_model": sc.material.model,
             "obstacle": "rigid plane (the flat is rigid)" if sc.contact.obstacle == "rigid_plane"
             else f"elastic flat (two deformable bodies of the same material, {sc.contact.sliding}-sliding pairing)",
@@ -701,10 +701,10 @@ class _Run:
                             "max_wear_depth_master": float(worn["master"].max(initial=0.0)),
                             "max_relative_tangential": pr.max_relative_tangential,
                             "small_sliding_warning": pr.sliding_warned, "sliding": sc.contact.sliding})
-            if problem.surface_compliance is not None:
+            if problem.operators.surface_compliance is not None:
                 loaded = worn["master"] > 0
                 along = worn["master_coordinates"][loaded] @ problem.contact.frame[1]
-                summary.update({"repairs": problem.repairs,
+                summary.update({"repairs": problem.sliding.repairs,
                                 "master_scar_width": float(np.ptp(along)) if along.size else 0.0})
         if problem.body is not None:
             ps = problem.plastic_state(st)
@@ -720,7 +720,7 @@ class _Run:
             summary["cycle_path"] = getattr(self, "cycle_mode", "python")
             if sc.wear.cycle_jump:
                 summary["cycle_jump"] = self._jump_summary()
-            counts = problem.pattern_counts
+            counts = problem.operators.pattern_counts
             if counts is not None and self.rank0:
                 summary["pattern_solves"] = {"accepted": int(counts[0]), "rejected": int(counts[1]),
                                              "factorizations": int(counts[2])}
@@ -764,7 +764,7 @@ class _Run:
             out["plastic_error_estimate"] = js["plastic_error"] + js["plastic_error_pending"]
             out["bounds"]["plastic_fraction"] = sc.wear.jump_plastic_fraction
             out["shakedown_strain"] = sc.material.shakedown_strain
-        k = self.problem._k(True)
+        k = self.problem.wear_coefficient(True)
         if self.model.setup.hertz is not None and sc.loading.tangential_kind == "displacement" and k > 0:
             _, E_star, _ = self.model.setup.hertz
             out["hertz_estimate_0.37h/(k delta E*)"] = hertz_jump_limit(

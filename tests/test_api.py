@@ -113,8 +113,8 @@ def test_constrained_dofs_are_excluded_and_W_is_the_free_compliance():
     assert np.abs(W_ref[held]).max() == 0.0  # the held row touches fixed dofs only
     W_ref[held, held] = W_ref[held - 1, held - 1]
     # Two direct solves of the same SPD system agree to ~1e-12 of the largest entry.
-    assert np.abs(problem.W - W_ref).max() <= 1e-9 * np.abs(W_ref).max()
-    assert np.diag(problem.W).max() < 1e-3  # physical compliances, not K's unit identity rows
+    assert np.abs(problem.operators.W - W_ref).max() <= 1e-9 * np.abs(W_ref).max()
+    assert np.diag(problem.operators.W).max() < 1e-3  # physical compliances, not K's unit identity rows
     state = problem.commit(problem.initial_state(), problem.solve(problem.initial_state(), normal=2e-4))
     assert state.forces[2 * corner] > 0 and state.forces[held] == 0.0
     with pytest.raises(ValueError, match="tangential t1 = a motion"):

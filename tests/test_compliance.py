@@ -41,12 +41,12 @@ def _scipy_K(K) -> sp.csr_matrix:
 @serial_only
 def test_routes_match_independent_solve(model):
     H = model.contact.H
-    Kd = _scipy_K(model.problem.K).tocsc()
+    Kd = _scipy_K(model.problem.operators.K).tocsc()
     Y = spla.splu(Kd).solve(H.T.toarray())
     W_ref = H @ Y
     scale = np.abs(W_ref).max()
     for route in ("columns", "block", "selected_inverse", "owned", "schur"):
-        W = model.problem.delassus.build(H, method=route)
+        W = model.problem.operators.delassus.build(H, method=route)
         # Two direct solvers on a K with condition number ~1e5-1e7: agreement to ~1e-10 of max|W|.
         assert np.abs(W - W_ref).max() <= 1e-9 * scale, route
     # The model's W (route "auto") is the same matrix.
@@ -57,7 +57,7 @@ def test_W_symmetric_positive_definite(model):
     W = model.W
     # build() symmetrises; the raw asymmetry of the route is recorded and must be at rounding level.
     assert np.array_equal(W, W.T)
-    assert model.problem.delassus.stats["asymmetry"] < 1e-10
+    assert model.problem.operators.delassus.stats["asymmetry"] < 1e-10
     eig = np.linalg.eigvalsh(W)
     assert eig.min() > 0, eig.min()
     # Finite conditioning (compliances of distinct nodes): well away from numerical singularity.
@@ -90,8 +90,8 @@ def test_constrained_dofs_are_rejected():
 
 def test_bad_method_and_missing_factor(model):
     with pytest.raises(ValueError, match="unknown Delassus method 'lu'"):
-        DelassusOperator(model.problem.K, method="lu")
-    op = DelassusOperator(model.problem.K)
+        DelassusOperator(model.problem.operators.K, method="lu")
+    op = DelassusOperator(model.problem.operators.K)
     with pytest.raises(RuntimeError, match="not factorised"):
         op.build(model.contact.H)
 
@@ -99,14 +99,14 @@ def test_bad_method_and_missing_factor(model):
 def test_refactorize_follows_new_values(model):
     """After K's values change (same pattern), refactorize() makes solves use the new K: x(2K) = x(K)/2."""
     p = model.problem
-    op = DelassusOperator(p.K, method="columns")
+    op = DelassusOperator(p.operators.K, method="columns")
     op.factorize()
-    b, x1 = p.K.createVecs()
+    b, x1 = p.operators.K.createVecs()
     x2 = b.duplicate()
     b.setRandom()
-    fem_bc_dofs = np.flatnonzero(np.isclose(p.K.getDiagonal().getArray(), 1.0))
+    fem_bc_dofs = np.flatnonzero(np.isclose(p.operators.K.getDiagonal().getArray(), 1.0))
     op.solve(b, x1)
-    p.K.scale(2.0)
+    p.operators.K.scale(2.0)
     try:
         op.refactorize()
         op.solve(b, x2)
@@ -115,7 +115,7 @@ def test_refactorize_follows_new_values(model):
         assert np.allclose(x2.getArray()[free], 0.5 * x1.getArray()[free], rtol=1e-10, atol=1e-14)
         assert op.stats["refactorizations"] == 1
     finally:
-        p.K.scale(0.5)
+        p.operators.K.scale(0.5)
         op.destroy()
         for v in (b, x1, x2):
             v.destroy()
@@ -127,7 +127,7 @@ def test_schur_route_reuses_its_factor_and_follows_refactorize(model):
     values change: W(2K) = W(K)/2 to rounding (exact arithmetic; the factor is refactorised, not rebuilt)."""
     p = model.problem
     H = model.contact.H
-    op = DelassusOperator(p.K, method="schur")
+    op = DelassusOperator(p.operators.K, method="schur")
     op.factorize()
     try:
         W1 = op.build(H)
@@ -135,12 +135,12 @@ def test_schur_route_reuses_its_factor_and_follows_refactorize(model):
         assert np.abs(op.build(H) - W1).max() == 0.0 and op._schur is own  # reused, not refactorised
         assert own.stats["factorizations"] == 1 and own.stats["refactorizations"] == 0
         assert op.stats["schur_size"] == np.unique(H.indices).size
-        p.K.scale(2.0)
+        p.operators.K.scale(2.0)
         op.refactorize()
         W2 = op.build(H)
         assert op._schur is own and own.stats["refactorizations"] == 1
         # Two factorisations of the same K up to a factor 2: agreement to rounding of max|W|.
         assert np.abs(W2 - 0.5 * W1).max() <= 1e-12 * np.abs(W1).max()
     finally:
-        p.K.scale(0.5)
+        p.operators.K.scale(0.5)
         op.destroy()

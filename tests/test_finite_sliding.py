@@ -127,16 +127,17 @@ def test_repaired_delassus_is_the_factorised_one(cylinder_on_flat):
     state = _pressed(problem)
     for d in np.linspace(0.0, 0.07, 8)[1:]:
         state = problem.commit(state, problem.solve(state, tangential=d))
-    assert problem.repairs > 0
-    assert not np.array_equal(state.pairing.master_faces, problem._reference_pairing.master_faces)
-    problem._activate(state)
+    assert problem.sliding.repairs > 0
+    assert not np.array_equal(state.pairing.master_faces, problem.operators.reference_pairing.master_faces)
+    problem.operators.activate(state)
     direct = _problem(cylinder_on_flat, "small")
-    direct.contact = direct.contact.with_pairing(state.pairing)
-    direct._build_contact_operators()
-    assert np.abs(problem.W - direct.W).max() <= 1e-9 * np.abs(direct.W).max()
-    assert problem.responses.shape == direct.responses.shape   # the scene's loads (none besides the obstacle)
-    if direct.responses.size:
-        assert np.abs(problem.responses - direct.responses).max() <= 1e-9 * np.abs(direct.responses).max()
+    direct.operators.contact = direct.contact.with_pairing(state.pairing)
+    direct.operators.build()
+    assert np.abs(problem.operators.W - direct.operators.W).max() <= 1e-9 * np.abs(direct.operators.W).max()
+    responses, direct_responses = problem.operators.responses, direct.operators.responses
+    assert responses.shape == direct_responses.shape   # the scene's loads (none besides the obstacle)
+    if direct_responses.size:
+        assert np.abs(responses - direct_responses).max() <= 1e-9 * np.abs(direct_responses).max()
 
 
 def test_a_cylinder_sliding_over_the_flat_keeps_its_hertz_pressure(cylinder_on_flat):
@@ -165,7 +166,7 @@ def test_a_cylinder_sliding_over_the_flat_keeps_its_hertz_pressure(cylinder_on_f
             hertz = p0 * np.sqrt(1 - (x[inside] / a) ** 2)
             assert np.abs(fields["pressure"][inside] - hertz).max() <= 0.02 * p0
         # The flat's surface: the nodes of the master facets, displaced by the elastic field (no rigid motion).
-        surface = problem._reference_pairing.master_surface
+        surface = problem.operators.reference_pairing.master_surface
         nodes, first = np.unique(surface.nodes.ravel(), return_index=True)
         x = surface.x.reshape(-1, 2)[first]
         u = problem.displacement(state)
@@ -209,7 +210,7 @@ def test_both_bodies_wear_the_dissipated_energy_and_the_flat_scar_spans_the_stro
         cs = problem.contact.contact_set
         slave_volume = (worn["slave"] * cs.tributary).sum()
         if model == "finite":
-            master_volume = (state.master_wear * problem.surface_compliance.master_areas).sum()
+            master_volume = (state.master_wear * problem.operators.surface_compliance.master_areas).sum()
         else:
             master_volume = (worn["master"] * cs.tributary).sum()
         assert slave_volume / master_volume == pytest.approx(k_slave / k_master, rel=1e-10)
@@ -308,14 +309,14 @@ def test_a_sphere_sliding_over_the_flat_in_3d():
         assert F[0] == pytest.approx(P_ball / 2, rel=1e-8)
         assert F[1] == pytest.approx(MU * P_ball / 2, rel=1e-5) and abs(F[2]) <= 1e-3 * MU * P_ball / 2
         if model == "finite":
-            assert problem.repairs > 0
+            assert problem.sliding.repairs > 0
             assert problem.contact_fields(state)["pressure"].max() == pytest.approx(peak, rel=0.03)
             direct = sphere_model(3, 3.0, 1.4, flat=True, mu=MU)[1]
-            direct.contact = direct.contact.with_pairing(state.pairing)
-            direct._build_contact_operators()
-            problem._activate(state)
-            assert np.abs(problem.W - direct.W).max() <= 1e-9 * np.abs(direct.W).max()
-        surface = problem._reference_pairing.master_surface
+            direct.operators.contact = direct.contact.with_pairing(state.pairing)
+            direct.operators.build()
+            problem.operators.activate(state)
+            assert np.abs(problem.operators.W - direct.operators.W).max() <= 1e-9 * np.abs(direct.operators.W).max()
+        surface = problem.operators.reference_pairing.master_surface
         nodes, first = np.unique(surface.nodes.ravel(), return_index=True)
         nodes, first = nodes[nodes >= 0], first[nodes >= 0]
         x = surface.x.reshape(-1, 3)[first]

@@ -119,7 +119,7 @@ def test_delassus_routes_agree_in_parallel():
 
     model = ContactModel(load_scene("hertz", ["geometry.contact_mesh_size=0.04", "output.xdmf=false",
                                               "output.plots=false"]), COMM)
-    d, H = model.problem.delassus, model.contact.H
+    d, H = model.problem.operators.delassus, model.contact.H
     assert d.method == "owned"  # the default under MPI (benchmarks/results/delassus_owned_np2.md)
     W = {r: d.build(H, method=r) for r in ("block", "selected_inverse", "owned")}
     scale = np.abs(W["block"]).max()
@@ -129,10 +129,10 @@ def test_delassus_routes_agree_in_parallel():
         gathered = COMM.allgather(W[r])  # every rank holds the same W, bit for bit
         assert all(np.array_equal(g, gathered[0]) for g in gathered), r
     # K's values change (K -> 2K) and are refactorised: the owned copy follows (W -> W/2).
-    model.problem.K.scale(2.0)
+    model.problem.operators.K.scale(2.0)
     d.refactorize()
     W2 = d.build(H)
-    model.problem.K.scale(0.5)
+    model.problem.operators.K.scale(0.5)
     d.refactorize()
     assert np.abs(W2 - 0.5 * W["owned"]).max() <= 1e-10 * scale
     model.problem.destroy()
@@ -189,7 +189,7 @@ def _sphere_history(comm):
         state, dfr.CyclePath.waveform(8, normal=state.obstacle[0], tangential=[0.01, 0.0])))
     out = {"coordinates": problem.contact.contact_set.coords, "forces": state.forces, "positions": state.positions,
            "wear": state.wear_gap, "obstacle": state.obstacle, "energy": np.array([state.dissipated_energy]),
-           "W": problem.W}
+           "W": problem.operators.W}
     problem.destroy()
     return out
 

@@ -44,7 +44,7 @@ def test_symmetry_plane_contacts_have_no_force_across_it():
     on_plane = np.flatnonzero(np.abs(cs.coords[:, 1]) <= 1e-12)
     held = problem.contact.held_rows
     assert on_plane.size > 0 and held.tolist() == (3 * on_plane + 2).tolist()
-    W = problem.W
+    W = problem.operators.W
     off = W[held].copy()
     off[np.arange(held.size), held] = 0.0
     assert np.abs(off).max() == 0.0 and np.all(W[held, held] == W[held - 2, held - 2])

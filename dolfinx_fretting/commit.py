@@ -1,0 +1,149 @@
+"""Committing a converged increment: Archard's law, the master's share of the wear, the totals of the record,
+and under finite sliding the re-pairing of the slave nodes once the bodies have slid.
+
+:class:`SlidingMonitor` holds what a run learns about sliding as it goes (re-pairings counted, warnings given
+once); everything else is in the states.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from . import sliding
+from .laws import Archard
+from .operators import ContactOperators
+from .readers import worn_measure
+from .state import ContactState, CycleResult, IncrementResult, solver_columns
+from .wear import ROW, ROW_FIELDS, commit_increment
+
+__all__ = ["SlidingMonitor", "commit", "relative_slip_ratio", "wear_coefficient"]
+
+
+@dataclass
+class SlidingMonitor:
+    """What a run learns about sliding as it goes.
+
+    Attributes:
+        warn: Warn (once each, rank 0) when two bodies slide past half a master element, or finite sliding
+            re-pairs after a long stride or past its reach; False when the caller reports it itself.
+        repairs: Finite sliding: how many times the slave nodes were paired anew.
+    """
+
+    warn: bool = True
+    repairs: int = 0
+    sliding_warned: bool = False
+    stride_warned: bool = False
+    reach_warned: bool = False
+
+
+def wear_coefficient(wear: Archard | None, in_cycle: bool) -> float:
+    """The wear gap's coefficient of an increment (0 without a wear law)."""
+    return 0.0 if wear is None else wear.coefficient(in_cycle)
+
+
+def commit(operators: ContactOperators, wear: Archard | None, monitor: SlidingMonitor, state: ContactState,
+           result: IncrementResult | CycleResult) -> ContactState:
+    """The new state after a converged increment or cycle: Archard's law (increments), the plastic history,
+    the totals of :attr:`~dolfinx_fretting.state.ContactState.record`. ``state`` itself is not changed. Collective only in name
+    (no communication: every rank holds the same contact data)."""
+    if isinstance(result, CycleResult):
+        check_sliding(operators, monitor, result.final)
+        return result.final
+    operators.activate(state)
+    cs = operators.contact.contact_set
+    states = np.empty(cs.nc, dtype=np.int8)
+    row = np.empty(len(ROW_FIELDS))
+    gw = state.wear_gap.copy()
+    commit_increment(result.forces, result.slip, result.positions, operators.contact.mu, cs.dim, cs.tributary,
+                     cs.abscissa, wear_coefficient(wear, result.in_cycle), gw, states, row)
+    master_wear = state.master_wear
+    if operators.surface_compliance is not None and wear is not None:
+        # The master's share of the wear stays on the master's nodes (it follows its material points).
+        master_share = (1.0 - wear.slave_share) * (gw - state.wear_gap)
+        added = sliding.spread_wear(cs, operators.surface_compliance, master_share)
+        master_wear = state.master_wear + added
+        gw = gw - master_share + sliding.interpolate_master(cs, operators.surface_compliance, added)
+        # the worn area of both bodies: the flat's wear left behind by the slide is no longer under a contact
+        row[ROW["wear_area"]] = worn_measure(operators, replace(state, wear_gap=gw, master_wear=master_wear))
+    record = {**dict(zip(ROW_FIELDS, row.tolist())), **solver_columns(result)}
+    new = replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=gw,
+                  obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
+                  dissipated_energy=state.dissipated_energy + row[ROW["dissipated_energy"]],
+                  local_iterations=state.local_iterations + result.iterations, record=record, status=states,
+                  targets=result.targets, force_controlled=result.force_controlled,
+                  plastic=result.plastic if result.plastic is not None else state.plastic, master_wear=master_wear)
+    if operators.surface_compliance is not None:
+        return _repair(operators, monitor, new)
+    check_sliding(operators, monitor, new)
+    return new
+
+
+def _surface_state(operators: ContactOperators, state: ContactState) -> tuple[np.ndarray, np.ndarray]:
+    """Finite sliding: (the surface nodes' displacement, the master's translation D) of ``state``."""
+    u = operators.surface_compliance.displacement(state.pairing, state.forces, state.load_factors)
+    return u, operators.obstacle_translation(state.obstacle)
+
+def _repair(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState) -> ContactState:
+    """Finite sliding: pair the slave nodes anew once a paired point has moved more than
+    ``ElasticBody.repair_slip`` master elements from its slave node, and carry ``state`` into the new
+    pairing (:func:`~dolfinx_fretting.sliding.carry_state`). Not collective (replicated data)."""
+    cs = state.pairing
+    u, D = _surface_state(operators, state)
+    moved = sliding.offsets(cs, operators.surface_compliance, u, D).max(initial=0.0)
+    if moved <= operators.contact.obstacle.repair_slip:
+        return state
+    if moved > 1.0 and monitor.warn and not monitor.stride_warned:
+        monitor.stride_warned = True
+        if operators.comm.rank == 0:
+            warnings.warn(f"finite sliding: an increment moved a paired point {moved:.3g} master elements (more than "
+                          "one): it was solved on a pairing that no longer faced its nodes; take smaller "
+                          "increments", RuntimeWarning, stacklevel=4)
+    new = sliding.repair(cs, operators.surface_compliance, u, D)
+    if np.array_equal(new.master_faces, cs.master_faces) and np.allclose(new.master_weights, cs.master_weights,
+                                                                         rtol=0.0, atol=1e-12):
+        return state   # e.g. a node facing past the master's end: its closest point does not move
+    carried = sliding.carry_state(cs, new, operators.surface_compliance, u, D, state.forces, state.slip,
+                                  state.wear_gap, state.master_wear)
+    monitor.repairs += 1
+    loaded = state.forces[0::cs.dim] > 0
+    beyond = sliding.offsets(new, operators.surface_compliance, u, D)[loaded]
+    if beyond.size and beyond.max() > operators.contact.obstacle.repair_slip and monitor.warn \
+            and not monitor.reach_warned:
+        monitor.reach_warned = True
+        if operators.comm.rank == 0:
+            warnings.warn(f"finite sliding: a loaded contact is {beyond.max():.3g} master elements from the "
+                          "closest master point within reach: it has slid beyond ElasticBody.reach (or off the "
+                          "master surface)", RuntimeWarning, stacklevel=4)
+    return replace(state, pairing=new, **carried)
+
+
+def relative_slip_ratio(operators: ContactOperators, state: ContactState) -> float:
+    """Two deformable bodies: the largest accumulated relative tangential displacement of a contact over its
+    master facet's size (:attr:`~dolfinx_fretting.contact.ContactSet.master_sizes`); 0 against a rigid
+    plane. The pairing is fixed (small sliding): past 0.5 the master point of a node is no longer the one
+    facing it."""
+    cs = operators.contact.contact_set
+    if cs.master_sizes is None:
+        return 0.0
+    if operators.surface_compliance is not None:  # how far the paired points have moved since the pairing
+        offsets = sliding.offsets(state.pairing, operators.surface_compliance, *_surface_state(operators, state))
+        return float(offsets.max(initial=0.0))
+    y_t = state.positions.reshape(cs.nc, cs.dim)[:, 1:]
+    return float((np.linalg.norm(y_t, axis=1) / cs.master_sizes).max(initial=0.0))
+
+def check_sliding(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState) -> None:
+    """Warn once (RuntimeWarning, rank 0) when the relative slip of two bodies exceeds half a master facet,
+    unless ``monitor.warn`` is False (a driver that reports it itself)."""
+    if not monitor.warn or monitor.sliding_warned or operators.surface_compliance is not None:
+        return
+    ratio = relative_slip_ratio(operators, state)
+    if ratio > 0.5:
+        monitor.sliding_warned = True
+        if operators.comm.rank == 0:
+            warnings.warn(
+                f"relative slip of {ratio:.3g} master elements exceeds half an element: the contact pairs are fixed "
+                "in the reference configuration (small sliding), so the master's displacement is taken up to "
+                f"{ratio:.2g} elements away from the point facing each slave node", RuntimeWarning, stacklevel=4)

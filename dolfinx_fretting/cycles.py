@@ -1,0 +1,155 @@
+"""One load cycle of the public problem: its path as per-increment targets, then either the compiled loop
+(:mod:`dolfinx_fretting.cycling`: elastic bodies, displacement and load control, Uzawa) or increment by
+increment through :func:`~dolfinx_fretting.increments.advance`. Either way a failure raises before anything is
+committed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any, Callable
+
+import numpy as np
+
+from . import local_solvers
+from .cycling import N_ROW, run_increments
+from .increments import on_rank0
+from .loading import CyclePath, Displacement, Force, tangential_item
+from .operators import ContactOperators
+from .settings import LocalSolver
+from .state import INCREMENT_COLUMNS, ContactState, ConvergenceError, CycleResult
+from .wear import ROW, ROW_FIELDS
+
+__all__ = ["cycle_targets", "stepwise_cycle", "compiled_cycle"]
+
+
+def cycle_targets(operators: ContactOperators, state: ContactState, path: CyclePath
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(obstacle targets (n, dim), which components are forces (dim,), load factors (n, L)) of ``path`` from
+    ``state``: components and loads the path does not give keep the state's values; bad shapes and unknown
+    names are refused."""
+    n = path.increments
+    dim = operators.dim
+    # Components the path does not give keep the state's prescribed values (displacements or forces).
+    held = state.targets if state.targets is not None else state.obstacle
+    obstacle = np.tile(held.astype(float), (n, 1))
+    forced = (state.force_controlled.copy() if state.force_controlled is not None
+              else np.zeros(dim, dtype=bool))
+    for item, comps in ((path.normal, [0]), (path.tangential, list(range(1, dim)))):
+        if item is None:
+            continue
+        if isinstance(item, tuple):  # one item per component
+            if len(item) != len(comps) or not all(isinstance(i, (Displacement, Force)) for i in item):
+                raise ValueError(f"CyclePath: expected {len(comps)} Displacement or Force items per component")
+            parts = [(np.asarray(i.value, dtype=float), isinstance(i, Force)) for i in item]
+            if any(v.shape != (n,) or not np.all(np.isfinite(v)) for v, _ in parts):
+                raise ValueError(f"CyclePath: expected {n} finite values per component")
+            for c, (v, f) in zip(comps, parts):
+                obstacle[:, c] = v
+                forced[c] = f
+            continue
+        values = np.asarray(item.value, dtype=float).reshape(n, -1)
+        if values.shape[1] == 1 and len(comps) > 1:
+            values = np.column_stack([values, np.zeros((n, len(comps) - 1))])
+        if values.shape[1] != len(comps) or not np.all(np.isfinite(values)):
+            raise ValueError(f"CyclePath: expected finite values with {len(comps)} component(s) per increment")
+        obstacle[:, comps] = values
+        forced[comps] = isinstance(item, Force)
+    factors = np.tile(state.load_factors, (n, 1))
+    for name, values in path.loads.items():
+        if name not in operators.load_names or name == "dirichlet values":
+            raise KeyError(f"unknown load {name!r}; this problem's loads: {', '.join(operators.load_names) or 'none'}")
+        values = np.asarray(values, dtype=float)
+        if values.shape != (n,) or not np.all(np.isfinite(values)):
+            raise ValueError(f"CyclePath.loads[{name!r}]: expected {n} finite factors")
+        factors[:, operators.load_names.index(name)] = values
+    return obstacle, forced, factors
+
+
+def stepwise_cycle(operators: ContactOperators, advance: Callable[..., tuple[ContactState, dict[str, Any]]],
+                   state: ContactState, obstacle: np.ndarray, forced: np.ndarray, factors: np.ndarray, keep: bool,
+                   check: Callable[[ContactState], None] | None) -> CycleResult:
+    """The cycle increment by increment, each through ``advance`` (the problem's, with its cut-backs)."""
+    n = obstacle.shape[0]
+    rows, kept, pairings = [], [], []
+    current = state
+    names = [nm for nm in operators.load_names if nm != "dirichlet values"]
+    obstacle = obstacle.copy()
+    for j in range(n):
+        normal = (Force if forced[0] else Displacement)(obstacle[j, 0])
+        tangential = tangential_item(obstacle[j, 1:], forced[1:])
+        loads = {nm: factors[j, operators.load_names.index(nm)] for nm in names}
+        try:
+            current, info = advance(current, normal, tangential, loads, in_cycle=True, check=check)
+        except ConvergenceError as exc:
+            raise ConvergenceError(str(exc), step=j + 1) from None
+        rows.append(current.record)
+        obstacle[j] = current.obstacle
+        if keep:
+            kept.append((current.forces, current.slip, current.positions, current.wear_gap, current.status))
+            pairings.append(current.pairing)
+    records = {k: np.array([r[k] for r in rows]) for k in INCREMENT_COLUMNS}
+    records["full_newton_fallbacks"] = np.array([r["full_newton_fallbacks"] for r in rows])
+    kept_arrays = tuple(np.array([k[i] for k in kept]) for i in range(5)) if keep else None
+    return CycleResult(records, obstacle, factors, current, kept_arrays, False,
+                       tuple(pairings) if keep and current.pairing is not None else None)
+
+
+def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coefficient: float, state: ContactState,
+                   obstacle: np.ndarray, factors: np.ndarray, keep: bool) -> CycleResult:
+    """The cycle in the compiled loop (rank 0, broadcast; the warm start of the next cycle stays on rank 0), with
+    ``wear_coefficient`` the wear gap's coefficient in cycles. Collective."""
+    cs = operators.contact.contact_set
+    frame = operators.contact.frame
+    n, m, dim = obstacle.shape[0], cs.nc * cs.dim, cs.dim
+    sv = solver
+    D = obstacle[:, :1] * frame[0]
+    for k in range(1, dim):
+        D = D + obstacle[:, k:k + 1] * frame[k]
+    D = np.ascontiguousarray(D)
+    warm_new = None
+
+    def work():  # rank 0: the compiled loop; its result is broadcast, the warm start stays on rank 0
+        nonlocal warm_new
+        Wc, rho, cache = operators.kernel_data(n)
+        active = cache.enabled and sv.pattern_reuse
+        warm = 1 if state.warm is not None and state.warm.shape == (n, m) and sv.warm_start == "cycle" else 0
+        r_warm = state.warm.copy() if warm else np.zeros((n, m))
+        gw, y, r_last = state.wear_gap.copy(), state.positions.copy(), state.forces.copy()
+        # Every increment is stored (cheap): the last one's slip and status belong to the final state.
+        out_r, out_x, out_y = np.zeros((n, m)), np.zeros((n, m)), np.zeros((n, m))
+        out_gw, out_states = np.zeros((n, cs.nc)), np.zeros((n, cs.nc), dtype=np.int8)
+        hist = np.zeros((n, N_ROW))
+        G = np.ascontiguousarray(cs.rigid_modes)
+        Q = np.ascontiguousarray(operators.responses)
+        S = np.ascontiguousarray(factors)
+        done, status, err = run_increments(
+            Wc, rho, operators.contact.mu, dim, cs.gap0, gw, G, D, Q, S, cs.tributary, cs.abscissa, y, r_last,
+            r_warm, warm, wear_coefficient, sv.tol, sv.max_iter, local_solvers._REFRESH, True, out_r, out_x,
+            out_y, out_gw, out_states, hist, active, cache.pattern, cache.lu, cache.piv, cache.lu_ok,
+            cache.counts)
+        if done < n:
+            why = "non-finite values" if status == 2 else "max_iter reached"
+            raise ConvergenceError(f"local solver did not converge ({why}, error {err:.3e} >= tol {sv.tol:.1e} "
+                                   f"after {sv.max_iter} sweeps)", step=done + 1)
+        warm_new = r_warm  # the cycle's forces: the next cycle's warm start
+        outs = (out_r, out_x, out_y, out_gw, out_states) if keep else (out_x[-1:], out_states[-1:])
+        return hist, gw, y, r_last, outs
+
+    result = on_rank0(operators.comm, work)
+    hist, gw, y, r_last, outs = result
+    nf = len(ROW_FIELDS)
+    records = {name: hist[:, i] for i, name in enumerate(ROW_FIELDS)}
+    records.update(local_iterations=hist[:, nf].astype(int), local_error=hist[:, nf + 1],
+                   load_solves=np.ones(n, dtype=int), newton_iterations=np.ones(n, dtype=int),
+                   newton_delta_1=np.zeros(n), newton_delta_2=np.zeros(n), cutbacks=np.zeros(n, dtype=int),
+                   yielded_points=np.zeros(n, dtype=int))
+    slip, status = (outs[1][-1].copy(), outs[4][-1].copy()) if keep else (outs[0][-1].copy(), outs[1][-1].copy())
+    final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=gw, obstacle=obstacle[-1].copy(),
+                    targets=obstacle[-1].copy(), force_controlled=np.zeros(dim, dtype=bool),
+                    load_factors=factors[-1].copy(), increment=state.increment + n,
+                    dissipated_energy=state.dissipated_energy + float(hist[:, ROW["dissipated_energy"]].sum()),
+                    local_iterations=state.local_iterations + int(hist[:, nf].sum()),
+                    record={k: records[k][-1].item() for k in INCREMENT_COLUMNS},
+                    status=status, warm=warm_new if operators.comm.rank == 0 else None)
+    return CycleResult(records, obstacle, factors, final, outs if keep else None, True)

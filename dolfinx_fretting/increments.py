@@ -1,0 +1,272 @@
+"""One increment of the public problem: its targets, the local contact solve under load control, the
+elastic–plastic Newton loop around it, and the cut-backs of :func:`advance`.
+
+The local problem ``x = W r + q`` is solved on rank 0 (:func:`on_rank0`: its result is broadcast and its
+error raised on every rank); a prescribed force makes its obstacle component an unknown found by
+:func:`~dolfinx_fretting.loading.find_displacement`, each trial one warm-started local solve.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any, Callable
+
+import numpy as np
+from mpi4py import MPI
+
+from . import local_solvers
+from .loading import Displacement, Force, LoadControlError, find_displacement, tangential_item
+from .operators import ContactOperators
+from .plasticity import ElastoplasticBody, NewtonError
+from .settings import LocalSolver, finite
+from .state import ContactState, ConvergenceError, IncrementResult, PlasticHistory, solver_columns
+
+__all__ = ["on_rank0", "increment_targets", "solve_contact", "solve_plastic", "load_plastic", "advance"]
+
+
+def on_rank0(comm: MPI.Comm, work: Callable[[], Any]) -> Any:
+    """Run ``work`` on rank 0 and broadcast its value; an exception there is raised on every rank (the others
+    would otherwise wait in the broadcast forever). Collective."""
+    value = failure = None
+    if comm.rank == 0:
+        try:
+            value = work()
+        except ConvergenceError as exc:
+            failure = ("ConvergenceError", str(exc), exc.step)
+        except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
+            failure = (type(exc).__name__, str(exc), None)
+    if comm.size > 1:
+        value, failure = comm.bcast((value, failure), root=0)
+    if failure is not None:
+        kind, message, step = failure
+        if kind == "ConvergenceError":
+            raise ConvergenceError(message, step=step)
+        raise RuntimeError(f"{kind} on rank 0: {message}")
+    return value
+
+
+def increment_targets(operators: ContactOperators, state: ContactState, normal, tangential
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """The prescribed value of each obstacle component and whether it is a force, after ``normal`` and
+    ``tangential`` (as :meth:`~dolfinx_fretting.problem.FrettingProblem.solve`); components not given keep
+    ``state``'s. Motions and forces along a held direction are refused."""
+    dim = operators.dim
+    targets = (state.targets if state.targets is not None else state.obstacle).astype(float).copy()
+    controlled = (state.force_controlled.copy() if state.force_controlled is not None
+                  else np.zeros(dim, dtype=bool))
+
+    def parse(item, comps: list[int], name: str):
+        if item is None:
+            return
+        if isinstance(item, (tuple, list)) and any(isinstance(i, (Displacement, Force)) for i in item):
+            # One item per component, e.g. (Force(Q), Displacement(0.0)): a force along t1, t2 held.
+            if len(item) != len(comps):
+                raise ValueError(f"{name} = {item!r}: expected {len(comps)} component(s)")
+            for c, sub in zip(comps, item):
+                parse(sub, [c], name)
+            return
+        kind_force = isinstance(item, Force)
+        value = item.value if isinstance(item, (Displacement, Force)) else item
+        values = np.atleast_1d(np.asarray(value, dtype=float))
+        if values.size == 1 and len(comps) > 1 and name == "tangential":
+            values = np.concatenate([values, np.zeros(len(comps) - 1)])
+        if values.size != len(comps):
+            raise ValueError(f"{name} = {value!r}: expected {len(comps)} component(s)")
+        for c, v in zip(comps, values):
+            targets[c] = finite(f"{name}", v)
+            controlled[c] = kind_force
+
+    parse(normal, [0], "normal")
+    parse(tangential, list(range(1, dim)), "tangential")
+    operators.check_held(targets, controlled)
+    return targets, controlled
+
+
+def solve_contact(operators: ContactOperators, solver: LocalSolver, state: ContactState, targets: np.ndarray,
+                  controlled: np.ndarray, factors: np.ndarray, q_body: np.ndarray | None = None,
+                  W: np.ndarray | None = None, r_warm: np.ndarray | None = None) -> IncrementResult:
+    """The local problem with its load control, on rank 0, broadcast; raises ConvergenceError on all ranks.
+    ``q_body`` and ``W`` replace the loads' response and the elastic W (the Newton loop's). Collective."""
+    return on_rank0(operators.comm, lambda: _local_with_control(operators, solver, state, targets, controlled,
+                                                                factors, q_body, W, r_warm))
+
+
+def _local_with_control(operators: ContactOperators, solver: LocalSolver, state: ContactState,
+                        targets: np.ndarray, controlled: np.ndarray, factors: np.ndarray,
+                        q_body: np.ndarray | None, W: np.ndarray | None,
+                        r_warm: np.ndarray | None) -> IncrementResult:
+    cs = operators.contact.contact_set
+    frame = operators.contact.frame
+    dim = cs.dim
+    Wm = operators.W if W is None else W
+    sv = solver
+    d = state.obstacle.astype(float).copy()
+    warm = [state.forces.copy() if r_warm is None else r_warm.copy()]
+    count = {"solves": 0, "iterations": 0}
+    last: dict[str, Any] = {}
+
+    def local(dd: np.ndarray) -> np.ndarray:
+        q, q_abs = operators.q(dd, factors, state.positions, state.wear_gap, q_body)
+        res = local_solvers.solve(Wm, q, operators.contact.mu, dim, method=sv.method, tol=sv.tol,
+                                  max_iter=sv.max_iter, r0=warm[0])
+        count["solves"] += 1
+        count["iterations"] += res.iterations
+        if not res.converged:
+            raise ConvergenceError(f"local solver did not converge: {res.message}")
+        warm[0] = res.r
+        F = cs.total_force(res.r)
+        last.update(res=res, d=dd.copy(), q_abs=q_abs, F=np.array([F @ frame[k] for k in range(dim)]))
+        return last["F"]
+
+    d[~controlled] = targets[~controlled]
+    names = ["normal force"] + [f"tangential force (t{k})" for k in range(1, dim)]
+    try:
+        F = local(d)
+        # Tolerance relative to the loads in play (a zero tangential target is held to the normal force).
+        scale = max(np.abs(targets[controlled]).max(initial=0.0), np.abs(F).max(), 1e-300)
+        ftol = sv.force_tol * scale
+        for _sweep in range(100):
+            if np.all(np.abs(F - targets)[controlled] <= ftol):
+                break
+            for k in np.flatnonzero(controlled):
+                def force_k(v: float, k: int = k) -> float:
+                    dd = d.copy()
+                    dd[k] = v
+                    return local(dd)[k]
+                d_old, F_old = d[k], F[k]
+                d[k], _, _ = find_displacement(force_k, targets[k], d[k], operators.stiffness[k], ftol, name=names[k])
+                F = last["F"]  # the root finder's last evaluation is at the returned d[k]
+                if d[k] != d_old and F[k] != F_old:
+                    operators.stiffness[k] = abs((F[k] - F_old) / (d[k] - d_old))
+        else:
+            raise ConvergenceError(f"prescribed forces not reached after 100 sweeps (residual "
+                                   f"{np.abs(F - targets)[controlled]}, tolerance {ftol:.3g})")
+    except LoadControlError as exc:
+        raise ConvergenceError(str(exc)) from None
+    res = last["res"]
+    y = Wm @ res.r + last["q_abs"]
+    return IncrementResult(res.r.copy(), res.x.copy(), y, last["d"].copy(), factors.copy(), False,
+                           count["iterations"], targets.copy(), controlled.copy(), res.error, count["solves"])
+
+
+def solve_plastic(operators: ContactOperators, solver: LocalSolver, body: ElastoplasticBody, state: ContactState,
+                  targets: np.ndarray, controlled: np.ndarray, factors: np.ndarray, in_cycle: bool) -> IncrementResult:
+    """An elastic–plastic increment: Newton with the contact solve inside every iteration (the paper's Fig. 4),
+    full Newton once more if the adaptive tangent fails. Collective."""
+    load_plastic(body, state.plastic)
+    scale = body.set_loads([(operators.vectors[i], factors[i]) for i in range(len(operators.load_names))])
+    warm = [state.forces]
+    total = {"iterations": 0, "solves": 0}
+
+    def local_solve(q_body, W):
+        solved = solve_contact(operators, solver, state, targets, controlled, factors, q_body, W,
+                               warm[0])
+        warm[0] = solved.forces
+        total["iterations"] += solved.iterations
+        total["solves"] += solved.local_solves
+        return solved
+
+    try:
+        try:
+            solved, info = body.increment(local_solve, scale)
+        except NewtonError:
+            if body.tangent != "adaptive":
+                raise
+            # The adaptive matrix failed: full Newton on the same increment before giving up.
+            body.tangent = "consistent"
+            try:
+                solved, info = body.increment(local_solve, scale)
+            finally:
+                body.tangent = "adaptive"
+            info = dict(info, full_newton_fallback=1)
+    except (NewtonError, ConvergenceError) as exc:
+        raise ConvergenceError(str(exc)) from None
+    st = body.state
+    history = PlasticHistory(body._trial.x.array.copy(), st.trial_sigma.copy(), st.trial_eps_p.copy(),
+                             st.trial_p.copy())
+    return replace(solved, in_cycle=in_cycle, newton=info, plastic=history,
+                   iterations=total["iterations"], local_solves=total["solves"])
+
+def load_plastic(body: ElastoplasticBody, history: PlasticHistory | None) -> None:
+    """Make ``history`` the body's committed state (a state may be solved from more than once)."""
+    if history is None:
+        raise ValueError("this elastic-plastic problem needs a state with its plastic history "
+                         "(from initial_state() or commit())")
+    body.u.x.array[:] = history.u
+    st = body.state
+    st.sigma, st.eps_p, st.p = history.sigma.copy(), history.eps_p.copy(), history.p.copy()
+
+
+def advance(operators: ContactOperators, solve: Callable[..., IncrementResult],
+            commit: Callable[[ContactState, IncrementResult], ContactState], state: ContactState, normal=None,
+            tangential=None, loads=None, *, in_cycle: bool = False, max_cutbacks: int = 0,
+            check: Callable[[ContactState], None] | None = None) -> tuple[ContactState, dict[str, Any]]:
+    """Solve and commit one increment, halving it on failure (elastic–plastic bodies).
+
+    A failed try is halved up to ``max_cutbacks`` times (default: ``Plasticity.max_cutbacks``, 0 for
+    elastic bodies); each converged sub-increment is committed (wear and plastic history) and the last
+    one's record carries the energy and wear added by the earlier ones. Sub-steps interpolate the
+    prescribed values (displacements, forces, load factors) between ``state.targets`` and the new ones.
+
+    Args:
+        operators: The problem's operators.
+        solve, commit: The problem's :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` and
+            :meth:`~dolfinx_fretting.problem.FrettingProblem.commit`.
+        state, normal, tangential, loads, in_cycle: As :meth:`~dolfinx_fretting.problem.FrettingProblem.solve`.
+        max_cutbacks: Halvings allowed.
+        check: Called with every committed (sub-)increment's state; an exception it raises aborts the
+            increment (the caller keeps ``state``).
+
+    Returns:
+        (the new state, the increment's solver columns :data:`~dolfinx_fretting.state.SOLVER_COLUMNS`).
+
+    Raises:
+        ConvergenceError: no convergence after the cut-backs (``state`` itself is unchanged).
+    """
+    end_targets, end_controlled = increment_targets(operators, state, normal, tangential)
+    end_factors = operators.factors(state, loads)
+    start_targets = (state.targets if state.targets is not None else state.obstacle).astype(float)
+    start_factors = state.load_factors.copy()
+    names = [n for n in operators.load_names if n != "dirichlet values"]
+    done, size = 0.0, 1.0
+    cuts = newton = local_its = 0
+    sums = np.zeros(2)
+    current = state
+    while True:
+        f = min(1.0, done + size)
+        if f == 1.0:
+            targets, factors = end_targets, end_factors
+        else:
+            targets = start_targets + f * (end_targets - start_targets)
+            factors = start_factors + f * (end_factors - start_factors)
+        sub_normal = (Force if end_controlled[0] else Displacement)(targets[0])
+        sub_tangential = tangential_item(targets[1:], end_controlled[1:])
+        sub_loads = {n: factors[operators.load_names.index(n)] for n in names}
+        try:
+            result = solve(current, sub_normal, sub_tangential, sub_loads, in_cycle=in_cycle)
+        except ConvergenceError as exc:
+            if cuts >= max_cutbacks:
+                raise ConvergenceError(
+                    (f"no convergence after {cuts} cut-backs (last try: {done:.4g} -> {f:.4g} of the "
+                     "increment): " if max_cutbacks else "") + str(exc)) from None
+            cuts += 1
+            size *= 0.5
+            continue
+        newton += result.newton["newton_iterations"] if result.newton is not None else 1
+        local_its += result.iterations
+        done = f
+        committed = commit(current, result)
+        if check is not None:
+            check(committed)
+        if done < 1.0:
+            current = committed
+            sums += (current.record["dissipated_energy"], current.record["wear_area_increment"])
+            continue
+        info = solver_columns(result, newton_iterations=newton, local_iterations=local_its, cutbacks=cuts)
+        record = {**committed.record, **info}
+        record["dissipated_energy"] += sums[0]
+        record["wear_area_increment"] += sums[1]
+        # The sub-increments count as one increment of the caller's path.
+        new = replace(committed, record=record, increment=state.increment + 1,
+                      local_iterations=state.local_iterations + local_its)
+        return new, info

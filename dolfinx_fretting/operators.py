@@ -1,0 +1,401 @@
+"""The operators of a fretting problem: K, its one factorisation, the loads, and W = H K^-1 H^T.
+
+:class:`ContactOperators` assembles K from the user's bilinear form with the Dirichlet conditions, factorises it
+once (MUMPS, :class:`~dolfinx_fretting.compliance.DelassusOperator`), assembles the named loads and Dirichlet
+data, and forms, for the contact set it holds, the Delassus operator W on the free dofs and each load's contact
+response ``H K^-1 f``. Under finite sliding it holds K^-1 on both contact surfaces
+(:class:`~dolfinx_fretting.sliding.SurfaceCompliance`) and forms each pairing's W from it; a new candidate window
+rebuilds W from the same factor (:meth:`ContactOperators.set_window`). Collective where it says so.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from . import _dolfinx as dfx
+from . import local_solvers, sliding
+from ._dolfinx import fem
+from .compliance import DelassusOperator
+from .contact import Contact, ContactSet, ElasticBody, constrained_global_dofs
+from .cycling import ActivePatternCache
+from .settings import finite
+from .state import ContactState
+
+__all__ = ["ContactOperators"]
+
+
+class ContactOperators:
+    """K, its factorisation, the load vectors, and W and the load responses of the contact set held. Collective.
+
+    Args:
+        a: The bilinear form of K (UFL or ``fem.Form``), or an assembled PETSc matrix (Dirichlet rows applied).
+        contact: The :class:`~dolfinx_fretting.contact.Contact`.
+        bcs: Dirichlet conditions (applied in full).
+        loads: Named linear forms or assembled PETSc vectors.
+        prescribed: Named lists of Dirichlet conditions scaled by their factors.
+        petsc_options: Options of the factorisation (keys without prefix).
+        delassus_method: Route for W (:data:`~dolfinx_fretting.compliance.METHODS`).
+        options_prefix: PETSc options prefix of the factorisation.
+        plastic: The body is elastic–plastic (non-zero Dirichlet values in ``bcs`` are then refused).
+
+    Attributes:
+        contact: The contact held (under finite sliding a copy holding the pairing last activated).
+        W: The Delassus operator of the contact set held (replicated, dense).
+        responses: ``H K^-1 f`` of each load (rows in :attr:`load_names` order).
+        load_names: Names of the load vectors, in the order of
+            :attr:`~dolfinx_fretting.state.ContactState.load_factors`: ``"dirichlet values"`` first if ``bcs``
+            prescribe non-zero values, then the keys of ``loads``, ``prescribed``.
+        surface_compliance: Finite sliding: K^-1 on both contact surfaces' dofs, else None.
+        timings: Wall times (s) of the assembly, the factorisation and W (with the load responses).
+    """
+
+    def __init__(self, a, contact: Contact, bcs: Sequence = (), *, loads: Mapping[str, Any] | None = None,
+                 prescribed: Mapping[str, Sequence] | None = None, petsc_options: Mapping[str, Any] | None = None,
+                 delassus_method: str = "auto", options_prefix: str = "dolfinx_fretting_", plastic: bool = False):
+        self.contact = contact
+        self.V = contact.V
+        self.comm: MPI.Comm = self.V.mesh.comm
+        self.bcs = list(bcs)
+        self.prescribed = {k: list(v) for k, v in (prescribed or {}).items()}
+        loads = dict(loads or {})
+        all_bcs = self.bcs + [bc for v in self.prescribed.values() for bc in v]
+        # The contact and K must fix the same dofs: W is built on the contact's free dofs, and K has identity
+        # rows exactly at the dofs of these conditions.
+        fixed = constrained_global_dofs(self.V, all_bcs)
+        if not np.array_equal(fixed, contact.fixed_global):
+            raise ValueError("FrettingProblem: the Dirichlet conditions (bcs and prescribed) differ from those given "
+                             f"to the Contact ({fixed.size} fixed dofs here, {contact.fixed_global.size} there): pass "
+                             "the same conditions to Contact(..., bcs=...), or W would be wrong")
+        t0 = time.perf_counter()
+        self.timings: dict[str, float] = {}
+        self.form = None
+        if isinstance(a, PETSc.Mat):
+            if self.prescribed:
+                raise ValueError("FrettingProblem: prescribed Dirichlet data need the bilinear form, not a matrix")
+            self.K = a
+            self._own_K = False
+        else:
+            self.form = dfx.compiled_form(a)
+            self.K = fem.petsc.assemble_matrix(self.form, bcs=all_bcs)
+            self.K.assemble()
+            self._own_K = True
+        self.all_bcs = all_bcs
+        base = self._dirichlet_vector(self.bcs) if self.form is not None else None
+        if base is not None and plastic:
+            base.destroy()
+            raise ValueError("FrettingProblem: non-zero Dirichlet values in bcs are not supported with plasticity "
+                             "(the Newton loop holds the Dirichlet dofs at zero); give the motion to the obstacle "
+                             "(normal=, tangential=) or apply a load instead")
+        self.timings["assemble_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        self.delassus = DelassusOperator(self.K, self.comm, method=delassus_method,
+                                         petsc_options=dict(petsc_options or {}), options_prefix=options_prefix)
+        self.delassus.factorize()
+        self.timings["factorize_s"] = time.perf_counter() - t0
+        self.vectors: list = []   # PETSc vectors of the loads (owned here)
+        self.load_names: list[str] = []
+        if base is not None:
+            self._add_vector("dirichlet values", base)
+        for name, form in loads.items():
+            self._add_vector(name, self._load_vector(form))
+        for name, conditions in self.prescribed.items():
+            vec = self._dirichlet_vector(conditions)
+            if vec is None:
+                raise ValueError(f"FrettingProblem: prescribed[{name!r}] has zero values everywhere")
+            self._add_vector(name, vec)
+        #: Loads always applied at factor 1 (the values of ``bcs``), by index in :attr:`load_names`.
+        self.fixed_factor = [i for i, n in enumerate(self.load_names) if n == "dirichlet values"]
+        t0 = time.perf_counter()
+        self.surface_compliance: sliding.SurfaceCompliance | None = None
+        if isinstance(contact.obstacle, ElasticBody) and contact.obstacle.sliding == "finite":
+            self.surface_compliance = self._build_surface_compliance()
+        #: The first guess of each obstacle component's load-displacement slope (force control).
+        self.stiffness: np.ndarray | None = None
+        self.build()
+        self.timings["delassus_s"] = time.perf_counter() - t0
+        self._kernel = None
+        #: Finite sliding: the pairing of the reference configuration (the initial state's).
+        self.reference_pairing = self.contact.contact_set
+
+    def _add_vector(self, name: str, vec) -> None:
+        self.load_names.append(name)
+        self.vectors.append(vec)
+
+    def _load_vector(self, form):
+        if isinstance(form, PETSc.Vec):
+            f = form.copy()
+        else:
+            L = dfx.compiled_form(form)
+            f = fem.petsc.assemble_vector(L)
+            if self.form is not None:
+                fem.petsc.apply_lifting(f, [self.form], bcs=[self.all_bcs])
+            f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dfx.set_bc(f, self.all_bcs, scale=0.0)  # a load alone: zero displacement at every fixed dof
+        return _plain_vector(f, self.K)
+
+    def _dirichlet_vector(self, conditions):
+        """The right-hand side of the Dirichlet values of ``conditions`` alone (lifting, other fixed dofs 0)."""
+        if not conditions:
+            return None
+        f = dfx.vector_for_form(fem.form(_zero_linear_form(self.V)))
+        with f.localForm() as loc:
+            loc.set(0.0)
+        fem.petsc.apply_lifting(f, [self.form], bcs=[list(conditions)])
+        f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dfx.set_bc(f, self.all_bcs, scale=0.0)
+        dfx.set_bc(f, list(conditions))
+        if f.norm() == 0.0:
+            f.destroy()
+            return None
+        return _plain_vector(f, self.K)
+
+    def build(self, keep_slope: bool = False) -> None:
+        """W on the free dofs (one copy broadcast from rank 0) and each load's contact response (finite sliding:
+        formed from the surface compliance, no communication)."""
+        cs = self.contact.contact_set
+        if self.surface_compliance is not None:
+            self.W, self.responses = self.surface_compliance.operators(cs)
+        else:
+            W = self.delassus.build(self.contact.H_free)
+            self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
+            self.responses = np.zeros((len(self.vectors), cs.nc * cs.dim))
+            for i, f in enumerate(self.vectors):
+                self.responses[i] = self.local_response(f)
+        self._hold_directions()
+        if not (keep_slope and self.stiffness is not None):
+            # Point stiffness of the closest node: a safe first guess of the load-displacement slope (kept when
+            # only the pairing changes, so that a force-controlled run does not depend on which state was read)
+            k = int(np.argmin(cs.gap0))
+            blk = self.W[k * cs.dim:(k + 1) * cs.dim, k * cs.dim:(k + 1) * cs.dim]
+            self.stiffness = np.array([1.0 / blk[c, c] for c in range(cs.dim)])
+        self._kernel = None
+
+    def _hold_directions(self) -> None:
+        """Tangential directions held by the conditions (:attr:`Contact.held_rows`, e.g. a symmetry plane's
+        roller): W is zero on their rows and columns; they get the contact's normal compliance on the diagonal,
+        which keeps the local problem well posed and leaves their force at zero as long as nothing moves along
+        them (then ``x = c r`` there: sticking gives r = 0, sliding ``r = -mu r_n x_t/|x_t|`` gives r = 0 too).
+        Obstacle components along them are refused (:meth:`_check_held`), as are loads that move them.
+        Then every contact's diagonal block must be positive definite."""
+        cs = self.contact.contact_set
+        dim = cs.dim
+        held = self.contact.held_rows
+        if held.size:
+            normal_rows = held - held % dim
+            self.W[held, held] = self.W[normal_rows, normal_rows]
+            scale = np.abs(self.responses).max(initial=0.0)
+            moved = np.abs(self.responses[:, held]).max(initial=0.0)
+            if moved > 1e-12 * scale:
+                c, k = divmod(int(held[np.argmax(np.abs(self.responses[:, held]).max(axis=0))]), dim)
+                raise ValueError(
+                    f"FrettingProblem: a load or Dirichlet value moves contact {c} (node at {cs.coords[c].tolist()}) "
+                    f"along its direction t{k}, which the conditions hold (a roller): a half model's loads must be "
+                    "symmetric about its symmetry plane")
+        # Obstacle components (rows of the obstacle frame) with a component along a held direction.
+        held_dirs = cs.frames.reshape(-1, dim)[held]
+        self.held_components = np.abs(held_dirs @ self.contact.frame.T).max(axis=0, initial=0.0) > 1e-9
+        blocks = np.array([self.W[c * dim:(c + 1) * dim, c * dim:(c + 1) * dim] for c in range(cs.nc)])
+        eig = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1))) if cs.nc else np.zeros((0, dim))
+        bad = np.flatnonzero(eig[:, 0] <= 1e-10 * eig[:, -1])
+        if bad.size:
+            c = int(bad[0])
+            raise ValueError(
+                f"FrettingProblem: the compliance of contact {c} (node at {cs.coords[c].tolist()}) is singular "
+                f"(eigenvalues {eig[c].tolist()}): the conditions fix a combination of its directions n, t1"
+                f"{', t2' if dim == 3 else ''} that is not one of them (a roller must fix the component along one "
+                "of the contact frame's directions, e.g. u_y on a symmetry plane y = 0 with the obstacle normal in "
+                "that plane)")
+
+    def check_held(self, obstacle: np.ndarray, force_controlled: np.ndarray) -> None:
+        """Refuse obstacle motions and forces along a held contact direction (see :meth:`_hold_directions`)."""
+        held = self.held_components
+        if not held.any():
+            return
+        obstacle = np.atleast_2d(obstacle)
+        names = ["normal"] + [f"tangential t{k}" for k in range(1, self.dim)]
+        for k in np.flatnonzero(held):
+            if force_controlled[k] or np.any(obstacle[:, k] != 0.0):
+                what = "a force" if force_controlled[k] else f"a motion ({np.abs(obstacle[:, k]).max():.3g})"
+                raise ValueError(
+                    f"{names[k]} = {what}: the conditions hold some contacts along this direction (a roller, e.g. "
+                    "on a symmetry plane): a half model moves only in its symmetry plane. Prescribe "
+                    f"Displacement(0) along {names[k]} (in 3D, tangential=(Force(Q), Displacement(0.0)) for a "
+                    "force along t1 alone)")
+
+    def local_response(self, f, H=None) -> np.ndarray:
+        """``H K^-1 f`` with the full H (prescribed values at fixed dofs count; default the contact set's),
+        replicated. Collective."""
+        H = self.contact.contact_set.H if H is None else H
+        u = f.duplicate()
+        self.delassus.solve(f, u)
+        rstart, rend = u.getOwnershipRange()
+        part = H[:, rstart:rend] @ u.getArray(readonly=True)
+        u.destroy()
+        return self.comm.allreduce(part, op=MPI.SUM)
+
+    def _build_surface_compliance(self) -> sliding.SurfaceCompliance:
+        """K^-1 on the dofs of both contact surfaces and the loads' responses there (finite sliding). Collective."""
+        cs = self.contact.contact_set
+        faces, nodes = sliding.surface_nodes(cs, self.contact.obstacle.reach)
+        paired = cs.master_nodes[cs.master_nodes >= 0]
+        if not np.isin(paired, nodes).all():  # before the build: the reference pairing must lie within reach
+            raise ValueError(f"ElasticBody.reach = {self.contact.obstacle.reach!r}: too short for the reference "
+                             "pairing itself (a slave candidate's closest master facet lies beyond it); allowed a "
+                             "reach at least the candidates' largest initial gap, or None")
+        dim = cs.dim
+        dofs = (dim * nodes[:, None] + np.arange(dim)).ravel()
+        S = sp.csr_matrix((np.ones(dofs.size), (np.arange(dofs.size), dofs)), shape=(dofs.size, self.n_dofs))
+        free = np.ones(self.n_dofs)
+        free[self.contact.fixed_global] = 0.0
+        S_free = sp.csr_matrix(S @ sp.diags(free))
+        S_free.eliminate_zeros()
+        C = self.delassus.build(S_free)
+        C = self.comm.bcast(C if self.comm.rank == 0 else None, root=0)
+        responses = np.array([self.local_response(f, S) for f in self.vectors]).reshape(len(self.vectors),
+                                                                                          dofs.size)
+        # rank 0's sums on every rank: each rank decides the re-pairings from these, so they must be the same bits
+        responses = self.comm.bcast(responses if self.comm.rank == 0 else None, root=0)
+        return sliding.SurfaceCompliance(nodes, dim, C, responses, faces,
+                                         sliding.master_node_areas(cs.master_surface, nodes))
+
+    def contact_set_of(self, state: ContactState) -> ContactSet:
+        """The contact set ``state``'s per-contact arrays refer to (its pairing under finite sliding), without
+        switching the problem to it (reading a state changes nothing)."""
+        return state.pairing if state.pairing is not None else self.contact.contact_set
+
+    def obstacle_translation(self, obstacle: np.ndarray) -> np.ndarray:
+        """The obstacle's rigid translation D (global frame) from its components ``obstacle`` in the obstacle
+        frame (:attr:`~dolfinx_fretting.state.ContactState.obstacle`: approach along n, then t1[, t2])."""
+        frame = self.contact.frame
+        return sum(obstacle[k] * frame[k] for k in range(frame.shape[0]))
+
+    def activate(self, state: ContactState) -> None:
+        """Finite sliding: hold ``state``'s pairing (its contact set, W and load responses) if another is held."""
+        if state.pairing is None or state.pairing is self.contact.contact_set:
+            return
+        self.contact = self.contact.with_pairing(state.pairing)
+        self.build(keep_slope=True)
+
+
+    # Properties -----------------------------------------------------------------------------------------
+    @property
+    def n_dofs(self) -> int:
+        """Global number of displacement dofs."""
+        return self.V.dofmap.index_map.size_global * self.V.dofmap.index_map_bs
+
+    @property
+    def dim(self) -> int:
+        """The contact's dimension (2 or 3)."""
+        return self.contact.dim
+
+    def factors(self, state: ContactState, loads: Mapping[str, float] | None) -> np.ndarray:
+        """``state``'s load factors with those named in ``loads`` replaced (unknown names refused)."""
+        s = state.load_factors.copy()
+        for name, value in (loads or {}).items():
+            if name not in self.load_names or name == "dirichlet values":
+                raise KeyError(f"unknown load {name!r}; this problem's loads: "
+                               f"{', '.join(n for n in self.load_names if n != 'dirichlet values') or 'none'}")
+            s[self.load_names.index(name)] = finite(f"loads[{name!r}]", value)
+        return s
+
+
+    def q(self, d: np.ndarray, factors: np.ndarray, y_prev: np.ndarray, gw: np.ndarray,
+           q_body: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(q for the local problem, q_abs) of an increment; ``q_body`` replaces the loads' response."""
+        cs = self.contact.contact_set
+        D = self.obstacle_translation(d)
+        if q_body is None:  # sum_l s_l q_l, in load order (one load: s q, as the compiled loop adds it)
+            q_body = np.zeros(cs.nc * cs.dim) if not len(self.load_names) else factors[0] * self.responses[0]
+            for i in range(1, len(self.load_names)):
+                q_body = q_body + factors[i] * self.responses[i]
+        q_abs = -cs.rigid_modes @ D + q_body
+        q_abs[0::cs.dim] += cs.gap0 + gw
+        q = q_abs.copy()
+        normal = np.arange(q.size) % cs.dim == 0
+        q[~normal] -= y_prev[~normal]
+        return q, q_abs
+
+
+    # Compiled cycles, window --------------------------------------------------------------------------------
+    def kernel_data(self, n: int):
+        """W transposed, the Uzawa steps and the contact-pattern cache of cycles of ``n`` increments (rank 0)."""
+        if self._kernel is None or self._kernel[2].pattern.shape[0] not in (n, 1):
+            cs = self.contact.contact_set
+            self._kernel = (np.ascontiguousarray(self.W.T), local_solvers.block_rho(self.W, cs.dim),
+                            ActivePatternCache(n, cs.nc, cs.dim))
+        return self._kernel
+
+    @property
+    def pattern_counts(self) -> np.ndarray | None:
+        """Counts of the compiled cycles' exact pattern solves accepted and rejected, and of their LU
+        factorisations (rank 0)."""
+        return None if self._kernel is None else self._kernel[2].counts
+
+
+    def set_window(self, state: ContactState, window: float | None) -> ContactState:
+        """Rebuild the contact set, W and the load responses for another candidate window (elastic bodies) and
+        carry ``state`` over: forces and wear by node; new candidates start open and unworn; the relative
+        positions are recomputed (y = W r + q_abs exactly). All or nothing. Collective."""
+        if self.surface_compliance is not None:
+            raise ValueError("the candidate window of a finite-sliding problem cannot change (its surface compliance "
+                             "is built for the contact's window): give Contact a window wide enough for the run")
+        old_contact, old_W, old_resp = self.contact, self.W, self.responses
+        try:
+            self.contact = old_contact.with_window(window)
+            self.build()
+        except Exception:
+            self.contact, self.W, self.responses = old_contact, old_W, old_resp
+            self._kernel = None
+            raise
+        old, new = old_contact.contact_set, self.contact.contact_set
+        where_old = {int(g): i for i, g in enumerate(old.global_nodes)}
+        src = np.array([where_old.get(int(g), -1) for g in new.global_nodes])
+        had = src >= 0
+        dim = new.dim
+
+        def carry(values: np.ndarray | None, per_contact: int) -> np.ndarray | None:
+            if values is None:
+                return None
+            lead = values.shape[:-1]
+            out = np.zeros(lead + (new.nc, per_contact))
+            out[..., had, :] = values.reshape(lead + (old.nc, per_contact))[..., src[had], :]
+            return out.reshape(lead + (new.nc * per_contact,))
+
+        gw = carry(state.wear_gap, 1)
+        r = carry(state.forces, dim)
+        _, q_abs = self.q(state.obstacle, state.load_factors, np.zeros(new.nc * dim), gw)
+        status = None if state.status is None else carry(state.status.astype(float), 1).astype(np.int8)
+        return replace(state, forces=r, wear_gap=gw, positions=self.W @ r + q_abs, slip=carry(state.slip, dim),
+                       warm=carry(state.warm, dim), status=status)
+
+
+    def destroy(self) -> None:
+        """Free the PETSc objects (factorisation, K if assembled here, load vectors)."""
+        self.delassus.destroy()
+        for f in self.vectors:
+            f.destroy()
+        if self._own_K:
+            self.K.destroy()
+
+
+def _zero_linear_form(V):
+    v = ufl.TestFunction(V)
+    zero = fem.Constant(V.mesh, PETSc.ScalarType((0.0,) * V.mesh.geometry.dim))
+    return ufl.inner(zero, v) * ufl.dx
+
+
+def _plain_vector(f, K):
+    """An unghosted copy of ``f`` with K's layout (K's solves and axpy need the same layout)."""
+    out = K.createVecRight()
+    n = out.getLocalSize()
+    out.getArray()[:] = f.getArray(readonly=True)[:n]
+    f.destroy()
+    return out

@@ -1,0 +1,111 @@
+"""Reading a state: the displacement field, the contact fields per node, each body's wear, the worn measure
+and the total contact force. Reading a state changes nothing (not even the pairing the operators hold, except
+:func:`displacement`, which solves with the state's own).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from petsc4py import PETSc
+
+from . import _dolfinx as dfx
+from . import sliding
+from ._dolfinx import cell_dofmap, fem
+from .contact import ElasticBody
+from .laws import Archard
+from .operators import ContactOperators
+from .state import ContactState
+
+__all__ = ["displacement", "contact_fields", "body_wear", "worn_measure", "total_force"]
+
+
+def displacement(operators: ContactOperators, state: ContactState, out=None, plastic_u: np.ndarray | None = None):
+    """The displacement of ``state`` as a ``fem.Function`` (``out`` if given). Collective.
+
+    Elastic: solves K u = H^T r + sum_l s_l f_l with the one factorisation; with an
+    :class:`~dolfinx_fretting.contact.ElasticBody` obstacle that has ``cells``, its nodes also move by
+    the obstacle's translation D. Elastic–plastic: ``plastic_u``, the state's committed displacement.
+    """
+    u = out if out is not None else fem.Function(operators.V, name="displacement")
+    operators.activate(state)
+    if plastic_u is not None:
+        u.x.array[:] = plastic_u
+        u.x.scatter_forward()
+        return _add_obstacle_motion(operators, u, state)
+    rhs = operators.K.createVecRight()
+    rstart, rend = rhs.getOwnershipRange()
+    R = operators.contact.H_free.T.tocsr() @ state.forces
+    rhs.setValues(np.arange(rstart, rend, dtype=PETSc.IntType), R[rstart:rend])
+    rhs.assemble()
+    dfx.set_bc(rhs, operators.all_bcs, scale=0.0)
+    for i, f in enumerate(operators.vectors):
+        if state.load_factors[i] != 0.0:
+            rhs.axpy(state.load_factors[i], f)
+    operators.delassus.solve(rhs, dfx.petsc_vec(u))
+    rhs.destroy()
+    u.x.scatter_forward()
+    return _add_obstacle_motion(operators, u, state)
+
+
+def _add_obstacle_motion(operators: ContactOperators, u, state: ContactState):
+    obstacle = operators.contact.obstacle
+    if not isinstance(obstacle, ElasticBody) or obstacle.cells is None:
+        return u
+    D = operators.obstacle_translation(state.obstacle)
+    # The cells' nodes from the dofmap (DOLFINx 0.11 wants a cell-to-cell connectivity for
+    # locate_dofs_topological on cells of a 3D mesh).
+    nodes = np.unique(cell_dofmap(operators.V)[np.asarray(obstacle.cells, dtype=np.int32)])
+    values = u.x.array.reshape(-1, operators.V.dofmap.index_map_bs)
+    values[nodes, :D.size] += D
+    return u
+
+
+def contact_fields(operators: ContactOperators, state: ContactState) -> dict[str, np.ndarray]:
+    """Per contact node (replicated): ``coordinates``, ``global_node``, ``pressure`` and ``shear``
+    (force / tributary measure; shear has dim-1 components), ``gap``, ``slip`` (last increment's slip
+    increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip)."""
+    cs = operators.contact_set_of(state)
+    dim = cs.dim
+    r = state.forces.reshape(cs.nc, dim)
+    y = state.positions.reshape(cs.nc, dim)
+    x = state.slip.reshape(cs.nc, dim)
+    status = state.status if state.status is not None else np.zeros(cs.nc, dtype=np.int8)
+    return {"coordinates": cs.coords.copy(), "global_node": cs.global_nodes.copy(),
+            "pressure": r[:, 0] / cs.tributary, "shear": r[:, 1:] / cs.tributary[:, None],
+            "gap": y[:, 0].copy(), "slip": x[:, 1:].copy(), "relative_tangential": y[:, 1:].copy(),
+            "wear": state.wear_gap.copy(), "status": status.copy()}
+
+def body_wear(operators: ContactOperators, wear: Archard | None, state: ContactState) -> dict[str, np.ndarray]:
+    """Two bodies: each body's worn depth. ``slave`` per contact node; ``master`` and
+    ``master_coordinates`` (reference) at the master's points: with finite sliding the master's nodes
+    (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`), with small sliding each contact's paired point (the pairing is fixed, so
+    the master's share is carried per contact). Reads ``state`` only (the problem's pairing is not changed)."""
+    cs = operators.contact_set_of(state)
+    if not cs.two_body:
+        raise ValueError("body_wear: the obstacle is rigid (the wear gap is the body's: contact_fields)")
+    if operators.surface_compliance is None:
+        share = wear.slave_share if wear is not None else 1.0
+        return {"slave": share * state.wear_gap, "master": (1 - share) * state.wear_gap,
+                "master_coordinates": cs.master_points.copy()}
+    on_master = operators.surface_compliance.master_areas > 0
+    surface = cs.master_surface
+    flat_nodes, first = np.unique(surface.nodes.ravel(), return_index=True)
+    x = surface.x.reshape(-1, surface.dim)[first[np.searchsorted(flat_nodes, operators.surface_compliance.nodes[on_master])]]
+    return {"slave": state.wear_gap - sliding.interpolate_master(cs, operators.surface_compliance, state.master_wear),
+            "master": state.master_wear[on_master].copy(), "master_coordinates": x}
+
+def worn_measure(operators: ContactOperators, state: ContactState) -> float:
+    """The worn area (2D, mm^2 per mm) or volume (3D) of ``state``: the wear gap times the tributary measures;
+    with finite sliding the slave's part per contact plus the master's on its own nodes (the master's wear
+    left behind by the slide is under no contact)."""
+    cs = operators.contact_set_of(state)
+    if operators.surface_compliance is None:
+        return float(state.wear_gap @ cs.tributary)
+    slave = state.wear_gap - sliding.interpolate_master(cs, operators.surface_compliance, state.master_wear)
+    return float(slave @ cs.tributary + state.master_wear @ operators.surface_compliance.master_areas)
+
+def total_force(operators: ContactOperators, state: ContactState) -> np.ndarray:
+    """Total contact force on the body in the obstacle frame (n, t1[, t2])."""
+    cs = operators.contact_set_of(state)
+    F = cs.total_force(state.forces)
+    return np.array([F @ operators.contact.frame[k] for k in range(operators.dim)])

@@ -1,0 +1,166 @@
+"""The explicit state of a fretting run and the results that advance it.
+
+:class:`ContactState` is everything a run needs to go on after a committed increment (immutable; a checkpoint
+holds it); :class:`IncrementResult` and :class:`CycleResult` are converged, not yet committed
+(:meth:`~dolfinx_fretting.problem.FrettingProblem.commit`: rollback is simply not committing). The per-increment
+columns are declared once here (:data:`INCREMENT_COLUMNS`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .contact import ContactSet
+from .wear import ROW_FIELDS
+
+__all__ = ["ConvergenceError", "STATUS_NAMES", "SOLVER_COLUMNS", "INCREMENT_COLUMNS", "PlasticHistory",
+           "ContactState", "IncrementResult", "CycleResult", "solver_columns"]
+
+#: Contact status codes of :attr:`ContactState.status` (the wear module's classification).
+STATUS_NAMES = {0: "open", 1: "stick", 2: "slip"}
+#: Per-increment columns of a cycle's records (:attr:`CycleResult.records`) and of the info of
+#: :meth:`~dolfinx_fretting.problem.FrettingProblem.advance`: the totals of :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then the solver's
+#: counters (one declaration: the scene runner's history table reads its columns from here).
+SOLVER_COLUMNS = ("local_iterations", "local_error", "load_solves", "newton_iterations", "newton_delta_1",
+                  "newton_delta_2", "cutbacks", "yielded_points")
+#: Per-increment columns: the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then the :data:`SOLVER_COLUMNS`.
+INCREMENT_COLUMNS = ROW_FIELDS + SOLVER_COLUMNS
+
+
+class ConvergenceError(RuntimeError):
+    """An increment or cycle could not be solved; nothing of it was committed. The message says why.
+
+    Attributes:
+        step: In a cycle, the 1-based increment of the cycle that failed (None otherwise).
+    """
+
+    def __init__(self, message: str, step: int | None = None):
+        super().__init__(message)
+        self.step = step
+
+
+
+@dataclass(frozen=True)
+class PlasticHistory:
+    """This rank's committed displacement and plastic state (owned quadrature points)."""
+
+    u: np.ndarray
+    sigma: np.ndarray
+    eps_p: np.ndarray
+    p: np.ndarray
+
+
+@dataclass(frozen=True)
+class ContactState:
+    """Everything a run needs to go on, after a committed increment (immutable; a checkpoint holds it).
+
+    Per-contact arrays follow the contact set's order, ``dim`` components per contact in the contact's frame
+    ``(n, t1[, t2])``.
+
+    Attributes:
+        forces: Contact forces r (N; N/mm in 2D plane strain).
+        positions: Total relative positions y = W r + q_abs: normal rows the gaps, tangential rows the
+            accumulated relative tangential displacement.
+        slip: The last increment's local solution x: gaps (normal rows) and slip increments (tangential rows).
+        wear_gap: Wear gap per contact (length).
+        obstacle: Obstacle displacement in the obstacle frame (approach along n, then t1[, t2]).
+        targets: The last increment's prescribed values per obstacle component (the displacement, or the force
+            where it was force controlled): what a component not given to :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` keeps,
+            and where a cut increment's sub-steps start from.
+        force_controlled: Which components of ``targets`` are forces.
+        load_factors: Factor of each named load and Dirichlet data set (:attr:`~dolfinx_fretting.problem.FrettingProblem.load_names`).
+        increment: Increments committed.
+        dissipated_energy: Frictional energy dissipated so far.
+        local_iterations: Local solver sweeps so far.
+        record: The last increment's row (:data:`INCREMENT_COLUMNS`: forces, peak pressure, energy and wear
+            added, widths, state counts ..., then the solver's iterations and errors), or None before any
+            increment.
+        status: Contact status codes of the last increment (0 open, 1 stick, 2 slip).
+        warm: Compiled cycles: the forces of every increment of the last cycle (rank 0 only; None elsewhere).
+        plastic: This rank's committed plastic history (elastic–plastic problems), else None.
+        pairing: Finite sliding (:class:`~dolfinx_fretting.contact.ElasticBody`): the contact set of the
+            pairing the per-contact arrays refer to (same slave nodes, frames and H of the paired master points),
+            else None.
+        master_wear: Finite sliding: the master's worn depth at the surface compliance's nodes
+            (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`; 0 at slave nodes); the master's share of ``wear_gap`` is this,
+            interpolated at each contact's paired point. None otherwise (the share is carried per contact).
+    """
+
+    forces: np.ndarray
+    positions: np.ndarray
+    slip: np.ndarray
+    wear_gap: np.ndarray
+    obstacle: np.ndarray
+    load_factors: np.ndarray
+    targets: np.ndarray | None = None
+    force_controlled: np.ndarray | None = None
+    increment: int = 0
+    dissipated_energy: float = 0.0
+    local_iterations: int = 0
+    record: dict[str, float] | None = None
+    status: np.ndarray | None = None
+    warm: np.ndarray | None = None
+    plastic: PlasticHistory | None = None
+    pairing: ContactSet | None = None
+    master_wear: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class IncrementResult:
+    """A converged increment, not yet committed (see :meth:`~dolfinx_fretting.problem.FrettingProblem.commit`)."""
+
+    forces: np.ndarray
+    slip: np.ndarray
+    positions: np.ndarray
+    obstacle: np.ndarray
+    load_factors: np.ndarray
+    in_cycle: bool
+    iterations: int
+    targets: np.ndarray
+    force_controlled: np.ndarray
+    error: float
+    local_solves: int
+    newton: dict[str, Any] | None = None
+    plastic: PlasticHistory | None = None
+
+
+@dataclass(frozen=True)
+class CycleResult:
+    """A converged cycle, not yet committed.
+
+    Attributes:
+        records: Per-increment columns: every :data:`~dolfinx_fretting.wear.ROW_FIELDS` entry, plus
+            ``local_iterations``, ``local_error`` and ``local_solves`` (arrays of length n).
+        obstacle: (n, dim) obstacle displacement of each increment (obstacle frame).
+        load_factors: (n, L) load factors of each increment.
+        final: The state the cycle ends in (committed by :meth:`~dolfinx_fretting.problem.FrettingProblem.commit`).
+        kept: With ``keep=True``: per increment (forces, slip, positions, wear gap, status), arrays (n, ...).
+        compiled: True when the compiled loop ran it.
+        kept_pairings: Finite sliding with ``keep=True``: the pairing each kept increment's arrays refer to
+            (:attr:`ContactState.pairing`), else None.
+    """
+
+    records: dict[str, np.ndarray]
+    obstacle: np.ndarray
+    load_factors: np.ndarray
+    final: ContactState
+    kept: tuple[np.ndarray, ...] | None
+    compiled: bool
+    kept_pairings: tuple[ContactSet, ...] | None = None
+
+
+def solver_columns(result: IncrementResult, newton_iterations: int | None = None,
+                    local_iterations: int | None = None, cutbacks: int = 0) -> dict[str, Any]:
+    """The :data:`SOLVER_COLUMNS` of an increment (and ``full_newton_fallbacks``); ``advance`` gives the totals
+    over its sub-increments."""
+    newton = result.newton or {}
+    return {"local_iterations": result.iterations if local_iterations is None else local_iterations,
+            "local_error": result.error, "load_solves": result.local_solves,
+            "newton_iterations": (newton_iterations if newton_iterations is not None
+                                  else newton.get("newton_iterations", 1)) if result.newton is not None else 1,
+            "newton_delta_1": newton.get("delta_1", 0.0), "newton_delta_2": newton.get("delta_2", 0.0),
+            "cutbacks": cutbacks, "yielded_points": newton.get("yielded_points", 0),
+            "full_newton_fallbacks": newton.get("full_newton_fallback", 0)}

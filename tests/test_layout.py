@@ -1,0 +1,37 @@
+"""The layout tables (README's "Layout", docs/architecture.md's "Who owns what") name every module of the package
+once, and nothing else: a module added, renamed or removed without its row fails here (issue 25: the README's
+table had drifted, listing ``_dolfinx`` twice and missing seven modules)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+MODULES = sorted(p.stem for p in (ROOT / "dolfinx_fretting").glob("*.py") if p.stem not in ("__init__", "__main__"))
+
+
+def _table_modules(path: Path, heading: str) -> list[str]:
+    """The module names in the first column of the table under ``heading`` (a cell may name several:
+    ``io``, ``plots``)."""
+    text = path.read_text()
+    lines = text[text.index(heading):].splitlines()[1:]
+    start = next(i for i, line in enumerate(lines) if line.startswith("|"))
+    end = next((i for i in range(start, len(lines)) if not lines[i].startswith("|")), len(lines))
+    rows = lines[start:end]  # the first table under the heading
+    names: list[str] = []
+    for row in rows[2:]:  # the header and its rule
+        first = row.split("|")[1]
+        names += re.findall(r"`([A-Za-z_0-9]+)`", first)
+    return names
+
+
+@pytest.mark.parametrize("path,heading", [(ROOT / "README.md", "## Layout"),
+                                          (ROOT / "docs" / "architecture.md", "## Who owns what")])
+def test_layout_table_names_every_module_once(path, heading):
+    names = _table_modules(path, heading)
+    assert len(names) == len(set(names)), f"named twice in {path.name}: {sorted({n for n in names if names.count(n) > 1})}"
+    assert sorted(names) == MODULES, (f"{path.name}: missing {sorted(set(MODULES) - set(names))}, "
+                                      f"not modules {sorted(set(names) - set(MODULES))}")
