@@ -3,6 +3,7 @@
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -35,6 +36,28 @@ def _serial_run(demo: Path, tmp_path_factory) -> Path:
         _run([sys.executable, str(demo)], folder)
         _serial[demo.stem] = folder
     return _serial[demo.stem]
+
+
+#: A private name of the package: a module or attribute with a leading underscore (``dolfinx_fretting._dolfinx``,
+#: ``from dolfinx_fretting import _x``, ``dfr._x``).
+PRIVATE = re.compile(r"dolfinx_fretting(\.[A-Za-z0-9_]+)*\._|from dolfinx_fretting[.\w]* import[^\n]*\b_\w|\bdfr\._")
+
+
+@pytest.mark.parametrize("demo", DEMOS, ids=[d.stem for d in DEMOS])
+def test_demo_uses_public_names_only(demo):
+    """A demo is what a user copies: it imports nothing private of the package (issue 22)."""
+    found = [line for line in demo.read_text().splitlines() if PRIVATE.search(line)]
+    assert not found, found
+
+
+def test_the_private_name_pattern_finds_private_names():
+    for line in ("from dolfinx_fretting._dolfinx import vector_space", "import dolfinx_fretting._dolfinx as dfx",
+                 "from dolfinx_fretting import _dolfinx", "from dolfinx_fretting.contact import _tagged_facets",
+                 "x = dfr._API"):
+        assert PRIVATE.search(line), line
+    for line in ("from dolfinx_fretting.compat import model_to_mesh, vector_space", "import dolfinx_fretting as dfr",
+                 "dfr.Contact(V, (facet_tags, 1), flat, mu=0.0, bcs=bcs)", "from dolfinx_fretting.meshes_3d import a_b"):
+        assert not PRIVATE.search(line), line
 
 
 @pytest.mark.parametrize("demo", DEMOS, ids=[d.stem for d in DEMOS])
