@@ -12,9 +12,13 @@ import pytest
 
 from dolfinx_fretting._dolfinx import mpiexec
 
-DEMOS = sorted((Path(__file__).resolve().parents[1] / "demos").glob("demo_*.py"))
+ROOT = Path(__file__).resolve().parents[1]
+DEMOS = sorted((ROOT / "demos").glob("demo_*.py"))
+# The demos run in scratch folders: the checkout under test goes first on their path, or they would import the
+# installed package (an editable install of another checkout, a worktree's shared venv).
 ENV = dict(os.environ, CI="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-           OPENBLAS_NUM_THREADS="1")
+           OPENBLAS_NUM_THREADS="1",
+           PYTHONPATH=os.pathsep.join([str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
 #: Summary numbers compared between the serial and the 2-rank run (the physics; not timings or counters
 #: of the solver's internal work, which differ with the partition).
 NUMBERS = ("normal_force", "tangential_force", "max_pressure", "max_wear_depth", "wear_area",
