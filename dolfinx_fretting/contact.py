@@ -28,10 +28,30 @@ __all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface"
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
-    """Orthonormal frame with rows (n, t1[, t2]) for a unit normal in 2D or 3D.
+    """Orthonormal frame with rows (n, t1[, t2]) for a normal in 2D or 3D (divided by its length first).
 
-    In 2D ``t1 = (n_y, -n_x)`` (so ``n = (0, 1)`` gives ``t1 = (1, 0)``); in 3D ``t1`` is the coordinate
-    axis least aligned with ``n``, orthogonalised, and ``t2 = n x t1``.
+    - 2D: ``t1 = (n_y, -n_x)``, n turned clockwise by 90 degrees: ``n = (0, 1)`` gives ``t1 = (1, 0)``.
+    - 3D: ``e`` is the coordinate axis least aligned with n (the smallest ``|n_i|``; on a tie the first of
+      x, y, z), ``t1 = (e - (e.n) n) / |e - (e.n) n|`` (e made orthogonal to n) and ``t2 = n x t1``, so that
+      (n, t1, t2) is right-handed:
+
+      ============== =================== =================
+      n              t1                  t2
+      ============== =================== =================
+      (0, 0, 1)      (1, 0, 0)           (0, 1, 0)
+      (0, 1, 0)      (1, 0, 0)           (0, 0, -1)
+      (1, 0, 0)      (0, 1, 0)           (0, 0, 1)
+      (1, 1, 1)/√3   (2, -1, -1)/√6      (0, 1, -1)/√2
+      ============== =================== =================
+
+    Args:
+        normal: The normal, 2 or 3 components, not zero.
+
+    Returns:
+        (dim, dim) array, rows n, t1[, t2].
+
+    Raises:
+        ValueError: if the normal does not have 2 or 3 components.
     """
     n = np.asarray(normal, dtype=float)
     n = n / np.linalg.norm(n)
@@ -1031,10 +1051,16 @@ class Contact:
     symmetry plane with its roller, whose normal is one of the frame's tangents): its force stays zero and the
     problem refuses obstacle motions along it (see :class:`~dolfinx_fretting.problem.FrettingProblem`).
 
-    Frames and units: the obstacle frame is ``obstacle.frame``, rows ``(n, t1[, t2])`` with n pointing from the
-    obstacle into the body, ``t1 = (n_y, -n_x)`` in 2D and ``t2 = n x t1`` in 3D; per-contact forces ``r``
-    and relative positions are in each contact's own frame (``contact_set.frames``: the obstacle frame for a
-    rigid plane, the master segment's for an elastic body).
+    Frames and units: the obstacle frame is ``obstacle.frame``, rows ``(n, t1[, t2])`` with n the obstacle's
+    normal divided by its length, pointing from the obstacle into the body, ``t1 = (n_y, -n_x)`` in 2D; in 3D
+    t1 the coordinate axis least aligned with n made orthogonal to it, and ``t2 = n x t1`` (see
+    :func:`tangent_frame`: ``n = (0, 0, 1)`` gives ``t1 = (1, 0, 0)``, ``t2 = (0, 1, 0)``). Per-contact forces
+    ``r`` and relative positions are in each contact's own frame (``contact_set.frames``: the obstacle frame for a
+    rigid plane, the master facet's for an elastic body, whose 3D t1 is the obstacle frame's t1 projected on the
+    facet).
+
+    Against a rigid plane the normal and tangential problems are coupled (Dundurs' β ≠ 0): the stick zone of
+    a partial-slip contact is not Cattaneo–Mindlin's; see "Frames and units" in ``docs/api.md``.
 
     Args:
         V: Vector P1 displacement space (anything else is refused).

@@ -165,6 +165,8 @@ def test_the_3d_frame_is_built_as_documented():
     assert np.array_equal(tangent_frame([0.0, 0.0, 1.0]), [[0, 0, 1], [1, 0, 0], [0, 1, 0]])
     # n = y: t1 = x, t2 = y x x = -z.
     assert np.array_equal(tangent_frame([0.0, 1.0, 0.0]), [[0, 1, 0], [1, 0, 0], [0, 0, -1]])
+    # n = x: the least aligned axes are y and z: t1 = y, t2 = x x y = z.
+    assert np.array_equal(tangent_frame([1.0, 0.0, 0.0]), [[1, 0, 0], [0, 1, 0], [0, 0, 1]])
     # n = (1, 1, 1)/sqrt 3: t1 = x orthogonalised, (2, -1, -1)/sqrt 6; t2 = n x t1 = (0, 1, -1)/sqrt 2 (by hand).
     frame = tangent_frame([1.0, 1.0, 1.0])
     assert np.allclose(frame, [np.ones(3) / np.sqrt(3), [2 / np.sqrt(6), -1 / np.sqrt(6), -1 / np.sqrt(6)],
