@@ -42,10 +42,10 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 import dolfinx_fretting as dfr
-# The two calls whose spelling changed between DOLFINx 0.5 and 0.11 (this demo runs on both; on one
-# DOLFINx, write them directly: 0.11 `dolfinx.io.gmsh.model_to_mesh(...).mesh` and
-# `fem.functionspace(msh, ("Lagrange", 1, (2,)))`).
-from dolfinx_fretting._dolfinx import model_to_mesh, vector_space
+# The two calls whose spelling changed between DOLFINx 0.5 and 0.11, from the package's public `compat` module
+# (this demo runs on both; on one DOLFINx, write them directly: 0.11 `dolfinx.io.gmsh.model_to_mesh(...).mesh`
+# and `fem.functionspace(msh, ("Lagrange", 1, (2,)))`).
+from dolfinx_fretting.compat import model_to_mesh, vector_space
 
 E, nu = 210000.0, 0.3            # MPa
 b, R = 0.5, 10.0                 # flat half-width and edge radius (mm)

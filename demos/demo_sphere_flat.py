@@ -39,9 +39,9 @@ from dolfinx import fem
 
 import dolfinx_fretting as dfr
 from dolfinx_fretting.meshes_3d import hertz_sphere, sphere_on_flat
-# The one call whose spelling changed between DOLFINx 0.5 and 0.11 (this demo runs on both; on one DOLFINx,
-# write it directly: 0.11 `fem.functionspace(msh, ("Lagrange", 1, (3,)))`).
-from dolfinx_fretting._dolfinx import vector_space
+# The one call whose spelling changed between DOLFINx 0.5 and 0.11, from the package's public `compat` module
+# (this demo runs on both; on one DOLFINx, write it directly: 0.11 `fem.functionspace(msh, ("Lagrange", 1, (3,)))`).
+from dolfinx_fretting.compat import vector_space
 
 E, nu = 210000.0, 0.3            # MPa: steel
 R, P = 10.0, 100.0               # ball radius (mm), normal force on the whole ball (N)

@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 import shutil
 import sys
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 from mpi4py import MPI  # first: loads libmpi for DOLFINx and PETSc (the wheel's libmpi.so.12)
@@ -30,6 +30,9 @@ import ufl  # noqa: E402
 from dolfinx import fem  # noqa: E402
 from dolfinx import mesh as dmesh  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
+
+if TYPE_CHECKING:  # for the annotations only: gmsh is imported by whoever builds a model
+    import gmsh
 
 __all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API", "TESTED_VERSIONS", "versions",
            "basis_gradient_expression", "eval_basis_gradients",
@@ -84,18 +87,38 @@ def value_size(V) -> int:
     return int(V.dofmap.index_map_bs) if V.num_sub_spaces == 0 else int(V.num_sub_spaces)
 
 
-def vector_space(msh, degree: int = 1, family: str = "Lagrange") -> fem.FunctionSpace:
-    """Vector-valued space with ``gdim`` components (the displacement space).
+def vector_space(msh: dolfinx.mesh.Mesh, degree: int = 1, family: str = "Lagrange") -> fem.FunctionSpace:
+    """Vector-valued space with ``gdim`` components (the displacement space), on any tested DOLFINx.
 
-    Its dofmap is blocked (block size gdim): dof ``bs * node + component``.
+    0.11: ``fem.functionspace(msh, (family, degree, (gdim,)))``; 0.5: ``fem.VectorFunctionSpace(msh, (family,
+    degree))``. Its dofmap is blocked (block size gdim): dof ``bs * node + component``.
+
+    Args:
+        msh: The mesh; the space has ``msh.geometry.dim`` components.
+        degree: Polynomial degree (:class:`~dolfinx_fretting.contact.Contact` needs 1).
+        family: Element family, e.g. ``"Lagrange"``.
+
+    Returns:
+        The function space.
     """
     if LEGACY_API:
         return fem.VectorFunctionSpace(msh, (family, degree))
     return fem.functionspace(msh, (family, degree, (msh.geometry.dim,)))
 
 
-def scalar_space(msh, family: str = "Lagrange", degree: int = 1) -> fem.FunctionSpace:
-    """Scalar space, e.g. ``("Lagrange", 1)`` or ``("DG", 0)``."""
+def scalar_space(msh: dolfinx.mesh.Mesh, family: str = "Lagrange", degree: int = 1) -> fem.FunctionSpace:
+    """Scalar space, e.g. ``("Lagrange", 1)`` or ``("DG", 0)``, on any tested DOLFINx.
+
+    0.11: ``fem.functionspace(msh, (family, degree))``; 0.5: ``fem.FunctionSpace(msh, (family, degree))``.
+
+    Args:
+        msh: The mesh.
+        family: Element family, e.g. ``"Lagrange"`` or ``"DG"``.
+        degree: Polynomial degree.
+
+    Returns:
+        The function space.
+    """
     if LEGACY_API:
         return fem.FunctionSpace(msh, (family, degree))
     return fem.functionspace(msh, (family, degree))
@@ -238,8 +261,25 @@ def eval_basis_gradients(compiled: fem.Expression, msh, cells: np.ndarray) -> np
 
 
 # Meshes --------------------------------------------------------------------------------------------------------
-def model_to_mesh(model, comm: MPI.Comm, rank: int, gdim: int) -> tuple[Any, Any, Any]:
-    """``(mesh, cell_tags, facet_tags)`` from the gmsh model that lives on ``rank``. Collective."""
+def model_to_mesh(model: gmsh.model, comm: MPI.Comm, rank: int,
+                  gdim: int) -> tuple[dolfinx.mesh.Mesh, dolfinx.mesh.MeshTags, dolfinx.mesh.MeshTags]:
+    """``(mesh, cell_tags, facet_tags)`` from the gmsh model that lives on ``rank``, on any tested DOLFINx.
+    Collective.
+
+    0.11: ``dolfinx.io.gmsh.model_to_mesh(model, comm, rank, gdim=gdim)`` (a named tuple: its ``mesh``,
+    ``cell_tags``, ``facet_tags``); 0.5: ``dolfinx.io.gmshio.model_to_mesh`` (a tuple).
+
+    Args:
+        model: ``gmsh.model`` with its mesh generated and physical groups defined (on ``rank``; other ranks'
+            models are not read).
+        comm: The communicator the mesh is distributed over.
+        rank: The rank that holds the model.
+        gdim: Geometric dimension of the mesh (2 or 3).
+
+    Returns:
+        The mesh, its cell tags (the physical groups of dimension ``tdim``) and facet tags (those of dimension
+        ``tdim - 1``), whose values are the physical groups' tags.
+    """
     if LEGACY_API:
         from dolfinx.io import gmshio
 

@@ -28,10 +28,30 @@ __all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface"
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
-    """Orthonormal frame with rows (n, t1[, t2]) for a unit normal in 2D or 3D.
+    """Orthonormal frame with rows (n, t1[, t2]) for a normal in 2D or 3D (divided by its length first).
 
-    In 2D ``t1 = (n_y, -n_x)`` (so ``n = (0, 1)`` gives ``t1 = (1, 0)``); in 3D ``t1`` is the coordinate
-    axis least aligned with ``n``, orthogonalised, and ``t2 = n x t1``.
+    - 2D: ``t1 = (n_y, -n_x)``, n turned clockwise by 90 degrees: ``n = (0, 1)`` gives ``t1 = (1, 0)``.
+    - 3D: ``e`` is the coordinate axis least aligned with n (the smallest ``|n_i|``; on a tie the first of
+      x, y, z), ``t1 = (e - (e.n) n) / |e - (e.n) n|`` (e made orthogonal to n) and ``t2 = n x t1``, so that
+      (n, t1, t2) is right-handed:
+
+      ============== =================== =================
+      n              t1                  t2
+      ============== =================== =================
+      (0, 0, 1)      (1, 0, 0)           (0, 1, 0)
+      (0, 1, 0)      (1, 0, 0)           (0, 0, -1)
+      (1, 0, 0)      (0, 1, 0)           (0, 0, 1)
+      (1, 1, 1)/√3   (2, -1, -1)/√6      (0, 1, -1)/√2
+      ============== =================== =================
+
+    Args:
+        normal: The normal, 2 or 3 components, not zero.
+
+    Returns:
+        (dim, dim) array, rows n, t1[, t2].
+
+    Raises:
+        ValueError: if the normal does not have 2 or 3 components.
     """
     n = np.asarray(normal, dtype=float)
     n = n / np.linalg.norm(n)
@@ -48,22 +68,32 @@ def tangent_frame(normal: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class RigidPlane:
-    """A rigid plane through ``point`` whose unit ``normal`` points from the plane into the body."""
+    """A rigid plane (a line in 2D) through ``point``, its ``normal`` pointing from the plane into the body.
+
+    The normal may have any length: it is stored divided by its length (``RigidPlane([0, 0], [0, 2]).normal`` is
+    ``[0, 1]``), so gaps are distances and the frame (:func:`tangent_frame`) is orthonormal whatever is given.
+
+    Attributes:
+        point: A point of the plane (2 or 3 coordinates, finite).
+        normal: The unit normal (given as any finite non-zero vector of the same dimension).
+    """
 
     point: np.ndarray
     normal: np.ndarray
 
     def __post_init__(self) -> None:
         n = np.asarray(self.normal, dtype=float)
-        if n.ndim != 1 or n.size not in (2, 3) or np.linalg.norm(n) == 0:
-            raise ValueError(f"plane normal must be a non-zero 2- or 3-vector, got {self.normal!r}")
-        if np.asarray(self.point).shape != n.shape:
-            raise ValueError("plane point and normal must have the same dimension")
+        if n.ndim != 1 or n.size not in (2, 3) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
+            raise ValueError(f"RigidPlane.normal = {self.normal!r}: expected a finite non-zero 2- or 3-vector")
+        point = np.asarray(self.point, dtype=float)
+        if point.shape != n.shape or not np.all(np.isfinite(point)):
+            raise ValueError(f"RigidPlane.point = {self.point!r}: expected {n.size} finite coordinates, as the normal")
         object.__setattr__(self, "normal", n / np.linalg.norm(n))
-        object.__setattr__(self, "point", np.asarray(self.point, dtype=float))
+        object.__setattr__(self, "point", point)
 
     @property
     def frame(self) -> np.ndarray:
+        """Rows (n, t1[, t2]) of the plane's frame (see :func:`tangent_frame`)."""
         return tangent_frame(self.normal)
 
     def gap(self, coords: np.ndarray) -> np.ndarray:
@@ -202,7 +232,8 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
         The contact set, identical on every rank.
 
     Raises:
-        ValueError: if no candidate is found, or the dimensions disagree.
+        ValueError: if ``facets`` hold no node outside ``exclude_nodes`` on any rank, no candidate is found within
+            the window, or the dimensions disagree.
     """
     from dolfinx import fem
 
@@ -221,6 +252,11 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
     nodes = nodes[nodes < n_owned]  # owned only: each node listed once across ranks
     if exclude_nodes is not None and len(exclude_nodes):
         nodes = np.setdiff1d(nodes, exclude_nodes)
+    # Decided on the sum over ranks (a rank may own no node of the surface while others do), so that every rank
+    # raises or none does; without it the extent below fails on an empty array with numpy's own message.
+    if comm.allreduce(nodes.size, op=MPI.SUM) == 0:
+        raise ValueError("find_candidates: the facets given hold no free node on any rank (no facet, or every node "
+                         "in exclude_nodes); check the surface's marker and the Dirichlet conditions on it")
     # 3D: the geometry's coordinates (partition-free bits, see _node_coordinates); 2D keeps the tabulated ones.
     coords = (_node_coordinates(V) if gdim == 3 else V.tabulate_dof_coordinates())[nodes, :gdim]
     gaps = obstacle.gap(coords)
@@ -865,7 +901,8 @@ class ElasticBody:
     Attributes:
         surface: ``(facet_tags, marker)`` of the master's contact surface.
         normal: Unit normal of the master surface, pointing from the master into the slave body; it fixes
-            the frame (n, t1) of the obstacle motion and of the total forces.
+            the frame (n, t1[, t2]) of the obstacle motion and of the total forces (:func:`tangent_frame`). Given as
+            any finite non-zero vector, stored divided by its length.
         cells: Local cells of the master body (optional): the displacement recovered by
             :meth:`~dolfinx_fretting.problem.FrettingProblem.displacement` then includes the master's rigid
             motion ``D`` on its nodes.
@@ -921,6 +958,59 @@ def _check_vector_p1(V) -> None:
             "solve on a vector P1 space (a mixed or higher-order space is not supported)")
 
 
+def _tagged_facets(surface: tuple, msh, name: str) -> np.ndarray:
+    """Local facets (owned and ghost) of ``surface = (facet_tags, marker)``. Collective.
+
+    Refuses, before any expensive work, tags that are not facet tags of ``msh``'s dimension, a marker that is not
+    an integer, and a marker that tags no facet on any rank; that last message names the markers the tags hold.
+    The emptiness is decided on the sum over ranks (a rank may own none of a surface's facets while others do),
+    so every rank raises or none does.
+
+    Args:
+        surface: ``(facet_tags, marker)``.
+        msh: The mesh of the displacement space.
+        name: How the message calls the surface (``"surface"``, ``"ElasticBody.surface"``).
+    """
+    if not (isinstance(surface, tuple) and len(surface) == 2):
+        raise TypeError(f"Contact: {name} must be (facet_tags, marker), got {surface!r}")
+    facet_tags, marker = surface
+    if not all(hasattr(facet_tags, attribute) for attribute in ("find", "dim", "values")):
+        raise TypeError(f"Contact: {name}[0] must be DOLFINx facet tags (dolfinx.mesh.MeshTags), got "
+                        f"{type(facet_tags).__name__}")
+    if isinstance(marker, (bool, np.bool_)) or not isinstance(marker, (int, np.integer)):
+        raise TypeError(f"Contact: {name} marker = {marker!r}: expected an integer facet tag")
+    fdim = msh.topology.dim - 1
+    if facet_tags.dim != fdim:
+        raise ValueError(f"Contact: {name}: the tags are of entities of dimension {facet_tags.dim}; the facets of this "
+                         f"{msh.topology.dim}D mesh have dimension {fdim} (cell tags given for facet tags?)")
+    facets = np.asarray(facet_tags.find(int(marker)), dtype=np.int32)
+    comm = msh.comm
+    if comm.allreduce(facets.size, op=MPI.SUM) == 0:
+        held = sorted(set().union(*comm.allgather({int(v) for v in np.unique(facet_tags.values)})))
+        raise ValueError(f"Contact: {name} marker {int(marker)} tags no facet; "
+                         + (f"the facet tags hold markers {held}" if held else "the facet tags hold no marker"))
+    return facets
+
+
+def _refuse_fixed_surface(V, facets: np.ndarray, fixed_nodes: np.ndarray, marker: int) -> None:
+    """Refuse a contact surface whose every node has all its components fixed (no free vertex). Collective.
+
+    Such a surface cannot move towards the obstacle; without this check the candidate search would find no node
+    and fail further on. Decided on the sums over ranks, so every rank raises or none does.
+    """
+    from dolfinx import fem
+
+    fdim = V.mesh.topology.dim - 1
+    nodes = fem.locate_dofs_topological(V, fdim, facets)
+    owned = nodes[nodes < V.dofmap.index_map.size_local]  # each node counted once across ranks
+    counts = np.array([owned.size, np.setdiff1d(owned, fixed_nodes).size], dtype=np.int64)
+    n_nodes, n_free = V.mesh.comm.allreduce(counts, op=MPI.SUM)
+    if n_free == 0:
+        raise ValueError(f"Contact: surface marker {marker} has no free vertex: bcs fix every component of all its "
+                         f"{n_nodes} nodes, so none can move towards the obstacle. Remove the condition from the "
+                         "contact surface (or fix fewer components there) or give another marker")
+
+
 def constrained_dofs(V, bcs) -> np.ndarray:
     """Local unrolled dofs (``bs * node + component``) of ``V`` fixed by ``bcs`` (owned and ghost).
 
@@ -961,10 +1051,16 @@ class Contact:
     symmetry plane with its roller, whose normal is one of the frame's tangents): its force stays zero and the
     problem refuses obstacle motions along it (see :class:`~dolfinx_fretting.problem.FrettingProblem`).
 
-    Frames and units: the obstacle frame is ``obstacle.frame``, rows ``(n, t1[, t2])`` with n pointing from the
-    obstacle into the body, ``t1 = (n_y, -n_x)`` in 2D and ``t2 = n x t1`` in 3D; per-contact forces ``r``
-    and relative positions are in each contact's own frame (``contact_set.frames``: the obstacle frame for a
-    rigid plane, the master segment's for an elastic body).
+    Frames and units: the obstacle frame is ``obstacle.frame``, rows ``(n, t1[, t2])`` with n the obstacle's
+    normal divided by its length, pointing from the obstacle into the body, ``t1 = (n_y, -n_x)`` in 2D; in 3D
+    t1 the coordinate axis least aligned with n made orthogonal to it, and ``t2 = n x t1`` (see
+    :func:`tangent_frame`: ``n = (0, 0, 1)`` gives ``t1 = (1, 0, 0)``, ``t2 = (0, 1, 0)``). Per-contact forces
+    ``r`` and relative positions are in each contact's own frame (``contact_set.frames``: the obstacle frame for a
+    rigid plane, the master facet's for an elastic body, whose 3D t1 is the obstacle frame's t1 projected on the
+    facet).
+
+    Against a rigid plane the normal and tangential problems are coupled (Dundurs' β ≠ 0): the stick zone of
+    a partial-slip contact is not Cattaneo–Mindlin's; see "Frames and units" in ``docs/api.md``.
 
     Args:
         V: Vector P1 displacement space (anything else is refused).
@@ -981,13 +1077,20 @@ class Contact:
         H_free: H without the columns of fixed dofs (what W is built from).
         held_rows: Rows of H (``dim c + k``, k >= 1) whose every dof is fixed: held tangential directions.
         mu: Friction coefficient per contact.
+
+    Raises:
+        TypeError: ``surface`` (or ``ElasticBody.surface``) is not ``(facet tags, integer marker)``, or the
+            obstacle is of another type.
+        ValueError: before any candidate search, on every rank alike: tags that are not of facets; a marker
+            (the body's, or the master's of an :class:`ElasticBody`) that tags no facet on any rank, the message
+            naming the markers the tags hold; a surface with no free vertex (every component of every node fixed
+            by ``bcs``); a non-P1 space, a normal of the wrong dimension, a bad ``mu`` or ``window``. After it: no
+            candidate within ``window``, or a contact whose normal direction ``bcs`` fix entirely.
     """
 
     def __init__(self, V, surface: tuple, obstacle: RigidPlane | ElasticBody, mu: float | np.ndarray,
                  bcs=(), window: float | None = None):
         _check_vector_p1(V)
-        if not (isinstance(surface, tuple) and len(surface) == 2):
-            raise TypeError("Contact: surface must be (facet_tags, marker)")
         if not isinstance(obstacle, (RigidPlane, ElasticBody)):
             raise TypeError(f"Contact: obstacle must be a RigidPlane or an ElasticBody, got {type(obstacle).__name__}")
         gdim = V.mesh.geometry.dim
@@ -995,22 +1098,33 @@ class Contact:
             raise ValueError(f"Contact: the obstacle normal has {obstacle.normal.size} components, the mesh is {gdim}D")
         if window is not None and not (np.isfinite(window) and window > 0):
             raise ValueError(f"Contact: window = {window!r}: expected a finite half-width > 0 or None")
+        # The values now (numbers: a string or None is not read as one); their number, one per contact, once the
+        # contacts are known.
+        try:
+            mu_values = np.asarray(mu)
+        except ValueError:  # a ragged list
+            mu_values = np.array(np.nan)
+        if mu_values.dtype.kind not in "iuf" or mu_values.ndim > 1 or not np.all(np.isfinite(mu_values)) \
+                or np.any(mu_values < 0):
+            raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact)")
         self.V, self.surface, self.obstacle, self.window = V, surface, obstacle, window
         self.bcs = list(bcs)
         self._mu_given = mu
-        facet_tags, marker = surface
-        self.facets = np.asarray(facet_tags.find(marker), dtype=np.int32)
+        # The surfaces and their free vertices are checked (a few reductions) before any candidate search.
+        self.facets = _tagged_facets(surface, V.mesh, "surface")
+        master_facets = (_tagged_facets(obstacle.surface, V.mesh, "ElasticBody.surface")
+                         if isinstance(obstacle, ElasticBody) else None)
         bs = V.dofmap.index_map_bs
         fixed = constrained_dofs(V, self.bcs)
         counts = np.bincount(fixed // bs, minlength=0)
         self.fixed_nodes = np.flatnonzero(counts == bs).astype(np.int32)  # local blocks with every component fixed
+        _refuse_fixed_surface(V, self.facets, self.fixed_nodes, int(surface[1]))
         self.fixed_global = constrained_global_dofs(V, self.bcs)
         if isinstance(obstacle, RigidPlane):
             cs = find_candidates(V, self.facets, obstacle, window, exclude_nodes=self.fixed_nodes)
         else:
-            master_tags, master_marker = obstacle.surface
-            cs = find_pairs(V, self.facets, np.asarray(master_tags.find(master_marker), dtype=np.int32), window,
-                            exclude_nodes=self.fixed_nodes, reference_frame=obstacle.frame)
+            cs = find_pairs(V, self.facets, master_facets, window, exclude_nodes=self.fixed_nodes,
+                            reference_frame=obstacle.frame)
         self._use(cs)
         mu_arr = np.broadcast_to(np.asarray(mu, dtype=float), (cs.nc,)).copy() if np.ndim(mu) == 0 else \
             np.asarray(mu, dtype=float)

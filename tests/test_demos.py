@@ -3,6 +3,7 @@
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -11,9 +12,13 @@ import pytest
 
 from dolfinx_fretting._dolfinx import mpiexec
 
-DEMOS = sorted((Path(__file__).resolve().parents[1] / "demos").glob("demo_*.py"))
+ROOT = Path(__file__).resolve().parents[1]
+DEMOS = sorted((ROOT / "demos").glob("demo_*.py"))
+# The demos run in scratch folders: the checkout under test goes first on their path, or they would import the
+# installed package (an editable install of another checkout, a worktree's shared venv).
 ENV = dict(os.environ, CI="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-           OPENBLAS_NUM_THREADS="1")
+           OPENBLAS_NUM_THREADS="1",
+           PYTHONPATH=os.pathsep.join([str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
 #: Summary numbers compared between the serial and the 2-rank run (the physics; not timings or counters
 #: of the solver's internal work, which differ with the partition).
 NUMBERS = ("normal_force", "tangential_force", "max_pressure", "max_wear_depth", "wear_area",
@@ -35,6 +40,28 @@ def _serial_run(demo: Path, tmp_path_factory) -> Path:
         _run([sys.executable, str(demo)], folder)
         _serial[demo.stem] = folder
     return _serial[demo.stem]
+
+
+#: A private name of the package: a module or attribute with a leading underscore (``dolfinx_fretting._dolfinx``,
+#: ``from dolfinx_fretting import _x``, ``dfr._x``).
+PRIVATE = re.compile(r"dolfinx_fretting(\.[A-Za-z0-9_]+)*\._|from dolfinx_fretting[.\w]* import[^\n]*\b_\w|\bdfr\._")
+
+
+@pytest.mark.parametrize("demo", DEMOS, ids=[d.stem for d in DEMOS])
+def test_demo_uses_public_names_only(demo):
+    """A demo is what a user copies: it imports nothing private of the package (issue 22)."""
+    found = [line for line in demo.read_text().splitlines() if PRIVATE.search(line)]
+    assert not found, found
+
+
+def test_the_private_name_pattern_finds_private_names():
+    for line in ("from dolfinx_fretting._dolfinx import vector_space", "import dolfinx_fretting._dolfinx as dfx",
+                 "from dolfinx_fretting import _dolfinx", "from dolfinx_fretting.contact import _tagged_facets",
+                 "x = dfr._API"):
+        assert PRIVATE.search(line), line
+    for line in ("from dolfinx_fretting.compat import model_to_mesh, vector_space", "import dolfinx_fretting as dfr",
+                 "dfr.Contact(V, (facet_tags, 1), flat, mu=0.0, bcs=bcs)", "from dolfinx_fretting.meshes_3d import a_b"):
+        assert not PRIVATE.search(line), line
 
 
 @pytest.mark.parametrize("demo", DEMOS, ids=[d.stem for d in DEMOS])

@@ -29,7 +29,7 @@ DEMOS = sorted((ROOT / "demos").glob("demo_*.py"))
 #: The modules with a page in docs/reference (the issue's list, and those the others refer to).
 MODULES = ("problem", "contact", "output", "plots", "scenes", "local_solvers", "wear", "cycling",
            "cycle_jump", "plasticity", "plastic_zone", "materials", "compliance", "loading", "io",
-           "contact_output", "_dolfinx", "sizes")
+           "contact_output", "_dolfinx", "compat", "sizes")
 
 
 @pytest.fixture(scope="module")
@@ -77,6 +77,18 @@ def test_every_export_and_module_is_documented(built):
     for module in MODULES:
         page = (out / "reference" / f"{module}.html").read_text()
         assert f'id="module-dolfinx_fretting.{module}"' in page, module
+
+
+def test_compat_helpers_are_documented(built):
+    """The public module the demos build their meshes and spaces with documents every name it exports."""
+    out, proc = built
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    from dolfinx_fretting import compat
+
+    page = (out / "reference" / "compat.html").read_text()
+    assert compat.__all__
+    for name in compat.__all__:
+        assert f'id="dolfinx_fretting.compat.{name}"' in page, name
 
 
 def test_demos_are_pages_with_their_code_and_text(built):

@@ -206,3 +206,36 @@ def test_parallel_3d_sphere_matches_serial():
         # As the 2D scenes: other factorisations' rounding only (W to ~1e-13 of its largest entry): 1e-8.
         scale = max(np.abs(serial[key]).max(), 1e-300)
         assert np.abs(value - serial[key]).max() <= 1e-8 * scale, key
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_contact_surface_checks_are_collective():
+    """A surface whose facets one rank alone tags is a surface on every rank; a marker no rank tags is refused on
+    every rank with the same message, naming the markers of all ranks (decided by reductions, so none hangs)."""
+    from dolfinx import mesh
+
+    import dolfinx_fretting as dfr
+    from dolfinx_fretting.compat import vector_space
+
+    n = 8
+    msh = mesh.create_unit_square(COMM, n, n)
+    V = vector_space(msh, 1)
+    msh.topology.create_connectivity(1, 0)
+    bottom = mesh.locate_entities_boundary(msh, 1, lambda x: np.isclose(x[1], 0.0))
+    bottom = bottom[bottom < msh.topology.index_map(1).size_local].astype(np.int32)  # owned: each facet once
+    holder = COMM.allgather(bottom.size > 0).index(True)  # the first rank that owns bottom facets tags them 1
+    marker = 1 if COMM.rank == holder else 20 + COMM.rank  # the others tag theirs with their own marker
+    tags = mesh.meshtags(msh, 1, bottom, np.full(bottom.size, marker, dtype=np.int32))
+
+    contact = dfr.Contact(V, (tags, 1), dfr.RigidPlane([0.0, -0.1], [0.0, 1.0]), mu=0.3)
+    # Reference: the holder's facets are intervals of length 1/n on y = 0 centred at their midpoints; their end
+    # points (on the grid k/n, rounded to it) are the contact nodes.
+    mid = mesh.compute_midpoints(msh, 1, bottom)[:, 0] if COMM.rank == holder else np.zeros(0)
+    ends = COMM.bcast(np.unique(np.round(np.concatenate([mid - 0.5 / n, mid + 0.5 / n]) * n)) / n, root=holder)
+    assert np.allclose(contact.contact_set.coords[:, 0], ends, rtol=0, atol=1e-12)
+    assert np.allclose(contact.contact_set.gap0, 0.1, rtol=0, atol=1e-12)
+
+    held = sorted({1} | {20 + r for r, owns in enumerate(COMM.allgather(bottom.size > 0)) if owns and r != holder})
+    with pytest.raises(ValueError) as info:
+        dfr.Contact(V, (tags, 7), dfr.RigidPlane([0.0, -0.1], [0.0, 1.0]), mu=0.3)
+    assert str(info.value) == f"Contact: surface marker 7 tags no facet; the facet tags hold markers {held}"
