@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import sliding
-from .laws import Archard
+from .laws import WearLaw
 from .operators import ContactOperators
 from .readers import worn_measure
 from .state import ContactState, CycleResult, IncrementResult, solver_columns
@@ -39,12 +39,12 @@ class SlidingMonitor:
     reach_warned: bool = False
 
 
-def wear_coefficient(wear: Archard | None, in_cycle: bool) -> float:
+def wear_coefficient(wear: WearLaw | None, in_cycle: bool) -> float:
     """The wear gap's coefficient of an increment (0 without a wear law)."""
     return 0.0 if wear is None else wear.coefficient(in_cycle)
 
 
-def commit(operators: ContactOperators, wear: Archard | None, monitor: SlidingMonitor, state: ContactState,
+def commit(operators: ContactOperators, wear: WearLaw | None, monitor: SlidingMonitor, state: ContactState,
            result: IncrementResult | CycleResult) -> ContactState:
     """The new state after a converged increment or cycle: Archard's law (increments), the plastic history,
     the totals of :attr:`~dolfinx_fretting.state.ContactState.record`. ``state`` itself is not changed. Collective only in name

@@ -1,17 +1,57 @@
 """Wear laws: what the wear gap gains in an increment from the contact pressure and the slip.
 
-:class:`Archard` is the paper's equation 5. The bookkeeping of the per-increment columns (forces, energies,
-widths, state counts) is the kernel :func:`dolfinx_fretting.wear.commit_increment`; the law supplies its
-coefficients.
+A wear law is any object with the :class:`WearLaw` protocol; :class:`Archard` (the paper's equation 5) is the
+one the package ships. The kernels that commit an increment (:func:`dolfinx_fretting.wear.commit_increment`,
+the compiled cycle loop of :mod:`dolfinx_fretting.cycling`) apply the law in its rate form
+``dg = c p |dx_t|`` at sliding contacts, with ``c = law.coefficient(in_cycle)``; they also keep the columns of
+the increment (forces, energies, widths, state counts), which are not the law's business. Everything else
+(the scene runner's cycle jumps, the writers, the tests) reads the law through its public methods.
+
+An energy law (Fouvry's, ``dg = alpha tau |dx_t|``) has this form at sliding contacts under constant friction
+(``tau = mu p``: ``c = alpha mu``), which is the room the protocol leaves for it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
 
 from .settings import finite
 
-__all__ = ["Archard"]
+__all__ = ["WearLaw", "Archard"]
+
+
+@runtime_checkable
+class WearLaw(Protocol):
+    """What the public problem needs of a wear law.
+
+    Attributes:
+        acceleration: Each simulated cycle stands for this many physical ones (>= 1).
+    """
+
+    acceleration: float
+
+    def coefficient(self, in_cycle: bool) -> float:
+        """The rate ``c`` of ``dg = c p |dx_t|`` applied to an increment (length per pressure per slip), with
+        the acceleration in a load cycle."""
+
+    @property
+    def slave_share(self) -> float:
+        """Fraction of the wear gap worn from the slave body (1 when one body wears)."""
+
+    @property
+    def body_coefficients(self) -> tuple[float, float]:
+        """The physical coefficients of the slave and the master body (without acceleration)."""
+
+    def increment(self, pressure: np.ndarray, slip_increment: np.ndarray, in_cycle: bool = False) -> np.ndarray:
+        """The wear-gap increment of sliding contacts from their pressure (any shape, e.g. ``(nc,)`` or
+        ``(increments, nc)``) and slip increment (the same shape and one more axis: its tangential components,
+        1 in 2D, 2 in 3D)."""
+
+    def describe(self) -> str:
+        """One line for a run's description."""
 
 
 @dataclass(frozen=True)
@@ -53,7 +93,26 @@ class Archard:
             return 1.0
         return float(self.k_slave) / self.k_total
 
+    @property
+    def body_coefficients(self) -> tuple[float, float]:
+        """(slave, master) coefficients: ``(k, 0)`` with a single ``k``."""
+        return (self.k_total, 0.0) if self.k is not None else (float(self.k_slave), float(self.k_master))
+
     def coefficient(self, in_cycle: bool) -> float:
         """The coefficient applied to an increment: :attr:`k_total`, times ``acceleration`` in a load cycle (each
         simulated cycle stands for that many physical ones)."""
         return self.k_total * (self.acceleration if in_cycle else 1.0)
+
+    def increment(self, pressure: np.ndarray, slip_increment: np.ndarray, in_cycle: bool = False) -> np.ndarray:
+        """``c p |dx_t|`` (:meth:`coefficient`), ``|dx_t|`` the norm of the last axis of ``slip_increment`` (its
+        tangential components: both in 3D)."""
+        pressure = np.asarray(pressure, dtype=float)
+        slip = np.asarray(slip_increment, dtype=float)
+        if slip.shape != pressure.shape + slip.shape[-1:] or slip.shape[-1] not in (1, 2):
+            raise ValueError(f"Archard.increment: slip_increment of shape {slip.shape} for pressure of shape "
+                             f"{pressure.shape}: expected {pressure.shape + (1,)} (2D) or {pressure.shape + (2,)} (3D)")
+        return self.coefficient(in_cycle) * pressure * np.linalg.norm(slip, axis=-1)
+
+    def describe(self) -> str:
+        """``"Archard, k = ... 1/MPa x acceleration ..."``."""
+        return f"Archard, k = {self.k_total} 1/MPa x acceleration {self.acceleration}"

@@ -56,7 +56,7 @@ from .compliance import METHODS
 from .contact import Contact, ContactSet, ElasticBody
 from .cycles import compiled_cycle, cycle_targets, stepwise_cycle
 from .increments import advance, increment_targets, load_plastic, solve_contact, solve_plastic
-from .laws import Archard
+from .laws import Archard, WearLaw
 from .loading import CyclePath, Displacement, Force
 from .materials import J2Plasticity
 from .operators import ContactOperators
@@ -78,7 +78,8 @@ class FrettingProblem:
         contact: The :class:`~dolfinx_fretting.contact.Contact`.
         bcs: Dirichlet conditions. Their values are part of the model (applied in full at every increment);
             to scale a Dirichlet value along a load path, give it in ``prescribed`` instead.
-        wear: :class:`~dolfinx_fretting.laws.Archard`, or None (no wear).
+        wear: A wear law (the :class:`~dolfinx_fretting.laws.WearLaw` protocol, e.g.
+            :class:`~dolfinx_fretting.laws.Archard`), or None (no wear).
         loads: Named linear forms (UFL or ``fem.Form``) or assembled PETSc vectors; each is applied times its
             factor (``loads={"face": 2.0}`` in :meth:`solve`).
         prescribed: Named lists of Dirichlet conditions with non-zero values (``fem.Function`` or
@@ -99,7 +100,7 @@ class FrettingProblem:
 
     _count = 0
 
-    def __init__(self, a, contact: Contact, bcs: Sequence = (), *, wear: Archard | None = None,
+    def __init__(self, a, contact: Contact, bcs: Sequence = (), *, wear: WearLaw | None = None,
                  loads: Mapping[str, Any] | None = None, prescribed: Mapping[str, Sequence] | None = None,
                  petsc_options: Mapping[str, Any] | None = None, delassus_method: str = "auto",
                  solver: LocalSolver | None = None, plasticity: Plasticity | None = None,
@@ -109,8 +110,9 @@ class FrettingProblem:
             raise TypeError(f"FrettingProblem: contact must be a Contact, got {type(contact).__name__}")
         if delassus_method not in METHODS:
             raise ValueError(f"FrettingProblem: delassus_method = {delassus_method!r}: allowed {', '.join(METHODS)}")
-        if wear is not None and not isinstance(wear, Archard):
-            raise TypeError("FrettingProblem: wear must be an Archard law or None")
+        if wear is not None and not isinstance(wear, WearLaw):
+            raise TypeError(f"FrettingProblem: wear = {type(wear).__name__}: expected a wear law (the WearLaw protocol "
+                            "of dolfinx_fretting.laws, e.g. Archard) or None")
         names = list(loads or {}) + list(prescribed or {})
         for name in names:
             if not isinstance(name, str) or not name:

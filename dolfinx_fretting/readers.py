@@ -12,7 +12,7 @@ from . import _dolfinx as dfx
 from . import sliding
 from ._dolfinx import cell_dofmap, fem
 from .contact import ElasticBody
-from .laws import Archard
+from .laws import WearLaw
 from .operators import ContactOperators
 from .state import ContactState
 
@@ -75,7 +75,7 @@ def contact_fields(operators: ContactOperators, state: ContactState) -> dict[str
             "gap": y[:, 0].copy(), "slip": x[:, 1:].copy(), "relative_tangential": y[:, 1:].copy(),
             "wear": state.wear_gap.copy(), "status": status.copy()}
 
-def body_wear(operators: ContactOperators, wear: Archard | None, state: ContactState) -> dict[str, np.ndarray]:
+def body_wear(operators: ContactOperators, wear: WearLaw | None, state: ContactState) -> dict[str, np.ndarray]:
     """Two bodies: each body's worn depth. ``slave`` per contact node; ``master`` and
     ``master_coordinates`` (reference) at the master's points: with finite sliding the master's nodes
     (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`), with small sliding each contact's paired point (the pairing is fixed, so

@@ -32,6 +32,8 @@ from typing import Annotated, Any, Literal
 import annotated_types
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .laws import Archard
+
 __all__ = ["Scene", "SceneError", "builtin_scenes", "load_scene", "apply_overrides", "PRESETS", "preset_values",
            "scene_differences", "describe_differences", "MAX_ELASTIC_STRAIN", "SHAKEDOWN_TOLERANCE"]
 
@@ -369,24 +371,23 @@ class WearSettings(_Section):
             raise _range_error("wear.jump_forced", self.jump_forced, "unset unless wear.cycle_jump = true")
         return self
 
+    def archard(self) -> Archard:
+        """The public API's law of this section: :class:`~dolfinx_fretting.laws.Archard` with ``k``, or per body
+        with ``k_slave`` and ``k_master``."""
+        if self.k_slave is not None and self.k_master is not None:
+            return Archard(k_slave=self.k_slave, k_master=self.k_master, acceleration=self.acceleration)
+        return Archard(self.k, acceleration=self.acceleration)
+
     @property
     def k_total(self) -> float:
-        """The wear gap's coefficient (1/MPa): ``k``, or ``k_slave + k_master``."""
-        if self.k_slave is not None and self.k_master is not None:
-            return self.k_slave + self.k_master
-        return self.k
+        """The wear gap's coefficient (1/MPa): ``k``, or ``k_slave + k_master`` (:attr:`Archard.k_total
+        <dolfinx_fretting.laws.Archard.k_total>`)."""
+        return self.archard().k_total
 
     @property
     def slave_share(self) -> float:
         """Fraction of the wear gap worn from the slave body (the cylinder): 1 with a single ``k``."""
-        if self.k_slave is not None and self.k_master is not None and self.k_total > 0:
-            return self.k_slave / self.k_total
-        return 1.0
-
-    @property
-    def k_effective(self) -> float:
-        """The wear coefficient applied per simulated increment (1/MPa): 0 without a wear law."""
-        return self.k_total * self.acceleration if self.law == "archard" else 0.0
+        return self.archard().slave_share
 
 
 class LoadingSettings(_Section):

@@ -103,11 +103,7 @@ class ContactModel:
             contact = Contact(s.V, s.surface, s.obstacle, scene.contact.mu, all_bcs, self.half_width)
         except ValueError as exc:
             raise SimulationError(str(exc)) from None
-        wear = None
-        if scene.wear.law == "archard":
-            w = scene.wear
-            wear = (Archard(k_slave=w.k_slave, k_master=w.k_master, acceleration=w.acceleration)
-                    if w.k_slave is not None else Archard(w.k, acceleration=w.acceleration))
+        wear = scene.wear.archard() if scene.wear.law == "archard" else None
         plasticity = None
         if m.model == "elastoplastic":
             from .materials import J2Plasticity
@@ -624,7 +620,10 @@ class _Run:
             # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
             # stands for itself; jumps restart from one.
             dim = cs.dim
-            wear = k * out_r[:, 0::dim] / cs.tributary * np.abs(out_x[:, 1::dim]) * (out_status == 2)
+            n = out_r.shape[0]
+            slip = out_x.reshape(n, cs.nc, dim)[:, :, 1:]  # both tangential components in 3D
+            wear = self.problem.wear.increment(out_r[:, 0::dim] / cs.tributary, slip, in_cycle=True)
+            wear = wear * (out_status == 2)
             this = float(wear.sum(axis=0).max(initial=0.0))
             old = float(js["rate"].max(initial=0.0)) if js["rate"] is not None else 0.0
             err = (js["last"] - 1) * max(old, this)
@@ -786,7 +785,7 @@ class _Run:
             "delassus": "W of the elastic K built once" + (f"; {newton['delassus']}" if body is not None else ""),
             "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0): "
                         "normal-only contact, the local problem solved on the normal rows of W alone",
-            "wear": (f"Archard, k = {sc.wear.k_total} 1/MPa x acceleration {sc.wear.acceleration}"
+            "wear": (self.problem.wear.describe()
                      + (f" (cylinder {sc.wear.slave_share:.3g}, flat {1 - sc.wear.slave_share:.3g} of the wear gap)"
                         if two_body else "")
                      + ((", cycle jumps (wear gap and plastic state extrapolated between simulated cycles)"

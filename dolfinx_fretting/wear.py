@@ -1,12 +1,12 @@
-"""Archard wear and the bookkeeping of a converged increment (pure NumPy/numba, no mesh).
+"""The bookkeeping of a converged increment, with the wear law in its rate form (pure NumPy/numba, no mesh).
 
 After an increment converges (paper eq. 5, backward Euler in the pressure)::
 
     g_w^a  <-  g_w^a + k p_n^a |dx_t^a|,      p_n^a = r_n^a / A^a,
 
 with ``dx_t`` the slip increment of the increment (the tangential rows of the local solution x), ``A^a`` the
-tributary length (2D) or area (3D) of contact ``a`` and ``k`` the wear coefficient (times the wear
-acceleration, see ``scenes.WearSettings``). The wear gap enters the next increment's initial normal gap
+tributary length (2D) or area (3D) of contact ``a`` and ``k`` the wear law's coefficient of the increment
+(:meth:`dolfinx_fretting.laws.WearLaw.coefficient`: Archard's k, times the wear acceleration in cycles). The wear gap enters the next increment's initial normal gap
 (paper eqs. 3, 8). Wear is applied to sliding contacts only: at a sticking contact the exact ``dx_t`` is
 zero (what the solver returns there is its residual), at an open one ``p_n = 0``.
 
@@ -25,7 +25,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["ROW", "ROW_FIELDS", "commit_increment", "archard_increment", "wear_area"]
+__all__ = ["ROW", "ROW_FIELDS", "commit_increment", "wear_area"]
 
 #: Names of the entries of the per-increment output row filled by :func:`commit_increment`.
 ROW_FIELDS = (
@@ -142,15 +142,6 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
     row[13] = 1.0 if nc > 0 and (states[0] != _OPEN or states[nc - 1] != _OPEN) else 0.0
     row[14] = area_loaded
     row[15] = area_stick
-
-
-def archard_increment(k: float, pressure: np.ndarray, slip_increment: np.ndarray) -> np.ndarray:
-    """Wear-gap increment ``k p |dx_t|`` per contact (paper eq. 5); ``slip_increment`` is (nc,) or (nc, d-1)."""
-    if not (np.isfinite(k) and k >= 0):
-        raise ValueError(f"wear.k = {k}: expected a finite value >= 0 (1/MPa)")
-    s = np.asarray(slip_increment, dtype=float)
-    mag = np.abs(s) if s.ndim == 1 else np.linalg.norm(s, axis=1)
-    return k * np.asarray(pressure, dtype=float) * mag
 
 
 def wear_area(gw: np.ndarray, tributary: np.ndarray) -> float:

@@ -15,7 +15,8 @@ import pytest
 from dolfinx_fretting.plots import read_table
 from dolfinx_fretting.scenes import load_scene
 from dolfinx_fretting.simulation import run_scene
-from dolfinx_fretting.wear import ROW, ROW_FIELDS, archard_increment, commit_increment
+from dolfinx_fretting.laws import Archard
+from dolfinx_fretting.wear import ROW, ROW_FIELDS, commit_increment
 
 
 def _commit(r, x, mu, k, gw=None):
@@ -56,11 +57,15 @@ def test_commit_without_wear_law_keeps_the_gap():
     assert row[ROW["max_wear_depth"]] == 2e-4 and row[ROW["wear_area"]] == pytest.approx(1.5e-4)
 
 
-def test_archard_increment_validates():
-    assert archard_increment(2.0, np.array([1.0, 3.0]), np.array([-0.5, 0.25])).tolist() == [1.0, 1.5]
-    assert archard_increment(1.0, np.array([2.0]), np.array([[3.0, 4.0]])).tolist() == [10.0]
-    with pytest.raises(ValueError, match="wear.k"):
-        archard_increment(-1.0, np.ones(1), np.ones(1))
+def test_archard_increment_uses_both_tangential_components():
+    """k p |dx_t| (paper eq. 5) by hand: 2D one component, 3D the norm of both (3-4-5), acceleration in cycles."""
+    law = Archard(2.0, acceleration=10.0)
+    assert law.increment(np.array([1.0, 3.0]), np.array([[-0.5], [0.25]])).tolist() == [1.0, 1.5]
+    assert law.increment(np.array([1.0]), np.array([[3.0, 4.0]]), in_cycle=True).tolist() == [100.0]
+    with pytest.raises(ValueError, match="slip_increment of shape"):
+        law.increment(np.ones(2), np.ones(2))  # a 2D slip needs its component axis
+    with pytest.raises(ValueError, match="Archard.k"):
+        Archard(-1.0)
 
 
 # ---- cyclic runs --------------------------------------------------------------------------------------
