@@ -1,14 +1,19 @@
-"""Closed-form references used by the tests and the reports (line contact, plane strain).
+"""Closed-form references used by the tests and the reports: line contact (plane strain) and sphere (3D).
 
-Sources: K. L. Johnson, *Contact Mechanics* (CUP, 1985), sections 4.2 (Hertz line contact) and 7.2
-(Cattaneo-Mindlin partial slip of a cylinder).
+Sources: K. L. Johnson, *Contact Mechanics* (CUP, 1985), sections 4.2 (Hertz line contact), 7.2 (Cattaneo-Mindlin
+partial slip of a cylinder and of a sphere) and 7.3 (Mindlin-Deresiewicz: the oscillating tangential force);
+R. D. Mindlin and H. Deresiewicz, *Elastic spheres in contact under varying oblique forces*, J. Appl. Mech. 20
+(1953) 327-344. The 3D forms hold for elastically similar bodies (Dundurs' beta = 0: the tangential traction does
+not change the pressure) and take the traction parallel to Q (Mindlin's approximation; exact for nu = 0).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plane_strain_modulus", "hertz_line_contact", "hertz_pressure", "cattaneo_mindlin_stick_half_width"]
+__all__ = ["plane_strain_modulus", "hertz_line_contact", "hertz_pressure", "cattaneo_mindlin_stick_half_width",
+           "mindlin_shear_modulus", "cattaneo_mindlin_stick_radius", "mindlin_tangential_displacement",
+           "mindlin_deresiewicz_energy"]
 
 
 def plane_strain_modulus(E1: float, nu1: float, E2: float | None = None, nu2: float | None = None) -> float:
@@ -40,3 +45,50 @@ def cattaneo_mindlin_stick_half_width(a: float, Q: float, mu: float, P: float) -
     if not 0 <= Q < mu * P:
         raise ValueError(f"Q = {Q} must satisfy 0 <= Q < mu*P = {mu * P}")
     return float(a * np.sqrt(1.0 - Q / (mu * P)))
+
+
+# Sphere (3D) ------------------------------------------------------------------------------------------------
+def mindlin_shear_modulus(E1: float, nu1: float, E2: float | None = None, nu2: float | None = None) -> float:
+    """Tangential contact modulus G* of Johnson's §7.2, 1/G* = (2 - nu1)/G1 + (2 - nu2)/G2 with G = E/(2(1 + nu));
+    a rigid second body if E2 is None (then Dundurs' beta is not 0: the sphere's forms below only approximate the
+    stick zone and the energy). The convention: the initial tangential stiffness of a circular contact of
+    radius a is dQ/d delta = 8 a G* (the slope of :func:`mindlin_tangential_displacement` at Q = 0)."""
+    inv = (2.0 - nu1) * 2.0 * (1.0 + nu1) / E1
+    if E2 is not None:
+        nu2 = nu1 if nu2 is None else nu2
+        inv += (2.0 - nu2) * 2.0 * (1.0 + nu2) / E2
+    return 1.0 / inv
+
+
+def _load_ratio(Q: float, mu: float, P: float) -> float:
+    if not 0 <= abs(Q) < mu * P:
+        raise ValueError(f"|Q| = {abs(Q)} must be below mu*P = {mu * P}")
+    return abs(Q) / (mu * P)
+
+
+def cattaneo_mindlin_stick_radius(a: float, Q: float, mu: float, P: float) -> float:
+    """Stick radius c = a (1 - Q/(mu P))^(1/3) of a sphere under a tangential force |Q| < mu P growing from 0 at
+    constant P (Johnson §7.2)."""
+    return float(a * (1.0 - _load_ratio(Q, mu, P)) ** (1.0 / 3.0))
+
+
+def mindlin_tangential_displacement(Q: float, mu: float, P: float, a: float, G_star: float) -> float:
+    """Tangential displacement of one sphere relative to the other under Q growing from 0 at constant P (Johnson
+    eq. 7.42): delta = (3 mu P / (16 a G*)) [1 - (1 - Q/(mu P))^(2/3)], G* of :func:`mindlin_shear_modulus`."""
+    return float(np.sign(Q) * 3.0 * mu * P / (16.0 * a * G_star) * (1.0 - (1.0 - _load_ratio(Q, mu, P)) ** (2.0 / 3.0)))
+
+
+def mindlin_deresiewicz_energy(Q_amplitude: float, mu: float, P: float, a: float, G_star: float) -> float:
+    """Frictional energy dissipated in one steady cycle of a tangential force oscillating between -Q* and +Q*
+    (|Q*| < mu P) at constant P (Mindlin & Deresiewicz 1953; Johnson eq. 7.60):
+
+        W = (9 mu^2 P^2 / (10 a G*)) [1 - (1 - phi)^(5/3) - (5 phi / 6) (1 + (1 - phi)^(2/3))],  phi = Q*/(mu P),
+
+    with G* of :func:`mindlin_shear_modulus`. It is the area of the loop that Masing's rule makes of
+    :func:`mindlin_tangential_displacement` (each unloading branch is the loading curve of twice the force change,
+    doubled): W = 4 Q* delta(Q*) - 8 int_0^Q* delta(Q) dQ. Small phi (its series): W = Q*^3 / (36 a G* mu P).
+    """
+    phi = _load_ratio(Q_amplitude, mu, P)
+    rest = 1.0 - phi
+    return float(9.0 * mu**2 * P**2 / (10.0 * a * G_star)
+                 * (1.0 - rest ** (5.0 / 3.0) - 5.0 * phi / 6.0 * (1.0 + rest ** (2.0 / 3.0))))

@@ -83,6 +83,10 @@ class SceneModel:
     #: forces are the whole contact's, so a driver prescribes ``model_fraction`` times them and reports forces,
     #: energies and volumes divided by it.
     model_fraction: float = 1.0
+    #: Tangential directions of the obstacle frame (1: t1, 2: t2) that the conditions hold on some contacts (the
+    #: half model's roller on y = 0 holds t2): the API refuses a force along them, so a driver prescribes a zero
+    #: displacement there when the scene's tangential load (along t1) is a force.
+    held_tangential: tuple[int, ...] = ()
 
 
 def _elasticity(scene: Scene, V, quadrature_degree: int | None):
@@ -281,7 +285,7 @@ def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
     return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, h, window, zone, automatic, True,
                       elastic_cells, display_cells, None, two_body and scene.contact.sliding == "small", text,
                       von_mises, {"mesh_s": mesh_s},
-                      model_fraction=0.5 if g.half_model else 1.0)
+                      model_fraction=0.5 if g.half_model else 1.0, held_tangential=(2,) if g.half_model else ())
 
 
 #: How each sliding model pairs the two bodies, in the model's description.

@@ -742,14 +742,18 @@ class Scene(_Section):
                 if len(vector) != len(c.plane_normal):
                     raise _range_error(f"boundary.displacement.{name}", vector,
                                        f"a {len(c.plane_normal)}-vector (mm)")
-        if lo.tangential_kind == "pressure" and g.kind not in ("file", "sphere"):
-            faces = ("bottom", "right", "top", "left") if g.kind == "rectangle" else ("top", "surface")
-            if lo.pressure_face not in faces:
+        if lo.tangential_kind == "pressure" and g.kind == "half_cylinder":
+            # a half-cylinder's faces are its fixed top and the contact surface: neither may carry a face pressure
+            raise _range_error("loading.tangential_pressure", lo.tangential_pressure,
+                               "unset with geometry.kind = 'half_cylinder' (its faces are the fixed top and the "
+                               "contact surface; rub it by loading.tangential_displacement or "
+                               "loading.tangential_force)")
+        if lo.tangential_kind == "pressure" and g.kind == "rectangle":
+            free = [f for f in ("bottom", "right", "top", "left") if f not in ("top", c.surface)]
+            if lo.pressure_face not in free:
                 raise _range_error("loading.pressure_face", lo.pressure_face,
-                                   f"a face of the {g.kind}: {', '.join(faces)}")
-            if lo.pressure_face in ("top", c.surface):
-                raise _range_error("loading.pressure_face", lo.pressure_face,
-                                   "a face that is neither fixed (top) nor the contact surface")
+                                   f"{', '.join(free)} (a face of the rectangle that is neither the fixed top nor "
+                                   f"the contact surface {c.surface!r})")
         if c.sliding == "finite" and c.obstacle != "elastic_flat":
             raise _range_error("contact.sliding", c.sliding, "'small' unless contact.obstacle = 'elastic_flat' (finite "
                                "sliding re-pairs two deformable bodies)")
@@ -1047,6 +1051,8 @@ def _format_validation_error(err: ValidationError, source: str) -> str:
         elif key and key not in msg:
             msg = f"{key} = {e.get('input')!r}: {msg}"
         lines.append(f"  - {msg}")
+    if len(lines) == 2:  # one error: one line (a shell's or a log's reader sees it whole)
+        return f"{lines[0]} {lines[1].removeprefix('  - ')}"
     return "\n".join(lines)
 
 

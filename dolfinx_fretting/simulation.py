@@ -220,6 +220,19 @@ def _target(force_controlled: bool, value, model_fraction: float):
     return Force(np.asarray(value) * model_fraction) if force_controlled else Displacement(np.asarray(value))
 
 
+def _tangential_target(force_controlled: bool, value, setup: SceneModel):
+    """A scene's tangential target (along t1) for the API. A force in a model whose conditions hold a tangential
+    direction (:attr:`SceneModel.held_tangential`: the half model's t2) is one item per component: the force
+    along t1, a zero displacement along a held direction (the API refuses a force there), a zero force along
+    any other. ``value`` is a number (an increment) or an array (a cycle's increments)."""
+    if not (force_controlled and setup.held_tangential):
+        return _target(force_controlled, value, setup.model_fraction)
+    zero = np.zeros_like(np.asarray(value, dtype=float))
+    return tuple(_target(True, value, setup.model_fraction) if k == 1
+                 else Displacement(zero) if k in setup.held_tangential else Force(zero)
+                 for k in range(1, setup.V.mesh.geometry.dim))
+
+
 def _step_targets(step: LoadStep, model: ContactModel, normal_increments: int) -> dict[str, Any]:
     """The API's arguments of a scene's load step (the geometry's ramped loads follow the preload)."""
     loads = {PRESSURE_LOAD: step.pressure} if PRESSURE_LOAD in model.problem.load_names else {}
@@ -227,17 +240,19 @@ def _step_targets(step: LoadStep, model: ContactModel, normal_increments: int) -
         loads[name] = min(1.0, step.increment / normal_increments) if step.stage == "normal" else 1.0
     fraction = model.setup.model_fraction
     return {"normal": _target(step.normal_force_controlled, step.normal, fraction),
-            "tangential": _target(step.tangential_force_controlled, step.tangential, fraction), "loads": loads}
+            "tangential": _tangential_target(step.tangential_force_controlled, step.tangential, model.setup),
+            "loads": loads}
 
 
-def _cycle_path(scene: Scene, problem: FrettingProblem, model_fraction: float) -> CyclePath:
+def _cycle_path(scene: Scene, problem: FrettingProblem, setup: SceneModel) -> CyclePath:
     """The targets of every cycle of the scene (the same each cycle: built once)."""
     steps = cycle_path(scene.loading, 1)
     first = steps[0]
     pressures = np.array([s.pressure for s in steps])
     loads = {PRESSURE_LOAD: pressures} if PRESSURE_LOAD in problem.load_names else {}
-    return CyclePath(_target(first.normal_force_controlled, [s.normal for s in steps], model_fraction),
-                     _target(first.tangential_force_controlled, [s.tangential for s in steps], model_fraction), loads)
+    return CyclePath(_target(first.normal_force_controlled, [s.normal for s in steps], setup.model_fraction),
+                     _tangential_target(first.tangential_force_controlled, [s.tangential for s in steps], setup),
+                     loads)
 
 
 def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> RunDescription:
@@ -281,7 +296,7 @@ class _Run:
             sizes, xdmf_started = None, False
         else:
             self.state, sizes, xdmf_started = self._restore(meta)
-        self.path = (_cycle_path(scene, self.problem, self.model.setup.model_fraction) if scene.loading.cycles > 0
+        self.path = (_cycle_path(scene, self.problem, self.model.setup) if scene.loading.cycles > 0
                      else None)
         self.writer = FrettingWriter(
             self.problem, out_dir, _description(scene, self.model, self.path), profiles=scene.output.contact_profiles,
