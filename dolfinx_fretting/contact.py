@@ -374,6 +374,17 @@ def _vertex_geometry(msh, vertices: np.ndarray) -> np.ndarray:
     return cache[vertices]
 
 
+
+def _tied_gaps(gaps: np.ndarray, coords: np.ndarray) -> np.ndarray:
+    """``gaps`` with those within rounding of the smallest (1e-9 of the surface's extent) set to the smallest, so
+    that the first point of contact of a conforming surface (flat or concentric: equal gaps by construction) is
+    decided by the partition-free tie-breaks, not by the last bit of a gap (as :func:`find_candidates` does)."""
+    if gaps.size == 0:
+        return gaps
+    extent = np.ptp(coords, axis=0).max(initial=0.0)
+    smallest = gaps.min()
+    return np.where(gaps > smallest + 1e-9 * extent, gaps, smallest)
+
 def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
                exclude_nodes: np.ndarray | None = None, reference_frame: np.ndarray | None = None) -> ContactSet:
     """Pair each slave node with a point of the master surface, in the reference configuration. Collective.
@@ -449,7 +460,7 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     frames = surface.frames(pairs["normal"])
     gaps = np.einsum("ij,ij->i", coords - pairs["point"], pairs["normal"])
     abscissa = np.einsum("ij,ij->i", coords, frames[:, 1])  # position along the master's tangent
-    closest = coords[np.lexsort((coords[:, 0], np.abs(abscissa), gaps))[0]]  # ties: nearest x = 0 (partition-free)
+    closest = coords[np.lexsort((coords[:, 0], np.abs(abscissa), _tied_gaps(gaps, coords)))[0]]  # ties: nearest x = 0
     keep = np.ones(gnodes.size, dtype=bool)
     if half_width is not None:
         keep = np.abs(np.einsum("ij,ij->i", coords - closest, frames[:, 1])) <= half_width * (1 + 1e-12)
@@ -856,7 +867,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
     gaps = np.einsum("ij,ij->i", coords - pairs["point"], pairs["normal"])
     in_plane = coords @ ref[1:].T
     distance = np.linalg.norm(in_plane, axis=1)
-    closest = coords[np.lexsort((coords[:, 1], coords[:, 0], distance, gaps))[0]]  # ties: nearest the axis
+    closest = coords[np.lexsort((coords[:, 1], coords[:, 0], distance, _tied_gaps(gaps, coords)))[0]]  # ties: the axis
     keep = np.ones(gnodes.size, dtype=bool)
     if half_width is not None:
         keep = np.linalg.norm((coords - closest) @ ref[1:].T, axis=1) <= half_width * (1 + 1e-12)

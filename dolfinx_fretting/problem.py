@@ -9,7 +9,7 @@ in the idiom of dolfinx_mpc's ``LinearProblem(a, L, mpc, bcs)``::
     for approach in np.linspace(0, 1e-3, 5)[1:]:
         result = problem.solve(state, normal=approach)          # or normal=Force(100.0)
         state = problem.commit(state, result)                   # rollback = not committing
-    result = problem.run_cycle(state, CyclePath.triangular(80, normal=1e-3, tangential=5e-3))
+    result = problem.run_cycle(state, CyclePath.waveform(80, normal=1e-3, tangential=5e-3))
     state = problem.commit(state, result)
     u = problem.displacement(state)                             # a fem.Function
 
