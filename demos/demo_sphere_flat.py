@@ -38,7 +38,8 @@ import ufl
 from dolfinx import fem
 
 import dolfinx_fretting as dfr
-from dolfinx_fretting.meshes_3d import hertz_sphere, sphere_on_flat
+from dolfinx_fretting.analytic import hertz_sphere
+from dolfinx_fretting.meshes_3d import sphere_on_flat
 # The one call whose spelling changed between DOLFINx 0.5 and 0.11, from the package's public `compat` module
 # (this demo runs on both; on one DOLFINx, write it directly: 0.11 `fem.functionspace(msh, ("Lagrange", 1, (3,)))`).
 from dolfinx_fretting.compat import vector_space

@@ -9,11 +9,13 @@ not change the pressure) and take the traction parallel to Q (Mindlin's approxim
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["plane_strain_modulus", "hertz_line_contact", "hertz_pressure", "cattaneo_mindlin_stick_half_width",
-           "mindlin_shear_modulus", "cattaneo_mindlin_stick_radius", "mindlin_tangential_displacement",
-           "mindlin_deresiewicz_energy"]
+__all__ = ["plane_strain_modulus", "hertz_line_contact", "hertz_pressure", "hertz_sphere",
+           "cattaneo_mindlin_stick_half_width", "mindlin_shear_modulus", "cattaneo_mindlin_stick_radius",
+           "mindlin_tangential_displacement", "mindlin_deresiewicz_energy"]
 
 
 def plane_strain_modulus(E1: float, nu1: float, E2: float | None = None, nu2: float | None = None) -> float:
@@ -38,6 +40,20 @@ def hertz_pressure(x: np.ndarray, P: float, R: float, E_star: float, x0: float =
     a, p0 = hertz_line_contact(P, R, E_star)
     s = 1.0 - ((np.asarray(x) - x0) / a) ** 2
     return p0 * np.sqrt(np.clip(s, 0.0, None))
+
+
+def hertz_sphere(P: float, R: float, E_star: float) -> tuple[float, float]:
+    """Hertz's sphere on a flat (Johnson, *Contact Mechanics*, 1985, eqs 4.22-4.23): contact radius
+    ``a = (3 P R / (4 E*))^(1/3)`` and peak pressure ``p0 = 3 P / (2 pi a^2)``.
+
+    Args:
+        P: Normal force (N, > 0).
+        R: Sphere radius (mm); against a sphere of radius R2, the relative radius.
+        E_star: Contact modulus (MPa): ``E/(1 - nu^2)`` on a rigid flat, ``E/(2 (1 - nu^2))`` for two
+            identical bodies.
+    """
+    a = (3.0 * P * R / (4.0 * E_star)) ** (1.0 / 3.0)
+    return a, 3.0 * P / (2.0 * math.pi * a * a)
 
 
 def cattaneo_mindlin_stick_half_width(a: float, Q: float, mu: float, P: float) -> float:

@@ -47,7 +47,8 @@ def wear_coefficient(wear: WearLaw | None, in_cycle: bool) -> float:
 def commit(operators: ContactOperators, wear: WearLaw | None, monitor: SlidingMonitor, state: ContactState,
            result: IncrementResult | CycleResult) -> ContactState:
     """The new state after a converged increment or cycle: Archard's law (increments), the plastic history,
-    the totals of :attr:`~dolfinx_fretting.state.ContactState.record`. ``state`` itself is not changed. Collective only in name
+    the totals of :attr:`~dolfinx_fretting.state.ContactState.record`. ``state`` itself is not changed. Collective
+    only in name
     (no communication: every rank holds the same contact data)."""
     if isinstance(result, CycleResult):
         check_sliding(operators, monitor, result.final)

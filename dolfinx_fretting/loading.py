@@ -70,7 +70,7 @@ class CyclePath:
                  tangential: Displacement | Force | float | None = None,
                  loads: Mapping[str, float] | None = None) -> CyclePath:
         """A periodic path: ``normal`` held, ``tangential`` and ``loads`` amplitudes times the waveform
-        (:func:`dolfinx_fretting.loading.waveform`: ``"triangular"`` 0 → A → 0 → −A → 0, or ``"sinusoidal"``)."""
+        (:func:`waveform`: ``"triangular"`` 0 → A → 0 → −A → 0, or ``"sinusoidal"``)."""
         wave = waveform(shape, increments)
 
         def held(item):
@@ -94,7 +94,8 @@ class CyclePath:
 
 
 def tangential_item(values: np.ndarray, forced: np.ndarray):
-    """The ``tangential`` argument of :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` for these values and controls: one
+    """The ``tangential`` argument of :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` for these values and
+    controls: one
     Displacement or Force of all components, or one item per component when the controls differ."""
     if forced.all() or not forced.any():
         return (Force if forced.all() else Displacement)(values)

@@ -33,7 +33,7 @@ from mpi4py import MPI
 from .meshes import BodyMesh, _check, _is_real
 
 __all__ = ["SPHERE_ON_FLAT_TAGS", "SPHERE_ON_FLAT_REGIONS", "graded_coordinates", "sphere_on_flat_grid",
-           "sphere_on_flat", "hertz_sphere"]
+           "sphere_on_flat"]
 
 #: Facet tag values of :func:`sphere_on_flat` (the sphere's cap, then the flat). Every exterior facet carries
 #: exactly one; the ``symmetry`` tags exist in a half model only.
@@ -41,20 +41,6 @@ SPHERE_ON_FLAT_TAGS: dict[str, int] = {"top": 1, "surface": 2, "symmetry": 3, "s
                                        "flat_top": 5, "flat_bottom": 6, "flat_symmetry": 7, "flat_sides": 8}
 #: Cell tag values of the two bodies.
 SPHERE_ON_FLAT_REGIONS: dict[str, int] = {"sphere": 1, "flat": 2}
-
-
-def hertz_sphere(P: float, R: float, E_star: float) -> tuple[float, float]:
-    """Hertz's sphere on a flat (Johnson, *Contact Mechanics*, 1985, eqs 4.22-4.23): contact radius
-    ``a = (3 P R / (4 E*))^(1/3)`` and peak pressure ``p0 = 3 P / (2 pi a^2)``.
-
-    Args:
-        P: Normal force (N, > 0).
-        R: Sphere radius (mm); against a sphere of radius R2, the relative radius.
-        E_star: Contact modulus (MPa): ``E/(1 - nu^2)`` on a rigid flat, ``E/(2 (1 - nu^2))`` for two
-            identical bodies.
-    """
-    a = (3.0 * P * R / (4.0 * E_star)) ** (1.0 / 3.0)
-    return a, 3.0 * P / (2.0 * math.pi * a * a)
 
 
 # Pure NumPy --------------------------------------------------------------------------------------------------
@@ -179,7 +165,7 @@ def sphere_on_flat(comm: MPI.Comm, radius: float, contact_radius: float, contact
                    half: bool = True, flat: bool = True, flat_mesh_size: float | None = None) -> BodyMesh:
     """A sphere's cap on a flat (or alone, for a rigid plane), structured trilinear hexahedra. Collective.
 
-    Sized from the expected Hertz contact radius a (:func:`hertz_sphere`): cubes of edge ``h`` over
+    Sized from the expected Hertz contact radius a (:func:`~dolfinx_fretting.analytic.hertz_sphere`): cubes of edge ``h`` over
     ``|x|, |y| <= zone a`` (rounded up to whole cells) and ``depth_zone a`` deep, then steps growing by about
     ``growth`` up to ``extent a`` in every direction: the cap is ``extent a`` high with its top meant to be
     held (``extent = 9``: within 0.05 % of a large body for the peak pressure), the flat ``extent a`` deep.

@@ -26,7 +26,8 @@ iteration (paper Fig. 4) on the same object (``plasticity=...``).
 
 Frame of the obstacle motion: ``normal`` is the approach of the obstacle along n (n points from the obstacle
 into the body: a positive value closes the gap), ``tangential`` the motion along t1 (and t2 in 3D); a
-:class:`~dolfinx_fretting.loading.Force` instead prescribes the matching component of the total contact force on the body, the
+:class:`~dolfinx_fretting.loading.Force` instead prescribes the matching component of the total contact force on the
+body, the
 obstacle position becoming an unknown.
 
 Collective: every method is called on every rank with the same arguments; the local problem is solved on
@@ -214,10 +215,12 @@ class FrettingProblem:
 
         Args:
             state: The committed state to start from.
-            normal: Obstacle approach along n (a float or :class:`~dolfinx_fretting.loading.Displacement`), or :class:`~dolfinx_fretting.loading.Force` on the body
+            normal: Obstacle approach along n (a float or :class:`~dolfinx_fretting.loading.Displacement`), or
+                :class:`~dolfinx_fretting.loading.Force` on the body
                 along n; None keeps the state's prescribed value (the approach, or the force if the last
                 increment prescribed one).
-            tangential: Obstacle motion along t1 (2D) or (t1, t2) (3D), or :class:`~dolfinx_fretting.loading.Force` components; None
+            tangential: Obstacle motion along t1 (2D) or (t1, t2) (3D), or :class:`~dolfinx_fretting.loading.Force`
+                components; None
                 keeps the state's prescribed values likewise.
             loads: Factors of named loads and prescribed Dirichlet data; names not given keep their factors.
             in_cycle: The increment belongs to a load cycle (the wear law's acceleration applies at commit).
@@ -238,7 +241,8 @@ class FrettingProblem:
 
     def commit(self, state: ContactState, result: IncrementResult | CycleResult) -> ContactState:
         """The new state after a converged increment or cycle (:func:`dolfinx_fretting.commit.commit`: the wear
-        law, the plastic history, the totals of :attr:`~dolfinx_fretting.state.ContactState.record`, finite sliding's re-pairing).
+        law, the plastic history, the totals of :attr:`~dolfinx_fretting.state.ContactState.record`, finite sliding's
+        re-pairing).
         ``state`` itself is not changed; rollback is not committing."""
         return commit(self.operators, self.wear, self.sliding, state, result)
 
@@ -329,7 +333,8 @@ class FrettingProblem:
         return self.operators.obstacle_translation(obstacle)
 
     def relative_slip_ratio(self, state: ContactState) -> float:
-        """Two bodies: the largest relative slip in master elements (:func:`dolfinx_fretting.commit.relative_slip_ratio`)."""
+        """Two bodies: the largest relative slip in master elements
+        (:func:`dolfinx_fretting.commit.relative_slip_ratio`)."""
         return relative_slip_ratio(self.operators, state)
 
     def plastic_state(self, state: ContactState):

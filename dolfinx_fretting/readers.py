@@ -78,7 +78,8 @@ def contact_fields(operators: ContactOperators, state: ContactState) -> dict[str
 def body_wear(operators: ContactOperators, wear: WearLaw | None, state: ContactState) -> dict[str, np.ndarray]:
     """Two bodies: each body's worn depth. ``slave`` per contact node; ``master`` and
     ``master_coordinates`` (reference) at the master's points: with finite sliding the master's nodes
-    (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`), with small sliding each contact's paired point (the pairing is fixed, so
+    (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`), with small sliding each contact's
+    paired point (the pairing is fixed, so
     the master's share is carried per contact). Reads ``state`` only (the problem's pairing is not changed)."""
     cs = operators.contact_set_of(state)
     if not cs.two_body:
@@ -90,7 +91,8 @@ def body_wear(operators: ContactOperators, wear: WearLaw | None, state: ContactS
     on_master = operators.surface_compliance.master_areas > 0
     surface = cs.master_surface
     flat_nodes, first = np.unique(surface.nodes.ravel(), return_index=True)
-    x = surface.x.reshape(-1, surface.dim)[first[np.searchsorted(flat_nodes, operators.surface_compliance.nodes[on_master])]]
+    master_nodes = operators.surface_compliance.nodes[on_master]
+    x = surface.x.reshape(-1, surface.dim)[first[np.searchsorted(flat_nodes, master_nodes)]]
     return {"slave": state.wear_gap - sliding.interpolate_master(cs, operators.surface_compliance, state.master_wear),
             "master": state.master_wear[on_master].copy(), "master_coordinates": x}
 

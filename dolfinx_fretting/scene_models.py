@@ -144,7 +144,7 @@ def expected_contact_size(scene: Scene) -> float:
     nothing: the mesh's uniform zone (1.5 a) holds either).
     """
     from .analytic import hertz_line_contact
-    from .meshes_3d import hertz_sphere
+    from .analytic import hertz_sphere
 
     g, lo = scene.geometry, scene.loading
     sphere = g.kind == "sphere"
@@ -281,7 +281,7 @@ def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
     text = (f", each paired with the closest point of the elastic flat's faces (node-to-face, "
             f"{_PAIRING[scene.contact.sliding]})" if two_body else ", against a rigid plane") \
         + (", half model (roller on y = 0)" if g.half_model else "")
-    # hertz = None: the driver's reference is the line contact's; the sphere's is meshes_3d.hertz_sphere.
+    # hertz = None: the driver's reference is the line contact's; the sphere's is analytic.hertz_sphere.
     return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, h, window, zone, automatic, True,
                       elastic_cells, display_cells, None, two_body and scene.contact.sliding == "small", text,
                       von_mises, {"mesh_s": mesh_s},

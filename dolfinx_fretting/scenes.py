@@ -665,7 +665,7 @@ def preset_values(scene: Scene) -> dict[str, Any]:
     elif g.kind == "sphere" and lo.normal_force is not None:
         # 3D: a quarter of these elements per contact radius (balanced: a/h = 4, the built-in default;
         # measured on Hertz: the peak pressure within 0.2 % from a/h = 3, tests/test_sphere.py)
-        from .meshes_3d import hertz_sphere
+        from .analytic import hertz_sphere
 
         a, _ = hertz_sphere(lo.normal_force, g.radius, scene.contact_modulus)
         out["geometry.contact_mesh_size"] = float(f"{a / (p['contact_elements_per_half_width'] / 2.5):.3g}")

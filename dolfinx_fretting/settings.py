@@ -80,7 +80,8 @@ class Plasticity:
         quadrature_degree: Degree of the quadrature rule that carries the plastic state (and of K).
         tangent: Newton iteration matrix: ``"adaptive"`` (default), ``"consistent"`` or ``"elastic"``.
         max_iter, residual_tol, displacement_tol: Newton settings.
-        max_cutbacks: Halvings of an increment whose Newton loop fails, in :meth:`~dolfinx_fretting.problem.FrettingProblem.advance`.
+        max_cutbacks: Halvings of an increment whose Newton loop fails, in
+            :meth:`~dolfinx_fretting.problem.FrettingProblem.advance`.
         elastic_cells: Local cells that stay elastic whatever the stress (e.g. the other body of a pair).
     """
 

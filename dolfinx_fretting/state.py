@@ -22,7 +22,8 @@ __all__ = ["ConvergenceError", "STATUS_NAMES", "SOLVER_COLUMNS", "INCREMENT_COLU
 #: Contact status codes of :attr:`ContactState.status` (the wear module's classification).
 STATUS_NAMES = {0: "open", 1: "stick", 2: "slip"}
 #: Per-increment columns of a cycle's records (:attr:`CycleResult.records`) and of the info of
-#: :meth:`~dolfinx_fretting.problem.FrettingProblem.advance`: the totals of :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then the solver's
+#: :meth:`~dolfinx_fretting.problem.FrettingProblem.advance`: the totals of :data:`~dolfinx_fretting.wear.ROW_FIELDS`,
+#: then the solver's
 #: counters (one declaration: the scene runner's history table reads its columns from here).
 SOLVER_COLUMNS = ("local_iterations", "local_error", "load_solves", "newton_iterations", "newton_delta_1",
                   "newton_delta_2", "cutbacks", "yielded_points")
@@ -68,10 +69,12 @@ class ContactState:
         wear_gap: Wear gap per contact (length).
         obstacle: Obstacle displacement in the obstacle frame (approach along n, then t1[, t2]).
         targets: The last increment's prescribed values per obstacle component (the displacement, or the force
-            where it was force controlled): what a component not given to :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` keeps,
+            where it was force controlled): what a component not given to
+            :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` keeps,
             and where a cut increment's sub-steps start from.
         force_controlled: Which components of ``targets`` are forces.
-        load_factors: Factor of each named load and Dirichlet data set (:attr:`~dolfinx_fretting.problem.FrettingProblem.load_names`).
+        load_factors: Factor of each named load and Dirichlet data set
+            (:attr:`~dolfinx_fretting.problem.FrettingProblem.load_names`).
         increment: Increments committed.
         dissipated_energy: Frictional energy dissipated so far.
         local_iterations: Local solver sweeps so far.
@@ -85,7 +88,8 @@ class ContactState:
             pairing the per-contact arrays refer to (same slave nodes, frames and H of the paired master points),
             else None.
         master_wear: Finite sliding: the master's worn depth at the surface compliance's nodes
-            (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`; 0 at slave nodes); the master's share of ``wear_gap`` is this,
+            (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`; 0 at slave nodes); the master's
+            share of ``wear_gap`` is this,
             interpolated at each contact's paired point. None otherwise (the share is carried per contact).
     """
 

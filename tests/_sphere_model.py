@@ -10,6 +10,7 @@ from dolfinx import fem  # noqa: E402
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 from dolfinx_fretting import meshes_3d as m3  # noqa: E402
+from dolfinx_fretting.analytic import hertz_sphere  # noqa: E402
 
 COMM = MPI.COMM_WORLD
 E, NU, R, P = 210000.0, 0.3, 10.0, 100.0   # MPa, -, mm, N (the whole sphere's load)
@@ -28,7 +29,7 @@ def sphere_model(a_over_h, extent, growth, *, flat, half=True, mu=0.0, wear=None
     from Hertz's a for P; a half model has rollers (u_y = 0) on y = 0; ``sliding`` and ``reach`` (in units of a)
     as :class:`~dolfinx_fretting.contact.ElasticBody`'s. Returns (body, problem, a, p0, h)."""
     E_star = E / (1 - NU**2) / (2.0 if flat else 1.0)
-    a, p0 = m3.hertz_sphere(P, R, E_star)
+    a, p0 = hertz_sphere(P, R, E_star)
     h = a / a_over_h
     body = m3.sphere_on_flat(comm, R, a, h, extent=extent, growth=growth, half=half, flat=flat,
                              flat_mesh_size=None if flat_mesh_size is None else a / flat_mesh_size)

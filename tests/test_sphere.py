@@ -351,7 +351,7 @@ def test_sphere_flat_scene_model_is_hertz():
     builds from it, pressed by the scene's P on the half model (model_fraction 0.5): Hertz for two identical
     steel bodies; h = a/3 here (12.5k dofs) as in test_hertz_sphere_on_an_identical_flat. A caller that does not
     scale the forces to the half model is refused."""
-    from dolfinx_fretting.meshes_3d import hertz_sphere
+    from dolfinx_fretting.analytic import hertz_sphere
     from dolfinx_fretting.scene_models import build_scene_model
     from dolfinx_fretting.scenes import load_scene
 

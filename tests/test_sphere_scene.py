@@ -109,7 +109,7 @@ def _force_controlled_run(folder, a_over_h, phi, cycles, increments, half=True):
     a/``a_over_h`` under the contact, no wear. Returns (summary, cycles.csv or None, a, h, the scene)."""
     from dolfinx_fretting.analytic import plane_strain_modulus
     from dolfinx_fretting.contact_output import read_table
-    from dolfinx_fretting.meshes_3d import hertz_sphere
+    from dolfinx_fretting.analytic import hertz_sphere
 
     scene = load_scene("sphere-flat")
     m, P, mu = scene.material, scene.loading.normal_force, scene.contact.mu

@@ -169,7 +169,7 @@ def test_study_default_plan_of_a_sphere():
     # The sphere's mesh is sized from its Hertz contact radius a (cubes of a/4 unless the scene sets
     # contact_mesh_size; it has no nx, ny): the default reference halves that size and the default sweep takes
     # 2x and 4x the reference's. Before, both wrote geometry.nx, which a sphere refuses.
-    from dolfinx_fretting.meshes_3d import hertz_sphere
+    from dolfinx_fretting.analytic import hertz_sphere
 
     plan = plan_study("sphere-flat", ["loading.cycles=2"])
     scene = load_scene("sphere-flat")
