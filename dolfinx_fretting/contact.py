@@ -22,6 +22,8 @@ import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 
+from .laws import Coulomb, FrictionLaw
+
 __all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates", "find_pairs",
            "tangent_frame", "constrained_dofs", "constrained_global_dofs", "pair_with_faces", "pair_with_segments",
            "paired_contact_set"]
@@ -1077,7 +1079,9 @@ class Contact:
         V: Vector P1 displacement space (anything else is refused).
         surface: ``(facet_tags, marker)``: the body's boundary that may touch the obstacle.
         obstacle: :class:`RigidPlane` (2D or 3D, any orientation) or :class:`ElasticBody` (2D or 3D).
-        mu: Coulomb friction coefficient (finite, >= 0), one value or one per contact.
+        mu: The friction law (:class:`~dolfinx_fretting.laws.FrictionLaw`, e.g.
+            :class:`~dolfinx_fretting.laws.Coulomb`), or Coulomb's coefficient (finite, >= 0): one value or one per
+            contact.
         bcs: The Dirichlet conditions of the problem (their dofs are excluded as above).
         window: Candidate half-width (length units): only nodes within this distance, measured in the
             obstacle's tangent plane, of the body point closest to the obstacle; ``None``: every node of
@@ -1087,7 +1091,8 @@ class Contact:
         contact_set: The :class:`ContactSet` (nodes, frames, gaps, tributary measures, H).
         H_free: H without the columns of fixed dofs (what W is built from).
         held_rows: Rows of H (``dim c + k``, k >= 1) whose every dof is fixed: held tangential directions.
-        mu: Friction coefficient per contact.
+        friction: The friction law (``Coulomb(mu)`` when ``mu`` was a number).
+        mu: Friction coefficient per contact (the law's).
 
     Raises:
         TypeError: ``surface`` (or ``ElasticBody.surface``) is not ``(facet tags, integer marker)``, or the
@@ -1099,7 +1104,7 @@ class Contact:
             candidate within ``window``, or a contact whose normal direction ``bcs`` fix entirely.
     """
 
-    def __init__(self, V, surface: tuple, obstacle: RigidPlane | ElasticBody, mu: float | np.ndarray,
+    def __init__(self, V, surface: tuple, obstacle: RigidPlane | ElasticBody, mu: float | np.ndarray | FrictionLaw,
                  bcs=(), window: float | None = None):
         _check_vector_p1(V)
         if not isinstance(obstacle, (RigidPlane, ElasticBody)):
@@ -1109,15 +1114,20 @@ class Contact:
             raise ValueError(f"Contact: the obstacle normal has {obstacle.normal.size} components, the mesh is {gdim}D")
         if window is not None and not (np.isfinite(window) and window > 0):
             raise ValueError(f"Contact: window = {window!r}: expected a finite half-width > 0 or None")
-        # The values now (numbers: a string or None is not read as one); their number, one per contact, once the
-        # contacts are known.
-        try:
-            mu_values = np.asarray(mu)
-        except ValueError:  # a ragged list
-            mu_values = np.array(np.nan)
-        if mu_values.dtype.kind not in "iuf" or mu_values.ndim > 1 or not np.all(np.isfinite(mu_values)) \
-                or np.any(mu_values < 0):
-            raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact)")
+        # A friction law, or the values of Coulomb's (numbers: a string or None is not read as one), checked now;
+        # their number, one per contact, once the contacts are known.
+        if isinstance(mu, FrictionLaw):
+            friction = mu
+        else:
+            try:
+                mu_values = np.asarray(mu)
+            except ValueError:  # a ragged list
+                mu_values = np.array(np.nan)
+            if mu_values.dtype.kind not in "iuf" or mu_values.ndim > 1 or not np.all(np.isfinite(mu_values)) \
+                    or np.any(mu_values < 0):
+                raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact), or a "
+                                 "friction law (dolfinx_fretting.laws.Coulomb)")
+            friction = Coulomb(mu)
         self.V, self.surface, self.obstacle, self.window = V, surface, obstacle, window
         self.bcs = list(bcs)
         self._mu_given = mu
@@ -1137,8 +1147,11 @@ class Contact:
             cs = find_pairs(V, self.facets, master_facets, window, exclude_nodes=self.fixed_nodes,
                             reference_frame=obstacle.frame)
         self._use(cs)
-        mu_arr = np.broadcast_to(np.asarray(mu, dtype=float), (cs.nc,)).copy() if np.ndim(mu) == 0 else \
-            np.asarray(mu, dtype=float)
+        self.friction: FrictionLaw = friction
+        try:
+            mu_arr = np.asarray(friction.coefficients(cs.nc), dtype=float)
+        except ValueError:
+            mu_arr = np.array(np.nan)
         if mu_arr.shape != (cs.nc,) or not np.all(np.isfinite(mu_arr)) or np.any(mu_arr < 0):
             raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact, {cs.nc})")
         self.mu = mu_arr

@@ -1,4 +1,10 @@
-"""Wear laws: what the wear gap gains in an increment from the contact pressure and the slip.
+"""The contact's laws as objects: friction (how much tangential force a contact carries before it slides) and
+wear (what the wear gap gains in an increment from the contact pressure and the slip).
+
+A friction law is any object with the :class:`FrictionLaw` protocol; :class:`Coulomb` (constant coefficient,
+one value or one per contact) is the one the package ships, and a plain number given as ``mu`` to
+:class:`~dolfinx_fretting.contact.Contact` means ``Coulomb(mu)``. The local solvers read the coefficient per
+contact (:meth:`FrictionLaw.coefficients`).
 
 A wear law is any object with the :class:`WearLaw` protocol; :class:`Archard` (the paper's equation 5) is the
 one the package ships. The kernels that commit an increment (:func:`dolfinx_fretting.wear.commit_increment`,
@@ -20,7 +26,50 @@ import numpy as np
 
 from .settings import finite
 
-__all__ = ["WearLaw", "Archard"]
+__all__ = ["FrictionLaw", "Coulomb", "WearLaw", "Archard"]
+
+
+@runtime_checkable
+class FrictionLaw(Protocol):
+    """What a contact needs of a friction law."""
+
+    def coefficients(self, contacts: int) -> np.ndarray:
+        """The friction coefficient of each of ``contacts`` contacts (finite, >= 0)."""
+
+    def describe(self) -> str:
+        """One line for a run's description."""
+
+
+@dataclass(frozen=True)
+class Coulomb:
+    """Coulomb friction, ``|r_t| <= mu r_n``, with a constant coefficient: one value, or one per contact (in the
+    contact set's order)."""
+
+    mu: float | np.ndarray
+
+    def __post_init__(self) -> None:
+        try:
+            values = np.asarray(self.mu, dtype=float)
+        except (TypeError, ValueError):  # a string, None, a ragged list
+            values = np.array(np.nan)
+        if values.ndim > 1 or not np.all(np.isfinite(values)) or np.any(values < 0):
+            raise ValueError(f"Coulomb.mu = {self.mu!r}: expected a finite value >= 0 (or one per contact)")
+
+    def coefficients(self, contacts: int) -> np.ndarray:
+        """``mu`` for each contact; one value per contact must be ``contacts`` values."""
+        values = np.asarray(self.mu, dtype=float)
+        if values.ndim == 0:
+            return np.full(contacts, float(values))
+        if values.shape != (contacts,):
+            raise ValueError(f"Coulomb.mu: {values.size} values for {contacts} contacts (one value or one per contact)")
+        return values.copy()
+
+    def describe(self) -> str:
+        """``"Coulomb, mu = 0.5"`` (the range for per-contact values)."""
+        values = np.asarray(self.mu, dtype=float)
+        if values.ndim == 0:
+            return f"Coulomb, mu = {float(values):g}"
+        return f"Coulomb, mu = {values.min():g} to {values.max():g} per contact"
 
 
 @runtime_checkable

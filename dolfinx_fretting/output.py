@@ -293,7 +293,7 @@ class FrettingWriter:
         resume = resume or {}
         self.tables = ResultWriter(self.folder, self.comm, profiles=profiles, resume_sizes=resume.get("sizes"),
                                    xdmf_started=bool(resume.get("xdmf_started", False)), dim=problem.contact.dim,
-                                   flat_profiles=getattr(problem, "surface_compliance", None) is not None)
+                                   flat_profiles=problem.operators.surface_compliance is not None)
         self._functions = None
         if self.comm.rank == 0:
             write_json_atomic(self.folder / RUN_DESCRIPTION, self.description.to_json())

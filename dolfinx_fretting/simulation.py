@@ -798,7 +798,7 @@ class _Run:
                          f"'{sc.solver.newton_tangent}', {newton['iteration']}"
                          if body is not None else "linear elastic: no Newton loop, no plastic state"),
             "delassus": "W of the elastic K built once" + (f"; {newton['delassus']}" if body is not None else ""),
-            "friction": f"Coulomb, mu = {sc.contact.mu}" if sc.contact.mu > 0 else "frictionless (mu = 0): "
+            "friction": self.problem.contact.friction.describe() if sc.contact.mu > 0 else "frictionless (mu = 0): "
                         "normal-only contact, the local problem solved on the normal rows of W alone",
             "wear": (self.problem.wear.describe()
                      + (f" (cylinder {sc.wear.slave_share:.3g}, flat {1 - sc.wear.slave_share:.3g} of the wear gap)"

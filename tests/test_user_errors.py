@@ -90,7 +90,8 @@ def test_cell_tags_and_non_integer_markers_are_refused(no_candidate_search):
 def test_bad_friction_values_are_refused_before_the_search(no_candidate_search):
     V, tags = square()
     for mu in (np.inf, np.nan, -0.1, "0.3", None, True, [0.1, -0.1], [[0.1]], [0.1, [0.2]]):
-        with pytest.raises(ValueError, match=r"^Contact: mu = .*: expected a finite value >= 0 \(or one per contact\)$"):
+        with pytest.raises(ValueError, match=r"^Contact: mu = .*: expected a finite value >= 0 \(or one per contact\), "
+                                             r"or a friction law \(dolfinx_fretting\.laws\.Coulomb\)$"):
             dfr.Contact(V, (tags, 1), PLANE, mu=mu)
 
 
@@ -178,3 +179,21 @@ def test_the_3d_frame_is_built_as_documented():
         assert np.allclose(frame @ frame.T, np.eye(3), atol=1e-14) and np.linalg.det(frame) == pytest.approx(1.0)
         assert np.allclose(frame[0], n / np.linalg.norm(n), atol=1e-15)
     assert np.linalg.det(tangent_frame([0.3, 0.7])) == pytest.approx(-1.0)
+
+
+
+def test_friction_law_object_equals_its_coefficient():
+    """Contact(mu=Coulomb(0.3)) holds the same per-contact coefficients as mu=0.3, and per-contact values must
+    number the contacts (laws.Coulomb: the friction law the local solvers read through its coefficients)."""
+    from dolfinx_fretting.laws import Coulomb
+
+    V, tags = square()
+    bcs = [clamp(V, tags, 3)]
+    by_value = dfr.Contact(V, (tags, 1), PLANE, mu=0.3, bcs=bcs)
+    by_law = dfr.Contact(V, (tags, 1), PLANE, mu=Coulomb(0.3), bcs=bcs)
+    assert np.array_equal(by_law.mu, by_value.mu) and by_law.mu.shape == (N + 1,)
+    assert by_value.friction == Coulomb(0.3) and by_law.friction.describe() == "Coulomb, mu = 0.3"
+    ramp = np.linspace(0.1, 0.5, N + 1)
+    assert np.array_equal(dfr.Contact(V, (tags, 1), PLANE, mu=Coulomb(ramp), bcs=bcs).mu, ramp)
+    with pytest.raises(ValueError, match="mu"):
+        dfr.Contact(V, (tags, 1), PLANE, mu=Coulomb(ramp[:-1]), bcs=bcs)
