@@ -25,6 +25,14 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+#: The README is a front page (issue 25: it had grown to 772 lines in 21 sections, lines of 300+ characters);
+#: what does not fit lives in docs/*.md. dolfinx_mpc's README has 122 lines, dolfinx-external-operator's 199.
+README_MAX_LINES = 250
+#: The longest line of the README and of the pages moved out of it (the package's line length).
+MAX_LINE = 120
+#: The pages made from the old README's sections, held to the same line width.
+MOVED_PAGES = ("cli", "scenes", "method", "validation", "performance", "stacks")
 DEMOS = sorted((ROOT / "demos").glob("demo_*.py"))
 #: The modules with a page in docs/reference (the issue's list, and those the others refer to).
 MODULES = ("problem", "contact", "output", "plots", "scenes", "local_solvers", "wear", "cycling",
@@ -115,3 +123,110 @@ def _text(page: str) -> str:
     """The text of HTML: no tags (Pygments splits a code line into many spans), entities decoded, Sphinx's
     typographic apostrophes back to ASCII."""
     return html.unescape(re.sub(r"<[^>]+>", "", page)).replace("\u2019", "'")
+
+
+# The README as a front page: short, lines that fit a screen, and links that lead somewhere (on GitHub, where
+# relative links are resolved against the repository, and in this reference, which includes the README).
+
+def _relative_links(text: str) -> list[str]:
+    """The targets of the Markdown links and images of ``text`` that are relative paths (no scheme, no bare
+    ``#anchor``), inline (``[text](target)``) or as reference definitions (``[name]: target``)."""
+    targets = re.findall(r"\]\(<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\)", text)
+    targets += re.findall(r"^\s*\[[^\]]+\]:\s*<?(\S+?)>?(?:\s|$)", text, re.M)
+    return [t for t in targets if not re.match(r"[A-Za-z][A-Za-z0-9+.-]*:", t) and not t.startswith("#")]
+
+
+def test_readme_is_a_front_page():
+    lines = README.read_text().splitlines()
+    assert len(lines) <= README_MAX_LINES, (
+        f"README.md has {len(lines)} lines (at most {README_MAX_LINES}): move details to docs/ and link them")
+    long = [f"line {i}: {len(line)} characters" for i, line in enumerate(lines, 1) if len(line) > MAX_LINE]
+    assert not long, f"README.md: lines over {MAX_LINE} characters: {long}"
+
+
+def test_moved_pages_keep_the_line_width():
+    for name in MOVED_PAGES:
+        lines = (ROOT / "docs" / f"{name}.md").read_text().splitlines()
+        long = [f"line {i}: {len(line)}" for i, line in enumerate(lines, 1) if len(line) > MAX_LINE]
+        assert not long, f"docs/{name}.md: lines over {MAX_LINE} characters: {long}"
+
+
+def test_readme_links_point_to_files():
+    targets = _relative_links(README.read_text())
+    assert any(t.startswith("docs/") for t in targets), "the README links to no page of docs/"
+    missing = [t for t in targets if not (ROOT / t.split("#")[0]).exists()]
+    assert not missing, f"README.md links to files that do not exist: {missing}"
+    # The reference includes the README from docs/index.md; MyST resolves its links to docs/*.md as pages
+    # (``relative-docs``) and would warn on a link to any other file of the repository.
+    outside = [t for t in targets if not t.startswith("docs/")]
+    assert not outside, f"README.md links outside docs/ (a broken link in the reference): {outside}"
+    # every guide the README links to is in the reference's table of contents
+    index = (ROOT / "docs" / "index.md").read_text()
+    for target in targets:
+        page = target.split("#")[0]
+        if page.startswith("docs/") and page.endswith(".md"):
+            assert re.search(rf"^{re.escape(page[len('docs/'):-len('.md')])}$", index, re.M), (
+                f"{page} is linked from the README but not in docs/index.md's toctree")
+
+
+def test_every_page_is_in_the_table_of_contents():
+    index = (ROOT / "docs" / "index.md").read_text()
+    for page in sorted((ROOT / "docs").glob("*.md")):
+        if page.name != "index.md":
+            listed = re.search(rf"^{re.escape(page.stem)}$", index, re.M)
+            assert listed, f"docs/{page.name}: not in the toctree of docs/index.md"
+
+
+#: The user's model that the README's example starts from ("yours": mesh, vector P1 space, form, clamped top,
+#: facet tags): a 2 x 1 mm block over a rigid flat, in public names and plain DOLFINx (0.5 and 0.11).
+README_EXAMPLE_MODEL = """\
+import numpy as np
+from mpi4py import MPI
+import ufl
+from dolfinx import fem, mesh
+from petsc4py import PETSc
+from dolfinx_fretting.compat import vector_space
+
+msh = mesh.create_rectangle(MPI.COMM_WORLD, [np.array([-1.0, 0.0]), np.array([1.0, 1.0])], [40, 20],
+                            mesh.CellType.quadrilateral)
+bottom = mesh.locate_entities_boundary(msh, 1, lambda x: np.isclose(x[1], 0.0))
+top = mesh.locate_entities_boundary(msh, 1, lambda x: np.isclose(x[1], 1.0))
+facets = np.concatenate([bottom, top])
+order = np.argsort(facets)
+markers = np.concatenate([np.full(len(bottom), 1), np.full(len(top), 2)])
+facet_tags = mesh.meshtags(msh, 1, facets[order].astype(np.int32), markers[order].astype(np.int32))
+V = vector_space(msh)
+E, nu = 210000.0, 0.3
+lmbda, G = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
+a = ufl.inner(lmbda * ufl.tr(eps(ufl.TrialFunction(V))) * ufl.Identity(2) + 2 * G * eps(ufl.TrialFunction(V)),
+              eps(ufl.TestFunction(V))) * ufl.dx
+clamped = fem.locate_dofs_topological(V, 1, facet_tags.find(2))
+bcs = [fem.dirichletbc(np.zeros(2, dtype=PETSc.ScalarType), clamped, V)]
+"""
+
+
+def test_readme_example_runs_as_written(tmp_path):
+    """The README's first Python block, run as written after the user's model (a few seconds)."""
+    if importlib.util.find_spec("dolfinx") is None:
+        pytest.skip("DOLFINx is not installed")
+    block = re.search(r"```python\n(.*?)```", README.read_text(), re.S).group(1)
+    assert len(block.strip().splitlines()) <= 20, "the README's example should stay about 15 lines"
+    check = """
+assert 0.0 < state.record["normal_force"] <= 100.0 + 1e-6, state.record
+assert fields["wear"].max() > 0.0
+for name in ("history.csv", "contact_profiles.csv", "fields.xdmf", "profiles.png"):
+    assert (Path("out") / name).is_file(), name
+print("README example ok")
+"""
+    script = tmp_path / "readme_example.py"
+    script.write_text(README_EXAMPLE_MODEL + "from pathlib import Path\n" + block + check)
+    # this checkout's package first (a venv may hold an editable install of another one)
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=path, OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=600, env=env)
+    assert proc.returncode == 0, f"the README's example failed:\n{block}\n{proc.stderr[-4000:]}"
+    assert "README example ok" in proc.stdout
+
