@@ -16,7 +16,7 @@
 # \qquad E^* = \frac{E}{1-\nu^2}. $$
 #
 # The contact is solved on the Delassus matrix $W = H K^{-1} H^T$ by the Uzawa iteration with De Saxcé's
-# projection onto the Coulomb cone; see the README for the method.
+# projection onto the Coulomb cone; see docs/method.md for the method.
 
 # +
 import os
