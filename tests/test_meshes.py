@@ -250,13 +250,11 @@ _MPI_SCRIPT = textwrap.dedent("""
 
 
 @pytest.mark.mpi
-def test_half_cylinder_under_mpi(tmp_path):
+def test_half_cylinder_under_mpi(tmp_path, mpirun_env):
     script = tmp_path / "mesh_mpi.py"
     script.write_text(_MPI_SCRIPT.format(tests=os.path.dirname(os.path.abspath(__file__))))
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OPENBLAS_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1")
     proc = subprocess.run([*dfx.mpiexec(2), sys.executable, "-m", "mpi4py", str(script)],
-                          capture_output=True, text=True, env=env, timeout=300)
+                          capture_output=True, text=True, env=mpirun_env, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     line = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
     assert len(line) == 1, proc.stdout + proc.stderr
