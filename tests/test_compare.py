@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.images import assert_png
 
 from dolfinx_fretting.compare import (COMPARE_PICTURES, SUMMARY_FIELDS, compare_runs, default_label, load_run,
                                       read_summary_csv)
 from dolfinx_fretting.io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS
-from test_plots import assert_png as _assert_png
 
 N_NODES, N_STEPS = 15, 8
 POSITIONS = np.linspace(-0.3, 0.3, N_NODES)
@@ -124,7 +124,7 @@ def test_compare_writes_pictures_and_summary(tmp_path, two_runs):
     assert not problems, problems
     assert [p.name for p in written] == [*COMPARE_PICTURES, "compare_summary.csv"]
     for name in COMPARE_PICTURES:
-        _assert_png(tmp_path / "cmp" / name)
+        assert_png(tmp_path / "cmp" / name)
     rows = _csv(tmp_path / "cmp" / "compare_summary.csv")
     assert list(rows[0]) == SUMMARY_FIELDS
     assert [r["label"] for r in rows] == ["elastic", "elastic-plastic"]

@@ -6,27 +6,14 @@ reference in x (not r: multibody W are rank-deficient) and in De Saxce's complem
 here independently, or report ``converged=False``; it must never claim convergence with a wrong x.
 """
 
-import json
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from support.fclib_problems import (EXPECT_FCLIB, FCLIB_DIR, FE, HAVE_FCLIB, INDEX, NON_UNIQUE, needs_fclib,
+                                    problem)
 
 from dolfinx_fretting import fclib
 from dolfinx_fretting.local_solvers import natural_map_error, solve
-
-FCLIB_DIR = Path(os.environ.get("DOLFINX_FRETTING_FCLIB",
-                                Path(__file__).resolve().parents[1].parent / "shared" / "fclib"))
-HAVE_FCLIB = (FCLIB_DIR / "index.json").is_file()
-#: Set (to 1) where the problems must be there (./tasks.sh test, hence CI, which has shared/ beside the clone):
-#: their absence then fails the suite instead of skipping the validation row silently.
-EXPECT_FCLIB = os.environ.get("DOLFINX_FRETTING_EXPECT_FCLIB", "0") not in ("", "0")
-needs_fclib = pytest.mark.skipif(not HAVE_FCLIB and not EXPECT_FCLIB,
-                                 reason=f"FCLIB problems not found in {FCLIB_DIR} (set DOLFINX_FRETTING_FCLIB to "
-                                 "the folder holding index.json)")
-INDEX = {e["name"]: e for e in json.loads((FCLIB_DIR / "index.json").read_text())} if HAVE_FCLIB else {}
 
 TOL = 1e-10
 MAX_ITER = 20000
@@ -36,24 +23,16 @@ MAX_ITER = 20000
 SLOW_TO_CONVERGE = {"BoxesStack1-i100000-32", "Capsules-i101-404", "Capsules-i122-1617", "RockPile_tob1",
                     "fc2d_granularflowonwall_02020_00213", "fc2d_granularflowonwall_07002_00801",
                     "spheres-in-a-box-98-i10000-256-10"}
-# Frictional problems with several solutions: the solver reaches a verified solution (error 1e-14 when run
-# further) whose x differs from Siconos's by 1.7 %; Siconos's x is also verified below.
-NON_UNIQUE = {"OneObject-i1028-138"}
 # More than ~1 s each (20000 sweeps of a few hundred contacts): out of the default run.
 SLOW = {"Capsules-i100-1090", "Capsules-i101-404", "Capsules-i122-1617", "Capsules-i125-1213",
         "Capsules-i97-269", "RockPile_tob1", "spheres-in-a-box-98-i10000-256-10",
         "fc2d_granularflowonwall_02020_00213", "fc2d_granularflowonwall_07002_00801"}
 
-FE = sorted(n for n, e in INDEX.items() if e["kind"] == "FE-condensed")
 ALL = sorted(INDEX)
 
 
 def param(names):
     return [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in names]
-
-
-def problem(name):
-    return fclib.load(FCLIB_DIR / f"{name}.npz")
 
 
 def complementarity_violation(W, q, r, mu, dim):

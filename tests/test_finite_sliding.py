@@ -293,7 +293,7 @@ def test_a_sphere_sliding_over_the_flat_in_3d():
 
     3 %: at a/h = 3 the nodal pressure's peak changes with where the ball's nodes face the flat's faces (both
     meshes' nodes match in the reference configuration, not after sliding)."""
-    from _sphere_model import P as P_ball, pressed, sphere_model
+    from support.sphere import P as P_ball, pressed, sphere_model
 
     deepest = {}
     for model in ("finite", "small"):

@@ -9,8 +9,8 @@ complementarity conditions checked directly on ``(r, W r + q)``, and closed form
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from test_fclib import FCLIB_DIR, needs_fclib
-from test_local_solvers import check_complementarity, random_problem
+from support.fclib_problems import FCLIB_DIR, needs_fclib
+from support.local_problems import check_complementarity, random_problem
 
 from dolfinx_fretting import fclib
 from dolfinx_fretting import local_solvers as ls

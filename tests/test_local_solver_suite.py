@@ -10,22 +10,15 @@ solutions shipped with the shared FCLIB problems.
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from test_fclib import FCLIB_DIR, INDEX, needs_fclib  # noqa: F401 - one place finds the FCLIB folder
-from test_local_solvers import check_complementarity, enumerate_2d, random_problem
+from support.fclib_problems import FE, INDEX, NON_UNIQUE, needs_fclib, problem
+from support.local_problems import check_complementarity, enumerate_2d, random_problem
 
-from dolfinx_fretting import fclib
 from dolfinx_fretting import local_solvers as ls
 from dolfinx_fretting.local_solvers import LocalSolverError, natural_map_error, solve
 
 NEW = ("nsgs", "newton", "auto")
 TOL = 1e-12
 SOL = dict(rtol=1e-9, atol=1e-9)  # as in test_local_solvers.py: cond(W) <= ~20, error < 1e-12
-
-FE = sorted(n for n, e in INDEX.items() if e["kind"] == "FE-condensed")
-
-
-def problem(name):
-    return fclib.load(FCLIB_DIR / f"{name}.npz")
 
 
 def violation(W, q, r, mu, dim):
@@ -282,7 +275,6 @@ NOT_CONVERGING = {
     "auto": {"RockPile_tob1", "fc2d_granularflowonwall_07002_00801"},
 }
 CAPS = {"nsgs": 5000, "newton": 500, "auto": 2000}
-NON_UNIQUE = {"OneObject-i1028-138"}  # see tests/test_fclib.py
 
 
 @needs_fclib

@@ -1,7 +1,7 @@
 """Mesh builders: geometry, refinement, tags, node sets, input checks and MPI distribution.
 
 Areas and lengths are computed with numpy from the cell and facet vertices (no form compilation), summed
-over owned entities only so that the same code gives global values under MPI.
+over owned entities only so that the same code gives global values under MPI (tests/support/mesh_measures.py).
 """
 
 import json
@@ -14,56 +14,13 @@ import textwrap
 import numpy as np
 import pytest
 from mpi4py import MPI
+from support import mesh_measures as measure
 
 from dolfinx_fretting import _dolfinx as dfx
 from dolfinx_fretting import meshes
 
 R = 6.0
 COMM = MPI.COMM_WORLD
-
-
-def _cell_polygons(msh) -> np.ndarray:
-    """(owned cells, k, 2) vertex coordinates of first-order cells in boundary order."""
-    tdim = msh.topology.dim
-    n = msh.topology.index_map(tdim).size_local
-    dofmap = dfx.geometry_dofmap(msh)[:n]
-    if dofmap.shape[1] == 4:  # DOLFINx quadrilaterals are tensor-ordered: 0 1 / 2 3
-        dofmap = dofmap[:, [0, 1, 3, 2]]
-    return msh.geometry.x[dofmap][:, :, :2]
-
-
-def _signed_areas(p: np.ndarray) -> np.ndarray:
-    """Shoelace areas of polygons (n, k, 2); positive when counter-clockwise."""
-    q = np.roll(p, -1, axis=1)
-    return 0.5 * np.sum(p[:, :, 0] * q[:, :, 1] - q[:, :, 0] * p[:, :, 1], axis=1)
-
-
-def _area(msh) -> float:
-    return msh.comm.allreduce(float(np.abs(_signed_areas(_cell_polygons(msh))).sum()), op=MPI.SUM)
-
-
-def _facet_segments(body, name, owned_only=True) -> np.ndarray:
-    """(n, 2, 2) end points of the facets of a tag or zone (owned facets only by default)."""
-    msh = body.mesh
-    fdim = msh.topology.dim - 1
-    facets = body.facets(name)
-    if owned_only:
-        facets = facets[facets < msh.topology.index_map(fdim).size_local]
-    if facets.size == 0:
-        return np.zeros((0, 2, 2))
-    nodes = dfx.entities_to_geometry(msh, fdim, facets)
-    return msh.geometry.x[nodes][:, :, :2]
-
-
-def _length(body, name) -> float:
-    seg = _facet_segments(body, name)
-    return body.mesh.comm.allreduce(float(np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1).sum()), op=MPI.SUM)
-
-
-def _max_chord(body, name) -> float:
-    seg = _facet_segments(body, name)
-    local = float(np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1).max()) if len(seg) else 0.0
-    return body.mesh.comm.allreduce(local, op=MPI.MAX)
 
 
 @pytest.fixture(scope="module", params=[True, False], ids=["quad", "tri"])
@@ -91,8 +48,8 @@ def test_area_is_the_inscribed_polygon(cylinder):
     # chords (sum phi = pi) the deficit lies in (0, pi R^2 phi_max^2 / 12]. The largest chord is set
     # by the coarse size (here R/10 = 0.6 mm; gmsh keeps edges within ~1.5x of the target size).
     exact = math.pi * R**2 / 2
-    deficit = exact - _area(cylinder.mesh)
-    chord = _max_chord(cylinder, "surface")
+    deficit = exact - measure.area(cylinder.mesh)
+    chord = measure.max_chord(cylinder, "surface")
     assert chord <= 1.5 * 0.6
     phi = 2 * math.asin(chord / (2 * R))
     assert 0 < deficit <= math.pi * R**2 * phi**2 / 12 * (1 + 1e-9)
@@ -116,9 +73,9 @@ def test_tags_cover_the_boundary_once(cylinder):
     assert np.array_equal(tagged[tagged < n_owned], exterior[exterior < n_owned])
     # Lengths: the flat top is exact; the arc is a polygon inscribed in it, shorter by at most
     # pi R phi_max^2 / 24 (a chord of angle phi is 2 R sin(phi/2) >= R phi (1 - phi^2 / 24)).
-    assert _length(cylinder, "top") == pytest.approx(2 * R, rel=1e-12)
-    phi = 2 * math.asin(_max_chord(cylinder, "surface") / (2 * R))
-    arc = _length(cylinder, "surface")
+    assert measure.length(cylinder, "top") == pytest.approx(2 * R, rel=1e-12)
+    phi = 2 * math.asin(measure.max_chord(cylinder, "surface") / (2 * R))
+    arc = measure.length(cylinder, "surface")
     assert math.pi * R * (1 - phi**2 / 24) <= arc < math.pi * R
 
 
@@ -150,9 +107,9 @@ def test_refinement_counts_and_grading(cylinder_fine):
     # graded rest must stay small compared with it, and the far field must be coarse.
     n_cells = cylinder_fine.mesh.topology.index_map(2).size_global
     assert 800 <= n_cells <= 4000
-    p = _cell_polygons(cylinder_fine.mesh)
+    p = measure.cell_polygons(cylinder_fine.mesh)
     centre = p.mean(axis=1)
-    size = np.sqrt(np.abs(_signed_areas(p)))
+    size = np.sqrt(np.abs(measure.signed_areas(p)))
     near = np.linalg.norm(centre, axis=1) < 0.05
     far = centre[:, 1] > 4.0
     assert COMM.allreduce(float(size[near].max()) if near.any() else 0.0, op=MPI.MAX) < 1.3 * 0.01
@@ -162,10 +119,10 @@ def test_refinement_counts_and_grading(cylinder_fine):
 def test_contact_zone_facets(cylinder_fine):
     zone = cylinder_fine.facets("contact_zone")
     assert np.all(np.isin(zone, cylinder_fine.facets("surface")))
-    seg = _facet_segments(cylinder_fine, "contact_zone", owned_only=False)
+    seg = measure.facet_segments(cylinder_fine, "contact_zone", owned_only=False)
     assert np.all(np.abs(seg[:, :, 0]) <= 0.4 + 1e-12)
     theta = math.asin(0.4 / R)
-    assert _length(cylinder_fine, "contact_zone") == pytest.approx(2 * R * theta, rel=1e-6)
+    assert measure.length(cylinder_fine, "contact_zone") == pytest.approx(2 * R * theta, rel=1e-6)
     assert "contact_zone" in cylinder_fine.names and "contact_zone" not in cylinder_fine.tags
     with pytest.raises(KeyError, match="allowed: top, surface, contact_zone"):
         cylinder_fine.facets("bottom")
@@ -176,8 +133,8 @@ def test_center_moves_the_body():
     x = body.mesh.geometry.x
     assert np.linalg.norm(x[:, :2] - [1.0, 3.0], axis=1).min() < 1e-12
     assert x[:, 1].max() == pytest.approx(5.0, abs=1e-12)
-    assert np.allclose(np.linalg.norm(_facet_segments(body, "surface").reshape(-1, 2) - [1.0, 5.0], axis=1),
-                       2.0, atol=1e-12)
+    assert np.allclose(np.linalg.norm(measure.facet_segments(body, "surface").reshape(-1, 2) - [1.0, 5.0],
+                                      axis=1), 2.0, atol=1e-12)
 
 
 @pytest.mark.parametrize("args", [(1.0, 0.3, 0.5), (6.0, 0.05, 2.0), (6.0, 0.01, 2.0, 0.9)])
@@ -194,7 +151,7 @@ def test_quadrilaterals_for_awkward_sizes(args):
     spacing = np.linalg.norm(np.diff(x[:, :2], axis=0), axis=1)
     assert np.all(np.abs(spacing / h - 1) <= 0.2), (spacing.min(), spacing.max())
     assert np.linalg.norm(x[:, :2] - [0.0, 0.0], axis=1).min() < 1e-12
-    assert np.allclose(np.linalg.norm(_facet_segments(body, "surface").reshape(-1, 2) - [0.0, radius],
+    assert np.allclose(np.linalg.norm(measure.facet_segments(body, "surface").reshape(-1, 2) - [0.0, radius],
                                       axis=1), radius, atol=1e-12)
 
 
@@ -222,11 +179,11 @@ def test_rectangle(quad):
     msh = body.mesh
     assert msh.topology.cell_type == (CellType.quadrilateral if quad else CellType.triangle)
     assert msh.topology.index_map(2).size_global == 30 * (1 if quad else 2)
-    assert _area(msh) == pytest.approx(6.0, rel=1e-12)
+    assert measure.area(msh) == pytest.approx(6.0, rel=1e-12)
     for name, length, count, (axis, value) in [("bottom", 3.0, 6, (1, -2.0)), ("top", 3.0, 6, (1, 0.0)),
                                                ("left", 2.0, 5, (0, 1.0)), ("right", 2.0, 5, (0, 4.0))]:
-        assert _length(body, name) == pytest.approx(length, rel=1e-12), name
-        seg = _facet_segments(body, name)
+        assert measure.length(body, name) == pytest.approx(length, rel=1e-12), name
+        seg = measure.facet_segments(body, name)
         assert COMM.allreduce(len(seg), op=MPI.SUM) == count, name
         assert np.allclose(seg[:, :, axis], value), name
     msh.topology.create_connectivity(1, 2)
@@ -270,7 +227,7 @@ _MPI_SCRIPT = textwrap.dedent("""
     sys.path.insert(0, {tests!r})
     from mpi4py import MPI
     from dolfinx_fretting import _dolfinx as dfx, meshes
-    import test_meshes as t
+    from support import mesh_measures as measure
 
     comm = MPI.COMM_WORLD
     body = meshes.half_cylinder(comm, 6.0, contact_mesh_size=0.02)
@@ -281,8 +238,8 @@ _MPI_SCRIPT = textwrap.dedent("""
         cells=body.mesh.topology.index_map(2).size_global,
         nodes=body.mesh.geometry.index_map().size_global,
         local_cells=comm.allgather(body.mesh.topology.index_map(2).size_local),
-        area=t._area(body.mesh),
-        top=t._length(body, "top"), surface=t._length(body, "surface"),
+        area=measure.area(body.mesh),
+        top=measure.length(body, "top"), surface=measure.length(body, "surface"),
         zone_nodes=comm.allreduce(meshes.facet_dofs(V, body, "contact_zone", owned_only=True).size),
         zone_geometry_nodes=comm.allreduce(meshes.boundary_nodes(body, "contact_zone", owned_only=True).size),
         lowest=comm.allreduce(float(abs(x[:, :2]).sum(axis=1).min()), op=MPI.MIN),
@@ -293,13 +250,11 @@ _MPI_SCRIPT = textwrap.dedent("""
 
 
 @pytest.mark.mpi
-def test_half_cylinder_under_mpi(tmp_path):
+def test_half_cylinder_under_mpi(tmp_path, mpirun_env):
     script = tmp_path / "mesh_mpi.py"
     script.write_text(_MPI_SCRIPT.format(tests=os.path.dirname(os.path.abspath(__file__))))
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OPENBLAS_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1")
     proc = subprocess.run([*dfx.mpiexec(2), sys.executable, "-m", "mpi4py", str(script)],
-                          capture_output=True, text=True, env=env, timeout=300)
+                          capture_output=True, text=True, env=mpirun_env, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     line = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
     assert len(line) == 1, proc.stdout + proc.stderr
@@ -310,9 +265,9 @@ def test_half_cylinder_under_mpi(tmp_path):
     assert par["cells"] == body.mesh.topology.index_map(2).size_global
     assert par["nodes"] == body.mesh.geometry.index_map().size_global
     assert all(n > 0 for n in par["local_cells"])  # really distributed
-    assert par["area"] == pytest.approx(_area(body.mesh), rel=1e-12)
+    assert par["area"] == pytest.approx(measure.area(body.mesh), rel=1e-12)
     assert par["top"] == pytest.approx(2 * 6.0, rel=1e-12)
-    assert par["surface"] == pytest.approx(_length(body, "surface"), rel=1e-12)
+    assert par["surface"] == pytest.approx(measure.length(body, "surface"), rel=1e-12)
     n_zone = meshes.boundary_nodes(body, "contact_zone").size
     assert par["zone_nodes"] == par["zone_geometry_nodes"] == n_zone  # owned nodes counted once
     assert par["lowest"] < 1e-12

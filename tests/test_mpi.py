@@ -1,7 +1,6 @@
 """Scenes under ``mpirun -n 2`` give the serial answer (collective-safe contact code, nothing written twice)."""
 
 import json
-import os
 import subprocess
 import sys
 
@@ -28,16 +27,14 @@ CASES = {
 
 @pytest.mark.mpi
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_mpi_matches_serial(tmp_path, name):
+def test_mpi_matches_serial(tmp_path, name, mpirun_env):
     overrides = CASES[name]
     serial = run_scene(load_scene(name, overrides), tmp_path / "serial", quiet=True)
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OPENBLAS_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1")
     cmd = [*mpiexec(2), sys.executable, "-m", "mpi4py", "-m", "dolfinx_fretting", "run", name,
            "--out", str(tmp_path / "mpi"), "--quiet"]
     for o in overrides:
         cmd += ["--set", o]
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=mpirun_env, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     parallel = json.loads((tmp_path / "mpi" / "summary.json").read_text())
     assert parallel["contacts"] == serial["contacts"] and parallel["dofs"] == serial["dofs"]

@@ -6,7 +6,6 @@ Each case starts ``mpiexec -n N python driver.py CASE -- CLI ARGS``: the driver 
 where the case says so) and calls :func:`dolfinx_fretting.cli.main` as ``dolfinx-fretting`` does.
 """
 
-import os
 import subprocess
 import sys
 import time
@@ -15,8 +14,6 @@ import pytest
 
 from dolfinx_fretting._dolfinx import mpiexec
 
-ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OPENBLAS_NUM_THREADS="1",
-           OMPI_MCA_rmaps_base_oversubscribe="1")
 SMALL = ["stromberg-block", "--set", "geometry.nx=16", "--set", "geometry.ny=16", "--set", "loading.cycles=3",
          "--set", "output.plots=false", "--set", "output.xdmf=false", "--quiet"]
 #: A run of SMALL takes ~10 s on 3 ranks here; a hang is caught by the timeout, a slow stop by STOP_SECONDS.
@@ -66,13 +63,13 @@ STOP_SECONDS = 60
 @pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [2, 3])
 @pytest.mark.parametrize("case", sorted(CASES))
-def test_an_error_on_any_rank_stops_all_ranks(tmp_path, case, ranks):
+def test_an_error_on_any_rank_stops_all_ranks(tmp_path, case, ranks, mpirun_env):
     args, code, words, aborts = CASES[case]
     driver = tmp_path / "driver.py"
     driver.write_text(DRIVER)
     cmd = [*mpiexec(ranks), sys.executable, str(driver), case, "--", "run", *args, "--out", str(tmp_path / "out")]
     t0 = time.monotonic()
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=ENV, timeout=TIMEOUT)
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=mpirun_env, timeout=TIMEOUT)
     elapsed = time.monotonic() - t0
     output = proc.stdout + proc.stderr
     if code is None:

@@ -175,10 +175,10 @@ def test_schur_route_is_refused_under_mpi():
 
 
 def _sphere_history(comm):
-    """The 3D sphere on an identical flat (half model, a/h = 2: tests/_sphere_model.py) on ``comm``: pressed by
+    """The 3D sphere on an identical flat (half model, a/h = 2: tests/support/sphere.py) on ``comm``: pressed by
     force, a Cattaneo-Mindlin tangential force, gross-slip increments with wear and one compiled cycle."""
     import dolfinx_fretting as dfr
-    from _sphere_model import P, pressed, sphere_model
+    from support.sphere import P, pressed, sphere_model
 
     body, problem, a, p0, h = sphere_model(2, 4.0, 1.6, flat=True, mu=0.5, wear=dfr.Archard(1e-6), comm=comm)
     state = pressed(problem, P / 2)

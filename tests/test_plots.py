@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.images import assert_png
 
 from dolfinx_fretting import plots
 from dolfinx_fretting.contact_output import (XDMF_FIELDS, read_contact_xdmf, read_profiles, read_table,
@@ -24,7 +25,6 @@ from dolfinx_fretting.output import RunDescription
 
 N_NODES, N_STEPS, N_CYCLES = 11, 8, 3
 POSITIONS = np.linspace(0.0, 10.0, N_NODES)
-PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
 def _triangular(step: int) -> float:
@@ -112,17 +112,6 @@ def _csv_rows(path: Path, increment: int) -> list[dict[str, str]]:
     with open(path) as f:
         return sorted((r for r in csv.DictReader(f) if int(r["increment"]) == increment),
                       key=lambda r: int(r["node"]))
-
-
-def assert_png(path: Path) -> None:
-    """A readable, non-blank PNG of at least 500 x 300 pixels (shared with test_compare)."""
-    import matplotlib.image
-
-    assert path.is_file(), path
-    assert path.read_bytes()[:8] == PNG_MAGIC, path
-    img = matplotlib.image.imread(path)
-    assert img.shape[0] > 300 and img.shape[1] > 500, (path, img.shape)
-    assert float(img[..., :3].std()) > 0.01, f"{path.name} is blank"
 
 
 def test_plot_run_cyclic_writes_every_picture(tmp_path, cyclic_run):

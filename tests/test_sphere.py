@@ -18,7 +18,7 @@ from dolfinx import fem  # noqa: E402
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 
-from _sphere_model import COMM, E, NU, P, R, contact_radii, pressed, sphere_model  # noqa: E402
+from support.sphere import COMM, E, NU, P, R, contact_radii, pressed, sphere_model  # noqa: E402
 
 
 def test_hertz_sphere_on_a_rigid_plane():

@@ -1,5 +1,6 @@
-"""The sphere-on-flat model of tests/test_sphere.py and tests/test_parallel.py, written as a DOLFINx user would
-(mesh, space, form, conditions), with the package's Contact and FrettingProblem."""
+"""The sphere-on-flat model of tests/test_sphere.py, tests/test_parallel.py and tests/test_finite_sliding.py,
+written as a DOLFINx user would (mesh, space, form, conditions), with the package's Contact and
+FrettingProblem."""
 
 import numpy as np
 from mpi4py import MPI

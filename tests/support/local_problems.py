@@ -1,0 +1,73 @@
+"""Small local contact problems (W, q, mu) and checks of a solution that do not depend on the solvers: random
+well-conditioned problems, every solution of a 2D one by enumeration, De Saxce's conditions on (r, W r + q).
+Used by tests/test_local_solvers.py, tests/test_local_solver_suite.py and tests/test_frictionless.py."""
+
+import itertools
+
+import numpy as np
+import scipy.sparse as sp
+
+
+def check_complementarity(W, q, r, mu, dim, rtol=1e-8):
+    """De Saxce's conditions per contact: r in K_mu, x_n >= 0 (x + mu|x_t| e_n in the dual cone) and
+    r . (x + mu |x_t| e_n) = 0, with x = W r + q recomputed here. Tolerances relative to max |r| and
+    max(|x|, |q|) (x alone is ~0 when every contact is closed)."""
+    W = W.toarray() if sp.issparse(W) else W
+    x = W @ r + q
+    R, X = r.reshape(-1, dim), x.reshape(-1, dim)
+    mu = np.broadcast_to(mu, len(R))
+    rs, xs = max(np.abs(R).max(), 1e-300), max(np.abs(X).max(), np.abs(q).max(), 1e-300)
+    xhat = X.copy()
+    xhat[:, 0] += mu * np.linalg.norm(X[:, 1:], axis=1)
+    assert np.all(R[:, 0] >= -rtol * rs), "negative normal force"
+    assert np.all(np.linalg.norm(R[:, 1:], axis=1) <= mu * R[:, 0] + rtol * rs), "force outside the cone"
+    assert np.all(X[:, 0] >= -rtol * xs), "penetration"
+    assert np.all(np.abs(np.sum(R * xhat, axis=1)) <= rtol * rs * xs), "complementarity r.x^ != 0"
+    return x
+
+
+def enumerate_2d(W, q, mu):
+    """All solutions of a 2D problem by trying every (open, stick, slip+, slip-) assignment."""
+    nc = len(q) // 2
+    sols = []
+    for states in itertools.product(("open", "stick", "slip+", "slip-"), repeat=nc):
+        A = np.zeros((2 * nc, 2 * nc))
+        b = np.zeros(2 * nc)
+        for a, s in enumerate(states):
+            n, t = 2 * a, 2 * a + 1
+            if s == "open":
+                A[n, n] = A[t, t] = 1.0
+            elif s == "stick":
+                A[n], A[t], b[n], b[t] = W[n], W[t], -q[n], -q[t]
+            else:  # slip in direction sgn: x_n = 0, r_t = -sgn mu r_n
+                sgn = 1.0 if s == "slip+" else -1.0
+                A[n], b[n] = W[n], -q[n]
+                A[t, t], A[t, n] = 1.0, sgn * mu
+        try:
+            r = np.linalg.solve(A, b)
+        except np.linalg.LinAlgError:
+            continue
+        x = W @ r + q
+        eps = 1e-12 * max(1.0, np.abs(r).max(), np.abs(x).max())
+        ok = True
+        for a, s in enumerate(states):
+            rn, rt, xn, xt = r[2 * a], r[2 * a + 1], x[2 * a], x[2 * a + 1]
+            if s == "open":
+                ok &= xn >= -eps
+            elif s == "stick":
+                ok &= rn >= -eps and abs(rt) <= mu * rn + eps
+            else:
+                ok &= rn >= -eps and (1.0 if s == "slip+" else -1.0) * xt >= -eps
+        if ok:
+            sols.append((states, r, x))
+    return sols
+
+
+def random_problem(seed, nc, dim=2, mu=0.3):
+    rng = np.random.default_rng(seed)
+    m = dim * nc
+    A = rng.normal(size=(m, m))
+    W = A @ A.T / m + np.eye(m)  # SPD, cond ~ 5
+    q = rng.normal(size=m)
+    q[::dim] -= 0.5  # most contacts pressed
+    return W, q, mu
