@@ -36,7 +36,7 @@ def hertz_line_contact(P: float, R: float, E_star: float) -> tuple[float, float]
 
 
 def hertz_pressure(x: np.ndarray, P: float, R: float, E_star: float, x0: float = 0.0) -> np.ndarray:
-    """Hertz pressure p(x) = p0 sqrt(1 - ((x - x0)/a)^2) inside |x - x0| < a, zero outside."""
+    """Hertz pressure p(x) = p0 sqrt(1 - ((x - x0)/a)^2) inside ``|x - x0| < a``, zero outside."""
     a, p0 = hertz_line_contact(P, R, E_star)
     s = 1.0 - ((np.asarray(x) - x0) / a) ** 2
     return p0 * np.sqrt(np.clip(s, 0.0, None))
@@ -83,7 +83,7 @@ def _load_ratio(Q: float, mu: float, P: float) -> float:
 
 
 def cattaneo_mindlin_stick_radius(a: float, Q: float, mu: float, P: float) -> float:
-    """Stick radius c = a (1 - Q/(mu P))^(1/3) of a sphere under a tangential force |Q| < mu P growing from 0 at
+    """Stick radius c = a (1 - Q/(mu P))^(1/3) of a sphere under a tangential force ``|Q| < mu P`` growing from 0 at
     constant P (Johnson §7.2)."""
     return float(a * (1.0 - _load_ratio(Q, mu, P)) ** (1.0 / 3.0))
 
@@ -96,7 +96,7 @@ def mindlin_tangential_displacement(Q: float, mu: float, P: float, a: float, G_s
 
 def mindlin_deresiewicz_energy(Q_amplitude: float, mu: float, P: float, a: float, G_star: float) -> float:
     """Frictional energy dissipated in one steady cycle of a tangential force oscillating between -Q* and +Q*
-    (|Q*| < mu P) at constant P (Mindlin & Deresiewicz 1953; Johnson eq. 7.60):
+    (``|Q*| < mu P``) at constant P (Mindlin & Deresiewicz 1953; Johnson eq. 7.60):
 
         W = (9 mu^2 P^2 / (10 a G*)) [1 - (1 - phi)^(5/3) - (5 phi / 6) (1 + (1 - phi)^(2/3))],  phi = Q*/(mu P),
 

@@ -37,7 +37,8 @@ DEMOS = sorted((ROOT / "demos").glob("demo_*.py"))
 #: The modules with a page in docs/reference (the issue's list, and those the others refer to).
 MODULES = ("problem", "contact", "output", "plots", "scenes", "local_solvers", "wear", "cycling",
            "cycle_jump", "plasticity", "plastic_zone", "materials", "compliance", "loading", "io",
-           "contact_output", "_dolfinx", "compat", "sizes")
+           "contact_output", "_dolfinx", "compat", "sizes", "state", "settings", "laws", "operators", "increments",
+           "commit", "cycles", "readers", "checkpoint", "scene_paths", "analytic")
 
 
 @pytest.fixture(scope="module")

@@ -44,14 +44,14 @@ def test_a_run_with_a_non_finite_result_is_not_a_success(tmp_path, monkeypatch):
     infinite coefficient forced into the problem and the per-cycle wear guard skipped, as a future bug could),
     the run itself must refuse to call such a result converged."""
     from dolfinx_fretting import simulation
-    from dolfinx_fretting.problem import Archard, FrettingProblem
+    from dolfinx_fretting.laws import Archard
 
     with pytest.raises(SceneError, match=r"wear.k = inf"):
         load_scene("stromberg-block", SMALL_BLOCK + ["wear.k=inf"])
     with pytest.raises(ValueError, match=r"Archard.k = inf"):
         Archard(math.inf)
     scene = load_scene("stromberg-block", SMALL_BLOCK + ["loading.cycles=2", "output.contact_profiles=false"])
-    monkeypatch.setattr(FrettingProblem, "_k", lambda self, in_cycle: math.inf)
+    monkeypatch.setattr(Archard, "coefficient", lambda self, in_cycle: math.inf)  # the law: every path reads it
     monkeypatch.setattr(simulation._Run, "_check_wear_step", lambda self, *args: None)
     with pytest.raises(SimulationError, match=r"non-finite results: .*max_wear_depth"):
         run_scene(scene, tmp_path, quiet=True)
