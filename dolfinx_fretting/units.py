@@ -9,7 +9,7 @@ area or volume, the wear coefficient (1/stress). The numbers are never converted
     Units.si()                                       # m, N, Pa
     Units(length="in", force="lbf", stress="psi")    # your own names: not checked
 
-Archard's coefficient k must then be in 1/stress of the same system (k p |slip| is a length).
+Archard's coefficient k must then be in 1/stress of the same system (``k p |slip|`` is a length).
 """
 
 from __future__ import annotations
@@ -98,13 +98,13 @@ class Units:
 
     @property
     def wear_coefficient(self) -> str:
-        """Unit of Archard's coefficient k: 1/stress (k p |slip| is a length)."""
+        """Unit of Archard's coefficient k: 1/stress (``k p |slip|`` is a length)."""
         stress = f"({self.stress})" if any(c in self.stress for c in "/·* ") else self.stress
         return f"1/{stress}"
 
     def length_scale(self, values) -> tuple[float, str]:
         """Factor and name of a length unit in which ``values`` (in :attr:`length`) read as plain numbers: steps of
-        1e3 down the ladder m, mm, µm, nm while the largest |value| is below 0.1; a length not on the ladder (or the
+        1e3 down the ladder m, mm, µm, nm while the largest ``|value|`` is below 0.1; a length not on the ladder (or the
         symbol L) is never rescaled."""
         arr = np.asarray(values, dtype=float)
         arr = arr[np.isfinite(arr)]
