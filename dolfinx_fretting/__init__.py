@@ -71,6 +71,7 @@ _API = {
     "CycleResult": "state", "ConvergenceError": "state", "CyclePath": "loading", "Displacement": "loading",
     "Force": "loading", "Archard": "laws", "LocalSolver": "settings", "Plasticity": "settings",
     "J2Plasticity": "materials", "FrettingWriter": "output", "RunDescription": "output", "plot_run": "plots",
+    "Units": "units",
 }
 __all__ = sorted(_API)
 

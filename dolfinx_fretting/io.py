@@ -20,6 +20,7 @@ import numpy as np
 from mpi4py import MPI
 
 from .state import INCREMENT_COLUMNS
+from .units import Units
 
 __all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys", "TableError", "HISTORY_FIELDS",
            "CYCLE_FIELDS", "PROFILE_FIELDS", "PROFILE_FIELDS_3D", "profile_fields", "plot_profiles",
@@ -272,16 +273,19 @@ class ResultWriter:
 
 
 def plot_profiles(path: Path, position: np.ndarray, curves: list[tuple[str, np.ndarray, np.ndarray]],
-                  reference: tuple[str, np.ndarray, np.ndarray] | None = None, title: str = "") -> None:
+                  reference: tuple[str, np.ndarray, np.ndarray] | None = None, title: str = "",
+                  units: Units | None = None) -> None:
     """Pressure and shear traction along the contact (matplotlib, PNG).
 
     Args:
         path: PNG file.
-        position: Node positions along the surface (mm).
+        position: Node positions along the surface.
         curves: (label, pressure, shear) per snapshot.
         reference: Optional (label, x, pressure) closed form drawn dashed.
         title: Figure title.
+        units: The :class:`~dolfinx_fretting.units.Units` of the labels (default: the scenes' mm, N, MPa).
     """
+    units = units or Units.mm_N_MPa()
     import matplotlib
 
     matplotlib.use("Agg")
@@ -293,9 +297,9 @@ def plot_profiles(path: Path, position: np.ndarray, curves: list[tuple[str, np.n
         ax_s.plot(position, s, ".-", ms=3, label=label)
     if reference is not None:
         ax_p.plot(reference[1], reference[2], "k--", lw=1, label=reference[0])
-    ax_p.set_ylabel("contact pressure p (MPa)")
-    ax_s.set_ylabel("shear traction q (MPa)")
-    ax_s.set_xlabel("position along the surface (mm)")
+    ax_p.set_ylabel(f"contact pressure p ({units.stress})")
+    ax_s.set_ylabel(f"shear traction q ({units.stress})")
+    ax_s.set_xlabel(f"position along the surface ({units.length})")
     for ax in (ax_p, ax_s):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)

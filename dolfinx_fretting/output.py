@@ -30,6 +30,7 @@ Tables are written by rank 0; fields by every rank (collective), like DOLFINx's 
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
@@ -38,6 +39,7 @@ import numpy as np
 
 from .io import CYCLE_FIELDS, HISTORY_FIELDS, RUN_DESCRIPTION, ResultWriter, profile_fields, write_json_atomic
 from .state import INCREMENT_COLUMNS
+from .units import Units
 
 __all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT", "EXTENSIVE_COLUMNS",
            "contact_measures"]
@@ -69,7 +71,7 @@ class RunDescription:
         preload_increments: Increments of the normal preload.
         increments_per_cycle: Increments of each cycle.
         tangential_control: One of :data:`TANGENTIAL_CONTROLS`: what drives the tangential load.
-        tangential_amplitude: Its amplitude (mm, N/mm or N, MPa).
+        tangential_amplitude: Its amplitude (a length, a contact force or a stress in :attr:`units`).
         pressure_face: The face a tangential pressure acts on (for labels), or None.
         wear_acceleration: Factor on the wear coefficient (the plots' titles say so when it is not 1).
         hertz: (radius, E*) of a Hertz line-contact reference drawn on the profiles, or None.
@@ -77,6 +79,12 @@ class RunDescription:
         loop_cycles: Cycles whose fretting loops are drawn.
         model_fraction: The fraction of the bodies the model holds (0.5: a half model about a symmetry plane);
             the tables' :data:`EXTENSIVE_COLUMNS` are the whole contact's (the model's divided by it).
+        units: The :class:`~dolfinx_fretting.units.Units` of the model's numbers, for the labels of ``run.json``,
+            the plots and the pictures (nothing is converted). Default ``Units()``: the dimension symbols L, F,
+            F/L², because the package cannot know a user's units and a default of mm would label an SI model
+            wrongly (issue 22); requiring them would break every script written before. The scene runner passes
+            :meth:`Units.mm_N_MPa() <dolfinx_fretting.units.Units.mm_N_MPa>`; declare yours with
+            ``RunDescription.of(problem, name, units=Units.si())``.
     """
 
     name: str
@@ -96,8 +104,11 @@ class RunDescription:
     track_positions: tuple[float, ...] = ()
     loop_cycles: tuple[int, ...] = field(default_factory=tuple)
     model_fraction: float = 1.0
+    units: Units = field(default_factory=Units)
 
     def __post_init__(self) -> None:
+        if not isinstance(self.units, Units):
+            raise TypeError(f"RunDescription.units must be a Units, got {type(self.units).__name__}")
         if not (np.isfinite(self.model_fraction) and 0 < self.model_fraction <= 1):
             raise ValueError(f"RunDescription.model_fraction = {self.model_fraction}: expected 0 < fraction <= 1")
         if self.obstacle not in OBSTACLE_TEXT:
@@ -119,7 +130,7 @@ class RunDescription:
             cycles: Cycles asked for.
             preload_increments: Increments before the first cycle.
             plane_point: A point of the obstacle plane (default: the rigid plane's, else the origin).
-            **extra: Any other attribute (``tangential_control``, ``hertz``, ``track_positions`` ...).
+            **extra: Any other attribute (``units``, ``tangential_control``, ``hertz``, ``track_positions`` ...).
         """
         from .problem import Displacement, Force
 
@@ -154,11 +165,11 @@ class RunDescription:
     def to_json(self) -> dict[str, Any]:
         """The ``run.json`` document (with the tables' columns and the units)."""
         data = asdict(self)
-        return {"format": 2, "scene": self.name, "dim": self.dim,
+        return {"format": 3, "scene": self.name, "dim": self.dim,
                 "obstacle": {"kind": self.obstacle, "point": list(self.plane_point),
                              "normal": list(self.plane_normal)},
                 "slave_wear_share": self.slave_wear_share,
-                "units": {"length": "mm", "force": "N/mm" if self.dim == 2 else "N", "stress": "MPa"},
+                "units": self.units.to_json(self.dim),
                 "tables": {"history.csv": HISTORY_FIELDS, "cycles.csv": CYCLE_FIELDS,
                            "contact_profiles.csv": profile_fields(self.dim)},
                 "run": {k: data[k] for k in ("cycles", "preload_increments", "increments_per_cycle",
@@ -168,13 +179,22 @@ class RunDescription:
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunDescription:
+        """The description of a ``run.json``. Formats 1 and 2 (before units were declared) always labelled mm, N,
+        MPa: they read as :meth:`Units.mm_N_MPa() <dolfinx_fretting.units.Units.mm_N_MPa>`, with a
+        :class:`UserWarning` saying so."""
         run = dict(data.get("run", {}))  # format 1 (no "run" section): the defaults
         for key in ("track_positions", "loop_cycles", "hertz"):
             if run.get(key) is not None:
                 run[key] = tuple(run[key])
+        if int(data.get("format", 1)) >= 3:
+            units = Units.from_json(data["units"])
+        else:
+            units = Units.mm_N_MPa()
+            warnings.warn(f"run.json of {data.get('scene')!r} (format {data.get('format', 1)}) declares no units: "
+                          "labelled mm, N, MPa as its release did", UserWarning, stacklevel=2)
         return cls(name=data["scene"], dim=int(data["dim"]), obstacle=data["obstacle"]["kind"],
                    plane_point=tuple(data["obstacle"]["point"]), plane_normal=tuple(data["obstacle"]["normal"]),
-                   slave_wear_share=data.get("slave_wear_share"), **run)
+                   slave_wear_share=data.get("slave_wear_share"), units=units, **run)
 
 
 def read_description(folder: str | Path) -> RunDescription | None:
@@ -223,8 +243,11 @@ def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_contro
         cycle: The cycle's number.
         records: Per-increment arrays of the cycle: the :data:`~dolfinx_fretting.state.INCREMENT_COLUMNS` and
             ``tangential_displacement`` (the obstacle's).
-        displacement_controlled: The loop's abscissa is the obstacle's displacement (else the mean relative
-            tangential displacement of the loaded contacts).
+        displacement_controlled: The loop's abscissa (``displacement_max``, ``displacement_min``) is the
+            obstacle's displacement; else it is ``-mean_relative_tangential``: the obstacle's tangential
+            displacement relative to the body's contact nodes, averaged over all the candidate contacts (the
+            history column holds the body's relative to the obstacle, y_t1 = u_t1 - D_t1, whose sign is opposite
+            to Q's: a body dragged by Q > 0 lags behind the obstacle). Either way the loop turns with Q.
         wear_acceleration: Factor on the wear coefficient (``equivalent_cycles``).
         wall: Wall time of the cycle (s).
         jump: The cycle jump that follows it (``jump``, ``bound``, ``stability_limit``, ``error``,
@@ -232,7 +255,7 @@ def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_contro
             ``plastic_flow``, ``plastic_net``: :class:`~dolfinx_fretting.cycle_jump.PlasticCycle`), or None.
     """
     Q = records["tangential_force"]
-    disp = records["tangential_displacement"] if displacement_controlled else records["mean_relative_tangential"]
+    disp = records["tangential_displacement"] if displacement_controlled else -records["mean_relative_tangential"]
     energy = float(records["dissipated_energy"].sum())
     force_amplitude = 0.5 * (Q.max() - Q.min())
     displacement_amplitude = 0.5 * (disp.max() - disp.min())

@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .contact_output import read_profiles
+from .units import Units
 
 __all__ = ["Fields", "read_fields", "field_times", "contact_surface", "nice_factor", "deformed_plotter",
            "deformed_plotter_3d", "worn_plotter", "worn_plotter_3d", "write_pictures", "draw_in_subprocess",
@@ -51,7 +52,8 @@ __all__ = ["Fields", "read_fields", "field_times", "contact_surface", "nice_fact
 
 #: Files written by :func:`write_pictures`.
 PICTURES = ("deformed_von_mises.png", "worn_profile.png")
-#: Scalar bar titles (the tests find the colour scales by them).
+#: Scalar bar titles of a folder in the scenes' units (the tests find the colour scales by them); a folder's own
+#: are :func:`vm_title` and :func:`wear_title` of its ``run.json``'s units.
 VM_TITLE = "von Mises stress (MPa)"
 WEAR_TITLE = "wear depth (mm)"
 #: XDMF topology name -> (VTK cell type, nodes per cell); DOLFINx writes VTK node order.
@@ -194,7 +196,7 @@ def contact_surface(points: np.ndarray, position: np.ndarray, normal: np.ndarray
         lo, hi = np.searchsorted(s[order], [p - tol, p + tol])
         cand = order[lo:hi]
         if cand.size == 0:
-            raise ValueError(f"no mesh node at contact position {p:.10g} mm (along t1 = {t1.tolist()}): "
+            raise ValueError(f"no mesh node at contact position {p:.10g} (along t1 = {t1.tolist()}): "
                              "the plane normal or the folder's files do not match")
         # On the body's side of the plane: with an elastic flat under it, the flat's nodes below the plane
         # share the positions (the flat's bottom is the lowest node there).
@@ -295,6 +297,7 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
     f = read_fields(folder) if f is None else f
     if f.gdim != 2:
         raise ValueError("3D meshes are not drawn")
+    vm_bar = vm_title(folder_units(folder))
     n, t1 = _frame(plane_normal)
     p0 = np.asarray(plane_point, dtype=float)[:2]
     lo, hi = f.points.min(axis=0), f.points.max(axis=0)
@@ -307,7 +310,7 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
     grids = []
     for factor in (scale, 1.0):
         g = _grid(pv, f, f.points + factor * f.displacement)
-        g.cell_data[VM_TITLE] = f.von_mises
+        g.cell_data[vm_bar] = f.von_mises
         grids.append(g)
     xdef = f.points + f.displacement
     clim = (float(f.von_mises.min()), float(f.von_mises.max()))
@@ -346,7 +349,7 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
     undeformed = _grid(pv, f, f.points).extract_feature_edges(boundary_edges=True, feature_edges=False,
                                                               manifold_edges=False, non_manifold_edges=False)
     plane = pv.Line(_to3(p0 - 2 * size * t1), _to3(p0 + 2 * size * t1))
-    mesh_kw = dict(scalars=VM_TITLE, cmap=CMAP, clim=clim, lighting=False, show_scalar_bar=False)
+    mesh_kw = dict(scalars=vm_bar, cmap=CMAP, clim=clim, lighting=False, show_scalar_bar=False)
     many = f.cells.shape[0] > 4000  # edges of small cells would paint the whole body grey
     labels = (f"whole body, displacement x {scale:g} (undeformed outline grey)",
               "contact zone, true scale (framed red on the left)")
@@ -360,7 +363,7 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
         label = pl.add_text(title, position="upper_left", font_size=10, color="black")
         label.GetTextProperty().SetBackgroundColor(1.0, 1.0, 1.0)
         label.GetTextProperty().SetBackgroundOpacity(0.85)
-        _scalar_bar(pl, VM_TITLE + " " * col, actor.mapper)
+        _scalar_bar(pl, vm_bar + " " * col, actor.mapper)
         bar_room = 0.2  # bottom share of the viewport kept for the colour bar
         if col == 0:
             c, hw, hh = 0.5 * (lo + hi)[:2], 0.55 * (hi - lo)[0], 0.55 * (hi - lo)[1]
@@ -379,11 +382,13 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None, plan
     """The worn-profile picture as an off-screen pyvista Plotter, or ``None`` when nothing wore.
 
     Returns:
-        (plotter, info) with ``magnification`` (of the wear gap), ``max_wear`` (mm), ``cycle`` and
+        (plotter, info) with ``magnification`` (of the wear gap), ``max_wear`` (in the folder's length unit), ``cycle`` and
         ``increment`` of the profile drawn; ``(None, info)`` when the wear is zero everywhere.
     """
     pv = _pyvista()
     f = read_fields(folder) if f is None else f
+    units = folder_units(folder)
+    wear_bar = wear_title(units)
     prof = read_profiles(folder)
     if prof is None:
         raise FileNotFoundError(f"{Path(folder) / 'contact_profiles.csv'}: no complete contact profile")
@@ -423,12 +428,12 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None, plan
         # Above the mesh drawn for scale (z towards the camera), the surfaces' lines above the band.
         pts[:, 2] = 1e-3 * width
         band = pv.PolyData(pts, faces=quads)
-        band.point_data[WEAR_TITLE] = np.concatenate([removed, removed])
-        actor = pl.add_mesh(band, scalars=WEAR_TITLE, cmap=CMAP, clim=(0.0, float(wear.max())), lighting=False,
+        band.point_data[wear_bar] = np.concatenate([removed, removed])
+        actor = pl.add_mesh(band, scalars=wear_bar, cmap=CMAP, clim=(0.0, float(wear.max())), lighting=False,
                             show_scalar_bar=False)
         pl.add_mesh(pv.lines_from_points(pts[:k] + [0.0, 0.0, 1e-3 * width]), color="black", line_width=3)
         pl.add_mesh(pv.lines_from_points(pts[k:] + [0.0, 0.0, 1e-3 * width]), color="#d62728", line_width=3)
-    _scalar_bar(pl, WEAR_TITLE, actor.mapper)
+    _scalar_bar(pl, wear_bar, actor.mapper)
     # Key in the free band between the profile and the colour bar (the profile sits above 40 % of the height).
     pl.add_text("black: original surface", position=(40, int(0.3 * _WINDOW[1])), font_size=11, color="black")
     pl.add_text(f"red: worn surface (wear x {mag:g})", position=(40, int(0.25 * _WINDOW[1])), font_size=11,
@@ -437,7 +442,7 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None, plan
     bodies = "" if len(layers) == 1 else (f"\nthe wear gap shared: cylinder {100 * share:.0f} % (above), "
                                           f"flat {100 * (1 - share):.0f} % (below)")
     pl.add_text(f"Worn profile after {cycle} (increment {info['increment']}): wear x {mag:g}, "
-                f"max wear gap {wear.max():.3g} mm{bodies}", position="upper_edge", font_size=12, color="black")
+                f"max wear gap {wear.max():.3g} {units.length}{bodies}", position="upper_edge", font_size=12, color="black")
     c_s = 0.5 * (s_lo + s_hi)
     h0 = float((x0 @ n)[worn_zone].min())
     depth = mag * float(wear.max())
@@ -478,6 +483,7 @@ def deformed_plotter_3d(folder: str | Path, f: Fields | None = None):
         (plotter, info) with ``clim``, ``scale``, ``time`` as :func:`deformed_plotter`.
     """
     pv = _pyvista()
+    vm_bar = vm_title(folder_units(folder))
     folder = Path(folder)
     f = read_fields(folder) if f is None else f
     if f.gdim != 3:
@@ -497,14 +503,14 @@ def deformed_plotter_3d(folder: str | Path, f: Fields | None = None):
     for col, factor in enumerate((scale, 1.0)):
         pl.subplot(0, col)
         grid = _grid(pv, f, f.points + factor * f.displacement)
-        grid.cell_data[VM_TITLE] = f.von_mises
+        grid.cell_data[vm_bar] = f.von_mises
         if col == 1:  # the cells around the contact only: the zone is a small part of the body
             box = (centre[0] - half, centre[0] + half, centre[1] - half, centre[1] + half, centre[2] - half,
                    centre[2] + half)
             grid = grid.clip_box(box, invert=False)
-        actor = pl.add_mesh(grid, scalars=VM_TITLE, cmap=CMAP, clim=clim, show_edges=col == 1,
+        actor = pl.add_mesh(grid, scalars=vm_bar, cmap=CMAP, clim=clim, show_edges=col == 1,
                             edge_color="#404040", line_width=0.5, show_scalar_bar=False)
-        _scalar_bar(pl, VM_TITLE + " " * col, actor.mapper)
+        _scalar_bar(pl, vm_bar + " " * col, actor.mapper)
         pl.add_text(titles[col], position="upper_left", font_size=11 if col == 0 else 10, color="black")
         # Obliquely from -y (the symmetry plane's side), a little above the contact plane; framed to fit.
         pl.view_vector((0.55, -1.0, 0.45), viewup=(0.0, 0.0, 1.0))
@@ -519,12 +525,14 @@ def worn_plotter_3d(folder: str | Path, plane_normal):
     wireframe. ``(None, info)`` when nothing wore.
 
     Returns:
-        (plotter, info) with ``magnification``, ``max_wear`` (mm), ``cycle`` and ``increment``.
+        (plotter, info) with ``magnification``, ``max_wear`` (in the folder's length unit), ``cycle`` and ``increment``.
     """
     from .contact_output import read_contact_xdmf
 
     pv = _pyvista()
     folder = Path(folder)
+    units = folder_units(folder)
+    wear_bar = wear_title(units)
     data = read_contact_xdmf(folder / "contact.xdmf")
     wear = np.asarray(data["point_data"][-1]["wear"], dtype=float)
     info = {"cycle": int(data["cycles"][-1]), "increment": int(data["times"][-1]),
@@ -540,22 +548,43 @@ def worn_plotter_3d(folder: str | Path, plane_normal):
     tri = np.asarray(data["cells"][1], dtype=np.int64)
     faces = np.column_stack([np.full(tri.shape[0], 3), tri]).ravel()
     worn = pv.PolyData(points + mag * wear[:, None] * n[None, :], faces=faces)
-    worn.point_data[WEAR_TITLE] = wear
+    worn.point_data[wear_bar] = wear
     original = pv.PolyData(points, faces=faces)
     pl = pv.Plotter(off_screen=True, window_size=[_WINDOW[0], _WINDOW[1]])
     pl.set_background("white")
-    actor = pl.add_mesh(worn, scalars=WEAR_TITLE, cmap=CMAP, clim=(0.0, float(wear.max())), show_scalar_bar=False,
+    actor = pl.add_mesh(worn, scalars=wear_bar, cmap=CMAP, clim=(0.0, float(wear.max())), show_scalar_bar=False,
                         lighting=False)
     pl.add_mesh(original, style="wireframe", color="#9a9a9a", line_width=1)
-    _scalar_bar(pl, WEAR_TITLE, actor.mapper)
+    _scalar_bar(pl, wear_bar, actor.mapper)
     cycle = f"cycle {info['cycle']}" if info["cycle"] > 0 else "the monotonic load"
     pl.add_text(f"Worn contact surface after {cycle} (increment {info['increment']}): wear x {mag:g}, "
-                f"max wear gap {wear.max():.3g} mm\n(grey: the original surface)", position="upper_left",
+                f"max wear gap {wear.max():.3g} {units.length}\n(grey: the original surface)", position="upper_left",
                 font_size=11, color="black")
     pl.view_vector(tuple(np.array([0.5, -1.0, 0.0]) - 0.8 * n), viewup=tuple(n))  # from below the plane
     pl.reset_camera()
     info.update(magnification=mag)
     return pl, info
+
+
+def folder_units(folder: str | Path) -> Units:
+    """The units of a run's output folder (``run.json``). A folder without declared units (no ``run.json``, or
+    one of format 1 or 2, written before units were declared) is labelled as its release did: mm, N, MPa."""
+    from .io import read_run_description
+
+    run = read_run_description(folder)
+    if run is None or int(run.get("format", 1)) < 3 or "units" not in run:
+        return Units.mm_N_MPa()
+    return Units.from_json(run["units"])
+
+
+def vm_title(units: Units) -> str:
+    """The von Mises scalar bar's title."""
+    return f"von Mises stress ({units.stress})"
+
+
+def wear_title(units: Units) -> str:
+    """The wear depth scalar bar's title."""
+    return f"wear depth ({units.length})"
 
 
 def _plane_from_description(folder: Path) -> tuple[list[float], list[float]] | None:
@@ -631,7 +660,7 @@ def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> l
     pl.screenshot(str(folder / PICTURES[0]))
     pl.close()
     notes.append(f"wrote {folder / PICTURES[0]} ({kind}displacement x {info['scale']:g}, von Mises "
-                 f"{info['clim'][0]:.4g}..{info['clim'][1]:.4g} MPa)")
+                 f"{info['clim'][0]:.4g}..{info['clim'][1]:.4g} {folder_units(folder).stress})")
     if pl_worn is None:
         notes.append(f"{PICTURES[1]} not drawn: no wear")
     else:

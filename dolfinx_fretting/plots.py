@@ -40,6 +40,7 @@ import numpy as np
 
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
 from .output import RunDescription, read_description
+from .units import Units
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -76,16 +77,10 @@ def _save(fig: Figure, path: Path) -> Path:
     return path
 
 
-def _length_unit(values: np.ndarray | float) -> tuple[float, str]:
-    """Factor and name of a length unit (mm, µm or nm) in which ``values`` (mm) read as plain numbers."""
-    arr = np.asarray(values, dtype=float)
-    arr = arr[np.isfinite(arr)]
-    m = float(np.max(np.abs(arr))) if arr.size else 0.0
-    if m >= 0.1 or m == 0.0:
-        return 1.0, "mm"
-    if m >= 1e-4:
-        return 1e3, "µm"
-    return 1e6, "nm"
+def _length_unit(values: np.ndarray | float, units: Units | None = None) -> tuple[float, str]:
+    """Factor and name of a length unit in which ``values`` (in ``units.length``; default mm) read as plain
+    numbers (:meth:`~dolfinx_fretting.units.Units.length_scale`: mm, µm or nm for mm)."""
+    return (units or Units.mm_N_MPa()).length_scale(values)
 
 
 def _mm(x: float) -> str:
@@ -120,7 +115,7 @@ class _History:
 
 
 def _load_label(run: RunDescription, hist: _History, cycle: int, step: int) -> str:
-    """The tangential load at (cycle, step) read from ``history.csv``, e.g. ``q = +10 MPa``.
+    """The tangential load at (cycle, step) read from ``history.csv``, e.g. ``q = +10 MPa`` (``run.units``).
 
     Values within 1e-6 of the load amplitude of zero (round-off of a force-controlled load) read 0.
     """
@@ -128,9 +123,10 @@ def _load_label(run: RunDescription, hist: _History, cycle: int, step: int) -> s
     kind = run.tangential_control
     if r is None or kind == "none":
         return ""
-    column, symbol, unit = {"pressure": ("face_pressure", "q", "MPa"),
-                            "displacement": ("tangential_displacement", "δ", "mm"),
-                            "force": ("tangential_force", "Q", "N/mm")}[kind]
+    units = run.units
+    column, symbol, unit = {"pressure": ("face_pressure", "q", units.stress),
+                            "displacement": ("tangential_displacement", "δ", units.length),
+                            "force": ("tangential_force", "Q", units.contact_force(run.dim))}[kind]
     value = float(hist.t[column][r])
     if abs(value) <= 1e-6 * abs(run.tangential_amplitude):
         return f"{symbol} = 0 {unit}"
@@ -232,7 +228,7 @@ def plot_wear_first_cycle(path: Path, run: RunDescription, prof: ContactProfiles
     if not chosen:
         return None
     wear = prof.values["wear"][[r for _, r in chosen]]
-    f, unit = _length_unit(wear)
+    f, unit = _length_unit(wear, run.units)
     pre = _preload_row(prof)
     n_labels = len(chosen) + (pre is not None)
     fig = _figure((12, 4.6 + 0.25 * -(-n_labels // 5)))
@@ -248,9 +244,9 @@ def plot_wear_first_cycle(path: Path, run: RunDescription, prof: ContactProfiles
     if pre is not None:
         ax_p.plot(prof.position, prof.values["pressure"][pre], "k--", lw=1, label="end of preload")
     ax_w.set_ylabel(f"wear gap ({unit})")
-    ax_p.set_ylabel("contact pressure P_n (MPa)")
+    ax_p.set_ylabel(f"contact pressure P_n ({run.units.stress})")
     for ax in (ax_w, ax_p):
-        ax.set_xlabel("position along the surface (mm)")
+        ax.set_xlabel(f"position along the surface ({run.units.length})")
         ax.grid(alpha=0.3)
     _profile_pair_legend(fig, ax_w, ax_p, wear)
     fig.suptitle(f"{run.name}: wear gap and contact pressure during cycle {cycle} (quarter points)")
@@ -276,7 +272,7 @@ def plot_wear_evolution(path: Path, run: RunDescription, prof: ContactProfiles, 
         return None
     n = run.increments_per_cycle
     last = [(c, int(prof.rows_of_cycle(c)[-1])) for c in cycles]
-    f, unit = _length_unit(prof.values["wear"][[r for _, r in last]])
+    f, unit = _length_unit(prof.values["wear"][[r for _, r in last]], run.units)
     cmap = matplotlib.colormaps["viridis"]
     pre = _preload_row(prof)
     n_labels = len(last) + (pre is not None)
@@ -291,9 +287,9 @@ def plot_wear_evolution(path: Path, run: RunDescription, prof: ContactProfiles, 
     if pre is not None:
         ax_p.plot(prof.position, prof.values["pressure"][pre], "k--", lw=1, label="end of preload")
     ax_w.set_ylabel(f"wear gap ({unit})")
-    ax_p.set_ylabel("contact pressure P_n (MPa)")
+    ax_p.set_ylabel(f"contact pressure P_n ({run.units.stress})")
     for ax in (ax_w, ax_p):
-        ax.set_xlabel("position along the surface (mm)")
+        ax.set_xlabel(f"position along the surface ({run.units.length})")
         ax.grid(alpha=0.3)
     _profile_pair_legend(fig, ax_w, ax_p, prof.values["wear"][[r for _, r in last]])
     load = _load_label(run, hist, last[-1][0], n)
@@ -332,8 +328,8 @@ def plot_node_history(path: Path, run: RunDescription, prof: ContactProfiles) ->
     rows_of = {c: prof.rows_of_cycle(c) for c in shown}
     gap, slip = prof.values["gap"], prof.values["slip"]
     pairs = [(j, c) for j in nodes for c in shown]
-    fg, ug = _length_unit(np.concatenate([gap[rows_of[c], j] for j, c in pairs]))
-    fs, us = _length_unit(np.concatenate([slip[rows_of[c], j] for j, c in pairs]))
+    fg, ug = _length_unit(np.concatenate([gap[rows_of[c], j] for j, c in pairs]), run.units)
+    fs, us = _length_unit(np.concatenate([slip[rows_of[c], j] for j, c in pairs]), run.units)
     ncol, nn = len(shown), len(nodes)
     # three rows of panels per node, a thin empty row between the nodes' blocks
     ratios: list[float] = []
@@ -369,7 +365,7 @@ def plot_node_history(path: Path, run: RunDescription, prof: ContactProfiles) ->
             ax_s.plot(steps, slip[rows, j] * fs, "k.-", ms=3, lw=1)
             ax_p.plot(steps, prof.values["pressure"][rows, j], ".-", ms=3, lw=1, color="tab:red")
             ax_p.plot(steps, prof.values["shear"][rows, j], ".-", ms=3, lw=1, color="tab:purple")
-            ax_g.set_title(f"node {int(prof.nodes[j])} at x = {_mm(prof.position[j])} mm, cycle {c}",
+            ax_g.set_title(f"node {int(prof.nodes[j])} at x = {_mm(prof.position[j])} {run.units.length}, cycle {c}",
                            fontsize=9.5)
             if b == nn - 1:
                 ax_p.set_xlabel(f"step in the cycle (of {n})")
@@ -383,7 +379,7 @@ def plot_node_history(path: Path, run: RunDescription, prof: ContactProfiles) ->
                                     span if span > _ROUND_OFF * factor else 1.0)
         axes[0, 0].set_ylabel(f"normal gap x_n ({ug})", fontsize=9)
         axes[1, 0].set_ylabel(f"tangential incr. Δx_t ({us})", fontsize=9)
-        axes[2, 0].set_ylabel("P_n, P_t (MPa)", fontsize=9)
+        axes[2, 0].set_ylabel(f"P_n, P_t ({run.units.stress})", fontsize=9)
     first.set_xticks([1, n // 4, n // 2, 3 * n // 4, n])
     first.set_xlim(0.5, n + 0.5)
     handles = [Patch(color=STATE_COLORS[s], alpha=0.5, label=STATE_NAMES[s]) for s in (0, 1, 2)]
@@ -396,17 +392,29 @@ def plot_node_history(path: Path, run: RunDescription, prof: ContactProfiles) ->
 
 
 def _loop_displacement(run: RunDescription, hist: _History) -> tuple[np.ndarray, str]:
+    """The fretting loop's abscissa and what it is (the x label without its unit).
+
+    Displacement control: the obstacle's tangential displacement D_t1. Otherwise ``-mean_relative_tangential``:
+    the history column is the mean over *all* candidate contacts (loaded or not) of the body's tangential
+    position relative to the obstacle, y_t1 = u_t1 - D_t1, which runs opposite to Q (the body dragged by Q > 0
+    lags behind the obstacle); its negative, the obstacle's displacement relative to the contact nodes, turns
+    with Q like the obstacle's displacement does (the same abscissa as ``cycles.csv``'s ``displacement_*``).
+    """
     if run.tangential_control == "displacement":
-        return hist.t["tangential_displacement"], "tangential displacement of the obstacle"
-    return hist.t["mean_relative_tangential"], "mean relative tangential displacement"
+        return hist.t["tangential_displacement"], "tangential displacement of the obstacle D_t1"
+    return (-hist.t["mean_relative_tangential"],
+            "obstacle's tangential displacement relative to the contact nodes,\n"
+            "mean over all candidate contacts (−mean y_t1)")
 
 
 def plot_fretting_loops(path: Path, run: RunDescription, hist: _History) -> Path | None:
     """Tangential contact force against displacement over the loop cycles (``history.csv``).
 
     The displacement is the obstacle's tangential displacement for a displacement-controlled load, else
-    the mean tangential relative displacement of the loaded contacts (``mean_relative_tangential``; it
-    jumps when the set of loaded contacts changes). A pressure-controlled run gets a second panel with
+    the obstacle's tangential displacement relative to the body's contact nodes, averaged over all candidate
+    contacts (``-mean_relative_tangential``: the same sign as Q, see :func:`_loop_displacement`). Q is the
+    contact force on the body along t1, in ``run.units.contact_force(run.dim)`` (N/mm in 2D, N in 3D for the
+    scenes). A pressure-controlled run gets a second panel with
     the force against the face pressure q. The cycles are ``run.loop_cycles`` found in the
     table, else up to four cycles spread over those present. Each loop starts at the last row before
     its cycle (the end of the previous cycle or of the preload), so it is closed.
@@ -436,7 +444,7 @@ def plot_fretting_loops(path: Path, run: RunDescription, hist: _History) -> Path
         if before.size:
             rows = np.concatenate([before[-1:], rows])
         loops.append((c, rows))
-    f, unit = _length_unit(np.concatenate([x_all[r] for _, r in loops]))
+    f, unit = _length_unit(np.concatenate([x_all[r] for _, r in loops]), run.units)
     cmap = matplotlib.colormaps["viridis"]
     pressure = run.tangential_control == "pressure"
     fig = _figure((12.5, 5.2) if pressure else (7, 5.2))
@@ -451,11 +459,11 @@ def plot_fretting_loops(path: Path, run: RunDescription, hist: _History) -> Path
                          label=f"cycle {c}")
     axes[0].set_xlabel(f"{what} ({unit})")
     if pressure:
-        axes[1].set_xlabel(f"face pressure q on '{run.pressure_face}' (MPa)")
+        axes[1].set_xlabel(f"face pressure q on '{run.pressure_face}' ({run.units.stress})")
     for ax in axes:
         ax.axhline(0, color="k", lw=0.5)
         ax.axvline(0, color="k", lw=0.5)
-        ax.set_ylabel("tangential contact force Q (N/mm)")
+        ax.set_ylabel(f"tangential contact force Q ({run.units.contact_force(run.dim)})")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     fig.suptitle(f"{run.name}: fretting loops")
@@ -480,16 +488,16 @@ def plot_wear_growth(path: Path, run: RunDescription, cycles: dict[str, np.ndarr
     x = cycles["equivalent_cycles"]
     style = ".-" if x.size <= 200 else "-"
     depth = cycles["max_wear_depth"]
-    f, unit = _length_unit(depth)
+    f, unit = _length_unit(depth, run.units)
     fig = _figure((7, 8))
     ax_d, ax_a, ax_e = fig.subplots(3, 1, sharex=True, gridspec_kw=dict(
         left=0.16, right=0.97, bottom=0.065, top=0.94, hspace=0.14))
     ax_d.plot(x, depth * f, style, ms=3, color="tab:red")
     ax_d.set_ylabel(f"max wear depth ({unit})")
     ax_a.plot(x, cycles["wear_area"], style, ms=3, color="tab:blue")
-    ax_a.set_ylabel("wear area (mm²)")
+    ax_a.set_ylabel(f"{'wear area' if run.dim == 2 else 'wear volume'} ({run.units.wear_measure(run.dim)})")
     ax_e.plot(x, cycles["dissipated_energy"], style, ms=3, color="tab:green")
-    ax_e.set_ylabel("dissipated energy per cycle\n(N·mm/mm)")
+    ax_e.set_ylabel(f"dissipated energy per cycle\n({run.units.energy(run.dim)})")
     ax_e.set_xlabel("cycles (equivalent physical cycles)")
     for ax in (ax_d, ax_a, ax_e):
         ax.grid(alpha=0.3)
@@ -501,7 +509,7 @@ def plot_wear_growth(path: Path, run: RunDescription, cycles: dict[str, np.ndarr
     return _save(fig, path)
 
 
-#: The fields of ``contact_maps.png``: (name, quantity: "stress" in MPa, "length" in mm, or "state"; value of a
+#: The fields of ``contact_maps.png``: (name, quantity: "stress", "length" (in the run's units) or "state"; value of a
 #: row of the profiles).
 _MAP_FIELDS = (
     ("pressure", "stress", lambda v, r: v["pressure"][r]),
@@ -550,7 +558,7 @@ def plot_contact_maps(path: Path, run: RunDescription, prof: ContactProfiles) ->
                 bar.ax.set_yticklabels([STATE_NAMES[k] for k in (0, 1, 2)])
                 title = name
             else:
-                f, unit = _length_unit(data) if quantity == "length" else (1.0, "MPa")
+                f, unit = _length_unit(data, run.units) if quantity == "length" else (1.0, run.units.stress)
                 art = ax.tripcolor(tri, data * f, shading="gouraud", cmap="viridis")
                 bar = fig.colorbar(art, ax=ax, fraction=0.046)
                 bar.formatter.set_useOffset(False)  # a nearly uniform field reads as its values, not "1e-5+2"
@@ -561,9 +569,9 @@ def plot_contact_maps(path: Path, run: RunDescription, prof: ContactProfiles) ->
             if j == 0:
                 inc = int(prof.increments[r])
                 label = f"end of preload (inc {inc})" if r == pre else f"increment {inc}"
-                ax.set_ylabel(f"{label}\nt2 (mm)", fontsize=8)
+                ax.set_ylabel(f"{label}\nt2 ({run.units.length})", fontsize=8)
             if i == len(rows) - 1:
-                ax.set_xlabel("t1 (mm)", fontsize=8)
+                ax.set_xlabel(f"t1 ({run.units.length})", fontsize=8)
     fig.suptitle(f"{run.name}: the contact plane (t1 the first tangent, t2 the second)")
     return _save(fig, path)
 
@@ -594,7 +602,8 @@ def _plot_profiles(out: Path, run: RunDescription, prof: ContactProfiles, hist: 
         reference = ("Hertz" + (", two identical bodies" if two_bodies else ", rigid flat, frictionless")
                      + ", end of preload", xs, hertz_pressure(xs, P, radius, E_star))
     path = out / name
-    plot_profiles(path, prof.position, curves, reference, title=f"{run.name}: contact tractions{direction}")
+    plot_profiles(path, prof.position, curves, reference, title=f"{run.name}: contact tractions{direction}",
+                  units=run.units)
     return path
 
 

@@ -36,6 +36,7 @@ from .contact import Contact
 from .cycle_jump import PlasticCycle
 from .io import non_finite_keys
 from .output import FrettingWriter, RunDescription, contact_measures
+from .units import Units
 from .scene_paths import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
                       Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity)
@@ -265,7 +266,7 @@ def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> R
         pressure_face=lo.pressure_face if lo.tangential_kind == "pressure" else None,
         wear_acceleration=scene.wear.acceleration, hertz=hertz[:2] if hertz is not None else None,
         track_positions=tuple(scene.output.track_positions), loop_cycles=tuple(scene.output.loop_cycles),
-        model_fraction=model.setup.model_fraction)
+        model_fraction=model.setup.model_fraction, units=Units.mm_N_MPa())
 
 
 class _Run:
@@ -754,6 +755,7 @@ class _Run:
         summary["contact_window"] = model.half_width
         summary["window_growths"] = pr.window_growths
         summary["modelled"] = self._modelled()
+        summary["units"] = self.writer.description.units.to_json(model.contact.dim)
         if self.size_estimate is not None:  # the estimate made before meshing, to compare with what was built
             summary["size_estimate"] = self.size_estimate.as_dict()
         if error is not None:

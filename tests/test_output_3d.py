@@ -44,7 +44,9 @@ def written(tmp_path_factory):
     folder = tmp_path_factory.mktemp("box3d") if COMM.rank == 0 else None
     folder = COMM.bcast(str(folder) if folder else None, root=0)
     problem = box_problem()
-    writer = dfr.FrettingWriter(problem, folder, dfr.RunDescription.of(problem, "box", preload_increments=1))
+    # the box's numbers declared SI (E = 1000 Pa, L = 1 m): the labels say so, nothing else changes
+    writer = dfr.FrettingWriter(problem, folder, dfr.RunDescription.of(problem, "box", preload_increments=1,
+                                                                       units=dfr.Units.si()))
     state = problem.commit(problem.initial_state(), problem.solve(problem.initial_state(), normal=dfr.Force(10.0)))
     writer.write_increment(state, stage="normal")
     for d in (5e-3, 2e-2, 5e-2):  # oblique drag (t1 and t2), the last ones in gross slip
@@ -119,3 +121,42 @@ def test_plot_run_draws_the_contact_maps(written):
     level = along_t1[np.argmin(np.abs(along_t1))]
     expected = np.sort(along_t2[np.abs(along_t1 - level) < 1e-12])
     assert across.position.size >= 3 and np.allclose(across.position, expected, atol=1e-9)
+
+
+def test_an_si_model_is_labelled_in_si(written, monkeypatch):
+    """Issue 22: a user's model declared SI writes m, N, Pa in run.json and its plots say m and Pa, never mm or
+    MPa (before: run.json and every label said mm, N, MPa whatever the model)."""
+    import json
+
+    from dolfinx_fretting import plots
+
+    folder, *_ = written
+    if COMM.rank != 0:
+        return
+    units = json.loads((Path(folder) / "run.json").read_text())["units"]
+    assert (units["length"], units["force"], units["stress"]) == ("m", "N", "Pa")
+    assert (units["contact_force"], units["wear_measure"], units["wear_coefficient"]) == ("N", "m³", "1/Pa")
+    drawn = {}
+
+    def keep(fig, path):
+        drawn[Path(path).name] = fig
+        return path
+
+    monkeypatch.setattr(plots, "_save", keep)
+    dfr.plot_run(folder)
+    maps = drawn["contact_maps.png"]
+    labels = [t for ax in maps.axes for t in (ax.get_xlabel(), ax.get_ylabel(), ax.get_title())]
+    assert "t1 (m)" in labels and "pressure (Pa)" in labels
+    assert any(t.startswith("end of preload") and t.endswith("t2 (m)") for t in labels)
+    assert not [t for t in labels if "MPa" in t]   # small lengths (slips, wear) are rescaled down from m: mm here
+
+
+def test_mean_relative_tangential_runs_opposite_to_Q(written):
+    """The history's mean_relative_tangential is the body's position relative to the obstacle (y_t1 = u_t1 - D_t1):
+    dragged along +t1 the box lags behind the obstacle, so the column is negative while Q > 0; the fretting loop
+    plots its negative (plots._loop_displacement), which turns with Q."""
+    folder, *_ = written
+    history = read_table(f"{folder}/history.csv")
+    dragged = history["stage"] == "tangential" if history["stage"].dtype.kind in "OU" else slice(1, None)
+    Q, y = history["tangential_force"][dragged], history["mean_relative_tangential"][dragged]
+    assert np.all(Q > 0) and np.all(y < 0)

@@ -21,7 +21,8 @@ from dolfinx_fretting.contact_output import (XDMF_FIELDS, read_contact_xdmf, rea
                                              write_contact_xdmf)
 from dolfinx_fretting.io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS
 from dolfinx_fretting.plots import CYCLIC_PICTURES, plot_run, tracked_nodes
-from dolfinx_fretting.output import RunDescription
+from dolfinx_fretting.output import RunDescription, cycle_row
+from dolfinx_fretting.units import Units
 
 N_NODES, N_STEPS, N_CYCLES = 11, 8, 3
 POSITIONS = np.linspace(0.0, 10.0, N_NODES)
@@ -97,7 +98,7 @@ def cyclic_description(**changes) -> RunDescription:
     values = dict(name="synthetic-block", dim=2, obstacle="rigid_plane", plane_point=(0.0, 0.0),
                   plane_normal=(0.0, 1.0), cycles=N_CYCLES, preload_increments=1, increments_per_cycle=N_STEPS,
                   tangential_control="pressure", tangential_amplitude=10.0, pressure_face="right",
-                  loop_cycles=(1, 3), track_positions=(1.2, 5.0))
+                  loop_cycles=(1, 3), track_positions=(1.2, 5.0), units=Units.mm_N_MPa())
     values.update(changes)
     return RunDescription(**values)
 
@@ -344,3 +345,108 @@ def test_contact_xdmf_without_profiles(tmp_path):
     (tmp_path / "contact_profiles.csv").write_text(",".join(PROFILE_FIELDS) + "\n")
     assert write_contact_xdmf(tmp_path) is None
     assert not (tmp_path / "contact.xdmf").exists()
+
+
+def _drawn(monkeypatch) -> dict:
+    """The figures plot_run draws, by file name (plots._save records them instead of writing PNGs)."""
+    drawn = {}
+
+    def keep(fig, path):
+        drawn[Path(path).name] = fig
+        return path
+
+    monkeypatch.setattr(plots, "_save", keep)
+    return drawn
+
+
+def _labels(fig) -> list[str]:
+    legends = [ax.get_legend() for ax in fig.axes if ax.get_legend()] + list(fig.legends)
+    return [t for ax in fig.axes for t in (ax.get_xlabel(), ax.get_ylabel(), ax.get_title()) if t] + \
+        [t.get_text() for legend in legends for t in legend.texts]
+
+
+def test_an_si_run_is_labelled_in_si(tmp_path, monkeypatch):
+    """Issue 22: run.json of a run declared SI says m, N, Pa, and every plot drawn from the folder alone labels
+    its axes in m and Pa (N/m for a 2D contact force), none in mm or MPa."""
+    import json
+
+    write_cyclic_folder(tmp_path)
+    run = cyclic_description(units=Units.si())
+    (tmp_path / "run.json").write_text(json.dumps(run.to_json()))
+    units = json.loads((tmp_path / "run.json").read_text())["units"]
+    assert (units["length"], units["force"], units["stress"], units["contact_force"]) == ("m", "N", "Pa", "N/m")
+    drawn = _drawn(monkeypatch)
+    plot_run(tmp_path)
+    assert set(CYCLIC_PICTURES) <= set(drawn)
+    every = [t for fig in drawn.values() for t in _labels(fig)]
+    # small lengths (wear, gaps, slips) are drawn rescaled down the ladder m, mm, µm, nm to read as plain numbers;
+    # no stress, force, energy or area is ever in the scenes' units
+    assert not [t for t in every if any(u in t for u in ("MPa", "N/mm", "N·mm", "mm²"))], every
+    assert all(t.endswith("(m)") for t in every if t.startswith("position"))
+    assert drawn["fretting_loops.png"].axes[0].get_ylabel() == "tangential contact force Q (N/m)"
+    assert drawn["fretting_loops.png"].axes[1].get_xlabel() == "face pressure q on 'right' (Pa)"
+    growth = [ax.get_ylabel() for ax in drawn["wear_growth.png"].axes]
+    assert growth[1:] == ["wear area (m²/m)", "dissipated energy per cycle\n(N·m/m)"]
+    first = drawn["wear_first_cycle.png"].axes
+    assert first[1].get_ylabel() == "contact pressure P_n (Pa)" and first[0].get_xlabel() == \
+        "position along the surface (m)"
+    assert "step 2/8, q = +10 Pa" in _labels(drawn["wear_first_cycle.png"])
+
+
+def test_a_3d_force_loop_is_in_newtons_and_turns_with_Q(tmp_path, monkeypatch):
+    """Issue 22: a 3D contact force is a force (N), not N/mm; the abscissa of a force-controlled loop is the
+    obstacle's displacement relative to the contacts (-mean_relative_tangential, which the history holds with the
+    opposite sign to Q: tests/test_output_3d.py), so the loop turns with Q; cycles.csv's extremes are the same."""
+    steps = np.arange(1, N_STEPS + 1)
+    Q = 5.0 * np.array([_triangular(s) for s in steps])
+    hist = plots._History({"increment": steps, "cycle": np.ones(N_STEPS, int), "step": steps,
+                           "tangential_force": Q, "mean_relative_tangential": -2e-3 * Q,
+                           "tangential_displacement": 3e-3 * Q, "face_pressure": np.zeros(N_STEPS)})
+    run = cyclic_description(dim=3, tangential_control="force", tangential_amplitude=5.0, pressure_face=None,
+                             loop_cycles=(1,))
+    drawn = _drawn(monkeypatch)
+    plots.plot_fretting_loops(tmp_path / "fretting_loops.png", run, hist)
+    ax = drawn["fretting_loops.png"].axes[0]
+    assert ax.get_ylabel() == "tangential contact force Q (N)"
+    assert "mean" in ax.get_xlabel() and "relative to the contact nodes" in ax.get_xlabel()
+    x, y = ax.lines[0].get_xdata(), ax.lines[0].get_ydata()
+    assert np.corrcoef(x, y)[0, 1] > 0.99
+    records = {"tangential_force": Q, "mean_relative_tangential": -2e-3 * Q, "tangential_displacement": 3e-3 * Q,
+               "dissipated_energy": np.zeros(N_STEPS), "n_stick": np.ones(N_STEPS), "n_slip": np.zeros(N_STEPS),
+               "wear_area": np.zeros(N_STEPS), "max_wear_depth": np.zeros(N_STEPS),
+               "max_pressure": np.ones(N_STEPS), "local_iterations": np.ones(N_STEPS)}
+    row = cycle_row(1, records, displacement_controlled=False)
+    assert row["displacement_max"] == pytest.approx(2e-3 * Q.max()) and row["displacement_min"] == \
+        pytest.approx(2e-3 * Q.min())
+
+
+def test_a_folder_without_declared_units_keeps_the_old_labels(tmp_path, monkeypatch):
+    """A run.json of format 2 (before units were declared: mm, N, MPa hard-coded) still reads, with a note, and is
+    drawn with the labels of its release."""
+    import json
+
+    write_cyclic_folder(tmp_path)
+    old = cyclic_description().to_json()
+    old.update(format=2, units={"length": "mm", "force": "N/mm", "stress": "MPa"})
+    (tmp_path / "run.json").write_text(json.dumps(old))
+    with pytest.warns(UserWarning, match="declares no units"):
+        run = RunDescription.from_json(old)
+    assert run.units == Units.mm_N_MPa()
+    drawn = _drawn(monkeypatch)
+    with pytest.warns(UserWarning, match="declares no units"):
+        plot_run(tmp_path)
+    assert drawn["fretting_loops.png"].axes[0].get_ylabel() == "tangential contact force Q (N/mm)"
+
+
+def test_units_are_checked_when_known_and_free_otherwise():
+    """The presets are consistent (stress = force / length²); a known but inconsistent set is refused; free names
+    are taken as given; the default names no unit (dimension symbols), so a user's model is never called mm."""
+    assert Units.mm_N_MPa() == Units("mm", "N", "MPa") and Units.si() == Units("m", "N", "Pa")
+    with pytest.raises(ValueError, match="not Pa"):
+        Units("mm", "N", "Pa")
+    assert Units("in", "lbf", "psi").contact_force(2) == "lbf/in"
+    assert not Units().declared and Units().to_json(2)["length"] == "L"
+    assert RunDescription(name="r", dim=2, obstacle="rigid_plane", plane_point=(0, 0), plane_normal=(0, 1)).units \
+        == Units()
+    assert Units.mm_N_MPa().wear_coefficient == "1/MPa" and Units.mm_N_MPa().energy(2) == "N·mm/mm"
+    assert Units.si().length_scale([2e-5]) == (1e6, "µm") and Units.mm_N_MPa().length_scale([5e-4]) == (1e3, "µm")

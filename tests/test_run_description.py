@@ -34,4 +34,11 @@ def test_run_description_of_a_rigid_plane(tmp_path):
     run_scene(load_scene("hertz", QUIET + ["geometry.contact_mesh_size=0.04", "loading.normal_increments=1",
                                            "loading.tangential_increments=1"]), tmp_path, quiet=True)
     assert not _obstacle_is_a_body(tmp_path) and _slave_share(tmp_path) is None
-    assert json.loads((tmp_path / "run.json").read_text())["dim"] == 2
+    run = json.loads((tmp_path / "run.json").read_text())
+    assert run["dim"] == 2
+    # issue 22: the scenes' units declared, in run.json and in summary.json (force per mm of thickness in 2D)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    for units in (run["units"], summary["units"]):
+        assert (units["length"], units["force"], units["stress"]) == ("mm", "N", "MPa")
+        assert (units["contact_force"], units["energy"], units["wear_measure"], units["wear_coefficient"]) == \
+            ("N/mm", "N·mm/mm", "mm²/mm", "1/MPa")
