@@ -711,7 +711,7 @@ class BoundarySettings(_Section):
 
 
 class Scene(_Section):
-    """A whole scene; see the README for every key with its unit."""
+    """A whole scene; see docs/scenes.md for every key with its unit."""
 
     name: str = "scene"
     description: str = ""
