@@ -372,6 +372,9 @@ class _Run:
             # the window may reach past it onto the graded cells.
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm; the mesh's uniform zone "
                       f"ends at {model.setup.window_limit:.4g} mm, beyond it the cells grow)")
+        elif model.setup.window_limit is None:  # a window the scene gives on a mesh with no refined zone
+            advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) or leave it out (the "
+                      "whole surface)")
         else:
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) and "
                       "geometry.contact_half_width (the refined zone, now "

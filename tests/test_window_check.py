@@ -23,6 +23,7 @@ from dolfinx_fretting import local_solvers  # noqa: E402
 from dolfinx_fretting.analytic import hertz_line_contact  # noqa: E402
 from dolfinx_fretting.scene_models import build_scene_model  # noqa: E402
 from dolfinx_fretting.scenes import load_scene  # noqa: E402
+from dolfinx_fretting.simulation import SimulationError, run_scene  # noqa: E402
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="serial references; tests/test_parallel.py "
                                                                   "checks the decision under MPI")
@@ -233,3 +234,16 @@ def test_two_bodies_outside_rows_are_the_displacement_s_gaps(sliding):
     moved = H @ u[:H.shape[1]]
     assert np.abs(rows - (out.nodes.gap0 + moved - out.normals @ D)).max() <= 1e-12 * np.abs(moved).max()
     assert rows.min() > 0   # the window holds the contact: every node outside it is open
+
+
+def test_scene_runner_stops_a_block_truncated_by_its_window(tmp_path):
+    """A scene's window with no refined zone to grow into (a rectangle: the window cannot grow): the block pressed
+    flat on the plate with a window of 10 mm on its 50 mm face ran to the end before, carrying the preload on a
+    fifth of the face; now the run stops at the first increment naming the window needed (the far corner lies
+    50 mm from the window's centre, the near corner) and the scene key."""
+    scene = load_scene("stromberg-block", ["geometry.nx=20", "geometry.ny=20", "contact.candidate_half_width=10.0",
+                                           "loading.cycles=1", "output.xdmf=false", "output.plots=false"])
+    with pytest.raises(SimulationError, match=r"increment 1 \(normal\): the contact reaches the edge of the candidate "
+                                              r"window and beyond: .* the window needed is 55 mm; widen "
+                                              r"contact.candidate_half_width \(now 10 mm\)"):
+        run_scene(scene, tmp_path, quiet=True)
