@@ -1103,7 +1103,8 @@ class Contact:
             :class:`~dolfinx_fretting.state.WindowError` (naming the window needed) if one does.
         grow_window: Instead of raising, let :meth:`~dolfinx_fretting.problem.FrettingProblem.advance` and
             :meth:`~dolfinx_fretting.problem.FrettingProblem.run_cycle` widen the window to the one needed and
-            solve the increment (or cycle) again (elastic bodies; a RuntimeWarning says so).
+            solve the increment (or cycle) again (a RuntimeWarning says so). Elastic bodies with a fixed pairing:
+            an elastic-plastic or finite-sliding problem cannot change its window and raises.
 
     Attributes:
         contact_set: The :class:`ContactSet` (nodes, frames, gaps, tributary measures, H).

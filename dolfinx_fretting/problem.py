@@ -295,7 +295,9 @@ class FrettingProblem:
             try:
                 return attempt(state)
             except WindowError as exc:
-                if not self.contact.grow_window or self.body is not None:
+                # (an elastic-plastic or finite-sliding problem cannot change its window: the error stands)
+                fixed = self.body is not None or self.operators.surface_compliance is not None
+                if not self.contact.grow_window or fixed:
                     raise
                 before = self.contact.window
                 state = self.set_window(state, exc.window_needed)
