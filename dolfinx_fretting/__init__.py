@@ -68,7 +68,8 @@ else:
 _API = {
     "RigidPlane": "contact", "ElasticBody": "contact", "Contact": "contact",
     "FrettingProblem": "problem", "ContactState": "state", "IncrementResult": "state",
-    "CycleResult": "state", "ConvergenceError": "state", "CyclePath": "loading", "Displacement": "loading",
+    "CycleResult": "state", "ConvergenceError": "state", "WindowError": "state", "CyclePath": "loading",
+    "Displacement": "loading",
     "Force": "loading", "Archard": "laws", "LocalSolver": "settings", "Plasticity": "settings",
     "J2Plasticity": "materials", "FrettingWriter": "output", "RunDescription": "output", "plot_run": "plots",
     "Units": "units",

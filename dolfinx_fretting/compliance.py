@@ -451,6 +451,41 @@ class DelassusOperator:
         self.stats["last_build_route"] = route
         return W
 
+    def coupling(self, H_rows: sp.spmatrix, H_cols: sp.spmatrix) -> np.ndarray:
+        """The dense block ``H_rows K^-1 H_cols^T`` (e.g. the contacts' forces seen at other nodes), identical on
+        every rank. Collective.
+
+        Whatever the route of W, the block is formed from entries of the inverse,
+        ``H_rows[:, R] (K^-1)_{R, C} H_cols[:, C]^T`` with R and C the dofs each touches (ICNTL(30), as the
+        ``"selected_inverse"`` route): MUMPS solves one sparse right-hand side per requested column, so the
+        smaller of R and C is requested as columns (K^-1 is symmetric). Under MPI with the ``"owned"`` route,
+        rank 0 takes the entries from its own whole factor (no shared solve), else from the distributed one.
+        Neither H may touch a Dirichlet-constrained dof (as for :meth:`build`).
+        """
+        self._require_factor()
+        H_rows, H_cols = (sp.csr_matrix(H, dtype=np.float64) for H in (H_rows, H_cols))
+        for H in (H_rows, H_cols):
+            H.eliminate_zeros()
+        t0 = time.perf_counter()
+        R = np.unique(H_rows.indices).astype(np.int64)
+        C = np.unique(H_cols.indices).astype(np.int64)
+        out = np.zeros((H_rows.shape[0], H_cols.shape[0]))
+        if R.size and C.size:
+            # _inverse_entries(rows, columns) solves for the columns and returns (K^-1)_{columns, rows}
+            # (symmetry): the smaller set is requested as the columns.
+            large, small = (R, C) if C.size <= R.size else (C, R)
+            if self.method == "owned" and self.comm.size > 1:
+                own = self._own_factor()
+                inv = own._inverse_entries(large, small) if self.comm.rank == 0 else None
+            else:
+                inv = self._inverse_entries(large, small)
+            if self.comm.rank == 0:
+                X = inv if small is R else inv.T     # (|R|, |C|) = (K^-1)_{R, C}
+                out[...] = H_rows[:, R] @ (H_cols[:, C] @ X.T).T
+        self.comm.Bcast(out, root=0)
+        self.stats["last_coupling_time"] = time.perf_counter() - t0
+        return out
+
     def _finish(self, W: np.ndarray | None, m: int) -> np.ndarray:
         """Symmetrise on rank 0 and broadcast: bitwise identical W on every rank."""
         out = np.empty((m, m), dtype=np.float64)

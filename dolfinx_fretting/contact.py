@@ -139,6 +139,9 @@ class ContactSet:
     #: ``master_weights``), and the master surface the pairing was searched on.
     master_faces: np.ndarray | None = None
     master_surface: MasterSurface | None = None
+    #: The candidate window's centre: the body point closest to the obstacle (the first point of contact), from
+    #: which the window's half-width is measured in the tangent plane.
+    window_centre: np.ndarray | None = None
 
     @property
     def two_body(self) -> bool:
@@ -161,6 +164,16 @@ class ContactSet:
     def total_force(self, r: np.ndarray) -> np.ndarray:
         """Total contact force on the body in global coordinates."""
         return self.rigid_modes.T @ r
+
+    def subset(self, contacts: np.ndarray) -> ContactSet:
+        """The contacts ``contacts`` (indices, in that order) of this set: their rows of every array and of H."""
+        contacts = np.asarray(contacts, dtype=np.int64)
+        rows = (self.dim * contacts[:, None] + np.arange(self.dim)).ravel()
+        pick = lambda a: None if a is None else a[contacts]  # noqa: E731
+        return ContactSet(self.dim, self.global_nodes[contacts], self.coords[contacts], self.frames[contacts],
+                          self.gap0[contacts], self.tributary[contacts], self.abscissa[contacts], self.H[rows],
+                          pick(self.master_nodes), pick(self.master_weights), pick(self.master_points),
+                          pick(self.master_sizes), pick(self.master_faces), self.master_surface, self.window_centre)
 
 
 def _tributary_measure(V, facets: np.ndarray, fdim: int) -> np.ndarray:
@@ -307,7 +320,7 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
     n_global = imap.size_global * bs
     H = sp.csr_matrix((frames.ravel(), (rows, cols)), shape=(nc * gdim, n_global))
     return ContactSet(dim=gdim, global_nodes=gnodes, coords=coords, frames=frames, gap0=gaps,
-                      tributary=trib, abscissa=in_plane[:, 0].copy(), H=H)
+                      tributary=trib, abscissa=in_plane[:, 0].copy(), H=H, window_centre=closest)
 
 
 
@@ -467,8 +480,10 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     if half_width is not None:
         keep = np.abs(np.einsum("ij,ij->i", coords - closest, frames[:, 1])) <= half_width * (1 + 1e-12)
     order = np.flatnonzero(keep)[np.argsort(abscissa[keep], kind="stable")]
-    return paired_contact_set(surface, gnodes[order], coords[order], trib[order], abscissa[order],
-                              pairs["face"][order], pairs["weights"][order], imap.size_global * gdim)
+    cs = paired_contact_set(surface, gnodes[order], coords[order], trib[order], abscissa[order],
+                            pairs["face"][order], pairs["weights"][order], imap.size_global * gdim)
+    cs.window_centre = closest
+    return cs
 
 
 def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords: np.ndarray, tributary: np.ndarray,
@@ -877,8 +892,10 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
         raise ValueError("contact: no slave node within the candidate window")
     sel = np.flatnonzero(keep)
     sel = sel[_in_plane_order(in_plane[sel], np.ptp(coords, axis=0).max())]  # along t1, then t2 (as find_candidates)
-    return paired_contact_set(surface, gnodes[sel], coords[sel], trib[sel], in_plane[sel, 0].copy(),
-                              pairs["face"][sel], pairs["weights"][sel], imap.size_global * gdim)
+    cs = paired_contact_set(surface, gnodes[sel], coords[sel], trib[sel], in_plane[sel, 0].copy(),
+                            pairs["face"][sel], pairs["weights"][sel], imap.size_global * gdim)
+    cs.window_centre = closest
+    return cs
 
 
 # The public contact object ---------------------------------------------------------------------------------
@@ -1085,10 +1102,18 @@ class Contact:
         bcs: The Dirichlet conditions of the problem (their dofs are excluded as above).
         window: Candidate half-width (length units): only nodes within this distance, measured in the
             obstacle's tangent plane, of the body point closest to the obstacle; ``None``: every node of
-            ``surface``.
+            ``surface``. The nodes of ``surface`` outside the window are not left unwatched: after every
+            increment the problem checks that none of them penetrates the obstacle, and raises
+            :class:`~dolfinx_fretting.state.WindowError` (naming the window needed) if one does.
+        grow_window: Instead of raising, let :meth:`~dolfinx_fretting.problem.FrettingProblem.advance` and
+            :meth:`~dolfinx_fretting.problem.FrettingProblem.run_cycle` widen the window to the one needed and
+            solve the increment (or cycle) again (a RuntimeWarning says so). Elastic bodies with a fixed pairing:
+            an elastic-plastic or finite-sliding problem cannot change its window and raises.
 
     Attributes:
         contact_set: The :class:`ContactSet` (nodes, frames, gaps, tributary measures, H).
+        outside: The free nodes of ``surface`` outside the window (a :class:`ContactSet`, paired with the master
+            like the candidates for an :class:`ElasticBody`), or None (no window, or none outside it).
         H_free: H without the columns of fixed dofs (what W is built from).
         held_rows: Rows of H (``dim c + k``, k >= 1) whose every dof is fixed: held tangential directions.
         friction: The friction law (``Coulomb(mu)`` when ``mu`` was a number).
@@ -1105,7 +1130,7 @@ class Contact:
     """
 
     def __init__(self, V, surface: tuple, obstacle: RigidPlane | ElasticBody, mu: float | np.ndarray | FrictionLaw,
-                 bcs=(), window: float | None = None):
+                 bcs=(), window: float | None = None, grow_window: bool = False):
         _check_vector_p1(V)
         if not isinstance(obstacle, (RigidPlane, ElasticBody)):
             raise TypeError(f"Contact: obstacle must be a RigidPlane or an ElasticBody, got {type(obstacle).__name__}")
@@ -1128,7 +1153,10 @@ class Contact:
                 raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact), or a "
                                  "friction law (dolfinx_fretting.laws.Coulomb)")
             friction = Coulomb(mu)
+        if not isinstance(grow_window, (bool, np.bool_)):
+            raise TypeError(f"Contact: grow_window = {grow_window!r}: expected True or False")
         self.V, self.surface, self.obstacle, self.window = V, surface, obstacle, window
+        self.grow_window = bool(grow_window)
         self.bcs = list(bcs)
         self._mu_given = mu
         # The surfaces and their free vertices are checked (a few reductions) before any candidate search.
@@ -1141,12 +1169,24 @@ class Contact:
         self.fixed_nodes = np.flatnonzero(counts == bs).astype(np.int32)  # local blocks with every component fixed
         _refuse_fixed_surface(V, self.facets, self.fixed_nodes, int(surface[1]))
         self.fixed_global = constrained_global_dofs(V, self.bcs)
-        if isinstance(obstacle, RigidPlane):
-            cs = find_candidates(V, self.facets, obstacle, window, exclude_nodes=self.fixed_nodes)
-        else:
-            cs = find_pairs(V, self.facets, master_facets, window, exclude_nodes=self.fixed_nodes,
-                            reference_frame=obstacle.frame)
+        def search(half_width: float | None) -> ContactSet:
+            if isinstance(obstacle, RigidPlane):
+                return find_candidates(V, self.facets, obstacle, half_width, exclude_nodes=self.fixed_nodes)
+            return find_pairs(V, self.facets, master_facets, half_width, exclude_nodes=self.fixed_nodes,
+                              reference_frame=obstacle.frame)
+
+        cs = search(window)
         self._use(cs)
+        #: The window's centre (kept here: a pairing made anew under finite sliding does not carry it).
+        self.window_centre = cs.window_centre
+        # The surface's other free nodes: a second search of the whole surface (the candidates' own search is left
+        # as it was, so a window's contact set keeps its bits), less the candidates.
+        self.outside: ContactSet | None = None
+        if window is not None:
+            whole = search(None)
+            rest = np.flatnonzero(~np.isin(whole.global_nodes, cs.global_nodes))
+            if rest.size:
+                self.outside = whole.subset(rest)
         self.friction: FrictionLaw = friction
         try:
             mu_arr = np.asarray(friction.coefficients(cs.nc), dtype=float)
@@ -1204,4 +1244,12 @@ class Contact:
 
     def with_window(self, window: float | None) -> Contact:
         """The same contact with another candidate window (collective)."""
-        return Contact(self.V, self.surface, self.obstacle, self._mu_given, self.bcs, window)
+        return Contact(self.V, self.surface, self.obstacle, self._mu_given, self.bcs, window, self.grow_window)
+
+    def window_distance(self, cs: ContactSet) -> np.ndarray:
+        """In-plane distance of ``cs``'s nodes from the window's centre, measured as the candidate search measures
+        it: in the obstacle's tangent plane (a node-to-segment pairing in 2D: along each node's own tangent)."""
+        offset = cs.coords - self.window_centre
+        if cs.two_body and cs.dim == 2:
+            return np.abs(np.einsum("ij,ij->i", offset, cs.frames[:, 1]))
+        return np.linalg.norm(offset @ self.frame[1:].T, axis=1)

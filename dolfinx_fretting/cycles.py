@@ -17,7 +17,7 @@ from .increments import on_rank0
 from .loading import CyclePath, Displacement, Force, tangential_item
 from .operators import ContactOperators
 from .settings import LocalSolver
-from .state import INCREMENT_COLUMNS, ContactState, ConvergenceError, CycleResult
+from .state import INCREMENT_COLUMNS, ContactState, ConvergenceError, CycleResult, WindowError
 from .wear import ROW, ROW_FIELDS
 
 __all__ = ["cycle_targets", "stepwise_cycle", "compiled_cycle"]
@@ -81,6 +81,8 @@ def stepwise_cycle(operators: ContactOperators, advance: Callable[..., tuple[Con
         loads = {nm: factors[j, operators.load_names.index(nm)] for nm in names}
         try:
             current, info = advance(current, normal, tangential, loads, in_cycle=True, check=check)
+        except WindowError as exc:
+            raise WindowError(str(exc), step=j + 1, **exc.details) from None
         except ConvergenceError as exc:
             raise ConvergenceError(str(exc), step=j + 1) from None
         rows.append(current.record)
@@ -132,6 +134,8 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
             why = "non-finite values" if status == 2 else "max_iter reached"
             raise ConvergenceError(f"local solver did not converge ({why}, error {err:.3e} >= tol {sv.tol:.1e} "
                                    f"after {sv.max_iter} sweeps)", step=done + 1)
+        # Every increment of the cycle, not only the last: one product of the outside rows with the cycle's forces.
+        operators.check_window(out_r, obstacle, factors, sv.tol, cycle=True)
         warm_new = r_warm  # the cycle's forces: the next cycle's warm start
         outs = (out_r, out_x, out_y, out_gw, out_states) if keep else (out_x[-1:], out_states[-1:])
         return hist, gw, y, r_last, outs

@@ -19,7 +19,7 @@ from .loading import Displacement, Force, LoadControlError, find_displacement, t
 from .operators import ContactOperators
 from .plasticity import ElastoplasticBody, NewtonError
 from .settings import LocalSolver, finite
-from .state import ContactState, ConvergenceError, IncrementResult, PlasticHistory, solver_columns
+from .state import ContactState, ConvergenceError, IncrementResult, PlasticHistory, WindowError, solver_columns
 
 __all__ = ["on_rank0", "increment_targets", "solve_contact", "solve_plastic", "load_plastic", "advance"]
 
@@ -31,14 +31,18 @@ def on_rank0(comm: MPI.Comm, work: Callable[[], Any]) -> Any:
     if comm.rank == 0:
         try:
             value = work()
+        except WindowError as exc:
+            failure = ("WindowError", str(exc), exc.step, exc.details)
         except ConvergenceError as exc:
-            failure = ("ConvergenceError", str(exc), exc.step)
+            failure = ("ConvergenceError", str(exc), exc.step, None)
         except Exception as exc:  # noqa: BLE001 - re-raised on every rank below
-            failure = (type(exc).__name__, str(exc), None)
+            failure = (type(exc).__name__, str(exc), None, None)
     if comm.size > 1:
         value, failure = comm.bcast((value, failure), root=0)
     if failure is not None:
-        kind, message, step = failure
+        kind, message, step, details = failure
+        if kind == "WindowError":
+            raise WindowError(message, step=step, **details)
         if kind == "ConvergenceError":
             raise ConvergenceError(message, step=step)
         raise RuntimeError(f"{kind} on rank 0: {message}")
@@ -222,6 +226,7 @@ def advance(operators: ContactOperators, solve: Callable[..., IncrementResult],
 
     Raises:
         ConvergenceError: no convergence after the cut-backs (``state`` itself is unchanged).
+        WindowError: a node outside the candidate window penetrated (no cut-back: ``state`` is unchanged).
     """
     end_targets, end_controlled = increment_targets(operators, state, normal, tangential)
     end_factors = operators.factors(state, loads)
@@ -244,6 +249,8 @@ def advance(operators: ContactOperators, solve: Callable[..., IncrementResult],
         sub_loads = {n: factors[operators.load_names.index(n)] for n in names}
         try:
             result = solve(current, sub_normal, sub_tangential, sub_loads, in_cycle=in_cycle)
+        except WindowError:
+            raise  # a smaller step does not widen the window: the caller's (state unchanged)
         except ConvergenceError as exc:
             if cuts >= max_cutbacks:
                 raise ConvergenceError(

@@ -11,7 +11,7 @@ rebuilds W from the same factor (:meth:`ContactOperators.set_window`). Collectiv
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -27,9 +27,93 @@ from .compliance import DelassusOperator
 from .contact import Contact, ContactSet, ElasticBody, constrained_global_dofs
 from .cycling import ActivePatternCache
 from .settings import finite
-from .state import ContactState
+from .state import ContactState, WindowError
 
-__all__ = ["ContactOperators"]
+__all__ = ["ContactOperators", "OutsideRows"]
+
+
+@dataclass(frozen=True)
+class OutsideRows:
+    """The nodes of the contact surface outside the candidate window, watched for penetration.
+
+    Their normal gap is affine in what an increment solves for, with the contacts' own ingredients (paper
+    eq. 28's q, one row per node)::
+
+        g_out = g0_out + C r - N D + sum_l s_l (H_out K^-1 f_l),     C = H_out K^-1 H^T  (free dofs),
+
+    r the contact forces, D the obstacle's translation (N: each node's normal, as the contacts' rigid modes),
+    s_l the load factors; H_out holds the nodes' normal rows (against an :class:`~dolfinx_fretting.contact.ElasticBody`:
+    the node minus its paired master point, as :func:`~dolfinx_fretting.contact.find_pairs` pairs the candidates).
+    The wear gap is zero there (a node outside the window has never been a contact). So checking an increment is a
+    product with C (a cycle's: one matrix product over its increments), no solve.
+
+    Attributes:
+        nodes: The outside nodes (a :class:`~dolfinx_fretting.contact.ContactSet`: coordinates, frames, gaps, H).
+        coupling: C, shape (k, m) (k nodes, m = dim x contacts).
+        responses: (L, k) each load's normal displacement at the nodes (prescribed values count).
+        normals: (k, dim) each node's normal.
+        distance: (k,) in-plane distance from the window's centre (what the window's half-width measures).
+        compliance: The largest contact compliance ``max_a ||W_aa||_2`` (the tolerance's length scale).
+    """
+
+    nodes: ContactSet
+    coupling: np.ndarray
+    responses: np.ndarray
+    normals: np.ndarray
+    distance: np.ndarray
+    compliance: float
+
+    def gaps(self, forces: np.ndarray, translation: np.ndarray, factors: np.ndarray) -> np.ndarray:
+        """Normal gaps (n, k) of n increments: ``forces`` (n, m), ``translation`` D (n, dim, global frame),
+        ``factors`` (n, L)."""
+        g = np.atleast_2d(forces) @ self.coupling.T - np.atleast_2d(translation) @ self.normals.T
+        if self.responses.shape[0]:
+            g += np.atleast_2d(factors) @ self.responses
+        return g + self.nodes.gap0
+
+    def tolerance(self, forces: np.ndarray, local_tol: float, terms: np.ndarray) -> np.ndarray:
+        """How far below zero a gap of each increment (rows of ``forces``) may be and not count as penetration.
+
+        The local solver accepts a solution whose natural-map error
+        (:func:`~dolfinx_fretting.local_solvers.natural_map_error`) is below ``local_tol``: a force residual of
+        ``local_tol ||r||``, which at an open contact leaves a
+        penetration up to ``local_tol ||r||_2 / rho_a = local_tol ||r||_2 ||W_aa||_2``. An outside node is held
+        to that same bound with the largest contact compliance (it would have been accepted as a candidate), plus
+        the rounding of the sum that forms its gap: 1e-12 of the largest term (``terms``, per increment), far above
+        the few ulps of a handful of additions and far below any penetration that matters."""
+        forces = np.atleast_2d(forces)
+        return local_tol * np.linalg.norm(forces, axis=1) * self.compliance + 1e-12 * terms
+
+    def check(self, gaps: np.ndarray, tolerance: np.ndarray, window: float | None,
+              cycle: bool = False) -> None:
+        """Raise :class:`~dolfinx_fretting.state.WindowError` if a gap (rows: increments) is below minus its
+        row's tolerance; in a cycle (``cycle``) the error's step is the first such increment."""
+        bad = gaps < -np.asarray(tolerance)[:, None]
+        if not bad.any():
+            return
+        rows = np.flatnonzero(bad.any(axis=1))
+        nodes = np.flatnonzero(bad.any(axis=0))   # penetrating in any increment of the batch
+        depth = -gaps[:, nodes].min(axis=0)
+        far = self.distance[nodes].max()
+        # The margin: a tenth of the farthest distance, at least two of the nodes' spacings (their tributary
+        # measure), so that the solve with the window needed has open candidates at its ends, as the scene
+        # runner's edge check wants, and room for the contact to settle.
+        dim = self.nodes.dim
+        spacing = float((self.nodes.tributary[nodes] ** (1.0 / (dim - 1))).max())
+        needed = far + max(0.1 * far, 2.0 * spacing)
+        order = np.argsort(-depth, kind="stable")
+        shown = "; ".join(str((np.round(self.nodes.coords[nodes[i]], 6) + 0.0).tolist()) for i in order[:3])
+        where = f" at increment {rows[0] + 1} of the cycle" if cycle else ""
+        raise WindowError(
+            f"window = {window:.6g}: {nodes.size} node(s) of the contact surface outside the candidate window "
+            f"penetrate the obstacle{where} (by up to {depth.max():.3g}; deepest at {shown}"
+            f"{' ...' if nodes.size > 3 else ''}): the answer would be truncated. The window needed is at least "
+            f"{needed:.6g} (the farthest penetrating node lies {far:.6g} from the window's centre "
+            f"{(np.round(self.nodes.window_centre, 6) + 0.0).tolist()}, plus a margin): widen it "
+            f"(problem.set_window(state, {needed:.6g}) and solve again), or let advance and run_cycle grow it "
+            "(Contact(..., grow_window=True))",
+            step=int(rows[0]) + 1 if cycle else None, window=window, window_needed=needed,
+            positions=self.nodes.coords[nodes[order]], penetration=float(depth.max()))
 
 
 class ContactOperators:
@@ -117,6 +201,7 @@ class ContactOperators:
         self.surface_compliance: sliding.SurfaceCompliance | None = None
         if isinstance(contact.obstacle, ElasticBody) and contact.obstacle.sliding == "finite":
             self.surface_compliance = self._build_surface_compliance()
+            self._surface_outside = self._outside_on_surfaces()
         #: The first guess of each obstacle component's load-displacement slope (force control).
         self.stiffness: np.ndarray | None = None
         self.build()
@@ -161,15 +246,20 @@ class ContactOperators:
         """W on the free dofs (one copy broadcast from rank 0) and each load's contact response (finite sliding:
         formed from the surface compliance, no communication)."""
         cs = self.contact.contact_set
+        out_responses = None   # the loads' responses at the nodes outside the window (finite sliding: made once)
         if self.surface_compliance is not None:
             self.W, self.responses = self.surface_compliance.operators(cs)
         else:
             W = self.delassus.build(self.contact.H_free)
             self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
             self.responses = np.zeros((len(self.vectors), cs.nc * cs.dim))
+            outside = self.contact.outside
+            H_out = outside.H[0::outside.dim] if outside is not None else None
+            out_responses = np.zeros((len(self.vectors), 0 if outside is None else outside.nc))
             for i, f in enumerate(self.vectors):
-                self.responses[i] = self.local_response(f)
+                self.responses[i], out_responses[i] = self._responses(f, cs.H, H_out)
         self._hold_directions()
+        self._watch_outside(out_responses)
         if not (keep_slope and self.stiffness is not None):
             # Point stiffness of the closest node: a safe first guess of the load-displacement slope (kept when
             # only the pairing changes, so that a force-controlled run does not depend on which state was read)
@@ -214,6 +304,94 @@ class ContactOperators:
                 "of the contact frame's directions, e.g. u_y on a symmetry plane y = 0 with the obstacle normal in "
                 "that plane)")
 
+    def _outside_normal_rows(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """The outside nodes' normal rows of H: (full, without the fixed dofs' columns)."""
+        outside = self.contact.outside
+        H = sp.csr_matrix(outside.H[0::outside.dim])
+        free = np.ones(H.shape[1])
+        free[self.contact.fixed_global] = 0.0
+        H_free = sp.csr_matrix(H @ sp.diags(free))
+        H_free.eliminate_zeros()
+        return H, H_free
+
+    def _outside_on_surfaces(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Finite sliding: ``H_out K^-1 S^T`` on the surface compliance's dofs S and the loads' responses at the
+        outside nodes, once (a pairing's coupling is then ``(H_out K^-1 S^T) L^T``, no solve: see
+        :meth:`_watch_outside`); None without outside nodes. The outside nodes keep their reference pairing.
+        Collective."""
+        if self.contact.outside is None:
+            return None
+        H, H_free = self._outside_normal_rows()
+        dofs = self.surface_compliance.dofs
+        S = sp.csr_matrix((np.ones(dofs.size), (np.arange(dofs.size), dofs)), shape=(dofs.size, self.n_dofs))
+        free = np.ones(self.n_dofs)
+        free[self.contact.fixed_global] = 0.0
+        S_free = sp.csr_matrix(S @ sp.diags(free))
+        S_free.eliminate_zeros()
+        responses = np.array([self.local_response(f, H) for f in self.vectors]).reshape(len(self.vectors), H.shape[0])
+        return self.delassus.coupling(H_free, S_free), responses
+
+    def _watch_outside(self, responses: np.ndarray | None) -> None:
+        """The operators of the surface's nodes outside the window (:class:`OutsideRows`), or None (no window, or
+        no node outside it). C is formed from entries of K^-1
+        (:meth:`~dolfinx_fretting.compliance.DelassusOperator.coupling`; its cost is measured in
+        ``benchmarks/results/window_check.md``); under finite sliding from ``H_out K^-1 S^T`` on the surface
+        compliance's dofs, made once (:meth:`_outside_on_surfaces`), and each pairing's columns L: no solve."""
+        outside = self.contact.outside
+        self.outside: OutsideRows | None = None
+        if outside is None:
+            return
+        t0 = time.perf_counter()
+        dim = outside.dim
+        if self.surface_compliance is not None:
+            on_surfaces, responses = self._surface_outside
+            L = self.surface_compliance.restrict(self.contact.contact_set)
+            coupling = np.asarray((L @ on_surfaces.T).T)
+        else:
+            coupling = self.delassus.coupling(self._outside_normal_rows()[1], self.contact.H_free)
+        rho = local_solvers.block_rho(self.W, dim) if self.contact.contact_set.nc else np.ones(1)
+        self.outside = OutsideRows(outside, coupling, responses, outside.frames[:, 0, :].copy(),
+                                   self.contact.window_distance(outside), float(1.0 / rho.min()))
+        self.timings["outside_s"] = time.perf_counter() - t0
+
+    def check_window(self, forces: np.ndarray, obstacle: np.ndarray, factors: np.ndarray, local_tol: float,
+                     cycle: bool = False, displacement_gaps: np.ndarray | None = None,
+                     displacement_tol: float = 0.0) -> None:
+        """Raise :class:`~dolfinx_fretting.state.WindowError` if a node outside the window penetrates the obstacle
+        in an increment (rows of ``forces`` (n, m), ``obstacle`` (n, dim) in the obstacle frame, ``factors``
+        (n, L)); ``cycle``: the rows are a cycle's increments. Elastic-plastic increments give their gaps from
+        the displacement instead (``displacement_gaps``, :meth:`outside_gaps_of`), converged by Newton to
+        ``displacement_tol`` of itself, which adds to the tolerance. Not collective (replicated data): call it on
+        rank 0 through :func:`~dolfinx_fretting.increments.on_rank0`."""
+        out = self.outside
+        if out is None:
+            return
+        forces, obstacle, factors = np.atleast_2d(forces), np.atleast_2d(obstacle), np.atleast_2d(factors)
+        D = obstacle @ self.contact.frame
+        gaps = out.gaps(forces, D, factors) if displacement_gaps is None else np.atleast_2d(displacement_gaps)
+        moved = np.abs(gaps - out.nodes.gap0).max(axis=1)
+        # The largest term of each row's sum, for its rounding (see OutsideRows.tolerance): the gap, what moved
+        # it, the translation and the loads' share.
+        terms = np.maximum(moved, np.abs(out.nodes.gap0).max())
+        terms = np.maximum(terms, np.linalg.norm(D, axis=1))
+        if out.responses.shape[0]:
+            terms = np.maximum(terms, np.abs(factors) @ np.abs(out.responses).max(axis=1))
+        tolerance = out.tolerance(forces, local_tol, terms) + displacement_tol * moved
+        out.check(gaps, tolerance, self.contact.window, cycle)
+
+    def outside_gaps_of(self, u: np.ndarray, obstacle: np.ndarray) -> np.ndarray | None:
+        """The outside nodes' normal gaps for this rank's displacement ``u`` (a ``fem.Function``'s array: owned
+        then ghost values) and the obstacle position ``obstacle`` (obstacle frame); None without outside nodes.
+        Collective (the same sum on every rank)."""
+        out = self.outside
+        if out is None:
+            return None
+        rstart, rend = self.K.getOwnershipRange()
+        part = out.nodes.H[0::out.nodes.dim][:, rstart:rend] @ u[:rend - rstart]
+        moved = self.comm.allreduce(part, op=MPI.SUM)
+        moved = self.comm.bcast(moved if self.comm.rank == 0 else None, root=0)
+        return out.nodes.gap0 + moved - out.normals @ (obstacle @ self.contact.frame)
+
     def check_held(self, obstacle: np.ndarray, force_controlled: np.ndarray) -> None:
         """Refuse obstacle motions and forces along a held contact direction (see :meth:`_hold_directions`)."""
         held = self.held_components
@@ -234,12 +412,18 @@ class ContactOperators:
         """``H K^-1 f`` with the full H (prescribed values at fixed dofs count; default the contact set's),
         replicated. Collective."""
         H = self.contact.contact_set.H if H is None else H
+        return self._responses(f, H)[0]
+
+    def _responses(self, f, *Hs) -> list[np.ndarray]:
+        """``H K^-1 f`` for each H of ``Hs`` (None: an empty array) from one solve, each reduced on its own (so
+        that each has the bits it would have alone). Collective."""
         u = f.duplicate()
         self.delassus.solve(f, u)
         rstart, rend = u.getOwnershipRange()
-        part = H[:, rstart:rend] @ u.getArray(readonly=True)
+        values = u.getArray(readonly=True)
+        out = [np.zeros(0) if H is None else self.comm.allreduce(H[:, rstart:rend] @ values, op=MPI.SUM) for H in Hs]
         u.destroy()
-        return self.comm.allreduce(part, op=MPI.SUM)
+        return out
 
     def _build_surface_compliance(self) -> sliding.SurfaceCompliance:
         """K^-1 on the dofs of both contact surfaces and the loads' responses there (finite sliding). Collective."""

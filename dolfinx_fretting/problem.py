@@ -44,6 +44,7 @@ commit (:mod:`~dolfinx_fretting.commit`), cycles (:mod:`~dolfinx_fretting.cycles
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -56,7 +57,7 @@ from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficien
 from .compliance import METHODS
 from .contact import Contact, ContactSet, ElasticBody
 from .cycles import compiled_cycle, cycle_targets, stepwise_cycle
-from .increments import advance, increment_targets, load_plastic, solve_contact, solve_plastic
+from .increments import advance, increment_targets, load_plastic, on_rank0, solve_contact, solve_plastic
 from .laws import Archard, WearLaw
 from .loading import CyclePath, Displacement, Force
 from .materials import J2Plasticity
@@ -64,10 +65,11 @@ from .operators import ContactOperators
 from .plasticity import ElastoplasticBody
 from .settings import LocalSolver, Plasticity
 from .state import (INCREMENT_COLUMNS, STATUS_NAMES, ContactState, ConvergenceError, CycleResult, IncrementResult,
-                    PlasticHistory)
+                    PlasticHistory, WindowError)
 
 __all__ = ["Archard", "Displacement", "Force", "LocalSolver", "Plasticity", "ContactState", "IncrementResult",
-           "CyclePath", "CycleResult", "FrettingProblem", "ConvergenceError", "STATUS_NAMES", "INCREMENT_COLUMNS"]
+           "CyclePath", "CycleResult", "FrettingProblem", "ConvergenceError", "WindowError", "STATUS_NAMES",
+           "INCREMENT_COLUMNS"]
 
 
 class FrettingProblem:
@@ -230,14 +232,35 @@ class FrettingProblem:
 
         Raises:
             ConvergenceError: the local solver, a force control or (elastic–plastic) Newton failed.
+            WindowError: a node of the contact surface outside the candidate window penetrates the obstacle (the
+                answer is truncated; the message names the window needed). Raised here whatever
+                ``grow_window``: the result must belong to ``state``'s window; :meth:`advance` and
+                :meth:`run_cycle` grow it.
         """
         ops = self.operators
         ops.activate(state)
         targets, controlled = increment_targets(ops, state, normal, tangential)
         factors = ops.factors(state, loads)
         if self.body is not None:
-            return solve_plastic(ops, self.solver, self.body, state, targets, controlled, factors, in_cycle)
-        return replace(solve_contact(ops, self.solver, state, targets, controlled, factors), in_cycle=in_cycle)
+            result = solve_plastic(ops, self.solver, self.body, state, targets, controlled, factors, in_cycle)
+        else:
+            result = replace(solve_contact(ops, self.solver, state, targets, controlled, factors), in_cycle=in_cycle)
+        self._check_window(result)
+        return result
+
+    def _check_window(self, result: IncrementResult) -> None:
+        """Raise WindowError on every rank if a node outside the window penetrates in ``result`` (the decision is
+        rank 0's, broadcast). Collective; nothing to do (no communication) without a window."""
+        ops = self.operators
+        if ops.outside is None:
+            return
+        gaps, newton_tol = None, 0.0
+        if result.plastic is not None:  # the displacement holds the plastic strains: gaps from it (a reduction)
+            gaps = ops.outside_gaps_of(result.plastic.u, result.obstacle)
+            newton_tol = self.plasticity.displacement_tol
+        on_rank0(ops.comm, lambda: ops.check_window(result.forces, result.obstacle, result.load_factors,
+                                                    self.solver.tol, displacement_gaps=gaps,
+                                                    displacement_tol=newton_tol))
 
     def commit(self, state: ContactState, result: IncrementResult | CycleResult) -> ContactState:
         """The new state after a converged increment or cycle (:func:`dolfinx_fretting.commit.commit`: the wear
@@ -257,11 +280,36 @@ class FrettingProblem:
 
         Raises:
             ConvergenceError: no convergence after the cut-backs (``state`` itself is unchanged).
+            WindowError: a node outside the candidate window penetrated (no cut-back). With
+                ``Contact(..., grow_window=True)`` (elastic bodies) the window is widened to the one needed
+                instead and the increment solved again from ``state`` (a RuntimeWarning says so); the new state
+                then belongs to the wider window, as after :meth:`set_window`.
         """
         if max_cutbacks is None:
             max_cutbacks = self.plasticity.max_cutbacks if self.plasticity is not None else 0
-        return advance(self.operators, self.solve, self.commit, state, normal, tangential, loads, in_cycle=in_cycle,
-                       max_cutbacks=max_cutbacks, check=check)
+        return self._growing(state, lambda start: advance(
+            self.operators, self.solve, self.commit, start, normal, tangential, loads, in_cycle=in_cycle,
+            max_cutbacks=max_cutbacks, check=check))
+
+    def _growing(self, state: ContactState, attempt: Callable[[ContactState], Any]) -> Any:
+        """``attempt(state)``; with ``Contact(grow_window=True)``, on a WindowError widen the window to the one
+        needed (the committed ``state`` carried over: nothing of the failed try is kept) and try again. Each
+        growth takes in the penetrating nodes, so it ends, at the latest with the whole surface. Collective."""
+        while True:
+            try:
+                return attempt(state)
+            except WindowError as exc:
+                # (an elastic-plastic or finite-sliding problem cannot change its window: the error stands)
+                fixed = self.body is not None or self.operators.surface_compliance is not None
+                if not self.contact.grow_window or fixed:
+                    raise
+                before = self.contact.window
+                state = self.set_window(state, exc.window_needed)
+                if self.comm.rank == 0:
+                    warnings.warn(f"candidate window grown from {before:.6g} to {exc.window_needed:.6g} "
+                                  f"({self.contact.nc} contacts): {exc.positions.shape[0]} node(s) outside it "
+                                  f"penetrated by up to {exc.penetration:.3g}; the increment is solved again",
+                                  RuntimeWarning, stacklevel=3)
 
     def run_cycle(self, state: ContactState, path: CyclePath, keep: bool = False,
                   check: Callable[[ContactState], None] | None = None) -> CycleResult:
@@ -281,16 +329,30 @@ class FrettingProblem:
 
         Raises:
             ConvergenceError: an increment failed (its cycle step in the message).
+            WindowError: a node outside the candidate window penetrated at some increment of the cycle (every
+                increment is checked; ``step`` is the first); with ``Contact(..., grow_window=True)`` the window
+                is widened instead and the whole cycle solved again from ``state``.
         """
         ops = self.operators
         obstacle, forced, factors = cycle_targets(ops, state, path)
         ops.activate(state)
         ops.check_held(obstacle, forced)
-        # Finite sliding pairs anew between increments: increment by increment.
-        if (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
-                and not forced.any() and ops.surface_compliance is None):
-            return compiled_cycle(ops, self.solver, self.wear_coefficient(True), state, obstacle, factors, keep)
-        return stepwise_cycle(ops, self.advance, state, obstacle, forced, factors, keep, check)
+
+        def attempt(start: ContactState) -> CycleResult:
+            # Finite sliding pairs anew between increments: increment by increment.
+            if (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
+                    and not forced.any() and ops.surface_compliance is None):
+                return compiled_cycle(ops, self.solver, self.wear_coefficient(True), start, obstacle, factors, keep)
+            return stepwise_cycle(ops, self._advance_once, start, obstacle, forced, factors, keep, check)
+        # A growth solves the whole cycle again from ``state`` in the wider window (its increments then all refer
+        # to one contact set).
+        return self._growing(state, attempt)
+
+    def _advance_once(self, state, normal=None, tangential=None, loads=None, *, in_cycle=False, check=None):
+        """:meth:`advance` without growing the window (a cycle grows it once for all its increments)."""
+        max_cutbacks = self.plasticity.max_cutbacks if self.plasticity is not None else 0
+        return advance(self.operators, self.solve, self.commit, state, normal, tangential, loads, in_cycle=in_cycle,
+                       max_cutbacks=max_cutbacks, check=check)
 
     def set_window(self, state: ContactState, window: float | None) -> ContactState:
         """Rebuild the contact set, W and the load responses for another candidate window (elastic bodies) and

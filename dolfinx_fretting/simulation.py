@@ -39,7 +39,7 @@ from .output import FrettingWriter, RunDescription, contact_measures
 from .units import Units
 from .scene_paths import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
-                      Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity)
+                      Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity, WindowError)
 from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
 from .scene_models import PRESSURE_LOAD, SceneModel, build_scene_model
 from .scenes import Scene, describe_differences
@@ -364,7 +364,7 @@ class _Run:
         if self.model.setup.window_edges_matter and (rn[0] > 0 or rn[-1] > 0):
             self._window_edge_reached(where)
 
-    def _window_edge_reached(self, where: str) -> None:
+    def _window_edge_reached(self, where: str, outside: WindowError | None = None) -> None:
         model, cs = self.model, self.model.contact
         if model.window_can_grow:
             raise _WindowTooSmall(where)
@@ -373,13 +373,19 @@ class _Run:
             # the window may reach past it onto the graded cells.
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm; the mesh's uniform zone "
                       f"ends at {model.setup.window_limit:.4g} mm, beyond it the cells grow)")
+        elif model.setup.window_limit is None:  # a window the scene gives on a mesh with no refined zone
+            advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) or leave it out (the "
+                      "whole surface)")
         else:
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) and "
                       "geometry.contact_half_width (the refined zone, now "
                       f"{self.scene.geometry.refined_half_width} mm)")
-        raise SimulationError(
-            f"{where}: the outermost contact candidates (x = {cs.abscissa[0]:.4g} .. {cs.abscissa[-1]:.4g} mm) "
-            f"carry load: the contact reaches the edge of the candidate window and would be truncated; {advice}")
+        what = (f"the outermost contact candidates (x = {cs.abscissa[0]:.4g} .. {cs.abscissa[-1]:.4g} mm) carry load: "
+                "the contact reaches the edge of the candidate window and would be truncated" if outside is None else
+                f"the contact reaches the edge of the candidate window and beyond: {outside.positions.shape[0]} "
+                f"node(s) outside it penetrate the obstacle (by up to {outside.penetration:.3g} mm, the deepest at "
+                f"{(np.round(outside.positions[0], 6) + 0.0).tolist()}); the window needed is {outside.window_needed:.4g} mm")
+        raise SimulationError(f"{where}: {what}; {advice}")
 
     def _check_wear_step(self, cycle: int, gw_old: np.ndarray, gw_new: np.ndarray) -> None:
         """Refuse a cycle that wears more than the contact element size at some contact: the wear gap is
@@ -392,15 +398,27 @@ class _Run:
                 f"size {h:.3g} mm; the explicit wear update is unstable there. Lower wear.acceleration (now "
                 f"{self.scene.wear.acceleration:g}) or wear.k (now {self.scene.wear.k:g} 1/MPa)")
 
-    def _grow_window(self, where: str) -> None:
+    def _grow_window(self, where: str, outside: WindowError | None = None) -> None:
         before = self.model.half_width
         self.state = self.model.grow_window(self.state)
         new = self.model.half_width
         self.progress.window_growths.append({"at": where, "from": before, "to": new,
                                              "contacts": self.model.contact.nc})
-        self.say(f"[{self.scene.name}] WARNING: {where}: the contact reached the edge of the candidate window "
-                 f"(half-width {before:.4g} mm); grown to {new:.4g} mm ({self.model.contact.nc} candidates) and the "
-                 "increment solved again")
+        why = ("the contact reached the edge of the candidate window" if outside is None else
+               f"{outside.positions.shape[0]} node(s) outside the candidate window penetrated the obstacle (by up to "
+               f"{outside.penetration:.3g} mm; window needed {outside.window_needed:.4g} mm)")
+        self.say(f"[{self.scene.name}] WARNING: {where}: {why} (half-width {before:.4g} mm); grown to {new:.4g} mm "
+                 f"({self.model.contact.nc} candidates) and the increment solved again")
+
+    def _outside_penetrated(self, exc: WindowError, where: str) -> None:
+        """Nodes outside the window penetrated (the problem's check): grow the window and solve again, or stop
+        with the problem's message and the scene's keys. The runner grows by its own rule (by half, at least three
+        elements, up to the refined zone), not straight to ``exc.window_needed``: its windows stay the ones an
+        edge-triggered growth makes (the same checkpoints, summaries and reference runs), and the increment solved
+        again is checked again, so a window still too small grows again."""
+        if not self.model.window_can_grow:
+            self._window_edge_reached(where, exc)
+        self._grow_window(where, exc)
 
     def _check_small_sliding(self, relative_tangential: np.ndarray) -> None:
         """Two bodies: warn once when the relative slip exceeds half a contact element (pairing is fixed)."""
@@ -428,6 +446,8 @@ class _Run:
                 break
             except _WindowTooSmall as edge:
                 self._grow_window(str(edge))  # nothing of the increment was committed: solve it again
+            except WindowError as exc:
+                self._outside_penetrated(exc, where)
             except ConvergenceError as exc:
                 raise SimulationError(f"{where}: {exc}" + _HINT) from None
         self.progress.newton_fallbacks += int(info.get("full_newton_fallbacks", 0))
@@ -474,6 +494,8 @@ class _Run:
                 return result
             except _WindowTooSmall as edge:
                 self._grow_window(str(edge))
+            except WindowError as exc:
+                self._outside_penetrated(exc, self._where(first + (exc.step or 1) - 1, cycle, exc.step or 1))
             except ConvergenceError as exc:
                 raise SimulationError(f"{self._where(first + exc.step - 1, cycle, exc.step)}: {exc}"
                                       + _HINT) from None

@@ -16,7 +16,7 @@ import numpy as np
 from .contact import ContactSet
 from .wear import ROW_FIELDS
 
-__all__ = ["ConvergenceError", "STATUS_NAMES", "SOLVER_COLUMNS", "INCREMENT_COLUMNS", "PlasticHistory",
+__all__ = ["ConvergenceError", "WindowError", "STATUS_NAMES", "SOLVER_COLUMNS", "INCREMENT_COLUMNS", "PlasticHistory",
            "ContactState", "IncrementResult", "CycleResult", "solver_columns"]
 
 #: Contact status codes of :attr:`ContactState.status` (the wear module's classification).
@@ -41,6 +41,40 @@ class ConvergenceError(RuntimeError):
     def __init__(self, message: str, step: int | None = None):
         super().__init__(message)
         self.step = step
+
+
+class WindowError(ConvergenceError):
+    """Nodes of the contact surface outside the candidate window (:class:`~dolfinx_fretting.contact.Contact`'s
+    ``window``) penetrate the obstacle: the increment's answer is truncated, and nothing of it was committed.
+
+    A :class:`ConvergenceError`: like a failed solve, the increment (or cycle) was not accepted and the caller's
+    state is unchanged, so code that already stops on a failed increment stops here too; it is caught first by
+    what can act on it (a wider window: :meth:`~dolfinx_fretting.problem.FrettingProblem.set_window`, what
+    ``Contact(..., grow_window=True)`` and the scene runner do). It is not a ValueError: the window is valid input,
+    only the load reached past it. The message names ``window``, the penetrating nodes and the window needed.
+
+    Attributes:
+        step: In a cycle, the 1-based increment of the cycle where the first penetration was found.
+        window: The candidate half-width in use.
+        window_needed: A half-width that holds every penetrating node (the in-plane distance from the window's
+            centre to the farthest one, plus a margin).
+        positions: (k, dim) reference coordinates of the penetrating nodes (all of them).
+        penetration: The largest penetration (length units, > 0).
+    """
+
+    def __init__(self, message: str, step: int | None = None, *, window: float | None = None,
+                 window_needed: float = 0.0, positions: np.ndarray | None = None, penetration: float = 0.0):
+        super().__init__(message, step=step)
+        self.window = window
+        self.window_needed = float(window_needed)
+        self.positions = np.zeros((0, 0)) if positions is None else np.asarray(positions, dtype=float)
+        self.penetration = float(penetration)
+
+    @property
+    def details(self) -> dict[str, Any]:
+        """The attributes above as plain data (what :func:`~dolfinx_fretting.increments.on_rank0` sends)."""
+        return {"window": self.window, "window_needed": self.window_needed, "positions": self.positions,
+                "penetration": self.penetration}
 
 
 

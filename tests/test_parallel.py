@@ -239,3 +239,41 @@ def test_contact_surface_checks_are_collective():
     with pytest.raises(ValueError) as info:
         dfr.Contact(V, (tags, 7), dfr.RigidPlane([0.0, -0.1], [0.0, 1.0]), mu=0.3)
     assert str(info.value) == f"Contact: surface marker 7 tags no facet; the facet tags hold markers {held}"
+
+
+def _hertz_window_decision(comm):
+    """The Hertz cylinder with a candidate window narrower than its contact (tests/test_window_check.py): the
+    WindowError's decision, then the peak pressure once solved in the window needed."""
+    import dolfinx_fretting as dfr
+    from dolfinx_fretting.scene_models import build_scene_model
+
+    scene = load_scene("hertz", ["geometry.contact_mesh_size=0.02", "contact.mu=0.0", "loading.tangential_force=0.0"])
+    model = build_scene_model(scene, comm)
+    contact = dfr.Contact(model.V, model.surface, model.obstacle, 0.0, model.bcs, window=0.05)
+    problem = dfr.FrettingProblem(model.form, contact, model.bcs)
+    state = problem.initial_state()
+    with pytest.raises(dfr.WindowError) as caught:
+        problem.solve(state, normal=dfr.Force(199.24))
+    err = caught.value
+    state = problem.set_window(state, err.window_needed)
+    state = problem.commit(state, problem.solve(state, normal=dfr.Force(199.24)))
+    peak = float(problem.contact_fields(state)["pressure"].max())
+    problem.destroy()
+    return {"needed": err.window_needed, "positions": err.positions, "penetration": err.penetration, "peak": peak}
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_window_check_decides_alike_on_every_rank():
+    """Nodes outside the candidate window penetrating: the check is decided on rank 0 and raised on every rank
+    (none hangs in a collective), with the serial run's decision: the same penetrating nodes and window needed."""
+    parallel = _hertz_window_decision(COMM)
+    serial = _hertz_window_decision(MPI.COMM_SELF) if COMM.rank == 0 else None
+    serial = COMM.bcast(serial, root=0)
+    # The same nodes (listed deepest first: the symmetric pairs' order is rounding's, so compared as sets; 2D node
+    # coordinates are tabulated by the cells' maps, equal to ~1e-16).
+    key = lambda x: x[np.lexsort(x.T[::-1])]  # noqa: E731
+    assert np.allclose(key(parallel["positions"]), key(serial["positions"]), rtol=0, atol=1e-12)
+    assert parallel["needed"] == pytest.approx(serial["needed"], rel=1e-12)
+    # As the runs above: other factorisations' rounding only: 1e-8.
+    assert parallel["penetration"] == pytest.approx(serial["penetration"], rel=1e-8)
+    assert parallel["peak"] == pytest.approx(serial["peak"], rel=1e-8)
