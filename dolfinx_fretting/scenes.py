@@ -807,10 +807,11 @@ class Scene(_Section):
             depth = min(max(g.refined_half_width / 4, 2 * g.contact_mesh_size), g.radius / 2)
             if g.flat_height <= depth:
                 raise _range_error("geometry.flat_height", g.flat_height, f"> the refined depth {depth:g} mm")
-        elif self.material.plastic_body == "flat":
+        # (not chained to the half-cylinder's flat above: a sphere on the elastic flat has a flat body too)
+        if c.obstacle == "rigid_plane" and self.material.plastic_body == "flat":
             raise _range_error("material.plastic_body", "flat",
                                "'both' or 'cylinder' with contact.obstacle = 'rigid_plane' (there is no flat body)")
-        elif self.wear.k_master is not None and self.wear.k_master > 0:
+        if c.obstacle == "rigid_plane" and self.wear.k_master is not None and self.wear.k_master > 0:
             raise _range_error("wear.k_master", self.wear.k_master,
                                "0 or unset with contact.obstacle = 'rigid_plane' (a rigid plane does not wear)")
         return self

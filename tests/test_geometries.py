@@ -1,0 +1,22 @@
+"""The geometry kinds of the scenes: what each accepts."""
+
+from __future__ import annotations
+
+import pytest
+
+from dolfinx_fretting.scenes import SceneError, load_scene
+
+
+def test_a_sphere_on_the_elastic_flat_has_a_flat_body():
+    """A sphere on the elastic flat may keep the flat plastic (the ball elastic) and give the flat its own wear
+    coefficient, as a half-cylinder on it may; the refusals of both are for a rigid plane only."""
+    plastic = ["material.model='elastoplastic'", "material.yield_stress=800.0", "material.hardening_modulus=1000.0",
+               "material.plastic_body='flat'"]
+    per_body = ["wear.k=none", "wear.k_slave=1e-8", "wear.k_master=3e-8"]
+    assert load_scene("sphere-flat", plastic).material.plastic_body == "flat"
+    assert load_scene("sphere-flat", per_body).wear.slave_share == pytest.approx(0.25)
+    rigid = ["contact.obstacle='rigid_plane'"]
+    with pytest.raises(SceneError, match=r"material.plastic_body = 'flat' .* 'rigid_plane' \(there is no flat body\)"):
+        load_scene("sphere-flat", rigid + plastic)
+    with pytest.raises(SceneError, match=r"wear.k_master = 3e-08 .* \(a rigid plane does not wear\)"):
+        load_scene("sphere-flat", rigid + per_body)
