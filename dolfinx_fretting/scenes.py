@@ -859,7 +859,8 @@ class Scene(_Section):
                                    f"<= {2 * eps**2 * g.radius:.4g} mm: the strain sqrt(d / (2R)) of an approach d "
                                    f"on geometry.radius = {g.radius:g} mm must stay <= {eps:g} (small-strain "
                                    "elasticity)")
-        elif c.surface in ("bottom", "top", "left", "right"):
+        elif g.kind == "rectangle" and c.surface in ("bottom", "top", "left", "right"):
+            # (a mesh file's body is not known before it is read: its faces may carry these names too)
             face, depth = (g.width, g.height) if c.surface in ("bottom", "top") else (g.height, g.width)
             if P is not None and P / (face * E_plane) > eps:
                 raise _range_error("loading.normal_force", P,

@@ -20,3 +20,15 @@ def test_a_sphere_on_the_elastic_flat_has_a_flat_body():
         load_scene("sphere-flat", rigid + plastic)
     with pytest.raises(SceneError, match=r"wear.k_master = 3e-08 .* \(a rigid plane does not wear\)"):
         load_scene("sphere-flat", rigid + per_body)
+
+
+def test_a_mesh_file_is_not_sized_as_the_rectangle():
+    """The strain estimate of a rectangle's face (its width and height, 50 mm by default) is not applied to a mesh
+    file whose contact surface happens to be called 'bottom': that body is not known before the file is read."""
+    data = {"geometry": {"kind": "file", "path": "/nowhere/punch.msh"}, "boundary": {"fixed": ["top"]},
+            "contact": {"surface": "bottom"}, "loading": {"normal_force": 1e6}}
+    assert load_scene(data).loading.normal_force == 1e6
+    data["geometry"] = {"kind": "rectangle"}
+    data.pop("boundary")
+    with pytest.raises(SceneError, match=r"loading.normal_force = 1000000.0 .*\(face length 50 mm"):
+        load_scene(data)
