@@ -160,14 +160,15 @@ def _contact_mesh_size(scene: Scene) -> float:
 
 def default_reference(scene: Scene) -> list[str]:
     """Overrides that make the fine reference of ``scene``: contact elements halved (``contact_mesh_size``
-    of a half-cylinder or a sphere; ``nx`` and ``ny`` of a rectangle doubled), twice the increments per cycle,
-    ``local_tol`` 1e-12 (or the scene's, if tighter; ``force_tol`` 100 times it under force control) and no
-    wear acceleration (its cycles multiplied by it, so that the physical cycle count is the scene's)."""
+    of a half-cylinder or a sphere; ``nx`` and ``ny`` of a rectangle doubled; a mesh file's mesh kept), twice the
+    increments per cycle, ``local_tol`` 1e-12 (or the scene's, if tighter; ``force_tol`` 100 times it under force
+    control) and no wear acceleration (its cycles multiplied by it, so that the physical cycle count is the
+    scene's)."""
     g, lo = scene.geometry, scene.loading
     ref = []
     if g.kind in ("half_cylinder", "sphere"):
         ref.append(f"geometry.contact_mesh_size={_contact_mesh_size(scene) / 2:.10g}")
-    else:
+    elif g.kind == "rectangle":  # (a mesh file's mesh is the user's: no key refines it)
         ref += [f"geometry.nx={2 * g.nx}", f"geometry.ny={2 * g.ny}"]
     if lo.cycles > 0:
         ref.append(f"loading.increments_per_cycle={2 * lo.increments_per_cycle}")
@@ -194,17 +195,18 @@ def sweep_entries(sweep: Sequence[tuple[str, list[str]]]) -> list[Entry]:
 
 def default_sweep(reference: Scene) -> list[Entry]:
     """The sweep when none is given, around the reference: contact elements 2x and 4x coarser (a
-    half-cylinder's or a sphere's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together), a half and a quarter of
-    the increments per cycle (multiples of 4; of the tangential increments for a monotonic load), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it
-    under force control) and (cyclic scenes with wear) wear accelerations that divide the physical cycle
-    count (up to three of 2, 5, 10, 20, 50, 100, ...)."""
+    half-cylinder's or a sphere's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together; none for a mesh
+    file), a half and a quarter of the increments per cycle (multiples of 4; of the tangential increments for a
+    monotonic load), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it under force control) and
+    (cyclic scenes with wear) wear accelerations that divide the physical cycle count (up to three of 2, 5, 10, 20,
+    50, 100, ...)."""
     g, lo = reference.geometry, reference.loading
     entries: list[Entry] = []
     for f in (2, 4):
         if g.kind in ("half_cylinder", "sphere"):
             h = f"{_contact_mesh_size(reference) * f:.6g}"
             entries.append(("geometry.contact_mesh_size", h, [f"geometry.contact_mesh_size={h}"]))
-        else:
+        elif g.kind == "rectangle":
             nx, ny = max(1, g.nx // f), max(1, g.ny // f)
             entries.append(("geometry.nx", f"{nx}", [f"geometry.nx={nx}", f"geometry.ny={ny}"]))
     if lo.cycles > 0:

@@ -32,3 +32,16 @@ def test_a_mesh_file_is_not_sized_as_the_rectangle():
     data.pop("boundary")
     with pytest.raises(SceneError, match=r"loading.normal_force = 1000000.0 .*\(face length 50 mm"):
         load_scene(data)
+
+
+def test_a_mesh_file_has_no_mesh_refinement_in_a_study():
+    """The study refines a built-in mesh (a half-cylinder's or a sphere's contact_mesh_size, a rectangle's nx and
+    ny); a mesh file's mesh is the user's, and geometry.nx or ny would change nothing in it."""
+    from dolfinx_fretting.study import default_reference, default_sweep
+
+    scene = load_scene({"geometry": {"kind": "file", "path": "/nowhere/punch.msh"}, "boundary": {"fixed": ["top"]},
+                        "contact": {"surface": "face"}, "loading": {"normal_force": 1.0}})
+    overrides = default_reference(scene) + [o for _, _, entry in default_sweep(scene) for o in entry]
+    assert overrides and not [o for o in overrides if o.startswith("geometry.")]
+    block = load_scene("stromberg-block")
+    assert f"geometry.nx={2 * block.geometry.nx}" in default_reference(block)
