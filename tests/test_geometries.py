@@ -1,10 +1,41 @@
-"""The geometry kinds of the scenes: what each accepts."""
+"""The geometry kinds of the scenes (dolfinx_fretting.geometries): the registry against the schema, the import
+direction, and what each kind accepts."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import typing
+from pathlib import Path
+
 import pytest
 
-from dolfinx_fretting.scenes import SceneError, load_scene
+from dolfinx_fretting.geometries import GEOMETRIES, Geometry
+from dolfinx_fretting.scenes import GeometrySettings, SceneError, load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_the_registry_covers_exactly_the_schema_kinds():
+    """One registry entry per value of the schema's ``geometry.kind`` (a kind added to the Literal without its
+    module, or a module without its name in the Literal, fails here), each a Geometry of its own module."""
+    kinds = typing.get_args(GeometrySettings.model_fields["kind"].annotation)
+    assert sorted(GEOMETRIES) == sorted(kinds)
+    assert all(isinstance(geometry, Geometry) for geometry in GEOMETRIES.values())
+    modules = [type(geometry).__module__ for geometry in GEOMETRIES.values()]
+    assert len(set(modules)) == len(modules)
+    assert all(module.startswith("dolfinx_fretting.geometries.") for module in modules)
+
+
+def test_the_api_imports_neither_the_schema_nor_the_geometries():
+    """The public API's modules sit below the scene layer: importing them loads no scene schema and no geometry
+    kind (a fresh interpreter)."""
+    api = ("problem", "operators", "loading", "state", "laws", "contact")
+    code = (f"import sys; import {', '.join('dolfinx_fretting.' + name for name in api)}; "
+            "print(sorted(m for m in sys.modules if m.startswith(('dolfinx_fretting.scenes', "
+            "'dolfinx_fretting.geometries'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.strip() == "[]"
 
 
 def test_a_sphere_on_the_elastic_flat_has_a_flat_body():

@@ -1,0 +1,84 @@
+"""What a geometry kind is: the protocol :class:`Geometry` every kind implements (with the defaults of a kind
+that needs no hook), and what the kinds' checks share with the scene schema (the limits, the message of a value
+out of range, the checks every built-in kind makes).
+
+The scene classes (``Scene``, ``GeometrySettings`` of :mod:`dolfinx_fretting.scenes`) are named in the
+annotations here and in the kinds' modules but not imported: the schema imports this package to call the
+checks from its validators, and an import back, even one for type checkers only, would close a circle.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["Geometry", "range_error", "check_no_boundary", "check_plane_strain", "MAX_ELASTIC_STRAIN",
+           "MAX_CONTACT_ELEMENTS", "MAX_CELLS"]
+
+#: Largest elastic strain a load may produce (estimated before any work, each kind's
+#: :meth:`Geometry.check_loads`): the model is small-strain linear elasticity; past a few percent its answer is
+#: meaningless (and past the elastic limit of any real solid). Estimates: half-cylinder under a normal force P,
+#: the Hertz peak p0/E* = sqrt(P / (pi R E*)); under an approach d, sqrt(d / (2R)) (from the geometric
+#: half-width sqrt(2Rd), an overestimate); a sphere, (6 P / (pi^3 R^2 E*))^(1/3) or sqrt(d / R); a rectangle,
+#: P / (width E') or d / height; a face pressure s, ``|s| / E``.
+MAX_ELASTIC_STRAIN = 0.1
+#: Largest mesh: elements along the refined contact zone of a half-cylinder, cells of a rectangle. Beyond,
+#: the mesh generator and the factorisation run for hours or exhaust memory (a hang, not a run): 206k dofs
+#: factorise in ~2 s here, and the cost grows faster than linearly.
+MAX_CONTACT_ELEMENTS = 20_000
+MAX_CELLS = 4_000_000
+
+
+def range_error(key: str, value: Any, allowed: str) -> ValueError:
+    """The schema's message of a value out of range: ``"<key> = <value> is out of range; allowed: <allowed>"``."""
+    return ValueError(f"{key} = {value!r} is out of range; allowed: {allowed}")
+
+
+def check_no_boundary(scene: Scene) -> None:
+    """A built-in geometry fixes its own faces: a ``[boundary]`` section is refused."""
+    names = scene.boundary.names
+    if names:
+        raise range_error(names[0][0], names[0][1], "no [boundary] section with a built-in geometry (its faces are "
+                          "fixed by the scene); set geometry.kind = 'file'")
+
+
+def check_plane_strain(scene: Scene) -> None:
+    """A two-dimensional (plane-strain) kind takes a rigid plane of two components."""
+    normal = scene.contact.plane_normal
+    if len(normal) != 2:
+        raise range_error("contact.plane_normal", normal, "a 2-vector: the geometries built in are two-dimensional "
+                          "(plane strain), but the sphere (geometry.kind = 'sphere')")
+
+
+class Geometry:
+    """The protocol of a geometry kind: one object per ``geometry.kind`` in
+    :data:`dolfinx_fretting.geometries.GEOMETRIES`.
+
+    Schema checks (called by the validators of :mod:`dolfinx_fretting.scenes`; each raises a ``ValueError`` whose
+    message names the key): :meth:`refuse_own_keys`, :meth:`check_geometry`, :meth:`check_scene`,
+    :meth:`check_loads`. Numerics: :meth:`preset_values` (``solver.preset``). Before any mesh:
+    :meth:`contact_size` (the Hertz reference). The defaults are those of a kind without the hook: no checks, no
+    preset, no Hertz contact.
+    """
+
+    def refuse_own_keys(self, geometry: GeometrySettings) -> None:
+        """Refuse the ``[geometry]`` keys only this kind reads, set while another kind is chosen."""
+
+    def check_geometry(self, geometry: GeometrySettings) -> None:
+        """Check the ``[geometry]`` section of this kind alone: which keys it takes, the sizes against the body."""
+
+    def check_scene(self, scene: Scene) -> None:
+        """Check what this kind accepts of the other sections: the obstacle, the loads, the rigid plane, the contact
+        surface and window, a ``[boundary]`` section."""
+
+    def check_loads(self, scene: Scene) -> None:
+        """Check that the normal load's estimated elastic strain on this body is at most
+        :data:`MAX_ELASTIC_STRAIN` (none: the body is not known before meshing)."""
+
+    def preset_values(self, scene: Scene, preset: dict[str, float]) -> dict[str, Any]:
+        """The ``geometry.*`` values of a numerics preset (an entry of :data:`dolfinx_fretting.scenes.PRESETS`)."""
+        return {}
+
+    def contact_size(self, scene: Scene) -> float | None:
+        """The Hertz reference of the kind: the expected contact half-width (2D) or radius (3D) in mm before any
+        mesh, Hertz's under a normal force, the geometric one under an approach; None without a curved body."""
+        return None

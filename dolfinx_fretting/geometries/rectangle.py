@@ -1,0 +1,69 @@
+"""The rectangle (plane strain): a block of ``geometry.width`` by ``height``, its top fixed, pressed on a rigid plane
+by one of its faces (the paper's Example 1: the ``stromberg-block`` scene).
+
+Its mesh (:func:`dolfinx_fretting.meshes.rectangle`): structured, ``nx`` by ``ny`` cells, quadrilaterals or
+triangles. No Hertz reference: the contact is the whole face.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .base import MAX_CELLS, MAX_ELASTIC_STRAIN, Geometry, check_no_boundary, check_plane_strain, range_error
+
+__all__ = ["Rectangle"]
+
+#: The faces of the rectangle (:data:`dolfinx_fretting.meshes.RECTANGLE_TAGS`).
+FACES = ("bottom", "right", "top", "left")
+
+
+class Rectangle(Geometry):
+    """``geometry.kind = "rectangle"``."""
+
+    def check_geometry(self, geometry: GeometrySettings) -> None:
+        """At most :data:`~dolfinx_fretting.geometries.base.MAX_CELLS` cells."""
+        if geometry.nx * geometry.ny > MAX_CELLS:
+            raise range_error("geometry.nx", geometry.nx, f"geometry.nx x geometry.ny <= {MAX_CELLS} cells "
+                              f"(ny = {geometry.ny})")
+
+    def check_scene(self, scene: Scene) -> None:
+        """No ``[boundary]``; a face pressure on a face that is neither the fixed top nor the contact surface; a 2D
+        plane; a rigid plane only (the elastic flat needs a curved body on it)."""
+        contact, loading = scene.contact, scene.loading
+        check_no_boundary(scene)
+        if loading.tangential_kind == "pressure":
+            free = [face for face in FACES if face not in ("top", contact.surface)]
+            if loading.pressure_face not in free:
+                raise range_error("loading.pressure_face", loading.pressure_face,
+                                  f"{', '.join(free)} (a face of the rectangle that is neither the fixed top nor "
+                                  f"the contact surface {contact.surface!r})")
+        check_plane_strain(scene)
+        if contact.obstacle == "elastic_flat":
+            raise range_error("contact.obstacle", contact.obstacle,
+                              "'rigid_plane' with geometry.kind = 'rectangle' ('elastic_flat' needs a "
+                              "half_cylinder or a sphere on it)")
+
+    def check_loads(self, scene: Scene) -> None:
+        """The mean strain ``P / (face length E')`` of a normal force, ``d / depth`` of an approach, on the contact
+        face."""
+        geometry, contact, loading, material = scene.geometry, scene.contact, scene.loading, scene.material
+        if contact.surface not in FACES:
+            return
+        E_plane, eps = material.E / (1 - material.nu**2), MAX_ELASTIC_STRAIN
+        face, depth = ((geometry.width, geometry.height) if contact.surface in ("bottom", "top")
+                       else (geometry.height, geometry.width))
+        force, approach = loading.normal_force, loading.normal_displacement
+        if force is not None and force / (face * E_plane) > eps:
+            raise range_error("loading.normal_force", force,
+                              f"<= {eps * face * E_plane:.4g} N/mm: the mean strain P / (face length {face:g} mm "
+                              f"x E/(1-nu^2) = {E_plane:.4g} MPa) must stay <= {eps:g} (small-strain elasticity)")
+        if approach is not None and approach / depth > eps:
+            raise range_error("loading.normal_displacement", approach,
+                              f"<= {eps * depth:.4g} mm: the strain d / ({depth:g} mm, the body's depth under "
+                              f"contact.surface = {contact.surface!r}) must stay <= {eps:g} (small-strain elasticity)")
+
+    def preset_values(self, scene: Scene, preset: dict[str, float]) -> dict[str, Any]:
+        """``nx``: the preset's ``rectangle_cells``; ``ny`` in proportion to the height."""
+        geometry = scene.geometry
+        nx = int(preset["rectangle_cells"])
+        return {"geometry.nx": nx, "geometry.ny": max(1, round(nx * geometry.height / geometry.width))}
