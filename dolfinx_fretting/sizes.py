@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from .geometries import GEOMETRIES
 from .scenes import Scene, SceneError
 
 __all__ = ["SizeEstimate", "SizeError", "estimate", "available_memory", "check_size", "msh_node_count",
@@ -251,7 +252,6 @@ def _default(function, name: str):
 def _half_cylinder(scene: Scene) -> tuple[int, int, bool]:
     """Nodes (both bodies), contacts, and whether the count is exact, of a half-cylinder scene."""
     from . import meshes
-    from .scene_models import candidate_window
 
     g = scene.geometry
     R, h, a, H = meshes._cylinder_sizes(g.radius, g.contact_mesh_size, g.refined_half_width, g.coarse_mesh_size)
@@ -273,7 +273,7 @@ def _half_cylinder(scene: Scene) -> tuple[int, int, bool]:
         W, Hf = g.flat_width, g.flat_height
         nodes += body(lambda x, y: _flat_regions(x, y, W, Hf, a, t), _flat_boundary(W, Hf), math.hypot(W / 2, Hf),
                       n_flat)
-    window, _ = candidate_window(scene, g.refined_half_width, g.contact_mesh_size)
+    window, _ = GEOMETRIES["half_cylinder"].candidate_window(scene, g.refined_half_width, g.contact_mesh_size)
     # Candidates: the arc's nodes within the window of the lowest one (measured along the plane).
     k = np.arange(n_arc + 1)
     within = R * np.sin(k * theta / n_arc) <= window * (1 + 1e-12)
@@ -287,16 +287,16 @@ def _half_cylinder(scene: Scene) -> tuple[int, int, bool]:
 def _sphere(scene: Scene) -> tuple[int, int, bool]:
     """Nodes (both bodies), contacts, exact, of a sphere scene (the structured hexahedra of meshes_3d)."""
     from .meshes_3d import _grid_axes, sphere_on_flat
-    from .scene_models import candidate_window, expected_contact_size, sphere_mesh_size
 
     g = scene.geometry
-    a, h = expected_contact_size(scene), sphere_mesh_size(scene)
+    sphere = GEOMETRIES["sphere"]
+    a, h = sphere.contact_size(scene), sphere.element_size(scene)
     options = {k: _default(sphere_on_flat, k) for k in ("zone", "depth_zone", "extent", "growth")}
     x, y, depth = _grid_axes(a, h, **options, half=g.half_model)
     bodies = 2 if scene.contact.obstacle == "elastic_flat" else 1
     nodes = bodies * x.size * y.size * depth.size
     zone = math.ceil(options["zone"] * a / h - 1e-9) * h  # the uniform zone's half-width (sphere_on_flat_grid)
-    window, _ = candidate_window(scene, zone, h)
+    window, _ = sphere.candidate_window(scene, zone, h)
     X, Y = np.meshgrid(x, y, indexing="ij")
     contacts = int(np.count_nonzero(np.hypot(X, Y) <= window * (1 + 1e-12)))
     return int(nodes), contacts, True
@@ -404,10 +404,9 @@ def _plastic_zone_dofs(scene: Scene, contacts: int | None) -> tuple[int, bool]:
     g, dim = scene.geometry, scene.dim
     if g.kind not in ("half_cylinder", "sphere"):
         return MAX_ZONE_DOFS, True
-    from .scene_models import expected_contact_size, sphere_mesh_size
-
-    a = expected_contact_size(scene)
-    h = sphere_mesh_size(scene) if g.kind == "sphere" else g.contact_mesh_size
+    geometry = GEOMETRIES[g.kind]
+    a = geometry.contact_size(scene)
+    h = geometry.element_size(scene)
     across = 2 * a / h + 2 * ZONE_MARGIN + 1
     deep = a / h + ZONE_MARGIN + 1
     nodes = across * deep * ((across / 2 if g.half_model else across) if dim == 3 else 1)

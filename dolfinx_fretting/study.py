@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from .geometries import GEOMETRIES
 from .scenes import Scene, SceneError, load_scene
 
 __all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
@@ -151,11 +152,7 @@ def _contact_mesh_size(scene: Scene) -> float:
     """The contact element size the scene's mesh will have (mm): ``geometry.contact_mesh_size``, except for a
     sphere that does not set it, whose cubes are sized from the Hertz contact radius (a/4), not from the
     key's 2D default."""
-    if scene.geometry.kind == "sphere":
-        from .scene_models import sphere_mesh_size
-
-        return sphere_mesh_size(scene)
-    return scene.geometry.contact_mesh_size
+    return GEOMETRIES[scene.geometry.kind].element_size(scene)
 
 
 def default_reference(scene: Scene) -> list[str]:

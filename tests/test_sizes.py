@@ -87,7 +87,7 @@ def test_estimate_is_pure_and_fast_for_a_typo():
 
 def _no_mesh(monkeypatch):
     """Every mesher raises: a test that passes with this did not mesh."""
-    from dolfinx_fretting import meshes, meshes_3d, scene_models
+    from dolfinx_fretting import geometries, meshes, meshes_3d
 
     import dolfinx_fretting.simulation as simulation
 
@@ -97,7 +97,7 @@ def _no_mesh(monkeypatch):
             raise AssertionError(f"a mesh was built ({function.__name__})")
         return meshed
     for module, name in ((meshes, "cylinder_on_flat"), (meshes, "half_cylinder"), (meshes, "rectangle"),
-                         (meshes_3d, "sphere_on_flat"), (scene_models, "build_scene_model"),
+                         (meshes_3d, "sphere_on_flat"), (geometries, "build_scene_model"),
                          (simulation, "build_scene_model")):
         monkeypatch.setattr(module, name, refuse(getattr(module, name)))
 

@@ -10,7 +10,10 @@ builders (``scene_models``). Each kind is now one object with the protocol of
   ``check_scene`` (what it accepts of the obstacle, the loads, the plane, the surface, the window, ``[boundary]``),
   ``check_loads`` (the normal load's elastic strain on its body);
 * ``preset_values``: its part of a numerics preset (``solver.preset``);
-* ``contact_size``: its Hertz reference (line contact, sphere or none), the expected contact size before any mesh.
+* ``contact_size``: its Hertz reference (line contact, sphere or none), the expected contact size before any mesh;
+  ``element_size`` and ``model_fraction`` (a half model);
+* ``build``: its mesh and model (:class:`~dolfinx_fretting.scene_models.SceneModel`), written with the parts of
+  :mod:`dolfinx_fretting.scene_models`; :func:`build_scene_model` looks the kind up.
 
 :data:`GEOMETRIES` maps each ``geometry.kind`` to its object; the modules that used to branch look the kind up
 instead. A new geometry kind is one new module here (a :class:`~dolfinx_fretting.geometries.base.Geometry` with
@@ -21,19 +24,24 @@ Why objects and not functions per concern: the laws of issue 25 (:mod:`dolfinx_f
 small protocol, and a kind is the same idea; a base class gives the defaults (no hook: nothing to check, no
 preset, no Hertz contact), so a kind writes only what it has.
 
-Imports point down: the schema (``scenes``) imports this package; nothing here imports the schema, whose classes
-are only named in annotations (see :mod:`~dolfinx_fretting.geometries.base`).
+Imports point down: the schema (``scenes``) imports this package, this package imports the parts of the model
+(``scene_models``), the meshers (``meshes``, ``meshes_3d``) and the closed forms (``analytic``); nothing here
+imports the schema, whose classes are only named in annotations (see :mod:`~dolfinx_fretting.geometries.base`).
+None of these modules loads DOLFINx when imported (their functions do), so a scene is validated and sized without it.
 """
 
 from __future__ import annotations
 
+from mpi4py import MPI
+
+from ..scene_models import SceneModel
 from .base import Geometry
 from .half_cylinder import HalfCylinder
 from .mesh_file import MeshFile
 from .rectangle import Rectangle
 from .sphere import Sphere
 
-__all__ = ["GEOMETRIES", "Geometry"]
+__all__ = ["GEOMETRIES", "Geometry", "build_scene_model"]
 
 #: Every geometry kind by its ``geometry.kind``: a new kind is one module and one line here.
 GEOMETRIES: dict[str, Geometry] = {
@@ -42,3 +50,28 @@ GEOMETRIES: dict[str, Geometry] = {
     "sphere": Sphere(),
     "file": MeshFile(),
 }
+
+
+def build_scene_model(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD, *,
+                      applies_model_fraction: bool = False) -> SceneModel:
+    """Mesh the scene's geometry and write its model: the ``build`` of its kind. Collective.
+
+    Args:
+        scene: The validated scene.
+        comm: Communicator of the mesh.
+        applies_model_fraction: The caller prescribes :attr:`SceneModel.model_fraction
+            <dolfinx_fretting.scene_models.SceneModel.model_fraction>` times the scene's forces and divides the
+            totals it reports by it. A model of a fraction of the bodies (a half model) is refused to a caller that
+            does not: its forces would be the whole contact's on part of it.
+
+    Raises:
+        ValueError: a name of the scene is not in the mesh (the message lists the names it holds), or a model of a
+            fraction of the bodies for a caller that does not apply it.
+    """
+    geometry = GEOMETRIES[scene.geometry.kind]
+    fraction = geometry.model_fraction(scene)
+    if fraction != 1.0 and not applies_model_fraction:  # (the sphere's half model is the only such model)
+        raise ValueError(f"geometry.half_model = true: this caller does not scale the scene's forces to the half "
+                         f"model (SceneModel.model_fraction = {fraction:g}) yet; run the whole sphere with "
+                         "geometry.half_model = false, or build the model with applies_model_fraction=True")
+    return geometry.build(scene, comm)

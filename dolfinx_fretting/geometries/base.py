@@ -11,6 +11,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from mpi4py import MPI
+
+from ..scene_models import SceneModel
+
 __all__ = ["Geometry", "range_error", "check_no_boundary", "check_plane_strain", "MAX_ELASTIC_STRAIN",
            "MAX_CONTACT_ELEMENTS", "MAX_CELLS"]
 
@@ -56,8 +60,9 @@ class Geometry:
     Schema checks (called by the validators of :mod:`dolfinx_fretting.scenes`; each raises a ``ValueError`` whose
     message names the key): :meth:`refuse_own_keys`, :meth:`check_geometry`, :meth:`check_scene`,
     :meth:`check_loads`. Numerics: :meth:`preset_values` (``solver.preset``). Before any mesh:
-    :meth:`contact_size` (the Hertz reference). The defaults are those of a kind without the hook: no checks, no
-    preset, no Hertz contact.
+    :meth:`contact_size` (the Hertz reference), :meth:`element_size`, :meth:`model_fraction`. The model:
+    :meth:`build`. The defaults are those of a kind without the hook: no checks, no preset, no Hertz contact, the
+    whole bodies.
     """
 
     def refuse_own_keys(self, geometry: GeometrySettings) -> None:
@@ -82,3 +87,38 @@ class Geometry:
         """The Hertz reference of the kind: the expected contact half-width (2D) or radius (3D) in mm before any
         mesh, Hertz's under a normal force, the geometric one under an approach; None without a curved body."""
         return None
+
+    def element_size(self, scene: Scene) -> float | None:
+        """The contact element size (mm) the mesh will have, if known before meshing."""
+        return None
+
+    def model_fraction(self, scene: Scene) -> float:
+        """The fraction of the bodies the model holds (:attr:`SceneModel.model_fraction
+        <dolfinx_fretting.scene_models.SceneModel.model_fraction>`)."""
+        return 1.0
+
+    def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
+        """Mesh (or read) the body and write its model with the parts of :mod:`dolfinx_fretting.scene_models`.
+        Collective."""
+        raise NotImplementedError(f"{type(self).__name__}.build")
+
+    def candidate_window(self, scene: Scene, zone: float, h: float) -> tuple[float, bool]:
+        """The initial candidate half-width (mm) of a kind with a :meth:`contact_size`, and whether it is automatic.
+
+        Automatic for elastic bodies without ``contact.candidate_half_width`` (an elastic-plastic body cannot grow
+        its window, and plasticity widens the contact beyond the elastic estimate, so it keeps the refined zone):
+        ``1.5 a + 3 h`` with a the :meth:`contact_size`, at most the refined ``zone``. Finite sliding cannot grow its
+        window either (its surface compliance is built for one): the zone, or the given width if wider.
+
+        Args:
+            scene: The scene.
+            zone: Half-width of the mesh's refined (uniform) contact zone (mm).
+            h: Contact element size (mm).
+        """
+        given = scene.contact.candidate_half_width
+        if scene.contact.sliding == "finite":  # the surface compliance is built for one window: the whole zone
+            return float(max(zone, given or 0.0)), False
+        automatic = given is None and scene.material.model == "elastic"
+        if automatic:
+            return float(min(zone, 1.5 * self.contact_size(scene) + 3 * h)), True
+        return (given if given is not None else zone), False

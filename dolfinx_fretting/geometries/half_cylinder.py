@@ -11,11 +11,16 @@ the line contact (:func:`dolfinx_fretting.analytic.hertz_line_contact`).
 from __future__ import annotations
 
 import math
+import time
 from typing import Any
 
 import numpy as np
+from mpi4py import MPI
 
+from .. import meshes
 from ..analytic import hertz_line_contact
+from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane,
+                            two_body_cells)
 from .base import MAX_CONTACT_ELEMENTS, MAX_ELASTIC_STRAIN, Geometry, check_no_boundary, check_plane_strain, range_error
 
 __all__ = ["HalfCylinder"]
@@ -110,3 +115,37 @@ class HalfCylinder(Geometry):
         if loading.normal_force is not None:
             return float(hertz_line_contact(loading.normal_force, radius, scene.contact_modulus)[0])
         return float(np.sqrt(2.0 * radius * loading.normal_displacement))
+
+    def element_size(self, scene: Scene) -> float:
+        """``geometry.contact_mesh_size``."""
+        return scene.geometry.contact_mesh_size
+
+    def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
+        """A half-cylinder on a rigid plane, or on an elastic flat (two bodies, one mesh)."""
+        geometry, contact = scene.geometry, scene.contact
+        two_body = contact.obstacle == "elastic_flat"
+        zone, h = geometry.refined_half_width, geometry.contact_mesh_size
+        start = time.perf_counter()
+        mesher = meshes.cylinder_on_flat if two_body else meshes.half_cylinder
+        flat = (geometry.flat_width, geometry.flat_height) if two_body else ()
+        body = mesher(comm, geometry.radius, *flat, contact_mesh_size=h, contact_half_width=zone,
+                      coarse_mesh_size=geometry.coarse_mesh_size, quadrilateral=geometry.quadrilateral)
+        mesh_s = time.perf_counter() - start
+        V, form, von_mises, bcs, loads = elastic_model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
+        plane = rigid_plane(scene)
+        window, automatic = self.candidate_window(scene, zone, h)
+        if two_body:
+            obstacle = elastic_flat(scene, body, plane, zone, h)
+            display_cells, elastic_cells = two_body_cells(scene, body, "cylinder")
+            label = "two identical elastic bodies: E* = E/(2(1-nu^2))"
+            text = f", each paired with a point of the elastic flat (node-to-segment, {PAIRING[contact.sliding]})"
+        else:
+            obstacle, display_cells, elastic_cells = plane, None, None
+            label = "rigid plane, frictionless: E* = E/(1-nu^2)"
+            text = ", against a rigid plane"
+        return SceneModel(body=body, V=V, form=form, bcs=bcs, surface=contact_surface(scene, body), obstacle=obstacle,
+                          loads=loads, element_size=h, window=window, window_limit=zone, window_automatic=automatic,
+                          window_edges_matter=True, elastic_cells=elastic_cells, display_cells=display_cells,
+                          hertz=(geometry.radius, scene.contact_modulus, label),
+                          small_sliding=two_body and contact.sliding == "small", contact_text=text,
+                          von_mises=von_mises, timings={"mesh_s": mesh_s})

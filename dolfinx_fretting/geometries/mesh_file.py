@@ -8,9 +8,17 @@ refinement in a study; its size estimate counts the nodes in the file's header.
 
 from __future__ import annotations
 
+import time
+
+from mpi4py import MPI
+
+from ..meshes import BodyMesh
+from ..scene_models import (BOUNDARY_DISPLACEMENT, BOUNDARY_PRESSURE, SceneModel, axis_normal, boundary_pressure,
+                            contact_surface, displacement_conditions, elastic_model, facet_length, read_msh,
+                            read_xdmf, rigid_plane, roller)
 from .base import Geometry, check_plane_strain, range_error
 
-__all__ = ["MeshFile"]
+__all__ = ["MeshFile", "check_names"]
 
 
 class MeshFile(Geometry):
@@ -48,3 +56,51 @@ class MeshFile(Geometry):
             if len(vector) != len(contact.plane_normal):
                 raise range_error(f"boundary.displacement.{name}", vector, f"a {len(contact.plane_normal)}-vector (mm)")
         check_plane_strain(scene)
+
+    def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
+        """The user's mesh file with the conditions of ``[boundary]`` by physical name: clamps, rollers on plane
+        faces normal to an axis, displacements and pressures ramped with the preload; the contact element size is
+        the median length of the contact surface's facets."""
+        geometry, boundary = scene.geometry, scene.boundary
+        start = time.perf_counter()
+        if geometry.path.endswith(".xdmf"):
+            body, _ = read_xdmf(geometry.path, comm, geometry.groups)
+        else:
+            body, _ = read_msh(geometry.path, comm)
+        check_names(scene, body.tags)
+        mesh_s = time.perf_counter() - start
+        V, form, von_mises, bcs, loads = elastic_model(scene, body, list(boundary.fixed))
+        for name in boundary.symmetry:
+            bcs.append(roller(V, body.facets(name), axis_normal(V, body.facets(name), name)))
+        prescribed = {}
+        if boundary.displacement:
+            prescribed[BOUNDARY_DISPLACEMENT] = displacement_conditions(V, body, boundary.displacement)
+        if boundary.pressure:
+            loads[BOUNDARY_PRESSURE] = boundary_pressure(V, body, boundary.pressure)
+        surface = contact_surface(scene, body)
+        h = facet_length(V, body.facets(scene.contact.surface))
+        body = BodyMesh(body.mesh, body.facet_tags, body.cell_tags, body.tags, h, None, {}, body.regions)
+        return SceneModel(body=body, V=V, form=form, bcs=bcs, surface=surface, obstacle=rigid_plane(scene),
+                          loads=loads, element_size=h, window=scene.contact.candidate_half_width, window_limit=None,
+                          window_automatic=False, window_edges_matter=False, elastic_cells=None, display_cells=None,
+                          hertz=None, small_sliding=False, contact_text=", against a rigid plane",
+                          von_mises=von_mises, timings={"mesh_s": mesh_s}, prescribed=prescribed,
+                          ramped=[name for name in (BOUNDARY_DISPLACEMENT, BOUNDARY_PRESSURE)
+                                  if name in prescribed or name in loads])
+
+
+def check_names(scene: Scene, facet_names: dict[str, int]) -> None:
+    """Every boundary name the scene uses must be a physical group of the file (once it is read, before any work).
+
+    Raises:
+        ValueError: naming the key, the name and the file's groups.
+    """
+    used = [("contact.surface", scene.contact.surface), *scene.boundary.names]
+    if scene.loading.tangential_kind == "pressure":
+        used.append(("loading.pressure_face", scene.loading.pressure_face))
+    for key, name in used:
+        if name not in facet_names:
+            raise ValueError(f"{key} = {name!r} is not a physical group of {scene.geometry.path}; the file's "
+                             f"boundary groups: {', '.join(sorted(facet_names)) or 'none'}"
+                             + (" (an XDMF file's markers are named by geometry.groups, else by their numbers)"
+                                if scene.geometry.path.endswith(".xdmf") else ""))

@@ -7,8 +7,13 @@ triangles. No Hertz reference: the contact is the whole face.
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
+from mpi4py import MPI
+
+from .. import meshes
+from ..scene_models import SceneModel, contact_surface, elastic_model, rigid_plane
 from .base import MAX_CELLS, MAX_ELASTIC_STRAIN, Geometry, check_no_boundary, check_plane_strain, range_error
 
 __all__ = ["Rectangle"]
@@ -67,3 +72,19 @@ class Rectangle(Geometry):
         geometry = scene.geometry
         nx = int(preset["rectangle_cells"])
         return {"geometry.nx": nx, "geometry.ny": max(1, round(nx * geometry.height / geometry.width))}
+
+    def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
+        """A block on a rigid plane (the paper's Example 1), its top fixed; the window: the scene's, or the whole
+        contact face."""
+        geometry = scene.geometry
+        start = time.perf_counter()
+        body = meshes.rectangle(comm, geometry.width, geometry.height, geometry.nx, geometry.ny,
+                                quadrilateral=geometry.quadrilateral)
+        mesh_s = time.perf_counter() - start
+        V, form, von_mises, bcs, loads = elastic_model(scene, body, ["top"])
+        return SceneModel(body=body, V=V, form=form, bcs=bcs, surface=contact_surface(scene, body),
+                          obstacle=rigid_plane(scene), loads=loads, element_size=body.contact_mesh_size,
+                          window=scene.contact.candidate_half_width, window_limit=None, window_automatic=False,
+                          window_edges_matter=False, elastic_cells=None, display_cells=None, hertz=None,
+                          small_sliding=False, contact_text=", against a rigid plane", von_mises=von_mises,
+                          timings={"mesh_s": mesh_s})

@@ -10,11 +10,16 @@ sphere's (:func:`dolfinx_fretting.analytic.hertz_sphere`).
 from __future__ import annotations
 
 import math
+import time
 from typing import Any
 
 import numpy as np
+from mpi4py import MPI
 
+from .. import meshes_3d
 from ..analytic import hertz_sphere
+from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane, roller,
+                            two_body_cells)
 from .base import MAX_ELASTIC_STRAIN, Geometry, check_no_boundary, range_error
 
 __all__ = ["Sphere"]
@@ -96,3 +101,48 @@ class Sphere(Geometry):
         if loading.normal_force is not None:
             return float(hertz_sphere(loading.normal_force, radius, scene.contact_modulus)[0])
         return float(np.sqrt(radius * loading.normal_displacement))
+
+    def element_size(self, scene: Scene) -> float:
+        """The edge h (mm) of the cubes under the contact: ``geometry.contact_mesh_size`` if the scene sets it, else
+        a quarter of the contact radius a (:meth:`contact_size`); at most a."""
+        geometry = scene.geometry
+        a = self.contact_size(scene)
+        h = geometry.contact_mesh_size if "contact_mesh_size" in geometry.model_fields_set else a / 4.0
+        return min(h, a)
+
+    def model_fraction(self, scene: Scene) -> float:
+        """0.5 for a half model (``geometry.half_model``), else 1."""
+        return 0.5 if scene.geometry.half_model else 1.0
+
+    def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
+        """A sphere's cap on an elastic flat of the same material (two bodies, one mesh) or on a rigid plane: a half
+        model about y = 0 by default, a roller there (u_y = 0 on both bodies' faces). ``hertz`` is None: the
+        summary's Hertz reference is the line contact's, not the sphere's."""
+        geometry, contact = scene.geometry, scene.contact
+        two_body = contact.obstacle == "elastic_flat"
+        a, h = self.contact_size(scene), self.element_size(scene)
+        start = time.perf_counter()
+        body = meshes_3d.sphere_on_flat(comm, geometry.radius, a, h, half=geometry.half_model, flat=two_body)
+        mesh_s = time.perf_counter() - start
+        V, form, von_mises, bcs, loads = elastic_model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
+        if geometry.half_model:  # the symmetry plane y = 0
+            faces = np.concatenate([body.facets(name) for name in body.tags if name.endswith("symmetry")])
+            bcs.append(roller(V, faces, 1))
+        plane = rigid_plane(scene)
+        zone = body.contact_half_width
+        window, automatic = self.candidate_window(scene, zone, h)
+        if two_body:
+            obstacle = elastic_flat(scene, body, plane, zone, h)
+            display_cells, elastic_cells = two_body_cells(scene, body, "sphere")
+            text = (", each paired with the closest point of the elastic flat's faces (node-to-face, "
+                    f"{PAIRING[contact.sliding]})")
+        else:
+            obstacle, display_cells, elastic_cells = plane, None, None
+            text = ", against a rigid plane"
+        text += ", half model (roller on y = 0)" if geometry.half_model else ""
+        return SceneModel(body=body, V=V, form=form, bcs=bcs, surface=contact_surface(scene, body), obstacle=obstacle,
+                          loads=loads, element_size=h, window=window, window_limit=zone, window_automatic=automatic,
+                          window_edges_matter=True, elastic_cells=elastic_cells, display_cells=display_cells,
+                          hertz=None, small_sliding=two_body and contact.sliding == "small", contact_text=text,
+                          von_mises=von_mises, timings={"mesh_s": mesh_s}, model_fraction=self.model_fraction(scene),
+                          held_tangential=(2,) if geometry.half_model else ())
