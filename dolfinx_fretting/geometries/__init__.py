@@ -12,6 +12,8 @@ builders (``scene_models``). Each kind is now one object with the protocol of
 * ``preset_values``: its part of a numerics preset (``solver.preset``);
 * ``contact_size``: its Hertz reference (line contact, sphere or none), the expected contact size before any mesh;
   ``element_size`` and ``model_fraction`` (a half model);
+* ``mesh_size``: its part of the size estimate (:func:`dolfinx_fretting.sizes.estimate`): nodes, contacts, the keys
+  that set them, counted without meshing;
 * ``build``: its mesh and model (:class:`~dolfinx_fretting.scene_models.SceneModel`), written with the parts of
   :mod:`dolfinx_fretting.scene_models`; :func:`build_scene_model` looks the kind up.
 

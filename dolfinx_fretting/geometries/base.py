@@ -9,14 +9,16 @@ checks from its validators, and an import back, even one for type checkers only,
 
 from __future__ import annotations
 
-from typing import Any
+import inspect
+from dataclasses import dataclass, field
+from typing import Any, Callable
 
 from mpi4py import MPI
 
 from ..scene_models import SceneModel
 
-__all__ = ["Geometry", "range_error", "check_no_boundary", "check_plane_strain", "MAX_ELASTIC_STRAIN",
-           "MAX_CONTACT_ELEMENTS", "MAX_CELLS"]
+__all__ = ["Geometry", "MeshSize", "range_error", "check_no_boundary", "check_plane_strain", "mesher_default",
+           "MAX_ELASTIC_STRAIN", "MAX_CONTACT_ELEMENTS", "MAX_CELLS"]
 
 #: Largest elastic strain a load may produce (estimated before any work, each kind's
 #: :meth:`Geometry.check_loads`): the model is small-strain linear elasticity; past a few percent its answer is
@@ -53,6 +55,38 @@ def check_plane_strain(scene: Scene) -> None:
                           "(plane strain), but the sphere (geometry.kind = 'sphere')")
 
 
+def mesher_default(mesher: Callable, name: str) -> Any:
+    """The default of a mesher's keyword argument (an estimate counts with the mesher's own defaults)."""
+    return inspect.signature(mesher).parameters[name].default
+
+
+@dataclass(frozen=True)
+class MeshSize:
+    """What a kind's mesh will hold, counted before meshing: the kind's part of
+    :func:`dolfinx_fretting.sizes.estimate` (which adds the memory of the factorisation, W and the rest).
+
+    Attributes:
+        nodes: Mesh nodes (both bodies), or None when the kind cannot count them cheaply.
+        contacts: Contact candidates, or None.
+        exact: The count follows from the mesh's construction (structured); otherwise a model of the mesher.
+        mesher: The memory class of the mesh per dof (a key of :data:`dolfinx_fretting.sizes.MESH_BYTES_PER_DOF`).
+        cell: The cells' Gauss-point family of an elastic-plastic body: ``"quadrilateral"``, ``"triangle"`` or
+            ``"hexahedron"``.
+        drivers: The scene keys that set the mesh's size, with their values (for a refusal's message).
+        window_default: What an unset ``contact.candidate_half_width`` means, in words.
+        notes: What was not counted, and why.
+    """
+
+    nodes: int | None
+    contacts: int | None
+    exact: bool
+    mesher: str
+    cell: str
+    drivers: dict[str, Any] = field(default_factory=dict)
+    window_default: str = "automatic"
+    notes: tuple[str, ...] = ()
+
+
 class Geometry:
     """The protocol of a geometry kind: one object per ``geometry.kind`` in
     :data:`dolfinx_fretting.geometries.GEOMETRIES`.
@@ -60,7 +94,8 @@ class Geometry:
     Schema checks (called by the validators of :mod:`dolfinx_fretting.scenes`; each raises a ``ValueError`` whose
     message names the key): :meth:`refuse_own_keys`, :meth:`check_geometry`, :meth:`check_scene`,
     :meth:`check_loads`. Numerics: :meth:`preset_values` (``solver.preset``). Before any mesh:
-    :meth:`contact_size` (the Hertz reference), :meth:`element_size`, :meth:`model_fraction`. The model:
+    :meth:`contact_size` (the Hertz reference), :meth:`element_size`, :meth:`model_fraction`, :meth:`mesh_size`
+    (the size estimate). The model:
     :meth:`build`. The defaults are those of a kind without the hook: no checks, no preset, no Hertz contact, the
     whole bodies.
     """
@@ -96,6 +131,10 @@ class Geometry:
         """The fraction of the bodies the model holds (:attr:`SceneModel.model_fraction
         <dolfinx_fretting.scene_models.SceneModel.model_fraction>`)."""
         return 1.0
+
+    def mesh_size(self, scene: Scene) -> MeshSize:
+        """Nodes, contacts and the keys that set them, counted without meshing (pure: no DOLFINx)."""
+        raise NotImplementedError(f"{type(self).__name__}.mesh_size")
 
     def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
         """Mesh (or read) the body and write its model with the parts of :mod:`dolfinx_fretting.scene_models`.

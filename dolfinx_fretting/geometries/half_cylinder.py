@@ -21,7 +21,9 @@ from .. import meshes
 from ..analytic import hertz_line_contact
 from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane,
                             two_body_cells)
-from .base import MAX_CONTACT_ELEMENTS, MAX_ELASTIC_STRAIN, Geometry, check_no_boundary, check_plane_strain, range_error
+from .base import (MAX_CONTACT_ELEMENTS, MAX_ELASTIC_STRAIN, Geometry, MeshSize, check_no_boundary,
+                   check_plane_strain, mesher_default, range_error)
+from .gmsh_nodes import ON_BOUNDARY, nodes_along, segment_distance, unstructured_nodes
 
 __all__ = ["HalfCylinder"]
 
@@ -120,6 +122,46 @@ class HalfCylinder(Geometry):
         """``geometry.contact_mesh_size``."""
         return scene.geometry.contact_mesh_size
 
+    def mesh_size(self, scene: Scene) -> MeshSize:
+        """The structured sectors under the contact counted exactly (quadrilaterals), the rest of the cylinder (and
+        of the flat) by gmsh's node density under the size field (:mod:`~dolfinx_fretting.geometries.gmsh_nodes`),
+        from the meshers' own sizing rules (``meshes._cylinder_sizes``, ``meshes._refined_depth``); the candidates:
+        the arc's nodes within the window."""
+        geometry = scene.geometry
+        R, h, a, H = meshes._cylinder_sizes(geometry.radius, geometry.contact_mesh_size, geometry.refined_half_width,
+                                            geometry.coarse_mesh_size)
+        t = meshes._refined_depth(R, h, a)
+        growth = mesher_default(meshes.half_cylinder, "growth")
+        cell = "quadrilateral" if geometry.quadrilateral else "triangle"
+        theta = math.asin(a / R)
+        # The structured sectors (meshes._half_cylinder_geometry, _flat_geometry): equal segments along the refined
+        # arc (each half R theta long) and the flat's refined segment (each half a long), layers through t.
+        n_arc, n_flat, n_layers = max(1, round(R * theta / h)), max(1, round(a / h)), max(1, round(t / h))
+        structured = geometry.quadrilateral
+
+        def body(regions, boundary, r_max: float, n_along: int) -> float:
+            exact = (2 * n_along + 1) * (n_layers + 1) if structured else 0
+            return exact + unstructured_nodes(regions, boundary, r_max, h, H, growth, cell,
+                                              include_sector=not structured)
+
+        nodes = body(lambda x, y: _cylinder_regions(x, y, R, a, t), _cylinder_boundary(R), math.sqrt(2) * R, n_arc)
+        if scene.contact.obstacle == "elastic_flat":
+            width, height = geometry.flat_width, geometry.flat_height
+            nodes += body(lambda x, y: _flat_regions(x, y, width, height, a, t), _flat_boundary(width, height),
+                          math.hypot(width / 2, height), n_flat)
+        window, _ = self.candidate_window(scene, geometry.refined_half_width, geometry.contact_mesh_size)
+        # Candidates: the arc's nodes within the window of the lowest one (measured along the plane).
+        k = np.arange(n_arc + 1)
+        within = R * np.sin(k * theta / n_arc) <= window * (1 + 1e-12)
+        contacts = 2 * int(within.sum()) - 1
+        if window > a:  # beyond the refined arc the spacing grows with the distance from it
+            length = R * (math.asin(min(window, R) / R) - theta)
+            contacts += 2 * int(nodes_along(length, h, H, growth))
+        coarse = geometry.coarse_mesh_size if geometry.coarse_mesh_size is not None else geometry.radius / 10
+        drivers = {"geometry.contact_mesh_size": geometry.contact_mesh_size,
+                   "geometry.contact_half_width": geometry.refined_half_width, "geometry.coarse_mesh_size": coarse}
+        return MeshSize(int(round(nodes)), contacts, False, "gmsh", cell, drivers)
+
     def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
         """A half-cylinder on a rigid plane, or on an elastic flat (two bodies, one mesh)."""
         geometry, contact = scene.geometry, scene.contact
@@ -149,3 +191,46 @@ class HalfCylinder(Geometry):
                           hertz=(geometry.radius, scene.contact_modulus, label),
                           small_sliding=two_body and contact.sliding == "small", contact_text=text,
                           von_mises=von_mises, timings={"mesh_s": mesh_s})
+
+
+# The regions of the gmsh size field (pure NumPy) -----------------------------------------------------------------
+def _cylinder_regions(x, y, R: float, a: float, t: float):
+    """Inside the half-cylinder (lowest point at the origin), inside its refined sector, distance to the sector.
+    Points on a boundary (within :data:`~dolfinx_fretting.geometries.gmsh_nodes.ON_BOUNDARY` R) are inside it."""
+    rho = np.hypot(x, R - y)
+    phi = np.arctan2(x, R - y)  # from the downward vertical, positive towards +x
+    theta = math.asin(a / R)
+    tol = ON_BOUNDARY * R
+    inside = (rho <= R + tol) & (y <= R + tol)
+    sector = inside & (rho >= R - t - tol) & (np.abs(phi) <= theta + ON_BOUNDARY)
+    side = np.sign(phi) * theta
+    ux, uy = np.sin(side), -np.cos(side)
+    d_side = segment_distance(x, y, (R - t) * ux, R + (R - t) * uy, R * ux, R + R * uy)
+    d = np.where(np.abs(phi) <= theta, np.maximum(R - t - rho, 0.0), d_side)
+    return inside, sector, d
+
+
+def _flat_regions(x, y, width: float, height: float, a: float, t: float):
+    """Inside the flat (top at y = 0, centred), inside its refined sector, distance to the sector. Points on a
+    boundary (within :data:`~dolfinx_fretting.geometries.gmsh_nodes.ON_BOUNDARY` of the width) are inside it."""
+    tol = ON_BOUNDARY * width
+    inside = (np.abs(x) <= width / 2 + tol) & (y <= tol) & (y >= -height - tol)
+    sector = inside & (np.abs(x) <= a + tol) & (y >= -t - tol)
+    d = np.hypot(np.maximum(np.abs(x) - a, 0.0), np.maximum(-t - y, 0.0))
+    return inside, sector, d
+
+
+def _cylinder_boundary(R: float, n: int = 20000):
+    """Points and lengths of the half-cylinder's boundary (the arc and the top face)."""
+    phi = (np.arange(n) + 0.5) * np.pi / n - np.pi / 2
+    x = np.concatenate([R * np.sin(phi), (np.arange(n) + 0.5) * 2 * R / n - R])
+    y = np.concatenate([R - R * np.cos(phi), np.full(n, R)])
+    return x, y, np.concatenate([np.full(n, np.pi * R / n), np.full(n, 2 * R / n)])
+
+
+def _flat_boundary(width: float, height: float, n: int = 20000):
+    """Points and lengths of the flat's boundary (top, bottom, sides)."""
+    u = (np.arange(n) + 0.5) / n
+    x = np.concatenate([(u - 0.5) * width, (u - 0.5) * width, np.full(n, -width / 2), np.full(n, width / 2)])
+    y = np.concatenate([np.zeros(n), np.full(n, -height), -u * height, -u * height])
+    return x, y, np.concatenate([np.full(2 * n, width / n), np.full(2 * n, height / n)])

@@ -8,17 +8,21 @@ refinement in a study; its size estimate counts the nodes in the file's header.
 
 from __future__ import annotations
 
+import re
 import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
 
+import numpy as np
 from mpi4py import MPI
 
 from ..meshes import BodyMesh
 from ..scene_models import (BOUNDARY_DISPLACEMENT, BOUNDARY_PRESSURE, SceneModel, axis_normal, boundary_pressure,
                             contact_surface, displacement_conditions, elastic_model, facet_length, read_msh,
                             read_xdmf, rigid_plane, roller)
-from .base import Geometry, check_plane_strain, range_error
+from .base import Geometry, MeshSize, check_plane_strain, range_error
 
-__all__ = ["MeshFile", "check_names"]
+__all__ = ["MeshFile", "check_names", "msh_node_count", "xdmf_node_count"]
 
 
 class MeshFile(Geometry):
@@ -56,6 +60,16 @@ class MeshFile(Geometry):
             if len(vector) != len(contact.plane_normal):
                 raise range_error(f"boundary.displacement.{name}", vector, f"a {len(contact.plane_normal)}-vector (mm)")
         check_plane_strain(scene)
+
+    def mesh_size(self, scene: Scene) -> MeshSize:
+        """The nodes in the file's header (None if it has none); the contacts are not counted (the surface is not
+        read before meshing)."""
+        path = scene.geometry.path
+        nodes = xdmf_node_count(path) if path.endswith(".xdmf") else msh_node_count(path)
+        notes = [f"nodes not estimated (no node count in the header of {path})"] if nodes is None else []
+        notes.append("contacts not estimated (a mesh file's surface is not read before meshing): W not counted")
+        return MeshSize(nodes, None, True, "gmsh", "quadrilateral", {"geometry.path": path},
+                        window_default="the whole surface", notes=tuple(notes))
 
     def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
         """The user's mesh file with the conditions of ``[boundary]`` by physical name: clamps, rollers on plane
@@ -104,3 +118,50 @@ def check_names(scene: Scene, facet_names: dict[str, int]) -> None:
                              f"boundary groups: {', '.join(sorted(facet_names)) or 'none'}"
                              + (" (an XDMF file's markers are named by geometry.groups, else by their numbers)"
                                 if scene.geometry.path.endswith(".xdmf") else ""))
+
+
+def msh_node_count(path: str | Path) -> int | None:
+    """The node count in a gmsh ``.msh`` file's ``$Nodes`` header (formats 2 and 4, ASCII or binary), without
+    reading the nodes; None if the file has no readable header."""
+    try:
+        with open(path, "rb") as stream:
+            head = stream.read(1 << 16)
+            header = re.search(rb"\$MeshFormat\s+(\S+)\s+(\d)\s+(\d+)", head)
+            if header is None:
+                return None
+            version, binary, size_t = float(header.group(1)), header.group(2) == b"1", int(header.group(3))
+            buffer, offset = head, 0
+            while b"$Nodes" not in buffer:  # the $Entities section may be long: read on in chunks
+                chunk = stream.read(1 << 20)
+                if not chunk:
+                    return None
+                offset += len(buffer) - 16
+                buffer = buffer[-16:] + chunk
+            start = buffer.index(b"$Nodes") + len(b"$Nodes")
+            stream.seek(offset + start)
+            rest = stream.read(4096)
+    except OSError:
+        return None
+    rest = rest.lstrip(b"\r\n")
+    if version >= 4 and binary:
+        return int(np.frombuffer(rest[:4 * size_t], dtype=f"<u{size_t}")[1])
+    fields = rest.split()
+    try:
+        return int(fields[1] if version >= 4 else fields[0])
+    except (IndexError, ValueError):
+        return None
+
+
+def xdmf_node_count(path: str | Path) -> int | None:
+    """The node count of an XDMF file's 2D mesh grid (its Geometry's dimensions), None if not found."""
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError):
+        return None
+    for grid in root.iter("Grid"):
+        if grid.find("Attribute") is not None:
+            continue  # a grid of markers
+        item = grid.find("Geometry/DataItem")
+        if item is not None and item.get("Dimensions"):
+            return int(item.get("Dimensions").split()[0])
+    return None

@@ -14,7 +14,8 @@ from mpi4py import MPI
 
 from .. import meshes
 from ..scene_models import SceneModel, contact_surface, elastic_model, rigid_plane
-from .base import MAX_CELLS, MAX_ELASTIC_STRAIN, Geometry, check_no_boundary, check_plane_strain, range_error
+from .base import (MAX_CELLS, MAX_ELASTIC_STRAIN, Geometry, MeshSize, check_no_boundary, check_plane_strain,
+                   range_error)
 
 __all__ = ["Rectangle"]
 
@@ -72,6 +73,20 @@ class Rectangle(Geometry):
         geometry = scene.geometry
         nx = int(preset["rectangle_cells"])
         return {"geometry.nx": nx, "geometry.ny": max(1, round(nx * geometry.height / geometry.width))}
+
+    def mesh_size(self, scene: Scene) -> MeshSize:
+        """Exact: ``(nx + 1) (ny + 1)`` nodes; the candidates: the contact face's nodes within the window."""
+        geometry, contact = scene.geometry, scene.contact
+        nodes = (geometry.nx + 1) * (geometry.ny + 1)
+        horizontal = contact.surface in ("bottom", "top")
+        along = geometry.nx if horizontal else geometry.ny
+        step = (geometry.width / geometry.nx) if horizontal else (geometry.height / geometry.ny)
+        contacts = along + 1
+        if contact.candidate_half_width is not None:
+            contacts = min(contacts, 2 * int(contact.candidate_half_width * (1 + 1e-12) / step) + 1)
+        cell = "quadrilateral" if geometry.quadrilateral else "triangle"
+        drivers = {"geometry.nx": geometry.nx, "geometry.ny": geometry.ny}
+        return MeshSize(nodes, contacts, True, "rectangle", cell, drivers, window_default="the whole surface")
 
     def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
         """A block on a rigid plane (the paper's Example 1), its top fixed; the window: the scene's, or the whole

@@ -20,7 +20,7 @@ from .. import meshes_3d
 from ..analytic import hertz_sphere
 from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane, roller,
                             two_body_cells)
-from .base import MAX_ELASTIC_STRAIN, Geometry, check_no_boundary, range_error
+from .base import MAX_ELASTIC_STRAIN, Geometry, MeshSize, check_no_boundary, mesher_default, range_error
 
 __all__ = ["Sphere"]
 
@@ -113,6 +113,25 @@ class Sphere(Geometry):
     def model_fraction(self, scene: Scene) -> float:
         """0.5 for a half model (``geometry.half_model``), else 1."""
         return 0.5 if scene.geometry.half_model else 1.0
+
+    def mesh_size(self, scene: Scene) -> MeshSize:
+        """Exact: the tensor grid of :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat` (its axes from the mesher's
+        own defaults), once per body; the candidates: the grid's points within the window."""
+        geometry = scene.geometry
+        a, h = self.contact_size(scene), self.element_size(scene)
+        options = {name: mesher_default(meshes_3d.sphere_on_flat, name)
+                   for name in ("zone", "depth_zone", "extent", "growth")}
+        x, y, depth = meshes_3d._grid_axes(a, h, **options, half=geometry.half_model)
+        bodies = 2 if scene.contact.obstacle == "elastic_flat" else 1
+        nodes = bodies * x.size * y.size * depth.size
+        zone = math.ceil(options["zone"] * a / h - 1e-9) * h  # the uniform zone's half-width (sphere_on_flat_grid)
+        window, _ = self.candidate_window(scene, zone, h)
+        X, Y = np.meshgrid(x, y, indexing="ij")
+        contacts = int(np.count_nonzero(np.hypot(X, Y) <= window * (1 + 1e-12)))
+        given = "contact_mesh_size" in geometry.model_fields_set
+        drivers = {"geometry.contact_mesh_size": geometry.contact_mesh_size if given else "a/4 (default)",
+                   "geometry.radius": geometry.radius, "geometry.half_model": geometry.half_model}
+        return MeshSize(int(nodes), contacts, True, "hexahedra", "hexahedron", drivers)
 
     def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
         """A sphere's cap on an elastic flat of the same material (two bodies, one mesh) or on a rigid plane: a half
