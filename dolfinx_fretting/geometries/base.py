@@ -17,8 +17,9 @@ from mpi4py import MPI
 
 from ..scene_models import SceneModel
 
-__all__ = ["Geometry", "MeshSize", "range_error", "check_no_boundary", "check_plane_strain", "mesher_default",
-           "MAX_ELASTIC_STRAIN", "MAX_CONTACT_ELEMENTS", "MAX_CELLS"]
+__all__ = ["Geometry", "MeshSize", "Refinement", "range_error", "check_no_boundary", "check_plane_strain",
+           "mesher_default", "finer_contact_mesh", "coarser_contact_mesh", "MAX_ELASTIC_STRAIN",
+           "MAX_CONTACT_ELEMENTS", "MAX_CELLS"]
 
 #: Largest elastic strain a load may produce (estimated before any work, each kind's
 #: :meth:`Geometry.check_loads`): the model is small-strain linear elasticity; past a few percent its answer is
@@ -87,17 +88,33 @@ class MeshSize:
     notes: tuple[str, ...] = ()
 
 
+#: A mesh point of the speed-vs-accuracy study: (the swept key, its value as text, the overrides that make it).
+Refinement = tuple[str, str, list[str]]
+
+
+def finer_contact_mesh(h: float) -> list[str]:
+    """The study's reference of a kind meshed by ``geometry.contact_mesh_size``: its element size h halved."""
+    return [f"geometry.contact_mesh_size={h / 2:.10g}"]
+
+
+def coarser_contact_mesh(h: float, factor: int) -> Refinement:
+    """The study's point of a kind meshed by ``geometry.contact_mesh_size``: ``factor`` times its element size h."""
+    value = f"{h * factor:.6g}"
+    return "geometry.contact_mesh_size", value, [f"geometry.contact_mesh_size={value}"]
+
+
 class Geometry:
     """The protocol of a geometry kind: one object per ``geometry.kind`` in
     :data:`dolfinx_fretting.geometries.GEOMETRIES`.
 
     Schema checks (called by the validators of :mod:`dolfinx_fretting.scenes`; each raises a ``ValueError`` whose
     message names the key): :meth:`refuse_own_keys`, :meth:`check_geometry`, :meth:`check_scene`,
-    :meth:`check_loads`. Numerics: :meth:`preset_values` (``solver.preset``). Before any mesh:
+    :meth:`check_loads`. Numerics: :meth:`preset_values` (``solver.preset``), :meth:`finer` and :meth:`coarser`
+    (the keys that refine its mesh in a study, :mod:`dolfinx_fretting.study`). Before any mesh:
     :meth:`contact_size` (the Hertz reference), :meth:`element_size`, :meth:`model_fraction`, :meth:`mesh_size`
     (the size estimate). The model:
-    :meth:`build`. The defaults are those of a kind without the hook: no checks, no preset, no Hertz contact, the
-    whole bodies.
+    :meth:`build`. The defaults are those of a kind without the hook: no checks, no preset, no mesh refinement, no
+    Hertz contact, the whole bodies.
     """
 
     def refuse_own_keys(self, geometry: GeometrySettings) -> None:
@@ -117,6 +134,14 @@ class Geometry:
     def preset_values(self, scene: Scene, preset: dict[str, float]) -> dict[str, Any]:
         """The ``geometry.*`` values of a numerics preset (an entry of :data:`dolfinx_fretting.scenes.PRESETS`)."""
         return {}
+
+    def finer(self, scene: Scene) -> list[str]:
+        """The overrides that halve the contact elements: the study's reference (none: the mesh is kept)."""
+        return []
+
+    def coarser(self, scene: Scene, factor: int) -> Refinement | None:
+        """The study's point with contact elements ``factor`` times larger (None: no mesh point)."""
+        return None
 
     def contact_size(self, scene: Scene) -> float | None:
         """The Hertz reference of the kind: the expected contact half-width (2D) or radius (3D) in mm before any

@@ -21,8 +21,8 @@ from .. import meshes
 from ..analytic import hertz_line_contact
 from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane,
                             two_body_cells)
-from .base import (MAX_CONTACT_ELEMENTS, MAX_ELASTIC_STRAIN, Geometry, MeshSize, check_no_boundary,
-                   check_plane_strain, mesher_default, range_error)
+from .base import (MAX_CONTACT_ELEMENTS, MAX_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary,
+                   check_plane_strain, coarser_contact_mesh, finer_contact_mesh, mesher_default, range_error)
 from .gmsh_nodes import ON_BOUNDARY, nodes_along, segment_distance, unstructured_nodes
 
 __all__ = ["HalfCylinder"]
@@ -110,6 +110,14 @@ class HalfCylinder(Geometry):
             return {}
         return {"geometry.contact_mesh_size":
                 float(f"{self.contact_size(scene) / preset['contact_elements_per_half_width']:.3g}")}
+
+    def finer(self, scene: Scene) -> list[str]:
+        """``contact_mesh_size`` half the :meth:`element_size`."""
+        return finer_contact_mesh(self.element_size(scene))
+
+    def coarser(self, scene: Scene, factor: int) -> Refinement:
+        """``contact_mesh_size`` ``factor`` times the :meth:`element_size`."""
+        return coarser_contact_mesh(self.element_size(scene), factor)
 
     def contact_size(self, scene: Scene) -> float:
         """Hertz's half-width a under a normal force; under an approach d, the geometric ``sqrt(2 R d)``."""

@@ -14,8 +14,8 @@ from mpi4py import MPI
 
 from .. import meshes
 from ..scene_models import SceneModel, contact_surface, elastic_model, rigid_plane
-from .base import (MAX_CELLS, MAX_ELASTIC_STRAIN, Geometry, MeshSize, check_no_boundary, check_plane_strain,
-                   range_error)
+from .base import (MAX_CELLS, MAX_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary,
+                   check_plane_strain, range_error)
 
 __all__ = ["Rectangle"]
 
@@ -73,6 +73,17 @@ class Rectangle(Geometry):
         geometry = scene.geometry
         nx = int(preset["rectangle_cells"])
         return {"geometry.nx": nx, "geometry.ny": max(1, round(nx * geometry.height / geometry.width))}
+
+    def finer(self, scene: Scene) -> list[str]:
+        """``nx`` and ``ny`` doubled."""
+        geometry = scene.geometry
+        return [f"geometry.nx={2 * geometry.nx}", f"geometry.ny={2 * geometry.ny}"]
+
+    def coarser(self, scene: Scene, factor: int) -> Refinement:
+        """``nx`` and ``ny`` divided by ``factor`` together (at least 1), swept as ``geometry.nx``."""
+        geometry = scene.geometry
+        nx, ny = max(1, geometry.nx // factor), max(1, geometry.ny // factor)
+        return "geometry.nx", f"{nx}", [f"geometry.nx={nx}", f"geometry.ny={ny}"]
 
     def mesh_size(self, scene: Scene) -> MeshSize:
         """Exact: ``(nx + 1) (ny + 1)`` nodes; the candidates: the contact face's nodes within the window."""

@@ -20,7 +20,8 @@ from .. import meshes_3d
 from ..analytic import hertz_sphere
 from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane, roller,
                             two_body_cells)
-from .base import MAX_ELASTIC_STRAIN, Geometry, MeshSize, check_no_boundary, mesher_default, range_error
+from .base import (MAX_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary, coarser_contact_mesh,
+                   finer_contact_mesh, mesher_default, range_error)
 
 __all__ = ["Sphere"]
 
@@ -92,6 +93,14 @@ class Sphere(Geometry):
             return {}
         elements = preset["contact_elements_per_half_width"] / 2.5
         return {"geometry.contact_mesh_size": float(f"{self.contact_size(scene) / elements:.3g}")}
+
+    def finer(self, scene: Scene) -> list[str]:
+        """``contact_mesh_size`` half the :meth:`element_size`."""
+        return finer_contact_mesh(self.element_size(scene))
+
+    def coarser(self, scene: Scene, factor: int) -> Refinement:
+        """``contact_mesh_size`` ``factor`` times the :meth:`element_size`."""
+        return coarser_contact_mesh(self.element_size(scene), factor)
 
     def contact_size(self, scene: Scene) -> float:
         """Hertz's contact radius a under a normal force; under an approach d, the geometric ``sqrt(R d)`` (against
