@@ -3,7 +3,7 @@ every geometry kind's ``build`` (:mod:`dolfinx_fretting.geometries`) is written 
 
 A kind's build meshes (or reads) the body and writes with these parts the user-side model a FEniCSx user would
 write by hand (vector P1 space, the elasticity form, Dirichlet conditions, named loads) and how the contact is set
-up (surface, obstacle, candidate window and its policy). The driver (:mod:`dolfinx_fretting.simulation`) reads
+up (surface, obstacle, candidate window and its policy). The driver (``dolfinx_fretting.simulation``) reads
 only the :class:`SceneModel` it gets: it has no branch on the geometry.
 
 DOLFINx, UFL, PETSc and gmsh are imported inside the functions that use them: the geometry kinds import this
@@ -246,7 +246,8 @@ def boundary_pressure(V, body: BodyMesh, pressures: dict[str, float]):
 
 
 def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[str, int]]:
-    """A gmsh ``.msh`` file as a :class:`BodyMesh` (facet tags = its physical curves in 2D). Collective.
+    """A gmsh ``.msh`` file as a :class:`~dolfinx_fretting.meshes.BodyMesh` (facet tags = its physical curves in
+    2D). Collective.
 
     The file is read on rank 0; the physical names (not carried by DOLFINx's reader) are read there too and
     broadcast. Returns the body (facet names in ``tags``) and the names of the cell groups.
@@ -301,7 +302,7 @@ def _xdmf_grids(path: str) -> list[tuple[str, str, bool]]:
 
 
 def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -> tuple[BodyMesh, dict[str, int]]:
-    """A DOLFINx XDMF mesh with its facet meshtags as a :class:`BodyMesh`. Collective.
+    """A DOLFINx XDMF mesh with its facet meshtags as a :class:`~dolfinx_fretting.meshes.BodyMesh`. Collective.
 
     The file holds one 2D mesh grid and one grid of facet markers (as ``XDMFFile.write_mesh`` and
     ``write_meshtags`` write them); the grids are found by their topology. XDMF carries no names for the marker

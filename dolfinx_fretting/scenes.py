@@ -14,7 +14,7 @@ Numbers must be finite (``inf`` and ``nan`` are refused everywhere, list element
 boolean not as a count, a float not as an integer (a TOML integer is accepted for a float key). Physical
 consistency that can be checked before any work is checked here too: a prescribed tangential force must
 stay below mu times a prescribed normal force, and the loads must keep the body in small strain (see
-:data:`MAX_ELASTIC_STRAIN`).
+:data:`~dolfinx_fretting.geometries.base.MAX_ELASTIC_STRAIN`).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ DOLFINx or building anything. The mesh is the geometry kind's to count (its ``me
   sectors under a half-cylinder's contact); for the rest of a half-cylinder or flat, meshed by gmsh with a size
   field, the node density ``c / s(d)^2`` integrated over the body, s the size field at distance d from the
   refined sector (h there, growing by ``growth`` per mm up to the coarse size) and c calibrated on gmsh's
-  meshes (:data:`GMSH_NODE_DENSITY`, :mod:`dolfinx_fretting.geometries.gmsh_nodes`); a mesh file: its node
+  meshes (:data:`~dolfinx_fretting.geometries.gmsh_nodes.GMSH_NODE_DENSITY`); a mesh file: its node
   count read from the file's header.
 * **contacts**: the nodes of the contact surface within the candidate window (exact on the structured contact
   zones).

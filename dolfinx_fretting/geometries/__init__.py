@@ -10,7 +10,7 @@ builders (``scene_models``). Each kind is now one object with the protocol of
   ``check_scene`` (what it accepts of the obstacle, the loads, the plane, the surface, the window, ``[boundary]``),
   ``check_loads`` (the normal load's elastic strain on its body);
 * ``preset_values``: its part of a numerics preset (``solver.preset``); ``finer`` and ``coarser``: the keys that
-  refine its mesh in the speed-vs-accuracy study (:mod:`dolfinx_fretting.study`);
+  refine its mesh in the speed-vs-accuracy study (``dolfinx_fretting.study``);
 * ``contact_size``: its Hertz reference (line contact, sphere or none), the expected contact size before any mesh;
   ``element_size`` and ``model_fraction`` (a half model);
 * ``mesh_size``: its part of the size estimate (:func:`dolfinx_fretting.sizes.estimate`): nodes, contacts, the keys

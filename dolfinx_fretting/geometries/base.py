@@ -32,6 +32,7 @@ MAX_ELASTIC_STRAIN = 0.1
 #: the mesh generator and the factorisation run for hours or exhaust memory (a hang, not a run): 206k dofs
 #: factorise in ~2 s here, and the cost grows faster than linearly.
 MAX_CONTACT_ELEMENTS = 20_000
+#: Largest rectangle, in cells (for the same reason).
 MAX_CELLS = 4_000_000
 
 
@@ -110,7 +111,7 @@ class Geometry:
     Schema checks (called by the validators of :mod:`dolfinx_fretting.scenes`; each raises a ``ValueError`` whose
     message names the key): :meth:`refuse_own_keys`, :meth:`check_geometry`, :meth:`check_scene`,
     :meth:`check_loads`. Numerics: :meth:`preset_values` (``solver.preset``), :meth:`finer` and :meth:`coarser`
-    (the keys that refine its mesh in a study, :mod:`dolfinx_fretting.study`). Before any mesh:
+    (the keys that refine its mesh in a study, ``dolfinx_fretting.study``). Before any mesh:
     :meth:`contact_size` (the Hertz reference), :meth:`element_size`, :meth:`model_fraction`, :meth:`mesh_size`
     (the size estimate). The model:
     :meth:`build`. The defaults are those of a kind without the hook: no checks, no preset, no mesh refinement, no
@@ -129,7 +130,7 @@ class Geometry:
 
     def check_loads(self, scene: Scene) -> None:
         """Check that the normal load's estimated elastic strain on this body is at most
-        :data:`MAX_ELASTIC_STRAIN` (none: the body is not known before meshing)."""
+        :data:`~dolfinx_fretting.geometries.base.MAX_ELASTIC_STRAIN` (none: the body is not known before meshing)."""
 
     def preset_values(self, scene: Scene, preset: dict[str, float]) -> dict[str, Any]:
         """The ``geometry.*`` values of a numerics preset (an entry of :data:`dolfinx_fretting.scenes.PRESETS`)."""

@@ -26,9 +26,10 @@ GMSH_NODE_DENSITY = {"quadrilateral": (1.19, 0.74), "triangle": (1.18, 1.14)}
 
 #: Points within this fraction of the body's size of a region's boundary count as on it (inside). The boundary
 #: samples of the half-cylinder (``half_cylinder._cylinder_boundary``) lie on the arc up to the rounding of a sine
-#: and a cosine, which differs between numpy builds and CPUs (numpy 2's vectorised sin/cos on AVX-512 against numpy 1.24's: 773 against 289
-#: of the refined arc's samples counted inside with an exact ``rho <= R``). 1e-9 is ~10^7 roundings away from
-#: those samples and ~10^-6 of the finest element a scene accepts, so no grid point of the integral moves.
+#: and a cosine, which differs between numpy builds and CPUs (numpy 2's vectorised sin/cos on AVX-512 against numpy
+#: 1.24's: 773 against 289 of the refined arc's samples counted inside with an exact ``rho <= R``). 1e-9 is ~10^7
+#: roundings away from those samples and ~10^-6 of the finest element a scene accepts, so no grid point of the
+#: integral moves.
 ON_BOUNDARY = 1e-9
 
 

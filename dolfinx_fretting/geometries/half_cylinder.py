@@ -5,7 +5,7 @@ plane or on an elastic flat of the same material (the paper's Example 2: the ``h
 Its mesh (:func:`dolfinx_fretting.meshes.half_cylinder`, :func:`~dolfinx_fretting.meshes.cylinder_on_flat`):
 gmsh, ``contact_mesh_size`` along the refined arc and in a structured sector under it (half-width
 ``contact_half_width``, by default R/15), graded to ``coarse_mesh_size`` (R/10) far away. Its Hertz reference is
-the line contact (:func:`dolfinx_fretting.analytic.hertz_line_contact`).
+the line contact (``analytic.hertz_line_contact``).
 """
 
 from __future__ import annotations
@@ -59,7 +59,8 @@ class HalfCylinder(Geometry):
         coarse = coarse if coarse is not None else radius / 10
         if math.pi * radius / coarse > MAX_CONTACT_ELEMENTS:
             raise range_error("geometry.coarse_mesh_size", coarse,
-                              f">= pi x radius / {MAX_CONTACT_ELEMENTS} = {math.pi * radius / MAX_CONTACT_ELEMENTS:.3g} mm")
+                              f">= pi x radius / {MAX_CONTACT_ELEMENTS} = "
+                              f"{math.pi * radius / MAX_CONTACT_ELEMENTS:.3g} mm")
 
     def check_scene(self, scene: Scene) -> None:
         """No ``[boundary]``, no face pressure (its faces are the fixed top and the contact surface), a window within

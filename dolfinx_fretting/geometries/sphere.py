@@ -4,7 +4,7 @@ elastic flat of the same material, sliding along x (the ``sphere-flat`` scene).
 Its mesh (:func:`dolfinx_fretting.meshes_3d.sphere_on_flat`): structured hexahedra, cubes of edge h under the
 contact graded away from it, sized from the Hertz contact radius a (h = a/4 unless ``contact_mesh_size`` is set);
 by default half of it (and of the flat) about the plane y = 0, with a roller there. Its Hertz reference is the
-sphere's (:func:`dolfinx_fretting.analytic.hertz_sphere`).
+sphere's (``analytic.hertz_sphere``).
 """
 
 from __future__ import annotations
