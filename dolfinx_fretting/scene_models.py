@@ -14,6 +14,7 @@ annotations, not imported: the schema sits above the kinds, which sit above this
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -98,7 +99,7 @@ def _elasticity(scene: Scene, V, quadrature_degree: int | None):
     """The user's model: plane-strain linear elasticity and its von Mises stress."""
     import ufl
 
-    from .materials import LinearElastic
+    from .materials import LinearElastic  # (numba: not for the schema's and the size estimate's imports either)
 
     lmbda, mu = LinearElastic(scene.material.E, scene.material.nu).lame
     gdim = V.mesh.geometry.dim
@@ -289,8 +290,6 @@ _XDMF_CELLS_2D, _XDMF_FACETS_2D = ("Triangle", "Quadrilateral"), ("PolyLine",)
 
 def _xdmf_grids(path: str) -> list[tuple[str, str, bool]]:
     """(name, topology type, has an attribute) of every grid of an XDMF file (its XML alone)."""
-    import xml.etree.ElementTree as ET
-
     grids = []
     for grid in ET.parse(path).getroot().iter("Grid"):
         topology = grid.find("Topology")

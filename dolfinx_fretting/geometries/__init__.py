@@ -25,7 +25,14 @@ the hooks it needs) and one line in :data:`GEOMETRIES`, plus its name in the sch
 
 Why objects and not functions per concern: the laws of issue 25 (:mod:`dolfinx_fretting.laws`) are objects with a
 small protocol, and a kind is the same idea; a base class gives the defaults (no hook: nothing to check, no
-preset, no Hertz contact), so a kind writes only what it has.
+preset, no mesh refinement, no Hertz contact), so a kind writes only what it has. Why an explicit dict and not
+discovery (entry points, subclass registration): the registry is read in one place and checked against the
+schema by a test. The obstacles (rigid plane, elastic flat) can follow the same pattern: one module each and a
+registry.
+
+Order of the checks: the schema asks every other kind to refuse its own keys, then the scene's kind checks its
+section; a scene's checks run the kind's first, then those that hold for any kind (finite sliding, the elastic
+flat's plane). A scene with two errors is told the first of them in that order.
 
 Imports point down: the schema (``scenes``) imports this package, this package imports the parts of the model
 (``scene_models``), the meshers (``meshes``, ``meshes_3d``) and the closed forms (``analytic``); nothing here

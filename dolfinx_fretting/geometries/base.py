@@ -28,11 +28,11 @@ __all__ = ["Geometry", "MeshSize", "Refinement", "range_error", "check_no_bounda
 #: half-width sqrt(2Rd), an overestimate); a sphere, (6 P / (pi^3 R^2 E*))^(1/3) or sqrt(d / R); a rectangle,
 #: P / (width E') or d / height; a face pressure s, ``|s| / E``.
 MAX_ELASTIC_STRAIN = 0.1
-#: Largest mesh: elements along the refined contact zone of a half-cylinder, cells of a rectangle. Beyond,
+#: Largest half-cylinder: elements along its refined contact zone (and along its arc at the coarse size). Beyond,
 #: the mesh generator and the factorisation run for hours or exhaust memory (a hang, not a run): 206k dofs
 #: factorise in ~2 s here, and the cost grows faster than linearly.
 MAX_CONTACT_ELEMENTS = 20_000
-#: Largest rectangle, in cells (for the same reason).
+#: Largest rectangle, in cells (for the same reason); also the bound of ``geometry.nx`` and ``ny``.
 MAX_CELLS = 4_000_000
 
 
