@@ -1,14 +1,20 @@
-"""From a scene's geometry to what the public API takes: one builder per geometry, one data object out.
+"""From a scene to what the public API takes: the data object :class:`SceneModel`, and the parts of the model
+every geometry kind's ``build`` (:mod:`dolfinx_fretting.geometries`) is written with.
 
-Each builder meshes (or reads) the body, writes the user-side model a FEniCSx user would write by hand
-(vector P1 space, the elasticity form, Dirichlet conditions, named loads) and says how the contact is set up
-(surface, obstacle, candidate window and its policy). The driver (:mod:`dolfinx_fretting.simulation`) reads
+A kind's build meshes (or reads) the body and writes with these parts the user-side model a FEniCSx user would
+write by hand (vector P1 space, the elasticity form, Dirichlet conditions, named loads) and how the contact is set
+up (surface, obstacle, candidate window and its policy). The driver (``dolfinx_fretting.simulation``) reads
 only the :class:`SceneModel` it gets: it has no branch on the geometry.
+
+DOLFINx, UFL, PETSc and gmsh are imported inside the functions that use them: the geometry kinds import this
+module, the scene schema and the size estimate import the kinds, and neither may load DOLFINx (a scene is
+validated and sized before anything is built). The scene (``dolfinx_fretting.scenes.Scene``) is named in the
+annotations, not imported: the schema sits above the kinds, which sit above this module.
 """
 
 from __future__ import annotations
 
-import time
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -17,10 +23,10 @@ from mpi4py import MPI
 
 from .contact import ElasticBody, RigidPlane
 from .meshes import BODY_CELL_TAG, BodyMesh
-from .scenes import Scene
 
-__all__ = ["SceneModel", "build_scene_model", "read_msh", "read_xdmf", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT",
-           "BOUNDARY_PRESSURE"]
+__all__ = ["SceneModel", "elastic_model", "contact_surface", "rigid_plane", "elastic_flat", "two_body_cells",
+           "roller", "displacement_conditions", "boundary_pressure", "facet_length", "axis_normal", "read_msh",
+           "read_xdmf", "PAIRING", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT", "BOUNDARY_PRESSURE"]
 
 #: Name of the face-pressure load of a scene (``loading.tangential_pressure``), factor in MPa.
 PRESSURE_LOAD = "face_pressure"
@@ -93,7 +99,7 @@ def _elasticity(scene: Scene, V, quadrature_degree: int | None):
     """The user's model: plane-strain linear elasticity and its von Mises stress."""
     import ufl
 
-    from .materials import LinearElastic
+    from .materials import LinearElastic  # (numba: not for the schema's and the size estimate's imports either)
 
     lmbda, mu = LinearElastic(scene.material.E, scene.material.nu).lame
     gdim = V.mesh.geometry.dim
@@ -136,189 +142,41 @@ def _pressure_load(V, body: BodyMesh, face: str):
     return -ufl.dot(ufl.FacetNormal(V.mesh), ufl.TestFunction(V)) * ds(body.tags[face])
 
 
-def expected_contact_size(scene: Scene) -> float:
-    """The contact half-width (cylinder) or radius (sphere) a built-in geometry expects (mm), before any mesh.
-
-    Hertz under a normal force; under an approach d, the geometric ``sqrt(2 R d)`` (cylinder) or ``sqrt(R d)``
-    (sphere; against the flat the two bodies share d, ``sqrt(R d / 2)`` is then an underestimate by 2^(1/2) of
-    nothing: the mesh's uniform zone (1.5 a) holds either).
-    """
-    from .analytic import hertz_line_contact
-    from .analytic import hertz_sphere
-
-    g, lo = scene.geometry, scene.loading
-    sphere = g.kind == "sphere"
-    if lo.normal_force is not None:
-        return float((hertz_sphere if sphere else hertz_line_contact)(lo.normal_force, g.radius,
-                                                                       scene.contact_modulus)[0])
-    return float(np.sqrt((1.0 if sphere else 2.0) * g.radius * lo.normal_displacement))
-
-
-def sphere_mesh_size(scene: Scene) -> float:
-    """The edge h (mm) of a sphere's cubes under the contact: ``geometry.contact_mesh_size`` if the scene sets
-    it, else a quarter of the expected contact radius a; at most a."""
-    g = scene.geometry
-    a = expected_contact_size(scene)
-    h = g.contact_mesh_size if "contact_mesh_size" in g.model_fields_set else a / 4.0
-    return min(h, a)
-
-
-def candidate_window(scene: Scene, zone: float, h: float) -> tuple[float, bool]:
-    """The initial candidate half-width (mm) of a half-cylinder or sphere scene, and whether it is automatic.
-
-    Automatic for elastic bodies without ``contact.candidate_half_width`` (an elastic-plastic body cannot grow
-    its window, and plasticity widens the contact beyond the elastic estimate, so it keeps the refined zone):
-    ``1.5 a + 3 h`` with a from :func:`expected_contact_size`, at most the refined ``zone``. Finite sliding
-    cannot grow its window either (its surface compliance is built for one): the zone, or the given width if
-    wider.
-
-    Args:
-        scene: The scene.
-        zone: Half-width of the mesh's refined (uniform) contact zone (mm).
-        h: Contact element size (mm).
-    """
-    given = scene.contact.candidate_half_width
-    if scene.contact.sliding == "finite":  # the surface compliance is built for one window: the whole zone
-        return float(max(zone, given or 0.0)), False
-    automatic = given is None and scene.material.model == "elastic"
-    if automatic:
-        return float(min(zone, 1.5 * expected_contact_size(scene) + 3 * h)), True
-    return (given if given is not None else zone), False
-
-
-def build_scene_model(scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD, *,
-                      applies_model_fraction: bool = False) -> SceneModel:
-    """Mesh the scene's geometry and write its model. Collective.
-
-    Args:
-        scene: The validated scene.
-        comm: Communicator of the mesh.
-        applies_model_fraction: The caller prescribes :attr:`SceneModel.model_fraction` times the scene's forces
-            and divides the totals it reports by it. A model of a fraction of the bodies (a half model) is refused
-            to a caller that does not: its forces would be the whole contact's on half of it.
-
-    Raises:
-        ValueError: a name of the scene is not in the mesh (the message lists the names it holds), or a half
-            model for a caller that does not apply its fraction.
-    """
-    g = scene.geometry
-    if g.kind == "sphere" and g.half_model and not applies_model_fraction:
-        raise ValueError("geometry.half_model = true: this caller does not scale the scene's forces to the half "
-                         "model (SceneModel.model_fraction = 0.5) yet; run the whole sphere with "
-                         "geometry.half_model = false, or build the model with applies_model_fraction=True")
-    return _BUILDERS[g.kind](scene, comm)
-
-
-def _half_cylinder(scene: Scene, comm: MPI.Comm) -> SceneModel:
-    """A half-cylinder on a rigid plane, or on an elastic flat (two bodies, one mesh)."""
-    from . import meshes
-
-    g, m = scene.geometry, scene.material
-    two_body = scene.contact.obstacle == "elastic_flat"
-    t0 = time.perf_counter()
-    build = meshes.cylinder_on_flat if two_body else meshes.half_cylinder
-    extra = (g.flat_width, g.flat_height) if two_body else ()
-    body = build(comm, g.radius, *extra, contact_mesh_size=g.contact_mesh_size,
-                 contact_half_width=g.refined_half_width, coarse_mesh_size=g.coarse_mesh_size,
-                 quadrilateral=g.quadrilateral)
-    mesh_s = time.perf_counter() - t0
-    V, form, von_mises, bcs, loads = _model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
-    plane = _plane(scene, body)
-    E_star = scene.contact_modulus
-    window, automatic = candidate_window(scene, g.refined_half_width, g.contact_mesh_size)
-    elastic_cells = display_cells = None
-    if two_body:
-        obstacle = _elastic_flat(scene, body, plane, g.refined_half_width, g.contact_mesh_size)
-        display_cells = body.cell_tags.find(body.regions["cylinder"])
-        if m.model == "elastoplastic" and m.plastic_body != "both":
-            other = "flat" if m.plastic_body == "cylinder" else "cylinder"
-            elastic_cells = body.cell_tags.find(body.regions[other])
-    else:
-        obstacle = plane
-    label = ("two identical elastic bodies: E* = E/(2(1-nu^2))" if two_body
-             else "rigid plane, frictionless: E* = E/(1-nu^2)")
-    text = f", each paired with a point of the elastic flat (node-to-segment, {_PAIRING[scene.contact.sliding]})" \
-        if two_body else ", against a rigid plane"
-    return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, g.contact_mesh_size, window,
-                      g.refined_half_width, automatic, True, elastic_cells, display_cells,
-                      (g.radius, E_star, label), two_body and scene.contact.sliding == "small", text, von_mises,
-                      {"mesh_s": mesh_s})
-
-
-def _sphere(scene: Scene, comm: MPI.Comm) -> SceneModel:
-    """A sphere's cap on an elastic flat of the same material (two bodies, one mesh) or on a rigid plane, 3D:
-    structured hexahedra sized from the Hertz contact radius (:func:`~dolfinx_fretting.meshes_3d.sphere_on_flat`),
-    a half model about y = 0 by default (a roller there)."""
-    from dolfinx import fem
-
-    from .meshes_3d import sphere_on_flat
-
-    g, m = scene.geometry, scene.material
-    two_body = scene.contact.obstacle == "elastic_flat"
-    a = expected_contact_size(scene)
-    h = sphere_mesh_size(scene)
-    t0 = time.perf_counter()
-    body = sphere_on_flat(comm, g.radius, a, h, half=g.half_model, flat=two_body)
-    mesh_s = time.perf_counter() - t0
-    V, form, von_mises, bcs, loads = _model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
-    if g.half_model:  # the symmetry plane y = 0: a roller (u_y = 0) on both bodies' faces there
-        V_y, _ = V.sub(1).collapse()
-        faces = np.concatenate([body.facets(n) for n in body.tags if n.endswith("symmetry")])
-        bcs.append(fem.dirichletbc(fem.Function(V_y), fem.locate_dofs_topological((V.sub(1), V_y), 2, faces),
-                                   V.sub(1)))
-    plane = _plane(scene, body)
-    zone = body.contact_half_width
-    window, automatic = candidate_window(scene, zone, h)
-    elastic_cells = display_cells = None
-    if two_body:
-        obstacle = _elastic_flat(scene, body, plane, zone, h)
-        display_cells = body.cell_tags.find(body.regions["sphere"])
-        if m.model == "elastoplastic" and m.plastic_body != "both":
-            other = "flat" if m.plastic_body == "cylinder" else "sphere"
-            elastic_cells = body.cell_tags.find(body.regions[other])
-    else:
-        obstacle = plane
-    text = (f", each paired with the closest point of the elastic flat's faces (node-to-face, "
-            f"{_PAIRING[scene.contact.sliding]})" if two_body else ", against a rigid plane") \
-        + (", half model (roller on y = 0)" if g.half_model else "")
-    # hertz = None: the driver's reference is the line contact's; the sphere's is analytic.hertz_sphere.
-    return SceneModel(body, V, form, bcs, _surface(scene, body), obstacle, loads, h, window, zone, automatic, True,
-                      elastic_cells, display_cells, None, two_body and scene.contact.sliding == "small", text,
-                      von_mises, {"mesh_s": mesh_s},
-                      model_fraction=0.5 if g.half_model else 1.0, held_tangential=(2,) if g.half_model else ())
-
-
 #: How each sliding model pairs the two bodies, in the model's description.
-_PAIRING = {"small": "fixed pairing", "finite": "paired anew as the bodies slide"}
+PAIRING = {"small": "fixed pairing", "finite": "paired anew as the bodies slide"}
 
 
-def _elastic_flat(scene: Scene, body, plane, zone: float, h: float) -> ElasticBody:
+def elastic_flat(scene: Scene, body: BodyMesh, plane: RigidPlane, zone: float, h: float) -> ElasticBody:
     """The flat as the master body. Finite sliding reaches, from every cylinder (or ball) candidate, twice a
     prescribed stroke plus three elements (the relative slip stays below the stroke); under force control, whose
     stroke is not known beforehand, the refined zone (where the mesh is fine enough for contact at all)."""
-    c, lo = scene.contact, scene.loading
-    stroke = lo.tangential_displacement
+    contact = scene.contact
+    stroke = scene.loading.tangential_displacement
     reach = 2 * abs(stroke) + 3 * h if stroke is not None else zone
-    return ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal, sliding=c.sliding,
-                       repair_slip=c.repair_slip, reach=reach)
+    return ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal, sliding=contact.sliding,
+                       repair_slip=contact.repair_slip, reach=reach)
 
 
-def _rectangle(scene: Scene, comm: MPI.Comm) -> SceneModel:
-    """A block on a rigid plane (the paper's Example 1), its top fixed."""
-    from . import meshes
-
-    g = scene.geometry
-    t0 = time.perf_counter()
-    body = meshes.rectangle(comm, g.width, g.height, g.nx, g.ny, quadrilateral=g.quadrilateral)
-    mesh_s = time.perf_counter() - t0
-    V, form, von_mises, bcs, loads = _model(scene, body, ["top"])
-    window = scene.contact.candidate_half_width
-    return SceneModel(body, V, form, bcs, _surface(scene, body), _plane(scene, body), loads, body.contact_mesh_size,
-                      window, None, False, False, None, None, None, False, ", against a rigid plane", von_mises,
-                      {"mesh_s": mesh_s})
+def two_body_cells(scene: Scene, body: BodyMesh, curved: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """The cells of a two-body mesh (regions ``curved`` and ``"flat"``): those drawn moved by the obstacle's reverse
+    motion (the curved body), and those that stay elastic in an elastic-plastic run (the body that
+    ``material.plastic_body`` does not name; None if both may yield)."""
+    material = scene.material
+    display_cells = body.cell_tags.find(body.regions[curved])
+    elastic_cells = None
+    if material.model == "elastoplastic" and material.plastic_body != "both":
+        other = "flat" if material.plastic_body == "cylinder" else curved
+        elastic_cells = body.cell_tags.find(body.regions[other])
+    return display_cells, elastic_cells
 
 
-def _model(scene: Scene, body: BodyMesh, fixed: list[str]):
+def elastic_model(scene: Scene, body: BodyMesh, fixed: list[str]) -> tuple[Any, Any, Callable, list, dict[str, Any]]:
+    """The user's model of a body: (V, the bilinear form of K, its von Mises stress, the faces ``fixed`` clamped,
+    the face-pressure load of ``loading.tangential_pressure`` if the scene has one).
+
+    Raises:
+        ValueError: ``loading.pressure_face`` is not a face of the mesh.
+    """
     from . import _dolfinx as dfx
 
     quadrature_degree = scene.solver.quadrature_degree
@@ -336,7 +194,12 @@ def _model(scene: Scene, body: BodyMesh, fixed: list[str]):
     return V, form, von_mises, _clamped(V, body, fixed), loads
 
 
-def _surface(scene: Scene, body: BodyMesh) -> tuple:
+def contact_surface(scene: Scene, body: BodyMesh) -> tuple:
+    """``(facet_tags, marker)`` of ``contact.surface``.
+
+    Raises:
+        ValueError: the name is not a boundary of the mesh (the message lists those it has).
+    """
     name = scene.contact.surface
     if name not in body.tags:
         raise ValueError(f"contact.surface = {name!r} is not a boundary of the {scene.geometry.kind} mesh; "
@@ -344,14 +207,48 @@ def _surface(scene: Scene, body: BodyMesh) -> tuple:
     return body.facet_tags, body.tags[name]
 
 
-def _plane(scene: Scene, body: BodyMesh) -> RigidPlane:
-    # Against an elastic flat this plane is the flat's top: its frame gives the directions of the flat's rigid
-    # motion D, so loads and total forces read as against a rigid plane.
+def rigid_plane(scene: Scene) -> RigidPlane:
+    """The scene's rigid plane. Against an elastic flat this plane is the flat's top: its frame gives the directions
+    of the flat's rigid motion D, so loads and total forces read as against a rigid plane."""
     return RigidPlane(np.array(scene.contact.plane_point), np.array(scene.contact.plane_normal))
 
 
+def roller(V, facets: np.ndarray, axis: int):
+    """A roller on a plane face normal to the coordinate ``axis``: the displacement component along it is zero."""
+    from dolfinx import fem
+
+    fdim = V.mesh.topology.dim - 1
+    component, _ = V.sub(axis).collapse()
+    dofs = fem.locate_dofs_topological((V.sub(axis), component), fdim, facets)
+    return fem.dirichletbc(fem.Function(component), dofs, V.sub(axis))
+
+
+def displacement_conditions(V, body: BodyMesh, displacements: dict[str, list[float]]) -> list:
+    """Dirichlet conditions prescribing a displacement vector (mm) on each named face."""
+    from dolfinx import fem
+
+    gdim = body.mesh.geometry.dim
+    fdim = gdim - 1
+    conditions = []
+    for name, vector in displacements.items():
+        value = fem.Function(V)
+        value.x.array.reshape(-1, V.dofmap.index_map_bs)[:, :gdim] = np.asarray(vector, dtype=float)
+        conditions.append(fem.dirichletbc(value, fem.locate_dofs_topological(V, fdim, body.facets(name))))
+    return conditions
+
+
+def boundary_pressure(V, body: BodyMesh, pressures: dict[str, float]):
+    """The load of pressures (MPa) on named faces, pushing into the body (traction -p n)."""
+    import ufl
+
+    ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=body.facet_tags)
+    n, v = ufl.FacetNormal(V.mesh), ufl.TestFunction(V)
+    return sum(-value * ufl.dot(n, v) * ds(body.tags[name]) for name, value in pressures.items())
+
+
 def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[str, int]]:
-    """A gmsh ``.msh`` file as a :class:`BodyMesh` (facet tags = its physical curves in 2D). Collective.
+    """A gmsh ``.msh`` file as a :class:`~dolfinx_fretting.meshes.BodyMesh` (facet tags = its physical curves in
+    2D). Collective.
 
     The file is read on rank 0; the physical names (not carried by DOLFINx's reader) are read there too and
     broadcast. Returns the body (facet names in ``tags``) and the names of the cell groups.
@@ -393,8 +290,6 @@ _XDMF_CELLS_2D, _XDMF_FACETS_2D = ("Triangle", "Quadrilateral"), ("PolyLine",)
 
 def _xdmf_grids(path: str) -> list[tuple[str, str, bool]]:
     """(name, topology type, has an attribute) of every grid of an XDMF file (its XML alone)."""
-    import xml.etree.ElementTree as ET
-
     grids = []
     for grid in ET.parse(path).getroot().iter("Grid"):
         topology = grid.find("Topology")
@@ -406,7 +301,7 @@ def _xdmf_grids(path: str) -> list[tuple[str, str, bool]]:
 
 
 def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -> tuple[BodyMesh, dict[str, int]]:
-    """A DOLFINx XDMF mesh with its facet meshtags as a :class:`BodyMesh`. Collective.
+    """A DOLFINx XDMF mesh with its facet meshtags as a :class:`~dolfinx_fretting.meshes.BodyMesh`. Collective.
 
     The file holds one 2D mesh grid and one grid of facet markers (as ``XDMFFile.write_mesh`` and
     ``write_meshtags`` write them); the grids are found by their topology. XDMF carries no names for the marker
@@ -464,20 +359,7 @@ def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -
     return body, regions
 
 
-def _check_names(scene: Scene, facet_names: dict[str, int]) -> None:
-    """Every boundary name the scene uses must be a physical group of the file (before any work)."""
-    used = [("contact.surface", scene.contact.surface), *scene.boundary.names]
-    if scene.loading.tangential_kind == "pressure":
-        used.append(("loading.pressure_face", scene.loading.pressure_face))
-    for key, name in used:
-        if name not in facet_names:
-            raise ValueError(f"{key} = {name!r} is not a physical group of {scene.geometry.path}; the file's "
-                             f"boundary groups: {', '.join(sorted(facet_names)) or 'none'}"
-                             + (" (an XDMF file's markers are named by geometry.groups, else by their numbers)"
-                                if scene.geometry.path.endswith(".xdmf") else ""))
-
-
-def _facet_length(V, facets: np.ndarray) -> float:
+def facet_length(V, facets: np.ndarray) -> float:
     """Median length of the owned facets of a 2D boundary (the contact element size of a user's mesh)."""
     msh = V.mesh
     fdim = msh.topology.dim - 1
@@ -492,46 +374,7 @@ def _facet_length(V, facets: np.ndarray) -> float:
     return float(np.median(everything))
 
 
-def _file(scene: Scene, comm: MPI.Comm) -> SceneModel:
-    """The user's mesh file with boundary conditions by physical name."""
-    import ufl
-    from dolfinx import fem
-
-    g, bd = scene.geometry, scene.boundary
-    t0 = time.perf_counter()
-    body, _ = (read_xdmf(g.path, comm, g.groups) if g.path.endswith(".xdmf") else read_msh(g.path, comm))
-    _check_names(scene, body.tags)
-    mesh_s = time.perf_counter() - t0
-    V, form, von_mises, bcs, loads = _model(scene, body, list(bd.fixed))
-    gdim = body.mesh.geometry.dim
-    fdim = gdim - 1
-    for name in bd.symmetry:  # zero normal displacement on a plane face normal to a coordinate axis
-        axis = _axis_normal(V, body.facets(name), name)
-        Vi, _ = V.sub(axis).collapse()
-        dofs = fem.locate_dofs_topological((V.sub(axis), Vi), fdim, body.facets(name))
-        bcs.append(fem.dirichletbc(fem.Function(Vi), dofs, V.sub(axis)))
-    prescribed = {}
-    if bd.displacement:
-        conditions = []
-        for name, vector in bd.displacement.items():
-            value = fem.Function(V)
-            value.x.array.reshape(-1, V.dofmap.index_map_bs)[:, :gdim] = np.asarray(vector, dtype=float)
-            conditions.append(fem.dirichletbc(value, fem.locate_dofs_topological(V, fdim, body.facets(name))))
-        prescribed[BOUNDARY_DISPLACEMENT] = conditions
-    if bd.pressure:
-        ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=body.facet_tags)
-        n, v = ufl.FacetNormal(V.mesh), ufl.TestFunction(V)
-        loads[BOUNDARY_PRESSURE] = sum(-value * ufl.dot(n, v) * ds(body.tags[name]) for name, value in bd.pressure.items())
-    surface = _surface(scene, body)
-    h = _facet_length(V, body.facets(scene.contact.surface))
-    body = BodyMesh(body.mesh, body.facet_tags, body.cell_tags, body.tags, h, None, {}, body.regions)
-    return SceneModel(body, V, form, bcs, surface, _plane(scene, body), loads, h, scene.contact.candidate_half_width,
-                      None, False, False, None, None, None, False, ", against a rigid plane", von_mises,
-                      {"mesh_s": mesh_s}, prescribed, [n for n in (BOUNDARY_DISPLACEMENT, BOUNDARY_PRESSURE)
-                                                       if n in prescribed or n in loads])
-
-
-def _axis_normal(V, facets: np.ndarray, name: str) -> int:
+def axis_normal(V, facets: np.ndarray, name: str) -> int:
     """The coordinate axis normal to a plane boundary (for a roller condition on one component)."""
     msh = V.mesh
     fdim = msh.topology.dim - 1
@@ -549,7 +392,3 @@ def _axis_normal(V, facets: np.ndarray, name: str) -> int:
                          f"extents are {spread.tolist()}); a roller on an oblique face is not supported")
     return int(flat[0])
 
-
-_BUILDERS: dict[str, Callable[[Scene, MPI.Comm], SceneModel]] = {
-    "half_cylinder": _half_cylinder, "rectangle": _rectangle, "file": _file, "sphere": _sphere,
-}

@@ -14,7 +14,7 @@ Numbers must be finite (``inf`` and ``nan`` are refused everywhere, list element
 boolean not as a count, a float not as an integer (a TOML integer is accepted for a float key). Physical
 consistency that can be checked before any work is checked here too: a prescribed tangential force must
 stay below mu times a prescribed normal force, and the loads must keep the body in small strain (see
-:data:`MAX_ELASTIC_STRAIN`).
+:data:`~dolfinx_fretting.geometries.base.MAX_ELASTIC_STRAIN`).
 """
 
 from __future__ import annotations
@@ -32,6 +32,9 @@ from typing import Annotated, Any, Literal
 import annotated_types
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .analytic import plane_strain_modulus
+from .geometries import GEOMETRIES
+from .geometries.base import MAX_CELLS, MAX_ELASTIC_STRAIN, range_error
 from .laws import Archard
 
 __all__ = ["Scene", "SceneError", "builtin_scenes", "load_scene", "apply_overrides", "PRESETS", "preset_values",
@@ -49,10 +52,6 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True, strict=True, allow_inf_nan=False)
 
 
-def _range_error(key: str, value: Any, allowed: str) -> ValueError:
-    return ValueError(f"{key} = {value!r} is out of range; allowed: {allowed}")
-
-
 #: Lengths (mm): from 1 nm to 100 m. Outside, the package's absolute geometric tolerances (node matching at
 #: ~1e-12 mm) and the mesh generator's stop making sense long before the floating-point range ends.
 MIN_LENGTH, MAX_LENGTH = 1e-6, 1e5
@@ -62,17 +61,8 @@ Length = Annotated[float, Field(ge=MIN_LENGTH, le=MAX_LENGTH)]
 #: below MUMPS's null-pivot threshold (the factorisation fails or returns garbage) and the forces near the
 #: underflow floors of the solvers' scales (1e-300), so no number of the run would mean anything.
 MIN_MODULUS, MAX_MODULUS = 1e-3, 1e7
-#: Largest elastic strain a load may produce (estimated before any work, see Scene._loads_fit_the_model):
-#: the model is small-strain linear elasticity; past a few percent its answer is meaningless (and past the
-#: elastic limit of any real solid). Estimates: half-cylinder under a normal force P, the Hertz peak
-#: p0/E* = sqrt(P / (pi R E*)); under an approach d, sqrt(d / (2R)) (from the geometric half-width
-#: sqrt(2Rd), an overestimate); a rectangle, P / (width E') or d / height; a face pressure s, ``|s| / E``.
-MAX_ELASTIC_STRAIN = 0.1
-#: Largest mesh: elements along the refined contact zone of a half-cylinder, cells of a rectangle. Beyond,
-#: the mesh generator and the factorisation run for hours or exhaust memory (a hang, not a run): 206k dofs
-#: factorise in ~2 s here, and the cost grows faster than linearly.
-MAX_CONTACT_ELEMENTS = 20_000
-MAX_CELLS = 4_000_000
+# MAX_ELASTIC_STRAIN (the loads' strain estimates), MAX_CONTACT_ELEMENTS and MAX_CELLS (the largest meshes) are
+# the geometry kinds' limits: geometries/base.py.
 #: Largest Archard coefficient (1/MPa), also for k x wear.acceleration: k p is the wear depth per unit slip, so
 #: at 1 MPa a coefficient of 1 wears as deep as the surfaces slide; measured coefficients are 1e-9 to 1e-4
 #: 1/MPa (severe adhesive wear). The bound keeps every wear update finite.
@@ -83,11 +73,6 @@ MAX_WEAR_COEFFICIENT = 1.0
 SHAKEDOWN_TOLERANCE = 1e-3
 FiniteFloat = Annotated[float, Field(ge=-MAX_LENGTH, le=MAX_LENGTH)]
 Cycle = Annotated[int, Field(ge=1, le=100_000_000)]
-
-
-#: Keys of the 2D geometries a sphere does not use (its mesh is sized from the Hertz contact radius).
-_NOT_FOR_SPHERE = ("contact_half_width", "coarse_mesh_size", "width", "height", "nx", "ny", "quadrilateral",
-                   "flat_width", "flat_height")
 
 
 class GeometrySettings(_Section):
@@ -128,64 +113,12 @@ class GeometrySettings(_Section):
 
     @model_validator(mode="after")
     def _sizes_fit_the_body(self) -> GeometrySettings:
-        if self.kind == "sphere":
-            unused = [k for k in _NOT_FOR_SPHERE if k in self.model_fields_set]
-            if unused:
-                raise ValueError(f"geometry.{unused[0]} is not a key of geometry.kind = 'sphere' (its mesh of "
-                                 "hexahedra is sized from the Hertz contact radius: geometry.radius, "
-                                 "geometry.contact_mesh_size, geometry.half_model)")
-            if "contact_mesh_size" in self.model_fields_set and self.contact_mesh_size >= self.radius / 20:
-                raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
-                                   f"< geometry.radius / 20 = {self.radius / 20:g} mm")
-        elif "half_model" in self.model_fields_set:
-            raise _range_error("geometry.half_model", self.half_model, "unset unless geometry.kind = 'sphere'")
-        if self.kind == "file":
-            if self.path is None:
-                raise ValueError("geometry.path (a gmsh .msh or an XDMF file) is required with "
-                                 "geometry.kind = 'file'")
-            if not self.path.endswith((".msh", ".xdmf")):
-                raise _range_error("geometry.path", self.path, "a gmsh .msh file (with physical groups) or a DOLFINx "
-                                   ".xdmf file (with facet meshtags)")
-            if self.groups is not None and not self.path.endswith(".xdmf"):
-                raise _range_error("geometry.groups", self.groups, "unset with a .msh file (its physical groups "
-                                   "carry their names); only an .xdmf file's markers need names")
-        elif self.path is not None or self.groups is not None:
-            key, value = ("geometry.path", self.path) if self.path is not None else ("geometry.groups", self.groups)
-            raise _range_error(key, value, f"unset with geometry.kind = {self.kind!r} (the mesh is built in); set "
-                               "geometry.kind = 'file' to read a mesh file")
-        if self.kind == "half_cylinder":
-            if self.contact_mesh_size >= self.radius:
-                raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
-                                   f"0 < contact_mesh_size < geometry.radius = {self.radius} mm")
-            if self.contact_half_width is not None and self.contact_half_width >= self.radius:
-                raise _range_error("geometry.contact_half_width", self.contact_half_width,
-                                   f"0 < contact_half_width < geometry.radius = {self.radius} mm")
-            if self.contact_half_width is not None and self.contact_half_width < self.contact_mesh_size:
-                raise _range_error("geometry.contact_half_width", self.contact_half_width,
-                                   f"contact_mesh_size = {self.contact_mesh_size} <= contact_half_width"
-                                   f" < radius = {self.radius} mm")
-            if self.coarse_mesh_size is not None and self.coarse_mesh_size >= self.radius:
-                raise _range_error("geometry.coarse_mesh_size", self.coarse_mesh_size,
-                                   f"0 < coarse_mesh_size < geometry.radius = {self.radius} mm")
-            if self.coarse_mesh_size is not None and self.coarse_mesh_size < self.contact_mesh_size:
-                raise _range_error("geometry.coarse_mesh_size", self.coarse_mesh_size,
-                                   f"geometry.contact_mesh_size = {self.contact_mesh_size} <= coarse_mesh_size "
-                                   f"< radius = {self.radius} mm")
-            # The mesh's size: elements along the refined zone and along the arc (a hang otherwise, not a run).
-            along = 2 * self.refined_half_width / self.contact_mesh_size
-            if along > MAX_CONTACT_ELEMENTS:
-                raise _range_error("geometry.contact_mesh_size", self.contact_mesh_size,
-                                   f">= 2 x refined half-width {self.refined_half_width:g} mm / {MAX_CONTACT_ELEMENTS} "
-                                   f"= {2 * self.refined_half_width / MAX_CONTACT_ELEMENTS:.3g} mm (at most "
-                                   f"{MAX_CONTACT_ELEMENTS} elements along the refined contact zone)")
-            coarse = self.coarse_mesh_size if self.coarse_mesh_size is not None else self.radius / 10
-            if math.pi * self.radius / coarse > MAX_CONTACT_ELEMENTS:
-                raise _range_error("geometry.coarse_mesh_size", coarse,
-                                   f">= pi x radius / {MAX_CONTACT_ELEMENTS} = "
-                                   f"{math.pi * self.radius / MAX_CONTACT_ELEMENTS:.3g} mm")
-        elif self.kind == "rectangle" and self.nx * self.ny > MAX_CELLS:
-            raise _range_error("geometry.nx", self.nx, f"geometry.nx x geometry.ny <= {MAX_CELLS} cells "
-                               f"(ny = {self.ny})")
+        # the keys only another kind reads, then this kind's own keys and sizes (dolfinx_fretting.geometries)
+        geometry = GEOMETRIES[self.kind]
+        for other in GEOMETRIES.values():
+            if other is not geometry:
+                other.refuse_own_keys(self)
+        geometry.check_geometry(self)
         return self
 
     @property
@@ -239,7 +172,7 @@ class MaterialSettings(_Section):
             raise ValueError("material: give exactly one of material.hardening_modulus (plastic modulus H, MPa, "
                              ">= 0) and material.tangent_modulus (uniaxial slope E_t, MPa, 0 <= E_t < E)")
         if self.tangent_modulus is not None and self.tangent_modulus >= self.E:
-            raise _range_error("material.tangent_modulus", self.tangent_modulus, f"0 <= E_t < E = {self.E} MPa")
+            raise range_error("material.tangent_modulus", self.tangent_modulus, f"0 <= E_t < E = {self.E} MPa")
         return self
 
     @property
@@ -293,7 +226,7 @@ class ContactSettings(_Section):
             raise ValueError(f"contact.plane_point {self.plane_point} and contact.plane_normal "
                              f"{self.plane_normal} must have the same length (2 in 2D)")
         if sum(c * c for c in self.plane_normal) < 1e-24:
-            raise _range_error("contact.plane_normal", self.plane_normal, "a non-zero vector")
+            raise range_error("contact.plane_normal", self.plane_normal, "a non-zero vector")
         return self
 
 
@@ -353,22 +286,22 @@ class WearSettings(_Section):
                                  "and wear.k_master (one per body), not both")
         if self.law == "archard" and self.k_total <= 0:
             key = "wear.k_slave + wear.k_master" if any(per_body) else "wear.k"
-            raise _range_error(key, self.k_total, f"{key.removeprefix('wear.')} > 0 (1/MPa) with wear.law = 'archard'")
+            raise range_error(key, self.k_total, f"{key.removeprefix('wear.')} > 0 (1/MPa) with wear.law = 'archard'")
         if self.k_total * self.acceleration > MAX_WEAR_COEFFICIENT:
             key = "wear.k_slave + wear.k_master" if any(per_body) else "wear.k"
-            raise _range_error("wear.acceleration", self.acceleration,
-                               f"{key} x wear.acceleration <= {MAX_WEAR_COEFFICIENT:g} 1/MPa (here {key} = "
-                               f"{self.k_total:g}): a wear gap growing faster than the slip at 1 MPa is no wear law")
+            raise range_error("wear.acceleration", self.acceleration,
+                              f"{key} x wear.acceleration <= {MAX_WEAR_COEFFICIENT:g} 1/MPa (here {key} = "
+                              f"{self.k_total:g}): a wear gap growing faster than the slip at 1 MPa is no wear law")
         if self.cycle_jump and self.law != "archard":
-            raise _range_error("wear.cycle_jump", self.cycle_jump, "false without a wear law (nothing to extrapolate)")
+            raise range_error("wear.cycle_jump", self.cycle_jump, "false without a wear law (nothing to extrapolate)")
         if self.cycle_jump and self.acceleration != 1.0:
             # Both stretch a simulated cycle over several physical ones; the jump does it under error and
             # stability control, the k-scaling does not, and together they would multiply the step.
-            raise _range_error("wear.acceleration", self.acceleration,
-                               "1 with wear.cycle_jump = true (use one of the two: the jump controls its "
-                               "step, the k-scaling does not)")
+            raise range_error("wear.acceleration", self.acceleration,
+                              "1 with wear.cycle_jump = true (use one of the two: the jump controls its "
+                              "step, the k-scaling does not)")
         if self.jump_forced is not None and not self.cycle_jump:
-            raise _range_error("wear.jump_forced", self.jump_forced, "unset unless wear.cycle_jump = true")
+            raise range_error("wear.jump_forced", self.jump_forced, "unset unless wear.cycle_jump = true")
         return self
 
     def archard(self) -> Archard:
@@ -434,8 +367,8 @@ class LoadingSettings(_Section):
             raise ValueError(f"loading.cycles = {self.cycles}: a cyclic load needs its amplitude: one of "
                              "loading.tangential_displacement, loading.tangential_force, loading.tangential_pressure")
         if self.cycles > 0 and self.increments_per_cycle % 4:
-            raise _range_error("loading.increments_per_cycle", self.increments_per_cycle,
-                               "a multiple of 4 >= 4 (the quarter points of the cycle are increments)")
+            raise range_error("loading.increments_per_cycle", self.increments_per_cycle,
+                              "a multiple of 4 >= 4 (the quarter points of the cycle are increments)")
         return self
 
     @property
@@ -510,7 +443,7 @@ def check_petsc_option(key: str, value: Any) -> None:
     name = f"solver.petsc_options.{key}"
     if key in PETSC_OPTIONS:
         if not isinstance(value, str) or value not in PETSC_OPTIONS[key]:
-            raise _range_error(name, value, "one of " + ", ".join(repr(v) for v in PETSC_OPTIONS[key]))
+            raise range_error(name, value, "one of " + ", ".join(repr(v) for v in PETSC_OPTIONS[key]))
         return
     m = re.fullmatch(r"mat_mumps_(icntl|cntl)_(\d+)", key)
     if m is None:
@@ -533,7 +466,7 @@ def check_petsc_option(key: str, value: Any) -> None:
               and lo <= value <= hi)
         allowed = f"a finite number in [{lo:g}, {hi:g}]"
     if not ok:
-        raise _range_error(name, value, allowed)
+        raise range_error(name, value, allowed)
 
 
 class SolverSettings(_Section):
@@ -644,37 +577,21 @@ def preset_values(scene: Scene) -> dict[str, Any]:
     """The ``section.key`` values ``scene.solver.preset`` would give to its numerics keys (all of them,
     set in the scene or not); empty without a preset.
 
-    Keys: ``geometry.contact_mesh_size`` (a half-cylinder under ``loading.normal_force``: the Hertz
-    half-width (against the rigid plane or the elastic flat) over ``contact_elements_per_half_width``; none under a normal
-    displacement), ``geometry.nx`` and ``geometry.ny`` (a rectangle), ``loading.increments_per_cycle``,
+    Keys: the geometry kind's (its ``preset_values``, :mod:`dolfinx_fretting.geometries`: under
+    ``loading.normal_force``, ``geometry.contact_mesh_size`` of a half-cylinder, the Hertz half-width against the
+    rigid plane or the elastic flat over ``contact_elements_per_half_width``, and of a sphere, its contact radius
+    over a 2.5th of that; ``geometry.nx`` and ``geometry.ny`` of a rectangle), ``loading.increments_per_cycle``,
     ``solver.local_tol`` and ``solver.force_tol``. Elastic-plastic scenes keep their tightened tolerances
     (local 1e-12, force 1e-11, see ``Scene._plastic_tolerances``): the presets' tolerances were measured on
     elastic scenes.
     """
-    from .analytic import hertz_line_contact
-
     name = scene.solver.preset
     if name is None:
         return {}
     p = PRESETS[name]
-    g, lo, m = scene.geometry, scene.loading, scene.material
-    out: dict[str, Any] = {}
-    if g.kind == "half_cylinder" and lo.normal_force is not None:
-        a, _ = hertz_line_contact(lo.normal_force, g.radius, scene.contact_modulus)
-        out["geometry.contact_mesh_size"] = float(f"{a / p['contact_elements_per_half_width']:.3g}")
-    elif g.kind == "sphere" and lo.normal_force is not None:
-        # 3D: a quarter of these elements per contact radius (balanced: a/h = 4, the built-in default;
-        # measured on Hertz: the peak pressure within 0.2 % from a/h = 3, tests/test_sphere.py)
-        from .analytic import hertz_sphere
-
-        a, _ = hertz_sphere(lo.normal_force, g.radius, scene.contact_modulus)
-        out["geometry.contact_mesh_size"] = float(f"{a / (p['contact_elements_per_half_width'] / 2.5):.3g}")
-    elif g.kind == "rectangle":
-        nx = int(p["rectangle_cells"])
-        out["geometry.nx"] = nx
-        out["geometry.ny"] = max(1, round(nx * g.height / g.width))
+    out: dict[str, Any] = GEOMETRIES[scene.geometry.kind].preset_values(scene, p)
     out["loading.increments_per_cycle"] = int(p["increments_per_cycle"])
-    if m.model == "elastic":
+    if scene.material.model == "elastic":
         out["solver.local_tol"] = p["local_tol"]
         out["solver.force_tol"] = min(p["local_tol"] * p["force_tol_factor"], 0.1)
     return out
@@ -727,69 +644,20 @@ class Scene(_Section):
 
     @model_validator(mode="after")
     def _window_fits(self) -> Scene:
-        g, c, lo = self.geometry, self.contact, self.loading
-        if g.kind != "file" and self.boundary.names:
-            raise _range_error(self.boundary.names[0][0], self.boundary.names[0][1],
-                               "no [boundary] section with a built-in geometry (its faces are fixed by the scene); "
-                               "set geometry.kind = 'file'")
-        if g.kind == "file":
-            if not (self.boundary.fixed or self.boundary.displacement):
-                raise ValueError("boundary: a mesh file needs boundary.fixed or boundary.displacement (names of "
-                                 "its physical groups) to hold the body")
-            if c.obstacle != "rigid_plane":
-                raise _range_error("contact.obstacle", c.obstacle, "'rigid_plane' with geometry.kind = 'file'")
-            for name, vector in self.boundary.displacement.items():
-                if len(vector) != len(c.plane_normal):
-                    raise _range_error(f"boundary.displacement.{name}", vector,
-                                       f"a {len(c.plane_normal)}-vector (mm)")
-        if lo.tangential_kind == "pressure" and g.kind == "half_cylinder":
-            # a half-cylinder's faces are its fixed top and the contact surface: neither may carry a face pressure
-            raise _range_error("loading.tangential_pressure", lo.tangential_pressure,
-                               "unset with geometry.kind = 'half_cylinder' (its faces are the fixed top and the "
-                               "contact surface; rub it by loading.tangential_displacement or "
-                               "loading.tangential_force)")
-        if lo.tangential_kind == "pressure" and g.kind == "rectangle":
-            free = [f for f in ("bottom", "right", "top", "left") if f not in ("top", c.surface)]
-            if lo.pressure_face not in free:
-                raise _range_error("loading.pressure_face", lo.pressure_face,
-                                   f"{', '.join(free)} (a face of the rectangle that is neither the fixed top nor "
-                                   f"the contact surface {c.surface!r})")
+        c = self.contact
+        # what the geometry kind accepts of the obstacle, the loads, the plane, the surface, the window, [boundary]
+        GEOMETRIES[self.geometry.kind].check_scene(self)
         if c.sliding == "finite" and c.obstacle != "elastic_flat":
-            raise _range_error("contact.sliding", c.sliding, "'small' unless contact.obstacle = 'elastic_flat' (finite "
-                               "sliding re-pairs two deformable bodies)")
+            raise range_error("contact.sliding", c.sliding, "'small' unless contact.obstacle = 'elastic_flat' (finite "
+                              "sliding re-pairs two deformable bodies)")
         if c.sliding == "finite" and self.wear.cycle_jump:
-            raise _range_error("contact.sliding", c.sliding, "'small' with wear.cycle_jump = true (a jump extrapolates "
-                               "each contact's wear gap; with finite sliding the flat's wear lives on its own nodes "
-                               "and is not extrapolated): use wear.acceleration instead")
+            raise range_error("contact.sliding", c.sliding, "'small' with wear.cycle_jump = true (a jump extrapolates "
+                              "each contact's wear gap; with finite sliding the flat's wear lives on its own nodes "
+                              "and is not extrapolated): use wear.acceleration instead")
         if c.sliding == "finite" and self.material.model != "elastic":
-            raise _range_error("contact.sliding", c.sliding, "'small' with material.model = "
-                               f"{self.material.model!r} (finite sliding is for elastic bodies)")
-        if g.kind == "half_cylinder" and c.candidate_half_width is not None and c.candidate_half_width > g.radius:
-            raise _range_error("contact.candidate_half_width", c.candidate_half_width,
-                               f"0 < candidate_half_width <= geometry.radius = {g.radius} mm")
-        if g.kind == "sphere":
-            if [float(x) for x in c.plane_normal] != [0.0, 0.0, 1.0]:
-                raise _range_error("contact.plane_normal", c.plane_normal,
-                                   "[0, 0, 1] with geometry.kind = 'sphere' (the sphere's axis is z, its lowest "
-                                   "point the origin; it slides along x)")
-            if len(c.plane_point) != 3 or c.plane_point[2] > 0:
-                raise _range_error("contact.plane_point", c.plane_point, "[x, y, z] with z <= 0 (the sphere's "
-                                   "lowest point is the origin)")
-            if lo.tangential_kind == "pressure":
-                raise _range_error("loading.tangential_pressure", lo.tangential_pressure,
-                                   "unset with geometry.kind = 'sphere' (rub it by loading.tangential_displacement "
-                                   "or loading.tangential_force)")
-            if c.surface != "surface":
-                raise _range_error("contact.surface", c.surface, "'surface' (the sphere's face) with a sphere")
-        elif len(c.plane_normal) != 2:
-            raise _range_error("contact.plane_normal", c.plane_normal,
-                               "a 2-vector: the geometries built in are two-dimensional (plane strain), but the "
-                               "sphere (geometry.kind = 'sphere')")
+            raise range_error("contact.sliding", c.sliding, "'small' with material.model = "
+                              f"{self.material.model!r} (finite sliding is for elastic bodies)")
         if c.obstacle == "elastic_flat":
-            if g.kind not in ("half_cylinder", "sphere"):
-                raise _range_error("contact.obstacle", c.obstacle,
-                                   "'rigid_plane' with geometry.kind = 'rectangle' ('elastic_flat' needs a "
-                                   "half_cylinder or a sphere on it)")
             origin = [0.0] * len(c.plane_normal)
             up = origin[:-1] + [1.0]
             moved = [k for k, v in (("plane_point", origin), ("plane_normal", up))
@@ -799,80 +667,36 @@ class Scene(_Section):
                 raise ValueError(f"contact.{moved[0]} describes a rigid plane; with contact.obstacle = "
                                  f"'elastic_flat' the flat's top is the plane {axis} = 0 (remove the key)")
             if c.surface != "surface":
-                raise _range_error("contact.surface", c.surface, "'surface' (the cylinder's arc) with an elastic flat")
-        if c.obstacle == "elastic_flat" and g.kind == "half_cylinder":
-            if g.flat_width <= 2 * g.refined_half_width:
-                raise _range_error("geometry.flat_width", g.flat_width,
-                                   f"> 2 x the refined half-width {g.refined_half_width} mm")
-            depth = min(max(g.refined_half_width / 4, 2 * g.contact_mesh_size), g.radius / 2)
-            if g.flat_height <= depth:
-                raise _range_error("geometry.flat_height", g.flat_height, f"> the refined depth {depth:g} mm")
-        elif self.material.plastic_body == "flat":
-            raise _range_error("material.plastic_body", "flat",
-                               "'both' or 'cylinder' with contact.obstacle = 'rigid_plane' (there is no flat body)")
-        elif self.wear.k_master is not None and self.wear.k_master > 0:
-            raise _range_error("wear.k_master", self.wear.k_master,
-                               "0 or unset with contact.obstacle = 'rigid_plane' (a rigid plane does not wear)")
+                raise range_error("contact.surface", c.surface, "'surface' (the cylinder's arc) with an elastic flat")
+        if c.obstacle == "rigid_plane" and self.material.plastic_body == "flat":
+            raise range_error("material.plastic_body", "flat",
+                              "'both' or 'cylinder' with contact.obstacle = 'rigid_plane' (there is no flat body)")
+        if c.obstacle == "rigid_plane" and self.wear.k_master is not None and self.wear.k_master > 0:
+            raise range_error("wear.k_master", self.wear.k_master,
+                              "0 or unset with contact.obstacle = 'rigid_plane' (a rigid plane does not wear)")
         return self
 
     @model_validator(mode="after")
     def _loads_fit_the_model(self) -> Scene:
         """Checks of the loads against the friction and the body that need no mesh: |Q| < mu P for prescribed
-        forces, and the estimated elastic strain of each load at most MAX_ELASTIC_STRAIN."""
-        g, c, m, lo = self.geometry, self.contact, self.material, self.loading
+        forces, and the estimated elastic strain of each load at most MAX_ELASTIC_STRAIN (the normal load's by the
+        geometry kind: it knows its body)."""
+        c, m, lo = self.contact, self.material, self.loading
         mu, P, Q = c.mu, lo.normal_force, lo.tangential_force
         if Q is not None and Q != 0 and mu == 0:
-            raise _range_error("loading.tangential_force", Q, "0 with contact.mu = 0 (a frictionless contact "
-                               "carries no tangential force)")
+            raise range_error("loading.tangential_force", Q, "0 with contact.mu = 0 (a frictionless contact "
+                              "carries no tangential force)")
         if Q is not None and Q != 0 and P is not None and abs(Q) >= mu * P:
-            raise _range_error("loading.tangential_force", Q,
-                               f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} "
-                               f"{'N' if self.dim == 3 else 'N/mm'} "
-                               "(at or beyond mu P the contact slides and no displacement gives Q)")
-        E_plane = m.E / (1 - m.nu**2)
-        E_star = self.contact_modulus
+            raise range_error("loading.tangential_force", Q,
+                              f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} "
+                              f"{'N' if self.dim == 3 else 'N/mm'} "
+                              "(at or beyond mu P the contact slides and no displacement gives Q)")
+        GEOMETRIES[self.geometry.kind].check_loads(self)
         eps = MAX_ELASTIC_STRAIN
-        if g.kind == "sphere":
-            # Hertz (Johnson §4.2): p0 / E* = (6 P / (pi^3 R^2 E*))^(1/3); an approach d: a = sqrt(R d), a / R
-            if P is not None and (6 * P / (math.pi**3 * g.radius**2 * E_star)) ** (1 / 3) > eps:
-                P_max = eps**3 * math.pi**3 * g.radius**2 * E_star / 6
-                raise _range_error("loading.normal_force", P,
-                                   f"<= {P_max:.4g} N: the Hertz strain p0/E* = (6 P / (pi^3 R^2 E*))^(1/3) with "
-                                   f"geometry.radius = {g.radius:g} mm and material.E = {m.E:g} MPa (E* = "
-                                   f"{E_star:.4g} MPa) must stay <= {eps:g} (small-strain elasticity)")
-            d = lo.normal_displacement
-            if d is not None and math.sqrt(d / g.radius) > eps:
-                raise _range_error("loading.normal_displacement", d,
-                                   f"<= {eps**2 * g.radius:.4g} mm: the strain sqrt(d / R) of an approach d on "
-                                   f"geometry.radius = {g.radius:g} mm must stay <= {eps:g} (small-strain elasticity)")
-        elif g.kind == "half_cylinder":
-            if P is not None and math.sqrt(P / (math.pi * g.radius * E_star)) > eps:
-                P_max = eps**2 * math.pi * g.radius * E_star
-                raise _range_error("loading.normal_force", P,
-                                   f"<= {P_max:.4g} N/mm: the Hertz strain sqrt(P / (pi R E*)) with geometry.radius "
-                                   f"= {g.radius:g} mm and material.E = {m.E:g} MPa (E* = {E_star:.4g} MPa) must stay "
-                                   f"<= {eps:g} (small-strain elasticity)")
-            d = lo.normal_displacement
-            if d is not None and d > 2 * eps**2 * g.radius:
-                raise _range_error("loading.normal_displacement", d,
-                                   f"<= {2 * eps**2 * g.radius:.4g} mm: the strain sqrt(d / (2R)) of an approach d "
-                                   f"on geometry.radius = {g.radius:g} mm must stay <= {eps:g} (small-strain "
-                                   "elasticity)")
-        elif c.surface in ("bottom", "top", "left", "right"):
-            face, depth = (g.width, g.height) if c.surface in ("bottom", "top") else (g.height, g.width)
-            if P is not None and P / (face * E_plane) > eps:
-                raise _range_error("loading.normal_force", P,
-                                   f"<= {eps * face * E_plane:.4g} N/mm: the mean strain P / (face length {face:g} mm "
-                                   f"x E/(1-nu^2) = {E_plane:.4g} MPa) must stay <= {eps:g} (small-strain elasticity)")
-            d = lo.normal_displacement
-            if d is not None and d / depth > eps:
-                raise _range_error("loading.normal_displacement", d,
-                                   f"<= {eps * depth:.4g} mm: the strain d / ({depth:g} mm, the body's depth under "
-                                   f"contact.surface = {c.surface!r}) must stay <= {eps:g} (small-strain elasticity)")
         s_face = lo.tangential_pressure
         if s_face is not None and abs(s_face) > eps * m.E:
-            raise _range_error("loading.tangential_pressure", s_face,
-                               f"|s| <= {eps:g} x material.E = {eps * m.E:.4g} MPa (small-strain elasticity)")
+            raise range_error("loading.tangential_pressure", s_face,
+                              f"|s| <= {eps:g} x material.E = {eps * m.E:.4g} MPa (small-strain elasticity)")
         return self
 
     @model_validator(mode="after")
@@ -903,8 +727,6 @@ class Scene(_Section):
     def contact_modulus(self) -> float:
         """E* (MPa) of the built-in geometries' Hertz estimates: against a rigid plane ``E/(1 - nu^2)``;
         against the elastic flat (same material) half that."""
-        from .analytic import plane_strain_modulus
-
         m = self.material
         if self.contact.obstacle == "elastic_flat":
             return plane_strain_modulus(m.E, m.nu, m.E, m.nu)

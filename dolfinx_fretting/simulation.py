@@ -1,7 +1,7 @@
 """The scene runner: a scene file in, results on disk out, through the public API.
 
-``run_scene`` is a user of :mod:`dolfinx_fretting.problem` like any script: the scene's geometry builder
-(:mod:`dolfinx_fretting.scene_models`) writes the model (space, form, conditions, loads, contact set-up), a
+``run_scene`` is a user of :mod:`dolfinx_fretting.problem` like any script: the scene's geometry kind
+(:mod:`dolfinx_fretting.geometries`) writes the model (space, form, conditions, loads, contact set-up), a
 :class:`~dolfinx_fretting.contact.Contact` and a :class:`~dolfinx_fretting.problem.FrettingProblem` are built
 from it, and the run walks the load path of the scene:
 
@@ -41,7 +41,8 @@ from .scene_paths import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
                       Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity, WindowError)
 from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
-from .scene_models import PRESSURE_LOAD, SceneModel, build_scene_model
+from .geometries import build_scene_model
+from .scene_models import PRESSURE_LOAD, SceneModel
 from .scenes import Scene, describe_differences
 from .sizes import SizeEstimate, check_size
 

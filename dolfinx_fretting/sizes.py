@@ -1,15 +1,15 @@
 """The size of a scene's model before anything is meshed: nodes, dofs, contacts and memory.
 
-:func:`estimate` counts what a validated :class:`~dolfinx_fretting.scenes.Scene` will build, from the same
-sizing rules the meshers use (``meshes._cylinder_sizes`` and ``meshes._refined_depth``, the sphere's
-``meshes_3d._grid_axes``, ``scene_models.candidate_window``), without importing DOLFINx or building
-anything:
+:func:`estimate` counts what a validated :class:`~dolfinx_fretting.scenes.Scene` will build without importing
+DOLFINx or building anything. The mesh is the geometry kind's to count (its ``mesh_size``,
+:mod:`dolfinx_fretting.geometries`), from the same sizing rules its mesher uses:
 
 * **nodes and dofs**: exact for the structured meshes (a rectangle, the sphere's hexahedra, the structured
   sectors under a half-cylinder's contact); for the rest of a half-cylinder or flat, meshed by gmsh with a size
   field, the node density ``c / s(d)^2`` integrated over the body, s the size field at distance d from the
   refined sector (h there, growing by ``growth`` per mm up to the coarse size) and c calibrated on gmsh's
-  meshes (:data:`GMSH_NODE_DENSITY`); a mesh file: its node count read from the file's header.
+  meshes (:data:`~dolfinx_fretting.geometries.gmsh_nodes.GMSH_NODE_DENSITY`); a mesh file: its node
+  count read from the file's header.
 * **contacts**: the nodes of the contact surface within the candidate window (exact on the structured contact
   zones).
 * **memory** (bytes, the whole machine: every rank counted), one term per consumer:
@@ -36,16 +36,16 @@ bad input, exit code 2 in the CLI) when it does not fit, before any mesh is buil
 
 from __future__ import annotations
 
-import inspect
 import math
 import os
-import re
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from .geometries import GEOMETRIES, Geometry
+from .geometries.base import MeshSize
+from .geometries.gmsh_nodes import GMSH_NODE_DENSITY
+from .geometries.mesh_file import msh_node_count, xdmf_node_count
 from .scenes import Scene, SceneError
 
 __all__ = ["SizeEstimate", "SizeError", "estimate", "available_memory", "check_size", "msh_node_count",
@@ -53,10 +53,8 @@ __all__ = ["SizeEstimate", "SizeError", "estimate", "available_memory", "check_s
            "MESH_BYTES_PER_DOF"]
 
 # Calibration (benchmarks/results/size_estimate.md has the measured points these come from) ------------------
-#: gmsh's frontal-Delaunay meshes (algorithm 6) under a size field s: (nodes per s^2 of area, nodes per s of
-#: boundary), for quadrilaterals (Blossom recombination) and triangles; fitted on the half-cylinder and the
-#: flat at h = 1.25 um to 40 um.
-GMSH_NODE_DENSITY = {"quadrilateral": (1.19, 0.74), "triangle": (1.18, 1.14)}
+# (gmsh's node density, GMSH_NODE_DENSITY, is the gmsh meshes' count: geometries/gmsh_nodes.py; the node counts
+# of a mesh file's header, msh_node_count and xdmf_node_count: geometries/mesh_file.py. Both are re-exported.)
 #: MUMPS factor memory (INFOG(22), bytes) per ``n log2 n`` (2D) and per ``n^(4/3)`` (3D), n the dofs: the upper
 #: envelope of the built-in geometries' measured points (2D: 53-62, 3D: 138-187 bytes).
 FACTOR_BYTES_2D = 64.0
@@ -151,266 +149,35 @@ def _size(n: float) -> str:
     return f"{n / _GB:.3g} GB" if n >= 0.1 * _GB else f"{n / 2**20:.3g} MB"
 
 
-# Nodes of the gmsh meshes -------------------------------------------------------------------------------------
-def _polar_grid(r_max: float, r_min: float, n_r: int = 700, n_phi: int = 1440):
-    """Midpoints and areas of a polar grid about the origin, radii geometric from ``r_min`` to ``r_max``."""
-    edges = np.concatenate([[0.0], np.geomspace(r_min, r_max, n_r)])
-    r = 0.5 * (edges[1:] + edges[:-1])
-    dr = np.diff(edges)
-    phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
-    R_, P_ = np.meshgrid(r, phi, indexing="ij")
-    area = (r * dr)[:, None] * (2 * np.pi / n_phi) * np.ones_like(P_)
-    return R_ * np.sin(P_), -R_ * np.cos(P_), area  # x, y (phi from the downward vertical), area
-
-
-def _segment_distance(px, py, ax, ay, bx, by):
-    dx, dy = bx - ax, by - ay
-    s = np.clip(((px - ax) * dx + (py - ay) * dy) / (dx * dx + dy * dy), 0.0, 1.0)
-    return np.hypot(px - ax - s * dx, py - ay - s * dy)
-
-
-#: Points within this fraction of the body's size of a region's boundary count as on it (inside). The boundary
-#: samples of :func:`_cylinder_boundary` lie on the arc up to the rounding of a sine and a cosine, which differs
-#: between numpy builds and CPUs (numpy 2's vectorised sin/cos on AVX-512 against numpy 1.24's: 773 against 289
-#: of the refined arc's samples counted inside with an exact ``rho <= R``). 1e-9 is ~10^7 roundings away from
-#: those samples and ~10^-6 of the finest element a scene accepts, so no grid point of the integral moves.
-_ON_BOUNDARY = 1e-9
-
-
-def _cylinder_regions(x, y, R: float, a: float, t: float):
-    """Inside the half-cylinder (lowest point at the origin), inside its refined sector, distance to the sector.
-    Points on a boundary (within :data:`_ON_BOUNDARY` R) are inside it."""
-    rho = np.hypot(x, R - y)
-    phi = np.arctan2(x, R - y)  # from the downward vertical, positive towards +x
-    theta = math.asin(a / R)
-    tol = _ON_BOUNDARY * R
-    inside = (rho <= R + tol) & (y <= R + tol)
-    sector = inside & (rho >= R - t - tol) & (np.abs(phi) <= theta + _ON_BOUNDARY)
-    side = np.sign(phi) * theta
-    ux, uy = np.sin(side), -np.cos(side)
-    d_side = _segment_distance(x, y, (R - t) * ux, R + (R - t) * uy, R * ux, R + R * uy)
-    d = np.where(np.abs(phi) <= theta, np.maximum(R - t - rho, 0.0), d_side)
-    return inside, sector, d
-
-
-def _flat_regions(x, y, width: float, height: float, a: float, t: float):
-    """Inside the flat (top at y = 0, centred), inside its refined sector, distance to the sector. Points on a
-    boundary (within :data:`_ON_BOUNDARY` of the width) are inside it."""
-    tol = _ON_BOUNDARY * width
-    inside = (np.abs(x) <= width / 2 + tol) & (y <= tol) & (y >= -height - tol)
-    sector = inside & (np.abs(x) <= a + tol) & (y >= -t - tol)
-    d = np.hypot(np.maximum(np.abs(x) - a, 0.0), np.maximum(-t - y, 0.0))
-    return inside, sector, d
-
-
-def _cylinder_boundary(R: float, n: int = 20000):
-    """Points and lengths of the half-cylinder's boundary (the arc and the top face)."""
-    phi = (np.arange(n) + 0.5) * np.pi / n - np.pi / 2
-    x = np.concatenate([R * np.sin(phi), (np.arange(n) + 0.5) * 2 * R / n - R])
-    y = np.concatenate([R - R * np.cos(phi), np.full(n, R)])
-    return x, y, np.concatenate([np.full(n, np.pi * R / n), np.full(n, 2 * R / n)])
-
-
-def _flat_boundary(width: float, height: float, n: int = 20000):
-    """Points and lengths of the flat's boundary (top, bottom, sides)."""
-    u = (np.arange(n) + 0.5) / n
-    x = np.concatenate([(u - 0.5) * width, (u - 0.5) * width, np.full(n, -width / 2), np.full(n, width / 2)])
-    y = np.concatenate([np.zeros(n), np.full(n, -height), -u * height, -u * height])
-    return x, y, np.concatenate([np.full(2 * n, width / n), np.full(2 * n, height / n)])
-
-
-def _unstructured_nodes(regions, boundary, r_max: float, h: float, H: float, growth: float, cell: str,
-                        include_sector: bool) -> float:
-    """gmsh's nodes under its Threshold size field s (h at the sector growing by ``growth`` per unit distance up
-    to H; h inside): ``c`` times the integral of 1 / s^2 over the body (outside its sector unless
-    ``include_sector``) plus ``b`` times the integral of 1 / s along its boundary (:data:`GMSH_NODE_DENSITY`)."""
-    c, b = GMSH_NODE_DENSITY[cell]
-    x, y, area = _polar_grid(r_max, min(h, r_max) / 8.0)
-    inside, sector, d = regions(x, y)
-    s = np.where(sector, h, np.minimum(h + growth * d, H))
-    keep = inside if include_sector else inside & ~sector
-    bx, by, length = boundary
-    _, b_sector, b_d = regions(bx, by)
-    b_s = np.minimum(h + growth * b_d, H)
-    b_keep = np.ones(bx.size, dtype=bool) if include_sector else ~b_sector
-    return float(c * np.sum(area[keep] / s[keep] ** 2) + b * np.sum(length[b_keep] / b_s[b_keep]))
-
-
-def _nodes_along(length: float, h: float, H: float, growth: float) -> float:
-    """Nodes along a line leaving the refined zone, spacing h + growth * distance up to H: the integral of
-    1 / spacing over ``length`` (closed form)."""
-    graded = min(length, (H - h) / growth) if growth > 0 else 0.0
-    nodes = math.log1p(growth * graded / h) / growth if growth > 0 else 0.0
-    return nodes + (length - graded) / (H if growth > 0 else h)
-
-
-def _default(function, name: str):
-    return inspect.signature(function).parameters[name].default
-
-
-def _half_cylinder(scene: Scene) -> tuple[int, int, bool]:
-    """Nodes (both bodies), contacts, and whether the count is exact, of a half-cylinder scene."""
-    from . import meshes
-    from .scene_models import candidate_window
-
-    g = scene.geometry
-    R, h, a, H = meshes._cylinder_sizes(g.radius, g.contact_mesh_size, g.refined_half_width, g.coarse_mesh_size)
-    t = meshes._refined_depth(R, h, a)
-    growth = _default(meshes.half_cylinder, "growth")
-    cell = "quadrilateral" if g.quadrilateral else "triangle"
-    theta = math.asin(a / R)
-    # The structured sectors (meshes._half_cylinder_geometry, _flat_geometry): equal segments along the refined
-    # arc (each half R theta long) and the flat's refined segment (each half a long), layers through t.
-    n_arc, n_flat, n_layers = max(1, round(R * theta / h)), max(1, round(a / h)), max(1, round(t / h))
-    structured = g.quadrilateral
-
-    def body(regions, boundary, r_max: float, n_along: int) -> float:
-        exact = (2 * n_along + 1) * (n_layers + 1) if structured else 0
-        return exact + _unstructured_nodes(regions, boundary, r_max, h, H, growth, cell, include_sector=not structured)
-
-    nodes = body(lambda x, y: _cylinder_regions(x, y, R, a, t), _cylinder_boundary(R), math.sqrt(2) * R, n_arc)
-    if scene.contact.obstacle == "elastic_flat":
-        W, Hf = g.flat_width, g.flat_height
-        nodes += body(lambda x, y: _flat_regions(x, y, W, Hf, a, t), _flat_boundary(W, Hf), math.hypot(W / 2, Hf),
-                      n_flat)
-    window, _ = candidate_window(scene, g.refined_half_width, g.contact_mesh_size)
-    # Candidates: the arc's nodes within the window of the lowest one (measured along the plane).
-    k = np.arange(n_arc + 1)
-    within = R * np.sin(k * theta / n_arc) <= window * (1 + 1e-12)
-    contacts = 2 * int(within.sum()) - 1
-    if window > a:  # beyond the refined arc the spacing grows with the distance from it
-        length = R * (math.asin(min(window, R) / R) - theta)
-        contacts += 2 * int(_nodes_along(length, h, H, growth))
-    return int(round(nodes)), contacts, False
-
-
-def _sphere(scene: Scene) -> tuple[int, int, bool]:
-    """Nodes (both bodies), contacts, exact, of a sphere scene (the structured hexahedra of meshes_3d)."""
-    from .meshes_3d import _grid_axes, sphere_on_flat
-    from .scene_models import candidate_window, expected_contact_size, sphere_mesh_size
-
-    g = scene.geometry
-    a, h = expected_contact_size(scene), sphere_mesh_size(scene)
-    options = {k: _default(sphere_on_flat, k) for k in ("zone", "depth_zone", "extent", "growth")}
-    x, y, depth = _grid_axes(a, h, **options, half=g.half_model)
-    bodies = 2 if scene.contact.obstacle == "elastic_flat" else 1
-    nodes = bodies * x.size * y.size * depth.size
-    zone = math.ceil(options["zone"] * a / h - 1e-9) * h  # the uniform zone's half-width (sphere_on_flat_grid)
-    window, _ = candidate_window(scene, zone, h)
-    X, Y = np.meshgrid(x, y, indexing="ij")
-    contacts = int(np.count_nonzero(np.hypot(X, Y) <= window * (1 + 1e-12)))
-    return int(nodes), contacts, True
-
-
-def _rectangle(scene: Scene) -> tuple[int, int, bool]:
-    g, c = scene.geometry, scene.contact
-    nodes = (g.nx + 1) * (g.ny + 1)
-    along = g.nx if c.surface in ("bottom", "top") else g.ny
-    step = (g.width / g.nx) if c.surface in ("bottom", "top") else (g.height / g.ny)
-    contacts = along + 1
-    if c.candidate_half_width is not None:
-        contacts = min(contacts, 2 * int(c.candidate_half_width * (1 + 1e-12) / step) + 1)
-    return nodes, contacts, True
-
-
-def msh_node_count(path: str | Path) -> int | None:
-    """The node count in a gmsh ``.msh`` file's ``$Nodes`` header (formats 2 and 4, ASCII or binary), without
-    reading the nodes; None if the file has no readable header."""
-    try:
-        with open(path, "rb") as f:
-            head = f.read(1 << 16)
-            m = re.search(rb"\$MeshFormat\s+(\S+)\s+(\d)\s+(\d+)", head)
-            if m is None:
-                return None
-            version, binary, size_t = float(m.group(1)), m.group(2) == b"1", int(m.group(3))
-            buffer, offset = head, 0
-            while b"$Nodes" not in buffer:  # the $Entities section may be long: read on in chunks
-                chunk = f.read(1 << 20)
-                if not chunk:
-                    return None
-                offset += len(buffer) - 16
-                buffer = buffer[-16:] + chunk
-            start = buffer.index(b"$Nodes") + len(b"$Nodes")
-            f.seek(offset + start)
-            rest = f.read(4096)
-    except OSError:
-        return None
-    rest = rest.lstrip(b"\r\n")
-    if version >= 4 and binary:
-        return int(np.frombuffer(rest[:4 * size_t], dtype=f"<u{size_t}")[1])
-    fields = rest.split()
-    try:
-        return int(fields[1] if version >= 4 else fields[0])
-    except (IndexError, ValueError):
-        return None
-
-
-def xdmf_node_count(path: str | Path) -> int | None:
-    """The node count of an XDMF file's 2D mesh grid (its Geometry's dimensions), None if not found."""
-    import xml.etree.ElementTree as ET
-
-    try:
-        root = ET.parse(path).getroot()
-    except (OSError, ET.ParseError):
-        return None
-    for grid in root.iter("Grid"):
-        if grid.find("Attribute") is not None:
-            continue  # a grid of markers
-        item = grid.find("Geometry/DataItem")
-        if item is not None and item.get("Dimensions"):
-            return int(item.get("Dimensions").split()[0])
-    return None
-
-
-def _file(scene: Scene) -> tuple[int | None, None, bool]:
-    path = scene.geometry.path
-    nodes = xdmf_node_count(path) if path.endswith(".xdmf") else msh_node_count(path)
-    return nodes, None, True
-
-
 # The estimate ------------------------------------------------------------------------------------------------
-def _drivers(scene: Scene, memory: dict[str, int]) -> dict[str, Any]:
-    """The keys that set the size, with their values: the mesh's, then the contact window's and the cycle's
-    when W, its build or the cycle cache weigh a tenth of the total or more."""
-    g, c = scene.geometry, scene.contact
-    if g.kind == "half_cylinder":
-        keys = {"geometry.contact_mesh_size": g.contact_mesh_size,
-                "geometry.contact_half_width": g.refined_half_width,
-                "geometry.coarse_mesh_size": g.coarse_mesh_size if g.coarse_mesh_size is not None else g.radius / 10}
-    elif g.kind == "rectangle":
-        keys = {"geometry.nx": g.nx, "geometry.ny": g.ny}
-    elif g.kind == "sphere":
-        keys = {"geometry.contact_mesh_size": g.contact_mesh_size if "contact_mesh_size" in g.model_fields_set
-                else "a/4 (default)", "geometry.radius": g.radius, "geometry.half_model": g.half_model}
-    else:
-        keys = {"geometry.path": g.path}
+def _drivers(scene: Scene, mesh: MeshSize, memory: dict[str, int]) -> dict[str, Any]:
+    """The keys that set the size, with their values: the mesh's (the geometry kind's), then the contact window's
+    and the cycle's when W, its build or the cycle cache weigh a tenth of the total or more."""
+    keys = dict(mesh.drivers)
     total = sum(memory.values())
     if memory.get("W", 0) + memory.get("W_build", 0) >= 0.1 * total:
-        default = "the whole surface" if g.kind in ("rectangle", "file") else "automatic"
-        keys["contact.candidate_half_width"] = c.candidate_half_width if c.candidate_half_width is not None \
-            else default
+        window = scene.contact.candidate_half_width
+        keys["contact.candidate_half_width"] = window if window is not None else mesh.window_default
     if memory.get("cycle_cache", 0) >= 0.1 * total:
         keys["loading.increments_per_cycle"] = scene.loading.increments_per_cycle
     return keys
 
 
-def _plastic_zone_dofs(scene: Scene, contacts: int | None) -> tuple[int, bool]:
+def _plastic_zone_dofs(scene: Scene, geometry: Geometry, contacts: int | None) -> tuple[int, bool]:
     """Dofs X of the plastic zone's dense algebra: the cells under the expected contact (2a wide, a deep, with
     ``plastic_zone.ZONE_MARGIN`` layers around) in each plastic body, and the contact's dofs; at most
     ``plastic_zone.MAX_ZONE_DOFS``, past which the body refactorises K_T instead (a second factor). A mesh file
     or a rectangle (no expected contact size): the cap. Returns (the zone's dofs, whether the cap is reached)."""
     from .plastic_zone import MAX_ZONE_DOFS, ZONE_MARGIN  # (numba, as the elastic-plastic run itself)
 
-    g, dim = scene.geometry, scene.dim
-    if g.kind not in ("half_cylinder", "sphere"):
+    dim, a = scene.dim, geometry.contact_size(scene)
+    if a is None:
         return MAX_ZONE_DOFS, True
-    from .scene_models import expected_contact_size, sphere_mesh_size
-
-    a = expected_contact_size(scene)
-    h = sphere_mesh_size(scene) if g.kind == "sphere" else g.contact_mesh_size
+    h = geometry.element_size(scene)
     across = 2 * a / h + 2 * ZONE_MARGIN + 1
     deep = a / h + ZONE_MARGIN + 1
-    nodes = across * deep * ((across / 2 if g.half_model else across) if dim == 3 else 1)
+    # 3D: the zone's width along y too, of which a half model holds its fraction
+    nodes = across * deep * (across * geometry.model_fraction(scene) if dim == 3 else 1)
     two_body = scene.contact.obstacle == "elastic_flat"
     bodies = 2 if two_body and scene.material.plastic_body == "both" else 1
     zone = bodies * nodes * dim + (contacts or 0) * dim
@@ -436,29 +203,22 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
     Returns:
         The estimate; counts the geometry cannot give cheaply are None, with a ``note``.
     """
-    g = scene.geometry
+    geometry = GEOMETRIES[scene.geometry.kind]
     dim = scene.dim
-    counter = {"half_cylinder": _half_cylinder, "sphere": _sphere, "rectangle": _rectangle, "file": _file}[g.kind]
-    nodes, contacts, exact = counter(scene)
-    notes = []
-    if nodes is None:
-        notes.append(f"nodes not estimated (no node count in the header of {g.path})")
-    if contacts is None:
-        notes.append("contacts not estimated (a mesh file's surface is not read before meshing): W not counted")
+    mesh = geometry.mesh_size(scene)
+    nodes, contacts = mesh.nodes, mesh.contacts
     dofs = None if nodes is None else nodes * dim
     memory = {"baseline": ranks * BASELINE_BYTES}
     if dofs is not None:
-        mesher = {"half_cylinder": "gmsh", "file": "gmsh", "rectangle": "rectangle", "sphere": "hexahedra"}[g.kind]
-        memory["mesh"] = int(MESH_BYTES_PER_DOF[mesher] * dofs)
+        memory["mesh"] = int(MESH_BYTES_PER_DOF[mesh.mesher] * dofs)
         one_factor = (FACTOR_BYTES_2D * dofs * math.log2(max(dofs, 2)) if dim == 2
                       else FACTOR_BYTES_3D * dofs ** (4.0 / 3.0))
         owned = ranks > 1 and scene.solver.delassus_method in ("auto", "owned")  # a whole factor on each rank
         memory["factor"] = int(one_factor * (1 + (ranks if owned else 0)))
         if scene.material.model == "elastoplastic":
-            cell = "hexahedron" if dim == 3 else ("quadrilateral" if g.quadrilateral or g.kind == "file" else
-                                                  "triangle")
+            cell = mesh.cell
             cells = nodes * (1 if cell != "triangle" else 2)
-            zone, capped = _plastic_zone_dofs(scene, contacts)
+            zone, capped = _plastic_zone_dofs(scene, geometry, contacts)
             # the Gauss-point state, the zone's dense algebra, and K_T's own factor once the zone outgrows its cap
             memory["plastic"] = int(cells * _GAUSS_POINTS[cell] * PLASTIC_BYTES_PER_POINT
                                     + ZONE_BYTES_PER_DOF_SQUARED * zone**2 + (one_factor if capped else 0))
@@ -477,8 +237,8 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
             memory["W_build"] = int(surface * surface * (12 + 12 + 8) + 8 * m * surface)
         if _compiled_2d_cycles(scene, dim):
             memory["cycle_cache"] = int(8 * m * m * scene.loading.increments_per_cycle)
-    return SizeEstimate(g.kind, nodes, dofs, contacts, dim, ranks, exact, memory, _drivers(scene, memory),
-                        "; ".join(notes))
+    return SizeEstimate(scene.geometry.kind, nodes, dofs, contacts, dim, ranks, mesh.exact, memory,
+                        _drivers(scene, mesh, memory), "; ".join(mesh.notes))
 
 
 # The machine -------------------------------------------------------------------------------------------------

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from .geometries import GEOMETRIES
 from .scenes import Scene, SceneError, load_scene
 
 __all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
@@ -147,37 +148,23 @@ def _tolerance(local_tol: float, scene: Scene) -> list[str]:
     return out
 
 
-def _contact_mesh_size(scene: Scene) -> float:
-    """The contact element size the scene's mesh will have (mm): ``geometry.contact_mesh_size``, except for a
-    sphere that does not set it, whose cubes are sized from the Hertz contact radius (a/4), not from the
-    key's 2D default."""
-    if scene.geometry.kind == "sphere":
-        from .scene_models import sphere_mesh_size
-
-        return sphere_mesh_size(scene)
-    return scene.geometry.contact_mesh_size
-
-
 def default_reference(scene: Scene) -> list[str]:
-    """Overrides that make the fine reference of ``scene``: contact elements halved (``contact_mesh_size``
-    of a half-cylinder or a sphere; ``nx`` and ``ny`` of a rectangle doubled), twice the increments per cycle,
-    ``local_tol`` 1e-12 (or the scene's, if tighter; ``force_tol`` 100 times it under force control) and no
-    wear acceleration (its cycles multiplied by it, so that the physical cycle count is the scene's)."""
-    g, lo = scene.geometry, scene.loading
-    ref = []
-    if g.kind in ("half_cylinder", "sphere"):
-        ref.append(f"geometry.contact_mesh_size={_contact_mesh_size(scene) / 2:.10g}")
+    """Overrides that make the fine reference of ``scene``: contact elements halved (the geometry kind's
+    ``finer``: the ``contact_mesh_size`` of a half-cylinder or a sphere halved, the ``nx`` and ``ny`` of a rectangle
+    doubled, a mesh file's mesh kept), twice the increments per cycle, ``local_tol`` 1e-12 (or the scene's, if
+    tighter; ``force_tol`` 100 times it under force control) and no wear acceleration (its cycles multiplied by it,
+    so that the physical cycle count is the scene's)."""
+    loading = scene.loading
+    ref = GEOMETRIES[scene.geometry.kind].finer(scene)
+    if loading.cycles > 0:
+        ref.append(f"loading.increments_per_cycle={2 * loading.increments_per_cycle}")
     else:
-        ref += [f"geometry.nx={2 * g.nx}", f"geometry.ny={2 * g.ny}"]
-    if lo.cycles > 0:
-        ref.append(f"loading.increments_per_cycle={2 * lo.increments_per_cycle}")
-    else:
-        ref.append(f"loading.tangential_increments={2 * lo.tangential_increments}")
+        ref.append(f"loading.tangential_increments={2 * loading.tangential_increments}")
     ref += _tolerance(min(scene.solver.local_tol, 1e-12), scene)
     if scene.wear.acceleration != 1.0:
         n = _physical_cycles(scene)
         if abs(n - round(n)) > 1e-9:
-            raise SceneError(f"wear.acceleration = {scene.wear.acceleration} times loading.cycles = {lo.cycles} "
+            raise SceneError(f"wear.acceleration = {scene.wear.acceleration} times loading.cycles = {loading.cycles} "
                              "is not a whole number of physical cycles")
         ref += ["wear.acceleration=1", f"loading.cycles={int(round(n))}"]
     return ref
@@ -193,31 +180,26 @@ def sweep_entries(sweep: Sequence[tuple[str, list[str]]]) -> list[Entry]:
 
 
 def default_sweep(reference: Scene) -> list[Entry]:
-    """The sweep when none is given, around the reference: contact elements 2x and 4x coarser (a
-    half-cylinder's or a sphere's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together), a half and a quarter of
-    the increments per cycle (multiples of 4; of the tangential increments for a monotonic load), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it
-    under force control) and (cyclic scenes with wear) wear accelerations that divide the physical cycle
-    count (up to three of 2, 5, 10, 20, 50, 100, ...)."""
-    g, lo = reference.geometry, reference.loading
-    entries: list[Entry] = []
-    for f in (2, 4):
-        if g.kind in ("half_cylinder", "sphere"):
-            h = f"{_contact_mesh_size(reference) * f:.6g}"
-            entries.append(("geometry.contact_mesh_size", h, [f"geometry.contact_mesh_size={h}"]))
-        else:
-            nx, ny = max(1, g.nx // f), max(1, g.ny // f)
-            entries.append(("geometry.nx", f"{nx}", [f"geometry.nx={nx}", f"geometry.ny={ny}"]))
-    if lo.cycles > 0:
-        ns = sorted({max(4, 4 * round(lo.increments_per_cycle / f / 4)) for f in (2, 4)}, reverse=True)
+    """The sweep when none is given, around the reference: contact elements 2x and 4x coarser (the geometry kind's
+    ``coarser``: a half-cylinder's or a sphere's ``contact_mesh_size``; a rectangle's ``nx`` and ``ny`` together;
+    none for a mesh file), a half and a quarter of the increments per cycle (multiples of 4; of the tangential
+    increments for a monotonic load), ``local_tol`` 1e-10, 1e-8 and 1e-6 (with ``force_tol`` 100 times it under
+    force control) and (cyclic scenes with wear) wear accelerations that divide the physical cycle count (up to
+    three of 2, 5, 10, 20, 50, 100, ...)."""
+    geometry, loading = GEOMETRIES[reference.geometry.kind], reference.loading
+    coarser = [geometry.coarser(reference, factor) for factor in (2, 4)]
+    entries: list[Entry] = [entry for entry in coarser if entry is not None]
+    if loading.cycles > 0:
+        ns = sorted({max(4, 4 * round(loading.increments_per_cycle / f / 4)) for f in (2, 4)}, reverse=True)
         entries += sweep_entries([("loading.increments_per_cycle",
-                                   [str(n) for n in ns if n != lo.increments_per_cycle])])
-    elif lo.tangential_increments > 1:  # a monotonic load: its tangential increments
-        ns = sorted({max(1, lo.tangential_increments // f) for f in (2, 4)}, reverse=True)
+                                   [str(n) for n in ns if n != loading.increments_per_cycle])])
+    elif loading.tangential_increments > 1:  # a monotonic load: its tangential increments
+        ns = sorted({max(1, loading.tangential_increments // f) for f in (2, 4)}, reverse=True)
         entries += sweep_entries([("loading.tangential_increments",
-                                   [str(n) for n in ns if n != lo.tangential_increments])])
+                                   [str(n) for n in ns if n != loading.tangential_increments])])
     for tol in (1e-10, 1e-8, 1e-6):
         entries.append(("solver.local_tol", f"{tol:g}", _tolerance(tol, reference)))
-    if lo.cycles > 0 and reference.wear.law != "none":
+    if loading.cycles > 0 and reference.wear.law != "none":
         n = int(round(_physical_cycles(reference)))
         cands = [m * 10**e for e in range(0, 8) for m in (2, 5, 10) if m * 10**e <= n]
         accs = [s for s in dict.fromkeys(cands) if n % s == 0][:3]

@@ -21,7 +21,7 @@ import dolfinx_fretting as dfr
 from dolfinx_fretting import sliding
 from dolfinx_fretting.analytic import hertz_line_contact
 from dolfinx_fretting.contact import Contact, MasterSurface, paired_contact_set, tangent_frame
-from dolfinx_fretting.scene_models import build_scene_model
+from dolfinx_fretting.geometries import build_scene_model
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import run_scene
 

@@ -1,7 +1,8 @@
 """The layout table (docs/architecture.md's "Who owns what", which the README links to) names every module of
 the package once, and nothing else: a module added, renamed or removed without its row fails here (issue 25:
 the README's table had drifted, listing ``_dolfinx`` twice and missing seven modules; the README is now a
-front page and the table lives in docs/architecture.md alone)."""
+front page and the table lives in docs/architecture.md alone). A subpackage's modules are named
+``package.module`` (its ``__init__`` as ``package``)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,11 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-MODULES = sorted(p.stem for p in (ROOT / "dolfinx_fretting").glob("*.py")
-                 if p.stem not in ("__init__", "__main__"))
+PACKAGE = ROOT / "dolfinx_fretting"
+SUBPACKAGES = sorted(folder for folder in PACKAGE.iterdir() if (folder / "__init__.py").is_file())
+MODULES = sorted([p.stem for p in PACKAGE.glob("*.py") if p.stem not in ("__init__", "__main__")]
+                 + [folder.name if p.stem == "__init__" else f"{folder.name}.{p.stem}"
+                    for folder in SUBPACKAGES for p in folder.glob("*.py")])
 ARCHITECTURE = ROOT / "docs" / "architecture.md"
 
 
@@ -25,7 +29,7 @@ def _table_modules(path: Path, heading: str) -> list[str]:
     names: list[str] = []
     for row in rows[2:]:  # the header and its rule
         first = row.split("|")[1]
-        names += re.findall(r"`([A-Za-z_0-9]+)`", first)
+        names += re.findall(r"`([A-Za-z_0-9.]+)`", first)
     return names
 
 

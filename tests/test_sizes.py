@@ -14,6 +14,7 @@ from mpi4py import MPI
 
 from dolfinx_fretting import sizes
 from dolfinx_fretting.cli import main
+from dolfinx_fretting.geometries import half_cylinder
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.sizes import SizeError, check_size, estimate, msh_node_count
 
@@ -61,13 +62,13 @@ def test_estimate_does_not_depend_on_the_last_bit_of_a_sine(name, monkeypatch):
     sample by a few units in the last place, inwards or outwards, must give the same estimate."""
     scene = load_scene(name, ["geometry.contact_mesh_size=0.02"])
     expected = estimate(scene)
-    boundary = sizes._cylinder_boundary
+    boundary = half_cylinder._cylinder_boundary
     for factor in (1 - 4e-16, 1 + 4e-16):
         def rounded_otherwise(R, n=20000, factor=factor):
             x, y, length = boundary(R, n)
             # scale about the axis (0, R): every arc sample moves radially by ~ R * 4e-16 (a couple of ulps)
             return x * factor, R + (y - R) * factor, length
-        monkeypatch.setattr(sizes, "_cylinder_boundary", rounded_otherwise)
+        monkeypatch.setattr(half_cylinder, "_cylinder_boundary", rounded_otherwise)
         moved = estimate(scene)
         # exactly: the only floating-point differences are ~1e-16 relative in one sample's weight
         assert (moved.nodes, moved.contacts) == (expected.nodes, expected.contacts), factor
@@ -87,7 +88,7 @@ def test_estimate_is_pure_and_fast_for_a_typo():
 
 def _no_mesh(monkeypatch):
     """Every mesher raises: a test that passes with this did not mesh."""
-    from dolfinx_fretting import meshes, meshes_3d, scene_models
+    from dolfinx_fretting import geometries, meshes, meshes_3d
 
     import dolfinx_fretting.simulation as simulation
 
@@ -97,7 +98,7 @@ def _no_mesh(monkeypatch):
             raise AssertionError(f"a mesh was built ({function.__name__})")
         return meshed
     for module, name in ((meshes, "cylinder_on_flat"), (meshes, "half_cylinder"), (meshes, "rectangle"),
-                         (meshes_3d, "sphere_on_flat"), (scene_models, "build_scene_model"),
+                         (meshes_3d, "sphere_on_flat"), (geometries, "build_scene_model"),
                          (simulation, "build_scene_model")):
         monkeypatch.setattr(module, name, refuse(getattr(module, name)))
 

@@ -347,12 +347,12 @@ def test_half_model_equals_full_model():
 
 # The built-in scene's model ----------------------------------------------------------------------------------
 def test_sphere_flat_scene_model_is_hertz():
-    """The ``sphere-flat`` scene's model (scene_models._sphere), with the Contact and FrettingProblem a run
+    """The ``sphere-flat`` scene's model (geometries.sphere), with the Contact and FrettingProblem a run
     builds from it, pressed by the scene's P on the half model (model_fraction 0.5): Hertz for two identical
     steel bodies; h = a/3 here (12.5k dofs) as in test_hertz_sphere_on_an_identical_flat. A caller that does not
     scale the forces to the half model is refused."""
     from dolfinx_fretting.analytic import hertz_sphere
-    from dolfinx_fretting.scene_models import build_scene_model
+    from dolfinx_fretting.geometries import build_scene_model
     from dolfinx_fretting.scenes import load_scene
 
     scene = load_scene("sphere-flat", ["geometry.contact_mesh_size=0.0622", "contact.mu=0"])
