@@ -245,7 +245,7 @@ def _hertz_window_decision(comm):
     """The Hertz cylinder with a candidate window narrower than its contact (tests/test_window_check.py): the
     WindowError's decision, then the peak pressure once solved in the window needed."""
     import dolfinx_fretting as dfr
-    from dolfinx_fretting.scene_models import build_scene_model
+    from dolfinx_fretting.geometries import build_scene_model
 
     scene = load_scene("hertz", ["geometry.contact_mesh_size=0.02", "contact.mu=0.0", "loading.tangential_force=0.0"])
     model = build_scene_model(scene, comm)

@@ -21,7 +21,7 @@ import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 from dolfinx_fretting import local_solvers  # noqa: E402
 from dolfinx_fretting.analytic import hertz_line_contact  # noqa: E402
-from dolfinx_fretting.scene_models import build_scene_model  # noqa: E402
+from dolfinx_fretting.geometries import build_scene_model  # noqa: E402
 from dolfinx_fretting.scenes import load_scene  # noqa: E402
 from dolfinx_fretting.simulation import SimulationError, run_scene  # noqa: E402
 
