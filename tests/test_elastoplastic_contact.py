@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from dolfinx_fretting import plasticity
+from dolfinx_fretting import problem as problem_module
 from dolfinx_fretting import simulation as sim
 from dolfinx_fretting.plots import read_table
-from dolfinx_fretting.problem import FrettingProblem
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import run_scene
 
@@ -101,7 +101,8 @@ def test_cut_back_recovers_and_equals_small_increments(tmp_path, monkeypatch):
     committed history equals a run with twice as many increments (the same load points)."""
     fresh = {"flag": False}
     increment = plasticity.ElastoplasticBody.increment
-    advance = FrettingProblem.advance
+    # increments.advance as problem.py calls it: FrettingProblem.advance and each increment of a stepwise cycle
+    advance = problem_module.advance
 
     def failing_first_try(self, local_solve, pressure):
         if fresh["flag"]:
@@ -109,16 +110,16 @@ def test_cut_back_recovers_and_equals_small_increments(tmp_path, monkeypatch):
             raise plasticity.NewtonError("deliberately too large")
         return increment(self, local_solve, pressure)
 
-    def mark(self, *args, **kwargs):  # every increment of the run, preload and cycles, is one advance
+    def mark(*args, **kwargs):  # every increment of the run, preload and cycles, is one advance
         fresh["flag"] = True
-        return advance(self, *args, **kwargs)
+        return advance(*args, **kwargs)
 
     # Full Newton: the adaptive tangent's fallback would retry the same full-size increment.
     yielding = BASE + PLASTIC + ["material.yield_stress=840", "solver.newton_tangent='consistent'"]
     small = run_scene(load_scene("cylinder-flat", [*yielding, "loading.normal_increments=4",
                                                    "loading.increments_per_cycle=16"]), tmp_path / "s", quiet=True)
     monkeypatch.setattr(plasticity.ElastoplasticBody, "increment", failing_first_try)
-    monkeypatch.setattr(FrettingProblem, "advance", mark)
+    monkeypatch.setattr(problem_module, "advance", mark)
     cut = run_scene(load_scene("cylinder-flat", yielding), tmp_path / "c", quiet=True)
     hist = read_table(tmp_path / "c" / "history.csv")
     assert np.all(hist["cutbacks"] == 1)
