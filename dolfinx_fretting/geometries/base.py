@@ -10,6 +10,7 @@ checks from its validators, and an import back, even one for type checkers only,
 from __future__ import annotations
 
 import inspect
+from abc import ABCMeta, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -104,7 +105,7 @@ def coarser_contact_mesh(h: float, factor: int) -> Refinement:
     return "geometry.contact_mesh_size", value, [f"geometry.contact_mesh_size={value}"]
 
 
-class Geometry:
+class Geometry(metaclass=ABCMeta):
     """The protocol of a geometry kind: one object per ``geometry.kind`` in
     :data:`dolfinx_fretting.geometries.GEOMETRIES`.
 
@@ -158,14 +159,14 @@ class Geometry:
         <dolfinx_fretting.scene_models.SceneModel.model_fraction>`)."""
         return 1.0
 
+    @abstractmethod
     def mesh_size(self, scene: Scene) -> MeshSize:
         """Nodes, contacts and the keys that set them, counted without meshing (pure: no DOLFINx)."""
-        raise NotImplementedError(f"{type(self).__name__}.mesh_size")
 
+    @abstractmethod
     def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
         """Mesh (or read) the body and write its model with the parts of :mod:`dolfinx_fretting.scene_models`.
         Collective."""
-        raise NotImplementedError(f"{type(self).__name__}.build")
 
     def candidate_window(self, scene: Scene, zone: float, h: float) -> tuple[float, bool]:
         """The initial candidate half-width (mm) of a kind with a :meth:`contact_size`, and whether it is automatic.
