@@ -39,7 +39,7 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
         arrays["warm"] = state.warm if state.warm is not None else np.zeros(0)
         arrays["targets"] = state.targets if state.targets is not None else state.obstacle
         arrays["force_controlled"] = (state.force_controlled if state.force_controlled is not None
-                                      else np.zeros(operators.dim, dtype=bool))
+                                      else np.zeros(state.obstacle.size, dtype=bool))
         if state.pairing is not None:  # finite sliding: the pairing and the master's wear
             arrays["pairing_faces"] = state.pairing.master_faces
             arrays["pairing_nodes"] = state.pairing.master_nodes

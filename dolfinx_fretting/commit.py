@@ -126,14 +126,19 @@ def relative_slip_ratio(operators: ContactOperators, state: ContactState) -> flo
     master facet's size (:attr:`~dolfinx_fretting.contact.ContactSet.master_sizes`); 0 against a rigid
     plane. The pairing is fixed (small sliding): past 0.5 the master point of a node is no longer the one
     facing it."""
-    cs = operators.contact.contact_set
-    if cs.master_sizes is None:
-        return 0.0
     if operators.surface_compliance is not None:  # how far the paired points have moved since the pairing
         offsets = sliding.offsets(state.pairing, operators.surface_compliance, *_surface_state(operators, state))
         return float(offsets.max(initial=0.0))
-    y_t = state.positions.reshape(cs.nc, cs.dim)[:, 1:]
-    return float((np.linalg.norm(y_t, axis=1) / cs.master_sizes).max(initial=0.0))
+    contacts = operators.contact
+    dim = contacts.dim
+    ratio = 0.0
+    for zone in range(len(contacts.zones)):   # the zones against an elastic body
+        sizes = contacts.zone_set(zone).master_sizes
+        if sizes is None:
+            continue
+        y_t = state.positions.reshape(-1, dim)[contacts.zone_slice(zone), 1:]
+        ratio = max(ratio, float((np.linalg.norm(y_t, axis=1) / sizes).max(initial=0.0)))
+    return ratio
 
 def check_sliding(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState) -> None:
     """Warn once (RuntimeWarning, rank 0) when the relative slip of two bodies exceeds half a master facet,

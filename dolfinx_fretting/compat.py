@@ -21,9 +21,9 @@ place that tests versions.
 from __future__ import annotations
 
 from . import _dolfinx
-from ._dolfinx import model_to_mesh, scalar_space, vector_space
+from ._dolfinx import create_mesh, model_to_mesh, scalar_space, vector_space
 
-__all__ = ["DOLFINX_VERSION", "model_to_mesh", "scalar_space", "vector_space"]
+__all__ = ["DOLFINX_VERSION", "create_mesh", "model_to_mesh", "scalar_space", "vector_space"]
 
 #: ``(major, minor)`` of the DOLFINx in use, e.g. ``(0, 11)``.
 DOLFINX_VERSION: tuple[int, int] = _dolfinx.DOLFINX_VERSION

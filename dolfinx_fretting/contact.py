@@ -1242,8 +1242,89 @@ class Contact:
         """Components per contact (the space dimension)."""
         return self.contact_set.dim
 
-    def with_window(self, window: float | None) -> Contact:
-        """The same contact with another candidate window (collective)."""
+    # The obstacle's motion and forces (the protocol :class:`~dolfinx_fretting.zones.ContactZones` shares) -----
+    @property
+    def zones(self) -> tuple[Contact, ...]:
+        """The contact zones of the problem: this contact alone."""
+        return (self,)
+
+    @property
+    def obstacle_size(self) -> int:
+        """Components of the obstacle's motion (:attr:`~dolfinx_fretting.state.ContactState.obstacle`): n, t1[, t2]."""
+        return self.dim
+
+    def translations(self, obstacle: np.ndarray) -> np.ndarray:
+        """The obstacle's rigid translation D (global frame) from its components ``obstacle`` in the obstacle frame
+        (the last axis: approach along n, then t1[, t2]); leading axes kept (e.g. a cycle's increments)."""
+        obstacle = np.asarray(obstacle, dtype=float)
+        frame = self.frame
+        D = obstacle[..., :1] * frame[0]
+        for k in range(1, frame.shape[0]):
+            D = D + obstacle[..., k:k + 1] * frame[k]
+        return D
+
+    def rigid_motion(self, obstacle: np.ndarray) -> np.ndarray:
+        """Each contact's local relative displacement (m,) when the obstacle moves by ``obstacle`` (its frame):
+        ``G D``, G = :attr:`ContactSet.rigid_modes`, D = :meth:`translations` (the local problem's ``q`` has
+        minus this)."""
+        frame = self.frame
+        D = sum(obstacle[k] * frame[k] for k in range(frame.shape[0]))
+        return self.contact_set.rigid_modes @ D
+
+    @property
+    def rigid_modes(self) -> np.ndarray:
+        """G of the compiled cycles: (m, dim) local relative displacement per unit global translation of the
+        obstacle (:meth:`translations` gives the translations it multiplies)."""
+        return self.contact_set.rigid_modes
+
+    def obstacle_forces(self, forces: np.ndarray, contact_set: ContactSet | None = None) -> np.ndarray:
+        """The total contact force on the body along each obstacle component (n, t1[, t2]) from the contact forces
+        ``forces`` (of ``contact_set``, default the one held)."""
+        cs = self.contact_set if contact_set is None else contact_set
+        F = cs.total_force(forces)
+        return np.array([F @ self.frame[k] for k in range(self.dim)])
+
+    def held_components(self, contact_set: ContactSet | None = None) -> np.ndarray:
+        """Which obstacle components (bool, (dim,)) have a component along a direction the conditions hold
+        (:attr:`held_rows`)."""
+        cs = self.contact_set if contact_set is None else contact_set
+        held_dirs = cs.frames.reshape(-1, self.dim)[self.held_rows]
+        return np.abs(held_dirs @ self.frame.T).max(axis=0, initial=0.0) > 1e-9
+
+    def component_names(self) -> list[str]:
+        """The obstacle components' names in messages: ``normal``, ``tangential t1`` ..."""
+        return ["normal"] + [f"tangential t{k}" for k in range(1, self.dim)]
+
+    def zone_slice(self, zone: int) -> slice:
+        """The contacts of zone ``zone`` (0: every contact)."""
+        return slice(0, self.nc)
+
+    def zone_set(self, zone: int) -> ContactSet:
+        """Zone ``zone``'s contact set (0: the one held)."""
+        return self.contact_set
+
+    @property
+    def windows(self) -> tuple[float | None, ...]:
+        """The candidate window of each zone (one)."""
+        return (self.window,)
+
+    @property
+    def outside_zone(self) -> np.ndarray:
+        """The zone of each node of :attr:`outside` (all 0)."""
+        return np.zeros(0 if self.outside is None else self.outside.nc, dtype=int)
+
+    def outside_distance(self) -> np.ndarray:
+        """Each node of :attr:`outside`'s in-plane distance from the window's centre."""
+        return self.window_distance(self.outside)
+
+    def outside_motion(self) -> np.ndarray:
+        """(k, dim): each node of :attr:`outside`'s normal displacement per unit obstacle component."""
+        return self.outside.frames[:, 0, :] @ self.frame.T
+
+    def with_window(self, window: float | None, zone: int = 0) -> Contact:
+        """The same contact with another candidate window (collective; ``zone`` must be 0, the only one)."""
+        if zone != 0:
+            raise ValueError(f"zone = {zone}: a single Contact is zone 0")
         return Contact(self.V, self.surface, self.obstacle, self._mu_given, self.bcs, window, self.grow_window)
 
     def window_distance(self, cs: ContactSet) -> np.ndarray:

@@ -13,8 +13,8 @@ import numpy as np
 
 from . import local_solvers
 from .cycling import N_ROW, run_increments
-from .increments import on_rank0
-from .loading import CyclePath, Displacement, Force, tangential_item
+from .increments import on_rank0, per_zone, target_items
+from .loading import CyclePath, Displacement, Force
 from .operators import ContactOperators
 from .settings import LocalSolver
 from .state import INCREMENT_COLUMNS, ContactState, ConvergenceError, CycleResult, WindowError
@@ -25,7 +25,8 @@ __all__ = ["cycle_targets", "stepwise_cycle", "compiled_cycle"]
 
 def cycle_targets(operators: ContactOperators, state: ContactState, path: CyclePath
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(obstacle targets (n, dim), which components are forces (dim,), load factors (n, L)) of ``path`` from
+    """(obstacle targets (n, components), which components are forces (components,), load factors (n, L)) of
+    ``path`` (with several zones, ``normal`` and ``tangential`` map each zone's Contact to its item) from
     ``state``: components and loads the path does not give keep the state's values; bad shapes and unknown
     names are refused."""
     n = path.increments
@@ -34,8 +35,11 @@ def cycle_targets(operators: ContactOperators, state: ContactState, path: CycleP
     held = state.targets if state.targets is not None else state.obstacle
     obstacle = np.tile(held.astype(float), (n, 1))
     forced = (state.force_controlled.copy() if state.force_controlled is not None
-              else np.zeros(dim, dtype=bool))
-    for item, comps in ((path.normal, [0]), (path.tangential, list(range(1, dim)))):
+              else np.zeros(held.size, dtype=bool))
+    items = [(item, [dim * zone]) for zone, item in per_zone(operators, path.normal, "CyclePath.normal")]
+    items += [(item, list(range(dim * zone + 1, dim * (zone + 1))))
+              for zone, item in per_zone(operators, path.tangential, "CyclePath.tangential")]
+    for item, comps in items:
         if item is None:
             continue
         if isinstance(item, tuple):  # one item per component
@@ -76,8 +80,7 @@ def stepwise_cycle(operators: ContactOperators, advance: Callable[..., tuple[Con
     names = [nm for nm in operators.load_names if nm != "dirichlet values"]
     obstacle = obstacle.copy()
     for j in range(n):
-        normal = (Force if forced[0] else Displacement)(obstacle[j, 0])
-        tangential = tangential_item(obstacle[j, 1:], forced[1:])
+        normal, tangential = target_items(operators, obstacle[j], forced)
         loads = {nm: factors[j, operators.load_names.index(nm)] for nm in names}
         try:
             current, info = advance(current, normal, tangential, loads, in_cycle=True, check=check)
@@ -102,13 +105,10 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
     """The cycle in the compiled loop (rank 0, broadcast; the warm start of the next cycle stays on rank 0), with
     ``wear_coefficient`` the wear gap's coefficient in cycles. Collective."""
     cs = operators.contact.contact_set
-    frame = operators.contact.frame
     n, m, dim = obstacle.shape[0], cs.nc * cs.dim, cs.dim
     sv = solver
-    D = obstacle[:, :1] * frame[0]
-    for k in range(1, dim):
-        D = D + obstacle[:, k:k + 1] * frame[k]
-    D = np.ascontiguousarray(D)
+    # Each zone's translation against G's block of its contacts (one zone: G = its rigid modes).
+    D = np.ascontiguousarray(operators.contact.translations(obstacle))
     warm_new = None
 
     def work():  # rank 0: the compiled loop; its result is broadcast, the warm start stays on rank 0
@@ -122,7 +122,7 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
         out_r, out_x, out_y = np.zeros((n, m)), np.zeros((n, m)), np.zeros((n, m))
         out_gw, out_states = np.zeros((n, cs.nc)), np.zeros((n, cs.nc), dtype=np.int8)
         hist = np.zeros((n, N_ROW))
-        G = np.ascontiguousarray(cs.rigid_modes)
+        G = np.ascontiguousarray(operators.contact.rigid_modes)
         Q = np.ascontiguousarray(operators.responses)
         S = np.ascontiguousarray(factors)
         done, status, err = run_increments(
@@ -150,7 +150,7 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
                    yielded_points=np.zeros(n, dtype=int))
     slip, status = (outs[1][-1].copy(), outs[4][-1].copy()) if keep else (outs[0][-1].copy(), outs[1][-1].copy())
     final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=gw, obstacle=obstacle[-1].copy(),
-                    targets=obstacle[-1].copy(), force_controlled=np.zeros(dim, dtype=bool),
+                    targets=obstacle[-1].copy(), force_controlled=np.zeros(obstacle.shape[1], dtype=bool),
                     load_factors=factors[-1].copy(), increment=state.increment + n,
                     dissipated_energy=state.dissipated_energy + float(hist[:, ROW["dissipated_energy"]].sum()),
                     local_iterations=state.local_iterations + int(hist[:, nf].sum()),

@@ -9,7 +9,7 @@ error raised on every rank); a prescribed force makes its obstacle component an 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 from mpi4py import MPI
@@ -21,7 +21,8 @@ from .plasticity import ElastoplasticBody, NewtonError
 from .settings import LocalSolver, finite
 from .state import ContactState, ConvergenceError, IncrementResult, PlasticHistory, WindowError, solver_columns
 
-__all__ = ["on_rank0", "increment_targets", "solve_contact", "solve_plastic", "load_plastic", "advance"]
+__all__ = ["on_rank0", "increment_targets", "target_items", "per_zone", "solve_contact", "solve_plastic",
+           "load_plastic", "advance"]
 
 
 def on_rank0(comm: MPI.Comm, work: Callable[[], Any]) -> Any:
@@ -57,7 +58,7 @@ def increment_targets(operators: ContactOperators, state: ContactState, normal, 
     dim = operators.dim
     targets = (state.targets if state.targets is not None else state.obstacle).astype(float).copy()
     controlled = (state.force_controlled.copy() if state.force_controlled is not None
-                  else np.zeros(dim, dtype=bool))
+                  else np.zeros(targets.size, dtype=bool))
 
     def parse(item, comps: list[int], name: str):
         if item is None:
@@ -80,10 +81,48 @@ def increment_targets(operators: ContactOperators, state: ContactState, normal, 
             targets[c] = finite(f"{name}", v)
             controlled[c] = kind_force
 
-    parse(normal, [0], "normal")
-    parse(tangential, list(range(1, dim)), "tangential")
+    for zone, item in per_zone(operators, normal, "normal"):
+        parse(item, [dim * zone], "normal")
+    for zone, item in per_zone(operators, tangential, "tangential"):
+        parse(item, list(range(dim * zone + 1, dim * (zone + 1))), "tangential")
     operators.check_held(targets, controlled)
     return targets, controlled
+
+
+def target_items(operators: ContactOperators, targets: np.ndarray, controlled: np.ndarray) -> tuple[Any, Any]:
+    """The ``normal`` and ``tangential`` arguments of :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` that
+    prescribe ``targets`` with their controls (with several zones: one item per zone, keyed by its Contact)."""
+    zones, dim = operators.contact.zones, operators.dim
+    normal, tangential = {}, {}
+    for i, zone in enumerate(zones):
+        first = dim * i
+        normal[zone] = (Force if controlled[first] else Displacement)(targets[first])
+        tangential[zone] = tangential_item(targets[first + 1:first + dim], controlled[first + 1:first + dim])
+    if len(zones) == 1:
+        return normal[zones[0]], tangential[zones[0]]
+    return normal, tangential
+
+
+def per_zone(operators: ContactOperators, value, name: str) -> list[tuple[int, Any]]:
+    """(zone index, item) of a ``normal`` or ``tangential`` argument: with one zone a bare value is its item;
+    with several a mapping from each zone's :class:`~dolfinx_fretting.contact.Contact` to its item (zones not
+    named keep their obstacle's prescribed values)."""
+    zones = operators.contact.zones
+    if isinstance(value, Mapping):
+        items = []
+        for key, item in value.items():
+            zone = operators.zone_of(key)
+            if zone is None:
+                raise ValueError(f"{name}: a key is not one of this problem's contact zones ({key!r}): name each "
+                                 "zone by the Contact given to FrettingProblem")
+            items.append((zone, item))
+        return items
+    if value is None:
+        return []
+    if len(zones) > 1:
+        raise ValueError(f"{name} = {value!r}: this problem has {len(zones)} contact zones: give one item per zone, "
+                         f"{name}={{contact: value, ...}} (zones not named keep their obstacle's prescribed value)")
+    return [(0, value)]
 
 
 def solve_contact(operators: ContactOperators, solver: LocalSolver, state: ContactState, targets: np.ndarray,
@@ -100,7 +139,6 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
                         q_body: np.ndarray | None, W: np.ndarray | None,
                         r_warm: np.ndarray | None) -> IncrementResult:
     cs = operators.contact.contact_set
-    frame = operators.contact.frame
     dim = cs.dim
     Wm = operators.W if W is None else W
     sv = solver
@@ -118,12 +156,14 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
         if not res.converged:
             raise ConvergenceError(f"local solver did not converge: {res.message}")
         warm[0] = res.r
-        F = cs.total_force(res.r)
-        last.update(res=res, d=dd.copy(), q_abs=q_abs, F=np.array([F @ frame[k] for k in range(dim)]))
+        last.update(res=res, d=dd.copy(), q_abs=q_abs, F=operators.contact.obstacle_forces(res.r))
         return last["F"]
 
     d[~controlled] = targets[~controlled]
     names = ["normal force"] + [f"tangential force (t{k})" for k in range(1, dim)]
+    zones = len(operators.contact.zones)
+    if zones > 1:
+        names = [f"contact[{zone}] {name}" for zone in range(zones) for name in names]
     try:
         F = local(d)
         # Tolerance relative to the loads in play (a zero tangential target is held to the normal force).
@@ -244,8 +284,7 @@ def advance(operators: ContactOperators, solve: Callable[..., IncrementResult],
         else:
             targets = start_targets + f * (end_targets - start_targets)
             factors = start_factors + f * (end_factors - start_factors)
-        sub_normal = (Force if end_controlled[0] else Displacement)(targets[0])
-        sub_tangential = tangential_item(targets[1:], end_controlled[1:])
+        sub_normal, sub_tangential = target_items(operators, targets, end_controlled)
         sub_loads = {n: factors[operators.load_names.index(n)] for n in names}
         try:
             result = solve(current, sub_normal, sub_tangential, sub_loads, in_cycle=in_cycle)

@@ -47,20 +47,23 @@ class CyclePath:
     (n,), ``tangential`` (n,) in 2D or (n, 2) in 3D (components along t1, t2; (n,) in 3D: along t1, t2 at 0);
     in 3D ``tangential`` may also be a pair of items of shape (n,) with their own controls, e.g.
     ``(Force(Q), Displacement(zeros))`` in a half model. ``loads`` maps load names to (n,) factors. Names and
-    components not given keep the state's values.
+    components not given keep the state's values. With several contact zones ``normal`` and ``tangential`` map
+    each zone's :class:`~dolfinx_fretting.contact.Contact` to its item (zones not named keep their values).
     """
 
-    normal: Displacement | Force | None = None
-    tangential: Displacement | Force | tuple | None = None
+    normal: Displacement | Force | Mapping | None = None
+    tangential: Displacement | Force | tuple | Mapping | None = None
     loads: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def increments(self) -> int:
-        for item in (self.normal, self.tangential):
-            if isinstance(item, tuple):
-                item = item[0]
-            if item is not None:
-                return int(np.shape(item.value)[0])
+        """The number of increments (the length of the first target given)."""
+        for given in (self.normal, self.tangential):
+            for item in (given.values() if isinstance(given, Mapping) else [given]):
+                if isinstance(item, tuple):
+                    item = item[0]
+                if item is not None:
+                    return int(np.shape(item.value)[0])
         for v in self.loads.values():
             return int(np.shape(v)[0])
         raise ValueError("CyclePath: no target given")
@@ -74,6 +77,8 @@ class CyclePath:
         wave = waveform(shape, increments)
 
         def held(item):
+            if isinstance(item, Mapping):
+                return {zone: held(value) for zone, value in item.items()}
             if item is None:
                 return None
             kind = type(item) if isinstance(item, (Displacement, Force)) else Displacement
@@ -81,6 +86,8 @@ class CyclePath:
             return kind(np.full(increments, float(value)))
 
         def waved(item):
+            if isinstance(item, Mapping):
+                return {zone: waved(value) for zone, value in item.items()}
             if item is None:
                 return None
             if isinstance(item, tuple):

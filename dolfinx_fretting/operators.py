@@ -11,7 +11,7 @@ rebuilds W from the same factor (:meth:`ContactOperators.set_window`). Collectiv
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -27,93 +27,11 @@ from .compliance import DelassusOperator
 from .contact import Contact, ContactSet, ElasticBody, constrained_global_dofs
 from .cycling import ActivePatternCache
 from .settings import finite
-from .state import ContactState, WindowError
+from .state import ContactState
+from .window_check import OutsideRows, check_window
+from .zones import ContactZones
 
-__all__ = ["ContactOperators", "OutsideRows"]
-
-
-@dataclass(frozen=True)
-class OutsideRows:
-    """The nodes of the contact surface outside the candidate window, watched for penetration.
-
-    Their normal gap is affine in what an increment solves for, with the contacts' own ingredients (paper
-    eq. 28's q, one row per node)::
-
-        g_out = g0_out + C r - N D + sum_l s_l (H_out K^-1 f_l),     C = H_out K^-1 H^T  (free dofs),
-
-    r the contact forces, D the obstacle's translation (N: each node's normal, as the contacts' rigid modes),
-    s_l the load factors; H_out holds the nodes' normal rows (against an :class:`~dolfinx_fretting.contact.ElasticBody`:
-    the node minus its paired master point, as :func:`~dolfinx_fretting.contact.find_pairs` pairs the candidates).
-    The wear gap is zero there (a node outside the window has never been a contact). So checking an increment is a
-    product with C (a cycle's: one matrix product over its increments), no solve.
-
-    Attributes:
-        nodes: The outside nodes (a :class:`~dolfinx_fretting.contact.ContactSet`: coordinates, frames, gaps, H).
-        coupling: C, shape (k, m) (k nodes, m = dim x contacts).
-        responses: (L, k) each load's normal displacement at the nodes (prescribed values count).
-        normals: (k, dim) each node's normal.
-        distance: (k,) in-plane distance from the window's centre (what the window's half-width measures).
-        compliance: The largest contact compliance ``max_a ||W_aa||_2`` (the tolerance's length scale).
-    """
-
-    nodes: ContactSet
-    coupling: np.ndarray
-    responses: np.ndarray
-    normals: np.ndarray
-    distance: np.ndarray
-    compliance: float
-
-    def gaps(self, forces: np.ndarray, translation: np.ndarray, factors: np.ndarray) -> np.ndarray:
-        """Normal gaps (n, k) of n increments: ``forces`` (n, m), ``translation`` D (n, dim, global frame),
-        ``factors`` (n, L)."""
-        g = np.atleast_2d(forces) @ self.coupling.T - np.atleast_2d(translation) @ self.normals.T
-        if self.responses.shape[0]:
-            g += np.atleast_2d(factors) @ self.responses
-        return g + self.nodes.gap0
-
-    def tolerance(self, forces: np.ndarray, local_tol: float, terms: np.ndarray) -> np.ndarray:
-        """How far below zero a gap of each increment (rows of ``forces``) may be and not count as penetration.
-
-        The local solver accepts a solution whose natural-map error
-        (:func:`~dolfinx_fretting.local_solvers.natural_map_error`) is below ``local_tol``: a force residual of
-        ``local_tol ||r||``, which at an open contact leaves a
-        penetration up to ``local_tol ||r||_2 / rho_a = local_tol ||r||_2 ||W_aa||_2``. An outside node is held
-        to that same bound with the largest contact compliance (it would have been accepted as a candidate), plus
-        the rounding of the sum that forms its gap: 1e-12 of the largest term (``terms``, per increment), far above
-        the few ulps of a handful of additions and far below any penetration that matters."""
-        forces = np.atleast_2d(forces)
-        return local_tol * np.linalg.norm(forces, axis=1) * self.compliance + 1e-12 * terms
-
-    def check(self, gaps: np.ndarray, tolerance: np.ndarray, window: float | None,
-              cycle: bool = False) -> None:
-        """Raise :class:`~dolfinx_fretting.state.WindowError` if a gap (rows: increments) is below minus its
-        row's tolerance; in a cycle (``cycle``) the error's step is the first such increment."""
-        bad = gaps < -np.asarray(tolerance)[:, None]
-        if not bad.any():
-            return
-        rows = np.flatnonzero(bad.any(axis=1))
-        nodes = np.flatnonzero(bad.any(axis=0))   # penetrating in any increment of the batch
-        depth = -gaps[:, nodes].min(axis=0)
-        far = self.distance[nodes].max()
-        # The margin: a tenth of the farthest distance, at least two of the nodes' spacings (their tributary
-        # measure), so that the solve with the window needed has open candidates at its ends, as the scene
-        # runner's edge check wants, and room for the contact to settle.
-        dim = self.nodes.dim
-        spacing = float((self.nodes.tributary[nodes] ** (1.0 / (dim - 1))).max())
-        needed = far + max(0.1 * far, 2.0 * spacing)
-        order = np.argsort(-depth, kind="stable")
-        shown = "; ".join(str((np.round(self.nodes.coords[nodes[i]], 6) + 0.0).tolist()) for i in order[:3])
-        where = f" at increment {rows[0] + 1} of the cycle" if cycle else ""
-        raise WindowError(
-            f"window = {window:.6g}: {nodes.size} node(s) of the contact surface outside the candidate window "
-            f"penetrate the obstacle{where} (by up to {depth.max():.3g}; deepest at {shown}"
-            f"{' ...' if nodes.size > 3 else ''}): the answer would be truncated. The window needed is at least "
-            f"{needed:.6g} (the farthest penetrating node lies {far:.6g} from the window's centre "
-            f"{(np.round(self.nodes.window_centre, 6) + 0.0).tolist()}, plus a margin): widen it "
-            f"(problem.set_window(state, {needed:.6g}) and solve again), or let advance and run_cycle grow it "
-            "(Contact(..., grow_window=True))",
-            step=int(rows[0]) + 1 if cycle else None, window=window, window_needed=needed,
-            positions=self.nodes.coords[nodes[order]], penetration=float(depth.max()))
+__all__ = ["ContactOperators"]
 
 
 class ContactOperators:
@@ -121,7 +39,8 @@ class ContactOperators:
 
     Args:
         a: The bilinear form of K (UFL or ``fem.Form``), or an assembled PETSc matrix (Dirichlet rows applied).
-        contact: The :class:`~dolfinx_fretting.contact.Contact`.
+        contact: The :class:`~dolfinx_fretting.contact.Contact`, or several zones
+            (:class:`~dolfinx_fretting.zones.ContactZones`).
         bcs: Dirichlet conditions (applied in full).
         loads: Named linear forms or assembled PETSc vectors.
         prescribed: Named lists of Dirichlet conditions scaled by their factors.
@@ -141,7 +60,8 @@ class ContactOperators:
         timings: Wall times (s) of the assembly, the factorisation and W (with the load responses).
     """
 
-    def __init__(self, a, contact: Contact, bcs: Sequence = (), *, loads: Mapping[str, Any] | None = None,
+    def __init__(self, a, contact: Contact | ContactZones, bcs: Sequence = (), *,
+                 loads: Mapping[str, Any] | None = None,
                  prescribed: Mapping[str, Sequence] | None = None, petsc_options: Mapping[str, Any] | None = None,
                  delassus_method: str = "auto", options_prefix: str = "dolfinx_fretting_", plastic: bool = False):
         self.contact = contact
@@ -199,7 +119,8 @@ class ContactOperators:
         self.fixed_factor = [i for i, n in enumerate(self.load_names) if n == "dirichlet values"]
         t0 = time.perf_counter()
         self.surface_compliance: sliding.SurfaceCompliance | None = None
-        if isinstance(contact.obstacle, ElasticBody) and contact.obstacle.sliding == "finite":
+        if (isinstance(contact, Contact) and isinstance(contact.obstacle, ElasticBody)
+                and contact.obstacle.sliding == "finite"):
             self.surface_compliance = self._build_surface_compliance()
             self._surface_outside = self._outside_on_surfaces()
         #: The first guess of each obstacle component's load-displacement slope (force control).
@@ -209,6 +130,8 @@ class ContactOperators:
         self._kernel = None
         #: Finite sliding: the pairing of the reference configuration (the initial state's).
         self.reference_pairing = self.contact.contact_set
+        #: The Contact of each zone as given (a zone rebuilt for a new window stays known by it).
+        self.zone_keys = self.contact.zones
 
     def _add_vector(self, name: str, vec) -> None:
         self.load_names.append(name)
@@ -263,9 +186,14 @@ class ContactOperators:
         if not (keep_slope and self.stiffness is not None):
             # Point stiffness of the closest node: a safe first guess of the load-displacement slope (kept when
             # only the pairing changes, so that a force-controlled run does not depend on which state was read)
-            k = int(np.argmin(cs.gap0))
-            blk = self.W[k * cs.dim:(k + 1) * cs.dim, k * cs.dim:(k + 1) * cs.dim]
-            self.stiffness = np.array([1.0 / blk[c, c] for c in range(cs.dim)])
+            # (each zone's closest node)
+            stiffness = []
+            for zone in range(len(self.contact.zones)):
+                rows = self.contact.zone_slice(zone)
+                k = rows.start + int(np.argmin(cs.gap0[rows]))
+                blk = self.W[k * cs.dim:(k + 1) * cs.dim, k * cs.dim:(k + 1) * cs.dim]
+                stiffness += [1.0 / blk[c, c] for c in range(cs.dim)]
+            self.stiffness = np.array(stiffness)
         self._kernel = None
 
     def _hold_directions(self) -> None:
@@ -289,9 +217,8 @@ class ContactOperators:
                     f"FrettingProblem: a load or Dirichlet value moves contact {c} (node at {cs.coords[c].tolist()}) "
                     f"along its direction t{k}, which the conditions hold (a roller): a half model's loads must be "
                     "symmetric about its symmetry plane")
-        # Obstacle components (rows of the obstacle frame) with a component along a held direction.
-        held_dirs = cs.frames.reshape(-1, dim)[held]
-        self.held_components = np.abs(held_dirs @ self.contact.frame.T).max(axis=0, initial=0.0) > 1e-9
+        # Obstacle components (rows of each zone's obstacle frame) with a component along a held direction.
+        self.held_components = self.contact.held_components()
         blocks = np.array([self.W[c * dim:(c + 1) * dim, c * dim:(c + 1) * dim] for c in range(cs.nc)])
         eig = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1))) if cs.nc else np.zeros((0, dim))
         bad = np.flatnonzero(eig[:, 0] <= 1e-10 * eig[:, -1])
@@ -350,34 +277,22 @@ class ContactOperators:
         else:
             coupling = self.delassus.coupling(self._outside_normal_rows()[1], self.contact.H_free)
         rho = local_solvers.block_rho(self.W, dim) if self.contact.contact_set.nc else np.ones(1)
-        self.outside = OutsideRows(outside, coupling, responses, outside.frames[:, 0, :].copy(),
-                                   self.contact.window_distance(outside), float(1.0 / rho.min()))
+        centres = tuple(zone.window_centre for zone in self.contact.zones)
+        self.outside = OutsideRows(outside, coupling, responses, self.contact.outside_motion(),
+                                   self.contact.outside_distance(), float(1.0 / rho.min()),
+                                   self.contact.outside_zone, self.contact.windows, centres)
         self.timings["outside_s"] = time.perf_counter() - t0
 
     def check_window(self, forces: np.ndarray, obstacle: np.ndarray, factors: np.ndarray, local_tol: float,
                      cycle: bool = False, displacement_gaps: np.ndarray | None = None,
                      displacement_tol: float = 0.0) -> None:
-        """Raise :class:`~dolfinx_fretting.state.WindowError` if a node outside the window penetrates the obstacle
-        in an increment (rows of ``forces`` (n, m), ``obstacle`` (n, dim) in the obstacle frame, ``factors``
-        (n, L)); ``cycle``: the rows are a cycle's increments. Elastic-plastic increments give their gaps from
-        the displacement instead (``displacement_gaps``, :meth:`outside_gaps_of`), converged by Newton to
-        ``displacement_tol`` of itself, which adds to the tolerance. Not collective (replicated data): call it on
-        rank 0 through :func:`~dolfinx_fretting.increments.on_rank0`."""
-        out = self.outside
-        if out is None:
+        """:func:`~dolfinx_fretting.window_check.check_window` on the outside rows held (``obstacle``: (n,
+        components) in the obstacles' frames). Not collective (replicated data): call it on rank 0 through
+        :func:`~dolfinx_fretting.increments.on_rank0`."""
+        if self.outside is None:
             return
-        forces, obstacle, factors = np.atleast_2d(forces), np.atleast_2d(obstacle), np.atleast_2d(factors)
-        D = obstacle @ self.contact.frame
-        gaps = out.gaps(forces, D, factors) if displacement_gaps is None else np.atleast_2d(displacement_gaps)
-        moved = np.abs(gaps - out.nodes.gap0).max(axis=1)
-        # The largest term of each row's sum, for its rounding (see OutsideRows.tolerance): the gap, what moved
-        # it, the translation and the loads' share.
-        terms = np.maximum(moved, np.abs(out.nodes.gap0).max())
-        terms = np.maximum(terms, np.linalg.norm(D, axis=1))
-        if out.responses.shape[0]:
-            terms = np.maximum(terms, np.abs(factors) @ np.abs(out.responses).max(axis=1))
-        tolerance = out.tolerance(forces, local_tol, terms) + displacement_tol * moved
-        out.check(gaps, tolerance, self.contact.window, cycle)
+        check_window(self.outside, forces, obstacle, factors, self.contact.translations(np.atleast_2d(obstacle)),
+                     local_tol, cycle, displacement_gaps, displacement_tol)
 
     def outside_gaps_of(self, u: np.ndarray, obstacle: np.ndarray) -> np.ndarray | None:
         """The outside nodes' normal gaps for this rank's displacement ``u`` (a ``fem.Function``'s array: owned
@@ -390,7 +305,7 @@ class ContactOperators:
         part = out.nodes.H[0::out.nodes.dim][:, rstart:rend] @ u[:rend - rstart]
         moved = self.comm.allreduce(part, op=MPI.SUM)
         moved = self.comm.bcast(moved if self.comm.rank == 0 else None, root=0)
-        return out.nodes.gap0 + moved - out.normals @ (obstacle @ self.contact.frame)
+        return out.nodes.gap0 + moved - out.motion @ obstacle
 
     def check_held(self, obstacle: np.ndarray, force_controlled: np.ndarray) -> None:
         """Refuse obstacle motions and forces along a held contact direction (see :meth:`_hold_directions`)."""
@@ -398,7 +313,7 @@ class ContactOperators:
         if not held.any():
             return
         obstacle = np.atleast_2d(obstacle)
-        names = ["normal"] + [f"tangential t{k}" for k in range(1, self.dim)]
+        names = self.contact.component_names()
         for k in np.flatnonzero(held):
             if force_controlled[k] or np.any(obstacle[:, k] != 0.0):
                 what = "a force" if force_controlled[k] else f"a motion ({np.abs(obstacle[:, k]).max():.3g})"
@@ -457,9 +372,9 @@ class ContactOperators:
 
     def obstacle_translation(self, obstacle: np.ndarray) -> np.ndarray:
         """The obstacle's rigid translation D (global frame) from its components ``obstacle`` in the obstacle
-        frame (:attr:`~dolfinx_fretting.state.ContactState.obstacle`: approach along n, then t1[, t2])."""
-        frame = self.contact.frame
-        return sum(obstacle[k] * frame[k] for k in range(frame.shape[0]))
+        frame (:attr:`~dolfinx_fretting.state.ContactState.obstacle`: approach along n, then t1[, t2]); with
+        several zones each zone's in turn."""
+        return self.contact.translations(obstacle)
 
     def activate(self, state: ContactState) -> None:
         """Finite sliding: hold ``state``'s pairing (its contact set, W and load responses) if another is held."""
@@ -468,6 +383,13 @@ class ContactOperators:
         self.contact = self.contact.with_pairing(state.pairing)
         self.build(keep_slope=True)
 
+
+    def zone_of(self, contact) -> int | None:
+        """The index of zone ``contact`` (the Contact given to the problem, or the one held now), else None."""
+        for i, (given, held) in enumerate(zip(self.zone_keys, self.contact.zones)):
+            if contact is given or contact is held:
+                return i
+        return None
 
     # Properties -----------------------------------------------------------------------------------------
     @property
@@ -495,12 +417,11 @@ class ContactOperators:
            q_body: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(q for the local problem, q_abs) of an increment; ``q_body`` replaces the loads' response."""
         cs = self.contact.contact_set
-        D = self.obstacle_translation(d)
         if q_body is None:  # sum_l s_l q_l, in load order (one load: s q, as the compiled loop adds it)
             q_body = np.zeros(cs.nc * cs.dim) if not len(self.load_names) else factors[0] * self.responses[0]
             for i in range(1, len(self.load_names)):
                 q_body = q_body + factors[i] * self.responses[i]
-        q_abs = -cs.rigid_modes @ D + q_body
+        q_abs = -self.contact.rigid_motion(d) + q_body
         q_abs[0::cs.dim] += cs.gap0 + gw
         q = q_abs.copy()
         normal = np.arange(q.size) % cs.dim == 0
@@ -524,24 +445,30 @@ class ContactOperators:
         return None if self._kernel is None else self._kernel[2].counts
 
 
-    def set_window(self, state: ContactState, window: float | None) -> ContactState:
-        """Rebuild the contact set, W and the load responses for another candidate window (elastic bodies) and
-        carry ``state`` over: forces and wear by node; new candidates start open and unworn; the relative
-        positions are recomputed (y = W r + q_abs exactly). All or nothing. Collective."""
+    def set_window(self, state: ContactState, window: float | None, zone: int = 0) -> ContactState:
+        """Rebuild the contact set, W and the load responses for another candidate window of zone ``zone``
+        (elastic bodies) and carry ``state`` over: forces and wear by node (of the same zone); new candidates start
+        open and unworn; the relative positions are recomputed (y = W r + q_abs exactly). All or nothing.
+        Collective."""
         if self.surface_compliance is not None:
             raise ValueError("the candidate window of a finite-sliding problem cannot change (its surface compliance "
                              "is built for the contact's window): give Contact a window wide enough for the run")
         old_contact, old_W, old_resp = self.contact, self.W, self.responses
         try:
-            self.contact = old_contact.with_window(window)
+            self.contact = old_contact.with_window(window, zone)
             self.build()
         except Exception:
             self.contact, self.W, self.responses = old_contact, old_W, old_resp
             self._kernel = None
             raise
         old, new = old_contact.contact_set, self.contact.contact_set
-        where_old = {int(g): i for i, g in enumerate(old.global_nodes)}
-        src = np.array([where_old.get(int(g), -1) for g in new.global_nodes])
+
+        def keys(contact) -> list[tuple[int, int]]:  # (zone, global node): a corner's node is in two zones
+            zone_of = np.repeat(np.arange(len(contact.zones)), np.diff([contact.zone_slice(i).start for i in
+                                                                        range(len(contact.zones))] + [contact.nc]))
+            return list(zip(zone_of.tolist(), contact.contact_set.global_nodes.tolist()))
+        where_old = {key: i for i, key in enumerate(keys(old_contact))}
+        src = np.array([where_old.get(key, -1) for key in keys(self.contact)])
         had = src >= 0
         dim = new.dim
 

@@ -62,6 +62,7 @@ from .laws import Archard, WearLaw
 from .loading import CyclePath, Displacement, Force
 from .materials import J2Plasticity
 from .operators import ContactOperators
+from .zones import ContactZones, as_zones
 from .plasticity import ElastoplasticBody
 from .settings import LocalSolver, Plasticity
 from .state import (INCREMENT_COLUMNS, STATUS_NAMES, ContactState, ConvergenceError, CycleResult, IncrementResult,
@@ -78,7 +79,11 @@ class FrettingProblem:
     Args:
         a: The bilinear form of K (UFL or ``fem.Form``), or an assembled PETSc matrix (Dirichlet rows already
             applied; then ``prescribed`` and a non-zero Dirichlet value are not available).
-        contact: The :class:`~dolfinx_fretting.contact.Contact`.
+        contact: The :class:`~dolfinx_fretting.contact.Contact`, or a list of them: several contact zones, each
+            with its own surface, obstacle, friction law and window, coupled through the body (one W, one
+            factorisation; :class:`~dolfinx_fretting.zones.ContactZones`). With several zones the targets of
+            :meth:`solve` and :class:`~dolfinx_fretting.loading.CyclePath` map each zone's Contact to its item, and
+            :meth:`total_force` and :meth:`contact_fields` take the zone.
         bcs: Dirichlet conditions. Their values are part of the model (applied in full at every increment);
             to scale a Dirichlet value along a load path, give it in ``prescribed`` instead.
         wear: A wear law (the :class:`~dolfinx_fretting.laws.WearLaw` protocol, e.g.
@@ -103,14 +108,13 @@ class FrettingProblem:
 
     _count = 0
 
-    def __init__(self, a, contact: Contact, bcs: Sequence = (), *, wear: WearLaw | None = None,
+    def __init__(self, a, contact: Contact | Sequence[Contact], bcs: Sequence = (), *, wear: WearLaw | None = None,
                  loads: Mapping[str, Any] | None = None, prescribed: Mapping[str, Sequence] | None = None,
                  petsc_options: Mapping[str, Any] | None = None, delassus_method: str = "auto",
                  solver: LocalSolver | None = None, plasticity: Plasticity | None = None,
                  options_prefix: str | None = None):
         # Bad input is refused before anything is assembled.
-        if not isinstance(contact, Contact):
-            raise TypeError(f"FrettingProblem: contact must be a Contact, got {type(contact).__name__}")
+        contact = as_zones(contact)
         if delassus_method not in METHODS:
             raise ValueError(f"FrettingProblem: delassus_method = {delassus_method!r}: allowed {', '.join(METHODS)}")
         if wear is not None and not isinstance(wear, WearLaw):
@@ -126,7 +130,8 @@ class FrettingProblem:
             if prescribed:
                 raise ValueError("FrettingProblem: prescribed Dirichlet data are not supported with plasticity "
                                  "(the Newton loop holds Dirichlet dofs at zero)")
-            if isinstance(contact.obstacle, ElasticBody) and contact.obstacle.sliding == "finite":
+            if any(isinstance(zone.obstacle, ElasticBody) and zone.obstacle.sliding == "finite"
+                   for zone in contact.zones):
                 raise ValueError("FrettingProblem: finite sliding (ElasticBody(sliding='finite')) is for elastic "
                                  "bodies; an elastic-plastic problem keeps the pairing fixed (sliding='small')")
             law = plasticity.law
@@ -154,9 +159,15 @@ class FrettingProblem:
 
     # What the problem holds ------------------------------------------------------------------------------
     @property
-    def contact(self) -> Contact:
-        """The contact (under finite sliding: holding the pairing of the state last solved or committed)."""
+    def contact(self) -> Contact | ContactZones:
+        """The contact (under finite sliding: holding the pairing of the state last solved or committed); with
+        several zones, all of them stacked (:class:`~dolfinx_fretting.zones.ContactZones`)."""
         return self.operators.contact
+
+    @property
+    def contacts(self) -> tuple[Contact, ...]:
+        """The contact zones, in the order given (one: ``(contact,)``)."""
+        return self.operators.contact.zones
 
     @property
     def V(self):
@@ -205,8 +216,9 @@ class FrettingProblem:
             points = self.body.state
             plastic = PlasticHistory(np.zeros_like(self.body.u.x.array), np.zeros_like(points.sigma),
                                      np.zeros_like(points.eps_p), np.zeros_like(points.p))
-        return ContactState(np.zeros(m), y, np.zeros(m), np.zeros(cs.nc), np.zeros(cs.dim), factors,
-                            targets=np.zeros(cs.dim), force_controlled=np.zeros(cs.dim, dtype=bool), plastic=plastic,
+        size = ops.contact.obstacle_size
+        return ContactState(np.zeros(m), y, np.zeros(m), np.zeros(cs.nc), np.zeros(size), factors,
+                            targets=np.zeros(size), force_controlled=np.zeros(size, dtype=bool), plastic=plastic,
                             pairing=cs if finite else None,
                             master_wear=np.zeros(ops.surface_compliance.nodes.size) if finite else None)
 
@@ -218,12 +230,13 @@ class FrettingProblem:
         Args:
             state: The committed state to start from.
             normal: Obstacle approach along n (a float or :class:`~dolfinx_fretting.loading.Displacement`), or
+                (several zones: a mapping from each zone's Contact to such an item; zones not named keep theirs)
                 :class:`~dolfinx_fretting.loading.Force` on the body
                 along n; None keeps the state's prescribed value (the approach, or the force if the last
                 increment prescribed one).
             tangential: Obstacle motion along t1 (2D) or (t1, t2) (3D), or :class:`~dolfinx_fretting.loading.Force`
-                components; None
-                keeps the state's prescribed values likewise.
+                components (several zones: per zone, as ``normal``); None keeps the state's prescribed values
+                likewise.
             loads: Factors of named loads and prescribed Dirichlet data; names not given keep their factors.
             in_cycle: The increment belongs to a load cycle (the wear law's acceleration applies at commit).
 
@@ -301,12 +314,14 @@ class FrettingProblem:
             except WindowError as exc:
                 # (an elastic-plastic or finite-sliding problem cannot change its window: the error stands)
                 fixed = self.body is not None or self.operators.surface_compliance is not None
-                if not self.contact.grow_window or fixed:
+                zone = self.contacts[exc.zone]
+                if not zone.grow_window or fixed:
                     raise
-                before = self.contact.window
-                state = self.set_window(state, exc.window_needed)
+                before = zone.window
+                state = self.set_window(state, exc.window_needed, zone=exc.zone)
+                who = f"contact[{exc.zone}]: " if len(self.contacts) > 1 else ""
                 if self.comm.rank == 0:
-                    warnings.warn(f"candidate window grown from {before:.6g} to {exc.window_needed:.6g} "
+                    warnings.warn(f"{who}candidate window grown from {before:.6g} to {exc.window_needed:.6g} "
                                   f"({self.contact.nc} contacts): {exc.positions.shape[0]} node(s) outside it "
                                   f"penetrated by up to {exc.penetration:.3g}; the increment is solved again",
                                   RuntimeWarning, stacklevel=3)
@@ -354,13 +369,16 @@ class FrettingProblem:
         return advance(self.operators, self.solve, self.commit, state, normal, tangential, loads, in_cycle=in_cycle,
                        max_cutbacks=max_cutbacks, check=check)
 
-    def set_window(self, state: ContactState, window: float | None) -> ContactState:
-        """Rebuild the contact set, W and the load responses for another candidate window (elastic bodies) and
-        carry ``state`` over: forces and wear by node; new candidates start open and unworn; the relative
-        positions are recomputed (y = W r + q_abs exactly). All or nothing. Collective."""
+    def set_window(self, state: ContactState, window: float | None, zone: int = 0) -> ContactState:
+        """Rebuild the contact set, W and the load responses for another candidate window of zone ``zone`` (its
+        index in the list given; elastic bodies) and carry ``state`` over: forces and wear by node; new candidates
+        start open and unworn; the relative positions are recomputed (y = W r + q_abs exactly). All or nothing.
+        Collective."""
         if self.body is not None:
             raise ValueError("the candidate window of an elastic-plastic problem cannot change")
-        return self.operators.set_window(state, window)
+        if not (isinstance(zone, (int, np.integer)) and 0 <= zone < len(self.contacts)):
+            raise ValueError(f"set_window: zone = {zone!r}: allowed 0 .. {len(self.contacts) - 1} (the zones' order)")
+        return self.operators.set_window(state, window, int(zone))
 
     # Readers ----------------------------------------------------------------------------------------------
     def displacement(self, state: ContactState, out=None):
@@ -369,13 +387,15 @@ class FrettingProblem:
         plastic_u = state.plastic.u if self.body is not None else None
         return readers.displacement(self.operators, state, out, plastic_u)
 
-    def contact_fields(self, state: ContactState) -> dict[str, np.ndarray]:
-        """Per contact node (replicated): :func:`dolfinx_fretting.readers.contact_fields`."""
-        return readers.contact_fields(self.operators, state)
+    def contact_fields(self, state: ContactState, contact: Contact | None = None) -> dict[str, np.ndarray]:
+        """Per contact node (replicated): :func:`dolfinx_fretting.readers.contact_fields`; ``contact``: one zone's
+        nodes (default every zone's, in turn)."""
+        return readers.contact_fields(self.operators, state, contact)
 
-    def total_force(self, state: ContactState) -> np.ndarray:
-        """Total contact force on the body in the obstacle frame (n, t1[, t2])."""
-        return readers.total_force(self.operators, state)
+    def total_force(self, state: ContactState, contact: Contact | None = None) -> np.ndarray:
+        """Total contact force on the body in the obstacle frame (n, t1[, t2]); with several zones, zone
+        ``contact``'s in its obstacle's frame."""
+        return readers.total_force(self.operators, state, contact)
 
     def body_wear(self, state: ContactState) -> dict[str, np.ndarray]:
         """Two bodies: each body's worn depth (:func:`dolfinx_fretting.readers.body_wear`)."""

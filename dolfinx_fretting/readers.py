@@ -16,7 +16,7 @@ from .laws import WearLaw
 from .operators import ContactOperators
 from .state import ContactState
 
-__all__ = ["displacement", "contact_fields", "body_wear", "worn_measure", "total_force"]
+__all__ = ["displacement", "contact_fields", "body_wear", "worn_measure", "total_force", "zone_index"]
 
 
 def displacement(operators: ContactOperators, state: ContactState, out=None, plastic_u: np.ndarray | None = None):
@@ -48,28 +48,49 @@ def displacement(operators: ContactOperators, state: ContactState, out=None, pla
 
 
 def _add_obstacle_motion(operators: ContactOperators, u, state: ContactState):
-    obstacle = operators.contact.obstacle
-    if not isinstance(obstacle, ElasticBody) or obstacle.cells is None:
-        return u
-    D = operators.obstacle_translation(state.obstacle)
-    # The cells' nodes from the dofmap (DOLFINx 0.11 wants a cell-to-cell connectivity for
-    # locate_dofs_topological on cells of a 3D mesh).
-    nodes = np.unique(cell_dofmap(operators.V)[np.asarray(obstacle.cells, dtype=np.int32)])
-    values = u.x.array.reshape(-1, operators.V.dofmap.index_map_bs)
-    values[nodes, :D.size] += D
+    """Each elastic obstacle with ``cells`` moves its nodes by its zone's translation D."""
+    dim = operators.dim
+    for zone, contact in enumerate(operators.contact.zones):
+        obstacle = contact.obstacle
+        if not isinstance(obstacle, ElasticBody) or obstacle.cells is None:
+            continue
+        D = contact.translations(state.obstacle[dim * zone:dim * (zone + 1)])
+        # The cells' nodes from the dofmap (DOLFINx 0.11 wants a cell-to-cell connectivity for
+        # locate_dofs_topological on cells of a 3D mesh).
+        nodes = np.unique(cell_dofmap(operators.V)[np.asarray(obstacle.cells, dtype=np.int32)])
+        values = u.x.array.reshape(-1, operators.V.dofmap.index_map_bs)
+        values[nodes, :D.size] += D
     return u
 
 
-def contact_fields(operators: ContactOperators, state: ContactState) -> dict[str, np.ndarray]:
+def zone_index(operators: ContactOperators, contact, reader: str) -> int | None:
+    """The index of zone ``contact`` (a :class:`~dolfinx_fretting.contact.Contact` of the problem), None for the
+    whole problem; with several zones a reader of one zone's quantity needs its zone."""
+    if contact is None:
+        return None
+    zone = operators.zone_of(contact)
+    if zone is None:
+        raise ValueError(f"{reader}: contact = {contact!r} is not one of this problem's "
+                         f"{len(operators.contact.zones)} contact zone(s)")
+    return zone
+
+
+def contact_fields(operators: ContactOperators, state: ContactState, contact=None) -> dict[str, np.ndarray]:
     """Per contact node (replicated): ``coordinates``, ``global_node``, ``pressure`` and ``shear``
     (force / tributary measure; shear has dim-1 components), ``gap``, ``slip`` (last increment's slip
-    increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip)."""
+    increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip).
+    ``contact``: one zone's nodes only (default every zone's, in turn)."""
     cs = operators.contact_set_of(state)
     dim = cs.dim
     r = state.forces.reshape(cs.nc, dim)
     y = state.positions.reshape(cs.nc, dim)
     x = state.slip.reshape(cs.nc, dim)
     status = state.status if state.status is not None else np.zeros(cs.nc, dtype=np.int8)
+    zone = zone_index(operators, contact, "contact_fields")
+    if zone is not None:
+        rows = operators.contact.zone_slice(zone)
+        fields = contact_fields(operators, state)
+        return {name: values[rows].copy() for name, values in fields.items()}
     return {"coordinates": cs.coords.copy(), "global_node": cs.global_nodes.copy(),
             "pressure": r[:, 0] / cs.tributary, "shear": r[:, 1:] / cs.tributary[:, None],
             "gap": y[:, 0].copy(), "slip": x[:, 1:].copy(), "relative_tangential": y[:, 1:].copy(),
@@ -106,8 +127,14 @@ def worn_measure(operators: ContactOperators, state: ContactState) -> float:
     slave = state.wear_gap - sliding.interpolate_master(cs, operators.surface_compliance, state.master_wear)
     return float(slave @ cs.tributary + state.master_wear @ operators.surface_compliance.master_areas)
 
-def total_force(operators: ContactOperators, state: ContactState) -> np.ndarray:
-    """Total contact force on the body in the obstacle frame (n, t1[, t2])."""
-    cs = operators.contact_set_of(state)
-    F = cs.total_force(state.forces)
-    return np.array([F @ operators.contact.frame[k] for k in range(operators.dim)])
+def total_force(operators: ContactOperators, state: ContactState, contact=None) -> np.ndarray:
+    """Total contact force on the body in the obstacle frame (n, t1[, t2]); with several zones the force of zone
+    ``contact`` in its obstacle's frame (required: the zones' frames differ)."""
+    zones = operators.contact.zones
+    zone = zone_index(operators, contact, "total_force")
+    if zone is None and len(zones) > 1:
+        raise ValueError(f"total_force: this problem has {len(zones)} contact zones, each with its own frame: name "
+                         "one, total_force(state, contact)")
+    forces = operators.contact.obstacle_forces(state.forces, operators.contact_set_of(state))
+    zone = zone or 0
+    return forces[operators.dim * zone:operators.dim * (zone + 1)]

@@ -60,11 +60,15 @@ class WindowError(ConvergenceError):
             centre to the farthest one, plus a margin).
         positions: (k, dim) reference coordinates of the penetrating nodes (all of them).
         penetration: The largest penetration (length units, > 0).
+        zone: The index of the contact zone whose window is too narrow (0 with one
+            :class:`~dolfinx_fretting.contact.Contact`; with several, their order in the problem's list).
     """
 
     def __init__(self, message: str, step: int | None = None, *, window: float | None = None,
-                 window_needed: float = 0.0, positions: np.ndarray | None = None, penetration: float = 0.0):
+                 window_needed: float = 0.0, positions: np.ndarray | None = None, penetration: float = 0.0,
+                 zone: int = 0):
         super().__init__(message, step=step)
+        self.zone = int(zone)
         self.window = window
         self.window_needed = float(window_needed)
         self.positions = np.zeros((0, 0)) if positions is None else np.asarray(positions, dtype=float)
@@ -74,7 +78,7 @@ class WindowError(ConvergenceError):
     def details(self) -> dict[str, Any]:
         """The attributes above as plain data (what :func:`~dolfinx_fretting.increments.on_rank0` sends)."""
         return {"window": self.window, "window_needed": self.window_needed, "positions": self.positions,
-                "penetration": self.penetration}
+                "penetration": self.penetration, "zone": self.zone}
 
 
 
@@ -101,7 +105,9 @@ class ContactState:
             accumulated relative tangential displacement.
         slip: The last increment's local solution x: gaps (normal rows) and slip increments (tangential rows).
         wear_gap: Wear gap per contact (length).
-        obstacle: Obstacle displacement in the obstacle frame (approach along n, then t1[, t2]).
+        obstacle: Obstacle displacement in the obstacle frame (approach along n, then t1[, t2]); with several
+            contact zones (:class:`~dolfinx_fretting.zones.ContactZones`) each zone's obstacle in turn, in its own
+            frame (``dim`` components per zone).
         targets: The last increment's prescribed values per obstacle component (the displacement, or the force
             where it was force controlled): what a component not given to
             :meth:`~dolfinx_fretting.problem.FrettingProblem.solve` keeps,

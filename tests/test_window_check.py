@@ -229,10 +229,11 @@ def test_two_bodies_outside_rows_are_the_displacement_s_gaps(sliding):
     u = problem.displacement(state).x.array   # serial: the local array is the global one
     out = problem.operators.outside
     D = problem.obstacle_translation(state.obstacle)
-    rows = out.gaps(state.forces, D, state.load_factors)[0]
+    rows = out.gaps(state.forces, state.obstacle, state.load_factors)[0]
     H = out.nodes.H[0::2]
     moved = H @ u[:H.shape[1]]
-    assert np.abs(rows - (out.nodes.gap0 + moved - out.normals @ D)).max() <= 1e-12 * np.abs(moved).max()
+    normals = out.nodes.frames[:, 0, :]
+    assert np.abs(rows - (out.nodes.gap0 + moved - normals @ D)).max() <= 1e-12 * np.abs(moved).max()
     assert rows.min() > 0   # the window holds the contact: every node outside it is open
 
 
