@@ -16,6 +16,7 @@ by position along the surface, so the local problem is the same whatever the par
 from __future__ import annotations
 
 import copy
+from abc import ABCMeta, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,7 @@ from mpi4py import MPI
 
 from .laws import Coulomb, FrictionLaw
 
-__all__ = ["RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates", "find_pairs",
+__all__ = ["Obstacle", "RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates", "find_pairs",
            "tangent_frame", "constrained_dofs", "constrained_global_dofs", "pair_with_faces", "pair_with_segments",
            "paired_contact_set"]
 
@@ -68,8 +69,42 @@ def tangent_frame(normal: np.ndarray) -> np.ndarray:
     raise ValueError(f"normal must have 2 or 3 components, got {n.size}")
 
 
+class Obstacle(metaclass=ABCMeta):
+    """What a :class:`Contact` needs of an obstacle: its frame, its candidate search, what moves with it.
+
+    An obstacle shape is one class implementing :meth:`candidates` (and, where it has them, :meth:`check`, the
+    cells moved with it and finite sliding), registered by name in
+    :data:`dolfinx_fretting.obstacles.OBSTACLES`; the operators, increments, cycles and readers reach it only
+    through these members. :class:`RigidPlane` and :class:`ElasticBody` are the two shapes.
+
+    Attributes:
+        normal: The unit normal of the obstacle motion's frame, pointing from the obstacle into the body.
+    """
+
+    normal: np.ndarray
+    #: Finite sliding: the candidates are paired anew as the bodies slide (:class:`ElasticBody` only).
+    finite_sliding: bool = False
+    #: Cells of the mesh that move with the obstacle's translation D in the displacement read back, or None.
+    moved_cells: np.ndarray | None = None
+
+    @property
+    def frame(self) -> np.ndarray:
+        """Rows (n, t1[, t2]) of the obstacle frame (see :func:`tangent_frame`): the directions of the obstacle
+        motion and of the total forces."""
+        return tangent_frame(self.normal)
+
+    def check(self, V) -> None:
+        """Cheap checks of the obstacle against the space (on every rank alike), before any candidate search."""
+
+    @abstractmethod
+    def candidates(self, V, facets: np.ndarray, half_width: float | None,
+                   exclude_nodes: np.ndarray | None) -> ContactSet:
+        """The candidate contacts of the body's ``facets`` (within ``half_width`` of the window's centre, all if
+        None; ``exclude_nodes`` never: their every dof is fixed), with frames, gaps and H. Collective."""
+
+
 @dataclass(frozen=True)
-class RigidPlane:
+class RigidPlane(Obstacle):
     """A rigid plane (a line in 2D) through ``point``, its ``normal`` pointing from the plane into the body.
 
     The normal may have any length: it is stored divided by its length (``RigidPlane([0, 0], [0, 2]).normal`` is
@@ -93,14 +128,14 @@ class RigidPlane:
         object.__setattr__(self, "normal", n / np.linalg.norm(n))
         object.__setattr__(self, "point", point)
 
-    @property
-    def frame(self) -> np.ndarray:
-        """Rows (n, t1[, t2]) of the plane's frame (see :func:`tangent_frame`)."""
-        return tangent_frame(self.normal)
-
     def gap(self, coords: np.ndarray) -> np.ndarray:
         """Signed normal distance of points (rows of ``coords``) from the plane."""
         return (np.asarray(coords) - self.point) @ self.normal
+
+    def candidates(self, V, facets: np.ndarray, half_width: float | None,
+                   exclude_nodes: np.ndarray | None) -> ContactSet:
+        """:func:`find_candidates` against this plane. Collective."""
+        return find_candidates(V, facets, self, half_width, exclude_nodes=exclude_nodes)
 
 
 @dataclass
@@ -903,7 +938,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
 SLIDING = ("small", "finite")
 
 @dataclass(frozen=True)
-class ElasticBody:
+class ElasticBody(Obstacle):
     """A deformable counter-body (the *master*) meshed in the same mesh as the body (the *slave*). 2D or 3D.
 
     Each slave node of the contact surface is paired with the closest point of the master surface:
@@ -968,9 +1003,25 @@ class ElasticBody:
             raise ValueError(f"ElasticBody.reach = {self.reach!r}: allowed None or a finite length > 0")
 
     @property
-    def frame(self) -> np.ndarray:
-        """Rows (n, t1[, t2]) of the obstacle-motion frame (see :func:`tangent_frame`)."""
-        return tangent_frame(self.normal)
+    def finite_sliding(self) -> bool:
+        """``sliding == "finite"``."""
+        return self.sliding == "finite"
+
+    @property
+    def moved_cells(self) -> np.ndarray | None:
+        """:attr:`cells`: the master body's cells, moved by D in the displacement read back."""
+        return self.cells
+
+    def check(self, V) -> None:
+        """The master surface's marker tags facets (a message naming the markers the tags hold otherwise)."""
+        _tagged_facets(self.surface, V.mesh, "ElasticBody.surface")
+
+    def candidates(self, V, facets: np.ndarray, half_width: float | None,
+                   exclude_nodes: np.ndarray | None) -> ContactSet:
+        """:func:`find_pairs`: each slave node of ``facets`` paired with the master surface. Collective."""
+        master_facets = _tagged_facets(self.surface, V.mesh, "ElasticBody.surface")
+        return find_pairs(V, facets, master_facets, half_width, exclude_nodes=exclude_nodes,
+                          reference_frame=self.frame)
 
 
 def _check_vector_p1(V) -> None:
@@ -1095,7 +1146,8 @@ class Contact:
     Args:
         V: Vector P1 displacement space (anything else is refused).
         surface: ``(facet_tags, marker)``: the body's boundary that may touch the obstacle.
-        obstacle: :class:`RigidPlane` (2D or 3D, any orientation) or :class:`ElasticBody` (2D or 3D).
+        obstacle: An :class:`Obstacle`: :class:`RigidPlane` (2D or 3D, any orientation) or :class:`ElasticBody` (2D
+            or 3D).
         mu: The friction law (:class:`~dolfinx_fretting.laws.FrictionLaw`, e.g.
             :class:`~dolfinx_fretting.laws.Coulomb`), or Coulomb's coefficient (finite, >= 0): one value or one per
             contact.
@@ -1129,11 +1181,12 @@ class Contact:
             candidate within ``window``, or a contact whose normal direction ``bcs`` fix entirely.
     """
 
-    def __init__(self, V, surface: tuple, obstacle: RigidPlane | ElasticBody, mu: float | np.ndarray | FrictionLaw,
+    def __init__(self, V, surface: tuple, obstacle: Obstacle, mu: float | np.ndarray | FrictionLaw,
                  bcs=(), window: float | None = None, grow_window: bool = False):
         _check_vector_p1(V)
-        if not isinstance(obstacle, (RigidPlane, ElasticBody)):
-            raise TypeError(f"Contact: obstacle must be a RigidPlane or an ElasticBody, got {type(obstacle).__name__}")
+        if not isinstance(obstacle, Obstacle):
+            raise TypeError(f"Contact: obstacle must be an Obstacle (a RigidPlane, an ElasticBody, or a shape of "
+                            f"dolfinx_fretting.obstacles.OBSTACLES), got {type(obstacle).__name__}")
         gdim = V.mesh.geometry.dim
         if obstacle.normal.size != gdim:
             raise ValueError(f"Contact: the obstacle normal has {obstacle.normal.size} components, the mesh is {gdim}D")
@@ -1161,8 +1214,7 @@ class Contact:
         self._mu_given = mu
         # The surfaces and their free vertices are checked (a few reductions) before any candidate search.
         self.facets = _tagged_facets(surface, V.mesh, "surface")
-        master_facets = (_tagged_facets(obstacle.surface, V.mesh, "ElasticBody.surface")
-                         if isinstance(obstacle, ElasticBody) else None)
+        obstacle.check(V)
         bs = V.dofmap.index_map_bs
         fixed = constrained_dofs(V, self.bcs)
         counts = np.bincount(fixed // bs, minlength=0)
@@ -1170,10 +1222,7 @@ class Contact:
         _refuse_fixed_surface(V, self.facets, self.fixed_nodes, int(surface[1]))
         self.fixed_global = constrained_global_dofs(V, self.bcs)
         def search(half_width: float | None) -> ContactSet:
-            if isinstance(obstacle, RigidPlane):
-                return find_candidates(V, self.facets, obstacle, half_width, exclude_nodes=self.fixed_nodes)
-            return find_pairs(V, self.facets, master_facets, half_width, exclude_nodes=self.fixed_nodes,
-                              reference_frame=obstacle.frame)
+            return obstacle.candidates(V, self.facets, half_width, self.fixed_nodes)
 
         cs = search(window)
         self._use(cs)

@@ -24,7 +24,7 @@ from . import _dolfinx as dfx
 from . import local_solvers, sliding
 from ._dolfinx import fem
 from .compliance import DelassusOperator
-from .contact import Contact, ContactSet, ElasticBody, constrained_global_dofs
+from .contact import Contact, ContactSet, constrained_global_dofs
 from .cycling import ActivePatternCache
 from .settings import finite
 from .state import ContactState
@@ -119,8 +119,7 @@ class ContactOperators:
         self.fixed_factor = [i for i, n in enumerate(self.load_names) if n == "dirichlet values"]
         t0 = time.perf_counter()
         self.surface_compliance: sliding.SurfaceCompliance | None = None
-        if (isinstance(contact, Contact) and isinstance(contact.obstacle, ElasticBody)
-                and contact.obstacle.sliding == "finite"):
+        if isinstance(contact, Contact) and contact.obstacle.finite_sliding:
             self.surface_compliance = self._build_surface_compliance()
             self._surface_outside = self._outside_on_surfaces()
         #: The first guess of each obstacle component's load-displacement slope (force control).

@@ -38,6 +38,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .io import CYCLE_FIELDS, HISTORY_FIELDS, RUN_DESCRIPTION, ResultWriter, profile_fields, write_json_atomic
+from .obstacles import obstacle_kind
 from .state import INCREMENT_COLUMNS
 from .units import Units
 
@@ -140,7 +141,7 @@ class RunDescription:
             plane_point = getattr(obstacle, "point", np.zeros(contact.dim))
         wear = problem.wear
         values: dict[str, Any] = {
-            "dim": contact.dim, "obstacle": "elastic_body" if contact.contact_set.two_body else "rigid_plane",
+            "dim": contact.dim, "obstacle": obstacle_kind(obstacle),
             "plane_point": tuple(float(v) for v in plane_point),
             "plane_normal": tuple(float(v) for v in contact.frame[0]),
             "slave_wear_share": wear.slave_share if wear is not None and contact.contact_set.two_body else None,

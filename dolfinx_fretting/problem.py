@@ -55,7 +55,7 @@ from mpi4py import MPI
 from . import checkpoint, readers
 from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficient
 from .compliance import METHODS
-from .contact import Contact, ContactSet, ElasticBody
+from .contact import Contact, ContactSet
 from .cycles import compiled_cycle, cycle_targets, stepwise_cycle
 from .increments import advance, increment_targets, load_plastic, on_rank0, solve_contact, solve_plastic
 from .laws import Archard, WearLaw
@@ -130,8 +130,7 @@ class FrettingProblem:
             if prescribed:
                 raise ValueError("FrettingProblem: prescribed Dirichlet data are not supported with plasticity "
                                  "(the Newton loop holds Dirichlet dofs at zero)")
-            if any(isinstance(zone.obstacle, ElasticBody) and zone.obstacle.sliding == "finite"
-                   for zone in contact.zones):
+            if any(zone.obstacle.finite_sliding for zone in contact.zones):
                 raise ValueError("FrettingProblem: finite sliding (ElasticBody(sliding='finite')) is for elastic "
                                  "bodies; an elastic-plastic problem keeps the pairing fixed (sliding='small')")
             law = plasticity.law

@@ -11,7 +11,6 @@ from petsc4py import PETSc
 from . import _dolfinx as dfx
 from . import sliding
 from ._dolfinx import cell_dofmap, fem
-from .contact import ElasticBody
 from .laws import WearLaw
 from .operators import ContactOperators
 from .state import ContactState
@@ -48,16 +47,17 @@ def displacement(operators: ContactOperators, state: ContactState, out=None, pla
 
 
 def _add_obstacle_motion(operators: ContactOperators, u, state: ContactState):
-    """Each elastic obstacle with ``cells`` moves its nodes by its zone's translation D."""
+    """Each obstacle with cells that move with it (an :class:`~dolfinx_fretting.contact.ElasticBody`'s ``cells``)
+    moves their nodes by its zone's translation D."""
     dim = operators.dim
     for zone, contact in enumerate(operators.contact.zones):
-        obstacle = contact.obstacle
-        if not isinstance(obstacle, ElasticBody) or obstacle.cells is None:
+        cells = contact.obstacle.moved_cells
+        if cells is None:
             continue
         D = contact.translations(state.obstacle[dim * zone:dim * (zone + 1)])
         # The cells' nodes from the dofmap (DOLFINx 0.11 wants a cell-to-cell connectivity for
         # locate_dofs_topological on cells of a 3D mesh).
-        nodes = np.unique(cell_dofmap(operators.V)[np.asarray(obstacle.cells, dtype=np.int32)])
+        nodes = np.unique(cell_dofmap(operators.V)[np.asarray(cells, dtype=np.int32)])
         values = u.x.array.reshape(-1, operators.V.dofmap.index_map_bs)
         values[nodes, :D.size] += D
     return u

@@ -22,7 +22,7 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from .contact import Contact, ContactSet, ElasticBody
+from .contact import Contact, ContactSet
 
 __all__ = ["ContactZones", "concatenate", "as_zones"]
 
@@ -59,8 +59,8 @@ class ContactZones:
         contact_set: Every zone's contacts in turn (:func:`concatenate`).
         offsets: (zones + 1,) the first contact of each zone in :attr:`contact_set` (and the end).
         H_free, held_rows, mu: Every zone's, stacked (row and contact indices of :attr:`contact_set`).
-        outside: Every zone's nodes outside its window, stacked (None if no zone has any);
-            :attr:`outside_zone` says whose.
+        outside: Every zone's nodes outside its window, stacked (None if no zone has any).
+        outside_zone: The zone of each node of ``outside``.
 
     Raises:
         TypeError: a zone is not a Contact.
@@ -89,7 +89,7 @@ class ContactZones:
                                  f"contact[0] ({zone.fixed_global.size} fixed dofs, {first.fixed_global.size} there): "
                                  "pass the problem's bcs to every Contact(..., bcs=...)")
         for i, zone in enumerate(zones):
-            if len(zones) > 1 and isinstance(zone.obstacle, ElasticBody) and zone.obstacle.sliding == "finite":
+            if len(zones) > 1 and zone.obstacle.finite_sliding:
                 raise ValueError(f"FrettingProblem: contact[{i}] has ElasticBody(sliding='finite'): finite sliding "
                                  "pairs its zone anew on a surface compliance of its own and is available with one "
                                  "zone per problem; use sliding='small' here")
