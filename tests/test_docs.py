@@ -38,7 +38,7 @@ DEMOS = sorted((ROOT / "demos").glob("demo_*.py"))
 MODULES = ("problem", "contact", "output", "plots", "scenes", "local_solvers", "wear", "cycling",
            "cycle_jump", "plasticity", "plastic_zone", "materials", "compliance", "loading", "io",
            "contact_output", "_dolfinx", "compat", "sizes", "state", "settings", "laws", "operators", "increments",
-           "commit", "cycles", "readers", "checkpoint", "scene_paths", "analytic")
+           "commit", "cycles", "readers", "checkpoint", "scene_paths", "analytic", "zones", "window_check", "obstacles")
 
 
 @pytest.fixture(scope="module")
