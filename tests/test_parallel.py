@@ -277,3 +277,40 @@ def test_window_check_decides_alike_on_every_rank():
     # As the runs above: other factorisations' rounding only: 1e-8.
     assert parallel["penetration"] == pytest.approx(serial["penetration"], rel=1e-8)
     assert parallel["peak"] == pytest.approx(serial["peak"], rel=1e-8)
+
+
+def _two_zone_run(comm: MPI.Comm) -> dict:
+    """Two blocks in one mesh, two zones: block A pressed by a displacement, block B by a force, then a compiled
+    fretting cycle of A's plane with wear, and a window too narrow on B (support.blocks)."""
+    import dolfinx_fretting as dfr
+    from support.blocks import TIGHT, elasticity, plane_above, two_blocks
+
+    V, tags, bcs = two_blocks(comm=comm)
+    a = dfr.Contact(V, (tags, 1), plane_above(), mu=0.5, bcs=bcs)
+    b = dfr.Contact(V, (tags, 2), plane_above(), mu=0.5, bcs=bcs)
+    problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, solver=TIGHT, wear=dfr.Archard(1e-6))
+    state, _ = problem.advance(problem.initial_state(), normal={a: 1e-3, b: dfr.Force(100.0)})
+    state = problem.commit(state, problem.run_cycle(state, dfr.CyclePath.waveform(
+        8, normal={b: state.obstacle[2]}, tangential={a: 3e-3})))
+    narrow = dfr.Contact(V, (tags, 2), plane_above(), mu=0.5, bcs=bcs, window=0.2)
+    windowed = dfr.FrettingProblem(elasticity(V), [a, narrow], bcs, solver=TIGHT)
+    try:
+        windowed.solve(windowed.initial_state(), normal={a: 1e-3, narrow: 1e-3})
+        zone = None
+    except dfr.WindowError as exc:
+        zone = exc.zone
+    return {"forces": [problem.total_force(state, zone_) for zone_ in (a, b)], "wear": state.wear_gap,
+            "obstacle": state.obstacle, "window_zone": zone}
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_two_contact_zones_match_serial():
+    """Several zones under MPI: targets per zone, force control, a compiled cycle of two zones and a zone's window
+    check give every rank the serial run's answer (other factorisations' rounding only: 1e-8) and raise alike."""
+    parallel = _two_zone_run(COMM)
+    serial = COMM.bcast(_two_zone_run(MPI.COMM_SELF) if COMM.rank == 0 else None, root=0)
+    assert parallel["window_zone"] == serial["window_zone"] == 1
+    for mine, theirs in zip(parallel["forces"], serial["forces"]):
+        assert mine == pytest.approx(theirs, rel=1e-8, abs=1e-10)
+    assert parallel["wear"] == pytest.approx(serial["wear"], rel=1e-8, abs=1e-8 * serial["wear"].max())
+    assert parallel["obstacle"] == pytest.approx(serial["obstacle"], rel=1e-8, abs=1e-14)

@@ -13,38 +13,12 @@ import numpy as np
 import pytest
 from mpi4py import MPI  # before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs
 
-import ufl  # noqa: E402
-from dolfinx import fem, mesh  # noqa: E402
+from dolfinx import mesh  # noqa: E402
 
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import compat  # noqa: E402
-
-E, NU = 200000.0, 0.3
-LMBDA, MU_LAME = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))
-E_PLANE = E / (1 - NU ** 2)   # plane strain, sigma_xx = 0: sigma_yy = E / (1 - nu^2) eps_yy
-TIGHT = dfr.LocalSolver(tol=1e-12)
-
-
-def elasticity(V):
-    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-    eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
-    sigma = LMBDA * ufl.tr(eps(u)) * ufl.Identity(2) + 2 * MU_LAME * eps(u)
-    return ufl.inner(sigma, eps(v)) * ufl.dx
-
-
-def tagged(msh, where: dict[int, object]):
-    fdim = 1
-    found = [(marker, mesh.locate_entities_boundary(msh, fdim, f)) for marker, f in where.items()]
-    facets = np.concatenate([f for _, f in found])
-    values = np.concatenate([np.full(f.size, m, dtype=np.int32) for m, f in found])
-    order = np.argsort(facets)
-    return mesh.meshtags(msh, fdim, facets[order], values[order])
-
-
-def component(V, i, where):
-    Vi, _ = V.sub(i).collapse()
-    dofs = fem.locate_dofs_geometrical((V.sub(i), Vi), where)
-    return fem.dirichletbc(fem.Function(Vi), dofs, V.sub(i))
+from support.blocks import (E_PLANE, LMBDA, MU_LAME, TIGHT, component, elasticity, plane_above,  # noqa: E402
+                            tagged, two_blocks)
 
 
 # A corner touching two walls ---------------------------------------------------------------------------------
@@ -113,37 +87,7 @@ def test_a_corner_under_two_forces_finds_both_approaches():
     assert problem.total_force(state, top)[0] == pytest.approx(F_top, rel=1e-7)
 
 
-# Two blocks in one mesh ----------------------------------------------------------------------------------------
-LEFT_X, RIGHT_X = 0.0, 1.5   # the blocks' left edges (unit squares, 0.5 apart)
-
-
-def two_blocks(n: int = 6):
-    """Two unit squares (n x n quadrilaterals each) side by side in one mesh, not touching; markers 1 and 2 their
-    tops; rollers on their bottoms (u_y = 0) and u_x = 0 at each bottom-left corner (no rigid motion)."""
-    comm = MPI.COMM_WORLD
-    points, cells = [], []
-    for x0 in (LEFT_X, RIGHT_X):
-        first = len(points) and sum(len(p) for p in points)
-        xs, ys = np.meshgrid(np.linspace(x0, x0 + 1, n + 1), np.linspace(0, 1, n + 1), indexing="ij")
-        points.append(np.column_stack([xs.ravel(), ys.ravel()]))
-        index = lambda i, j, first=first: first + i * (n + 1) + j  # noqa: E731
-        cells += [[index(i, j), index(i + 1, j), index(i, j + 1), index(i + 1, j + 1)]
-                  for i in range(n) for j in range(n)]
-    points = np.vstack(points) if comm.rank == 0 else np.zeros((0, 2))
-    cells = np.array(cells) if comm.rank == 0 else np.zeros((0, 4), dtype=np.int64)
-    msh = compat.create_mesh(comm, cells, points, "quadrilateral")
-    V = compat.vector_space(msh, 1)
-    tags = tagged(msh, {1: lambda x: np.isclose(x[1], 1.0) & (x[0] < 1.2),
-                        2: lambda x: np.isclose(x[1], 1.0) & (x[0] > 1.2)})
-    bcs = [component(V, 1, lambda x: np.isclose(x[1], 0.0)),
-           component(V, 0, lambda x: np.isclose(x[1], 0.0) & (np.isclose(x[0], LEFT_X) | np.isclose(x[0], RIGHT_X)))]
-    return V, tags, bcs
-
-
-def plane_above():
-    return dfr.RigidPlane([0.0, 1.0], [0.0, -1.0])
-
-
+# Two blocks in one mesh (support.blocks) -----------------------------------------------------------------------
 def test_two_blocks_each_pressed_by_its_own_plane_are_uniaxial_stress():
     """Frictionless: in each block sigma_yy = -E/(1 - nu^2) d, sigma_xx = 0, exact in P1 (the roller bottom lets it
     expand). Block A by a displacement, block B by a force: P_A = E' d_A and d_B = P_B / E' (unit widths), to 1e-8
