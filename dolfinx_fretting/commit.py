@@ -54,23 +54,25 @@ def commit(operators: ContactOperators, wear: WearLaw | None, monitor: SlidingMo
         check_sliding(operators, monitor, result.final)
         return result.final
     operators.activate(state)
-    cs = operators.contact.contact_set
-    states = np.empty(cs.nc, dtype=np.int8)
+    contact_set = operators.contact.contact_set
+    states = np.empty(contact_set.nc, dtype=np.int8)
     row = np.empty(len(ROW_FIELDS))
-    gw = state.wear_gap.copy()
-    commit_increment(result.forces, result.slip, result.positions, operators.contact.mu, cs.dim, cs.tributary,
-                     cs.abscissa, wear_coefficient(wear, result.in_cycle), gw, states, row)
+    wear_gap = state.wear_gap.copy()
+    commit_increment(result.forces, result.slip, result.positions, operators.contact.mu, contact_set.dim,
+                     contact_set.tributary, contact_set.abscissa, wear_coefficient(wear, result.in_cycle), wear_gap,
+                     states, row)
     master_wear = state.master_wear
     if operators.surface_compliance is not None and wear is not None:
         # The master's share of the wear stays on the master's nodes (it follows its material points).
-        master_share = (1.0 - wear.slave_share) * (gw - state.wear_gap)
-        added = sliding.spread_wear(cs, operators.surface_compliance, master_share)
+        master_share = (1.0 - wear.slave_share) * (wear_gap - state.wear_gap)
+        added = sliding.spread_wear(contact_set, operators.surface_compliance, master_share)
         master_wear = state.master_wear + added
-        gw = gw - master_share + sliding.interpolate_master(cs, operators.surface_compliance, added)
+        wear_gap = (wear_gap - master_share
+                    + sliding.interpolate_master(contact_set, operators.surface_compliance, added))
         # the worn area of both bodies: the flat's wear left behind by the slide is no longer under a contact
-        row[ROW["wear_area"]] = worn_measure(operators, replace(state, wear_gap=gw, master_wear=master_wear))
+        row[ROW["wear_area"]] = worn_measure(operators, replace(state, wear_gap=wear_gap, master_wear=master_wear))
     record = {**dict(zip(ROW_FIELDS, row.tolist())), **solver_columns(result)}
-    new = replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=gw,
+    new = replace(state, forces=result.forces, positions=result.positions, slip=result.slip, wear_gap=wear_gap,
                   obstacle=result.obstacle, load_factors=result.load_factors, increment=state.increment + 1,
                   dissipated_energy=state.dissipated_energy + row[ROW["dissipated_energy"]],
                   local_iterations=state.local_iterations + result.iterations, record=record, status=states,
@@ -91,9 +93,9 @@ def _repair(operators: ContactOperators, monitor: SlidingMonitor, state: Contact
     """Finite sliding: pair the slave nodes anew once a paired point has moved more than
     ``ElasticBody.repair_slip`` master elements from its slave node, and carry ``state`` into the new
     pairing (:func:`~dolfinx_fretting.sliding.carry_state`). Not collective (replicated data)."""
-    cs = state.pairing
+    contact_set = state.pairing
     u, D = _surface_state(operators, state)
-    moved = sliding.offsets(cs, operators.surface_compliance, u, D).max(initial=0.0)
+    moved = sliding.offsets(contact_set, operators.surface_compliance, u, D).max(initial=0.0)
     if moved <= operators.contact.obstacle.repair_slip:
         return state
     if moved > 1.0 and monitor.warn and not monitor.stride_warned:
@@ -102,14 +104,15 @@ def _repair(operators: ContactOperators, monitor: SlidingMonitor, state: Contact
             warnings.warn(f"finite sliding: an increment moved a paired point {moved:.3g} master elements (more than "
                           "one): it was solved on a pairing that no longer faced its nodes; take smaller "
                           "increments", RuntimeWarning, stacklevel=4)
-    new = sliding.repair(cs, operators.surface_compliance, u, D)
-    if np.array_equal(new.master_faces, cs.master_faces) and np.allclose(new.master_weights, cs.master_weights,
+    new = sliding.repair(contact_set, operators.surface_compliance, u, D)
+    if np.array_equal(new.master_faces, contact_set.master_faces) and np.allclose(new.master_weights,
+                                                                                  contact_set.master_weights,
                                                                          rtol=0.0, atol=1e-12):
         return state   # e.g. a node facing past the master's end: its closest point does not move
-    carried = sliding.carry_state(cs, new, operators.surface_compliance, u, D, state.forces, state.slip,
+    carried = sliding.carry_state(contact_set, new, operators.surface_compliance, u, D, state.forces, state.slip,
                                   state.wear_gap, state.master_wear)
     monitor.repairs += 1
-    loaded = state.forces[0::cs.dim] > 0
+    loaded = state.forces[0::contact_set.dim] > 0
     beyond = sliding.offsets(new, operators.surface_compliance, u, D)[loaded]
     if beyond.size and beyond.max() > operators.contact.obstacle.repair_slip and monitor.warn \
             and not monitor.reach_warned:

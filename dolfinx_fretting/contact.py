@@ -25,7 +25,8 @@ from mpi4py import MPI
 
 from .laws import Coulomb, FrictionLaw
 
-__all__ = ["Obstacle", "RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates", "find_pairs",
+__all__ = ["Obstacle", "RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates",
+           "find_pairs",
            "tangent_frame", "constrained_dofs", "constrained_global_dofs", "pair_with_faces", "pair_with_segments",
            "paired_contact_set"]
 
@@ -515,10 +516,10 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     if half_width is not None:
         keep = np.abs(np.einsum("ij,ij->i", coords - closest, frames[:, 1])) <= half_width * (1 + 1e-12)
     order = np.flatnonzero(keep)[np.argsort(abscissa[keep], kind="stable")]
-    cs = paired_contact_set(surface, gnodes[order], coords[order], trib[order], abscissa[order],
+    contact_set = paired_contact_set(surface, gnodes[order], coords[order], trib[order], abscissa[order],
                             pairs["face"][order], pairs["weights"][order], imap.size_global * gdim)
-    cs.window_centre = closest
-    return cs
+    contact_set.window_centre = closest
+    return contact_set
 
 
 def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords: np.ndarray, tributary: np.ndarray,
@@ -841,13 +842,13 @@ def pair_with_faces(points: np.ndarray, faces_x: np.ndarray, faces_nv: np.ndarra
     point = np.zeros((n, 3))
     distance = np.full(n, np.inf)
     params = np.zeros((n, 2))
-    for lo in range(0, n, 256):  # chunks: (chunk x facets) distance tables stay small
-        hi = min(n, lo + 256)
-        d_c = np.linalg.norm(points[lo:hi, None, :] - centre[None], axis=2)
+    for start in range(0, n, 256):  # chunks: (chunk x facets) distance tables stay small
+        stop = min(n, start + 256)
+        d_c = np.linalg.norm(points[start:stop, None, :] - centre[None], axis=2)
         # A facet can hold a closer point than the nearest centre's facet only if |p - c_f| - diam_f <= that.
         cand = d_c - diam[None] <= d_c.min(axis=1, keepdims=True) + 1e-12 * diam.max()
         rows, cols = np.nonzero(cand)
-        p = points[lo + rows]
+        p = points[start + rows]
         w = np.zeros((rows.size, 4))
         x = np.zeros((rows.size, 3))
         tri = faces_nv[cols] == 3
@@ -861,7 +862,7 @@ def pair_with_faces(points: np.ndarray, faces_x: np.ndarray, faces_nv: np.ndarra
         # Smallest distance per row; ties (a node facing a shared node or edge) to the first facet.
         order = np.lexsort((cols, dist, rows))
         first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
-        r = lo + rows[first]
+        r = start + rows[first]
         face[r], weights[r], point[r], distance[r], params[r] = cols[first], w[first], x[first], dist[first], par[first]
     # The facet's normal at the point (bilinear: d/dxi x d/deta there), out of the body.
     X = faces_x[face]
@@ -927,10 +928,10 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
         raise ValueError("contact: no slave node within the candidate window")
     sel = np.flatnonzero(keep)
     sel = sel[_in_plane_order(in_plane[sel], np.ptp(coords, axis=0).max())]  # along t1, then t2 (as find_candidates)
-    cs = paired_contact_set(surface, gnodes[sel], coords[sel], trib[sel], in_plane[sel, 0].copy(),
+    contact_set = paired_contact_set(surface, gnodes[sel], coords[sel], trib[sel], in_plane[sel, 0].copy(),
                             pairs["face"][sel], pairs["weights"][sel], imap.size_global * gdim)
-    cs.window_centre = closest
-    return cs
+    contact_set.window_centre = closest
+    return contact_set
 
 
 # The public contact object ---------------------------------------------------------------------------------
@@ -1224,42 +1225,44 @@ class Contact:
         def search(half_width: float | None) -> ContactSet:
             return obstacle.candidates(V, self.facets, half_width, self.fixed_nodes)
 
-        cs = search(window)
-        self._use(cs)
+        contact_set = search(window)
+        self._use(contact_set)
         #: The window's centre (kept here: a pairing made anew under finite sliding does not carry it).
-        self.window_centre = cs.window_centre
+        self.window_centre = contact_set.window_centre
         # The surface's other free nodes: a second search of the whole surface (the candidates' own search is left
         # as it was, so a window's contact set keeps its bits), less the candidates.
         self.outside: ContactSet | None = None
         if window is not None:
             whole = search(None)
-            rest = np.flatnonzero(~np.isin(whole.global_nodes, cs.global_nodes))
+            rest = np.flatnonzero(~np.isin(whole.global_nodes, contact_set.global_nodes))
             if rest.size:
                 self.outside = whole.subset(rest)
         self.friction: FrictionLaw = friction
         try:
-            mu_arr = np.asarray(friction.coefficients(cs.nc), dtype=float)
+            mu_arr = np.asarray(friction.coefficients(contact_set.nc), dtype=float)
         except ValueError:
             mu_arr = np.array(np.nan)
-        if mu_arr.shape != (cs.nc,) or not np.all(np.isfinite(mu_arr)) or np.any(mu_arr < 0):
-            raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact, {cs.nc})")
+        if mu_arr.shape != (contact_set.nc,) or not np.all(np.isfinite(mu_arr)) or np.any(mu_arr < 0):
+            raise ValueError(f"Contact: mu = {mu!r}: expected a finite value >= 0 (or one per contact, "
+                             f"{contact_set.nc})")
         self.mu = mu_arr
 
-    def _use(self, cs: ContactSet) -> None:
-        """Hold ``cs``: its H without the fixed columns and its held rows (see the class's docstring)."""
-        self.contact_set: ContactSet = cs
-        H = cs.H.tocsc(copy=True)
+    def _use(self, contact_set: ContactSet) -> None:
+        """Hold ``contact_set``: its H without the fixed columns and its held rows (see the class's docstring)."""
+        self.contact_set: ContactSet = contact_set
+        H = contact_set.H.tocsc(copy=True)
         free = np.ones(H.shape[1], dtype=bool)
         free[self.fixed_global] = False
         self.H_free = sp.csr_matrix(H @ sp.diags(free.astype(float)))
         self.H_free.eliminate_zeros()
         empty = np.diff(self.H_free.indptr) == 0
-        normal_rows = np.arange(empty.size) % cs.dim == 0
+        normal_rows = np.arange(empty.size) % contact_set.dim == 0
         if (empty & normal_rows).any():
             row = int(np.flatnonzero(empty & normal_rows)[0])
-            c = row // cs.dim
+            c = row // contact_set.dim
             raise ValueError(
-                f"Contact: direction n of contact {c} (node at {cs.coords[c].tolist()}) has every dof fixed by bcs: "
+                f"Contact: direction n of contact {c} (node at {contact_set.coords[c].tolist()}) has every dof fixed "
+                "by bcs: "
                 "the contact cannot move that way. Remove the node from the contact surface or the condition from bcs")
         # Rows (dim c + k) of the tangential directions held by bcs: every dof of the row is fixed, as at a node on a
         # symmetry plane with its roller (the plane's normal is then one of the contact's tangents). Their contact
@@ -1267,13 +1270,13 @@ class Contact:
         # the local problem stays well posed, and refuses an obstacle motion along them.
         self.held_rows = np.flatnonzero(empty & ~normal_rows)
 
-    def with_pairing(self, cs: ContactSet) -> Contact:
+    def with_pairing(self, contact_set: ContactSet) -> Contact:
         """The same contact with the same slave nodes paired anew (finite sliding: :class:`ElasticBody`'s
-        ``sliding = "finite"``): a shallow copy holding ``cs``. Not collective."""
-        if not (cs.two_body and np.array_equal(cs.global_nodes, self.contact_set.global_nodes)):
+        ``sliding = "finite"``): a shallow copy holding ``contact_set``. Not collective."""
+        if not (contact_set.two_body and np.array_equal(contact_set.global_nodes, self.contact_set.global_nodes)):
             raise ValueError("Contact.with_pairing: the pairing must be of the same slave nodes, in the same order")
         other = copy.copy(self)
-        other._use(cs)
+        other._use(contact_set)
         return other
 
     @property
@@ -1329,15 +1332,15 @@ class Contact:
     def obstacle_forces(self, forces: np.ndarray, contact_set: ContactSet | None = None) -> np.ndarray:
         """The total contact force on the body along each obstacle component (n, t1[, t2]) from the contact forces
         ``forces`` (of ``contact_set``, default the one held)."""
-        cs = self.contact_set if contact_set is None else contact_set
-        F = cs.total_force(forces)
+        contact_set = self.contact_set if contact_set is None else contact_set
+        F = contact_set.total_force(forces)
         return np.array([F @ self.frame[k] for k in range(self.dim)])
 
     def held_components(self, contact_set: ContactSet | None = None) -> np.ndarray:
         """Which obstacle components (bool, (dim,)) have a component along a direction the conditions hold
         (:attr:`held_rows`)."""
-        cs = self.contact_set if contact_set is None else contact_set
-        held_dirs = cs.frames.reshape(-1, self.dim)[self.held_rows]
+        contact_set = self.contact_set if contact_set is None else contact_set
+        held_dirs = contact_set.frames.reshape(-1, self.dim)[self.held_rows]
         return np.abs(held_dirs @ self.frame.T).max(axis=0, initial=0.0) > 1e-9
 
     def component_names(self) -> list[str]:
@@ -1376,10 +1379,11 @@ class Contact:
             raise ValueError(f"zone = {zone}: a single Contact is zone 0")
         return Contact(self.V, self.surface, self.obstacle, self._mu_given, self.bcs, window, self.grow_window)
 
-    def window_distance(self, cs: ContactSet) -> np.ndarray:
-        """In-plane distance of ``cs``'s nodes from the window's centre, measured as the candidate search measures
+    def window_distance(self, contact_set: ContactSet) -> np.ndarray:
+        """In-plane distance of ``contact_set``'s nodes from the window's centre, measured as the candidate search
+        measures
         it: in the obstacle's tangent plane (a node-to-segment pairing in 2D: along each node's own tangent)."""
-        offset = cs.coords - self.window_centre
-        if cs.two_body and cs.dim == 2:
-            return np.abs(np.einsum("ij,ij->i", offset, cs.frames[:, 1]))
+        offset = contact_set.coords - self.window_centre
+        if contact_set.two_body and contact_set.dim == 2:
+            return np.abs(np.einsum("ij,ij->i", offset, contact_set.frames[:, 1]))
         return np.linalg.norm(offset @ self.frame[1:].T, axis=1)

@@ -104,9 +104,8 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
                    obstacle: np.ndarray, factors: np.ndarray, keep: bool) -> CycleResult:
     """The cycle in the compiled loop (rank 0, broadcast; the warm start of the next cycle stays on rank 0), with
     ``wear_coefficient`` the wear gap's coefficient in cycles. Collective."""
-    cs = operators.contact.contact_set
-    n, m, dim = obstacle.shape[0], cs.nc * cs.dim, cs.dim
-    sv = solver
+    contact_set = operators.contact.contact_set
+    n, m, dim = obstacle.shape[0], contact_set.nc * contact_set.dim, contact_set.dim
     # Each zone's translation against G's block of its contacts (one zone: G = its rigid modes).
     D = np.ascontiguousarray(operators.contact.translations(obstacle))
     warm_new = None
@@ -114,46 +113,47 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
     def work():  # rank 0: the compiled loop; its result is broadcast, the warm start stays on rank 0
         nonlocal warm_new
         Wc, rho, cache = operators.kernel_data(n)
-        active = cache.enabled and sv.pattern_reuse
-        warm = 1 if state.warm is not None and state.warm.shape == (n, m) and sv.warm_start == "cycle" else 0
+        active = cache.enabled and solver.pattern_reuse
+        warm = 1 if state.warm is not None and state.warm.shape == (n, m) and solver.warm_start == "cycle" else 0
         r_warm = state.warm.copy() if warm else np.zeros((n, m))
-        gw, y, r_last = state.wear_gap.copy(), state.positions.copy(), state.forces.copy()
+        wear_gap, y, r_last = state.wear_gap.copy(), state.positions.copy(), state.forces.copy()
         # Every increment is stored (cheap): the last one's slip and status belong to the final state.
         out_r, out_x, out_y = np.zeros((n, m)), np.zeros((n, m)), np.zeros((n, m))
-        out_gw, out_states = np.zeros((n, cs.nc)), np.zeros((n, cs.nc), dtype=np.int8)
-        hist = np.zeros((n, N_ROW))
+        out_wear, out_states = np.zeros((n, contact_set.nc)), np.zeros((n, contact_set.nc), dtype=np.int8)
+        rows = np.zeros((n, N_ROW))
         G = np.ascontiguousarray(operators.contact.rigid_modes)
         Q = np.ascontiguousarray(operators.responses)
         S = np.ascontiguousarray(factors)
         done, status, err = run_increments(
-            Wc, rho, operators.contact.mu, dim, cs.gap0, gw, G, D, Q, S, cs.tributary, cs.abscissa, y, r_last,
-            r_warm, warm, wear_coefficient, sv.tol, sv.max_iter, local_solvers._REFRESH, True, out_r, out_x,
-            out_y, out_gw, out_states, hist, active, cache.pattern, cache.lu, cache.piv, cache.lu_ok,
+            Wc, rho, operators.contact.mu, dim, contact_set.gap0, wear_gap, G, D, Q, S, contact_set.tributary,
+            contact_set.abscissa, y, r_last,
+            r_warm, warm, wear_coefficient, solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r, out_x,
+            out_y, out_wear, out_states, rows, active, cache.pattern, cache.lu, cache.piv, cache.lu_ok,
             cache.counts)
         if done < n:
             why = "non-finite values" if status == 2 else "max_iter reached"
-            raise ConvergenceError(f"local solver did not converge ({why}, error {err:.3e} >= tol {sv.tol:.1e} "
-                                   f"after {sv.max_iter} sweeps)", step=done + 1)
+            raise ConvergenceError(f"local solver did not converge ({why}, error {err:.3e} >= tol {solver.tol:.1e} "
+                                   f"after {solver.max_iter} sweeps)", step=done + 1)
         # Every increment of the cycle, not only the last: one product of the outside rows with the cycle's forces.
-        operators.check_window(out_r, obstacle, factors, sv.tol, cycle=True)
+        operators.check_window(out_r, obstacle, factors, solver.tol, cycle=True)
         warm_new = r_warm  # the cycle's forces: the next cycle's warm start
-        outs = (out_r, out_x, out_y, out_gw, out_states) if keep else (out_x[-1:], out_states[-1:])
-        return hist, gw, y, r_last, outs
+        outs = (out_r, out_x, out_y, out_wear, out_states) if keep else (out_x[-1:], out_states[-1:])
+        return rows, wear_gap, y, r_last, outs
 
     result = on_rank0(operators.comm, work)
-    hist, gw, y, r_last, outs = result
+    rows, wear_gap, y, r_last, outs = result
     nf = len(ROW_FIELDS)
-    records = {name: hist[:, i] for i, name in enumerate(ROW_FIELDS)}
-    records.update(local_iterations=hist[:, nf].astype(int), local_error=hist[:, nf + 1],
+    records = {name: rows[:, i] for i, name in enumerate(ROW_FIELDS)}
+    records.update(local_iterations=rows[:, nf].astype(int), local_error=rows[:, nf + 1],
                    load_solves=np.ones(n, dtype=int), newton_iterations=np.ones(n, dtype=int),
                    newton_delta_1=np.zeros(n), newton_delta_2=np.zeros(n), cutbacks=np.zeros(n, dtype=int),
                    yielded_points=np.zeros(n, dtype=int))
     slip, status = (outs[1][-1].copy(), outs[4][-1].copy()) if keep else (outs[0][-1].copy(), outs[1][-1].copy())
-    final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=gw, obstacle=obstacle[-1].copy(),
+    final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=wear_gap, obstacle=obstacle[-1].copy(),
                     targets=obstacle[-1].copy(), force_controlled=np.zeros(obstacle.shape[1], dtype=bool),
                     load_factors=factors[-1].copy(), increment=state.increment + n,
-                    dissipated_energy=state.dissipated_energy + float(hist[:, ROW["dissipated_energy"]].sum()),
-                    local_iterations=state.local_iterations + int(hist[:, nf].sum()),
+                    dissipated_energy=state.dissipated_energy + float(rows[:, ROW["dissipated_energy"]].sum()),
+                    local_iterations=state.local_iterations + int(rows[:, nf].sum()),
                     record={k: records[k][-1].item() for k in INCREMENT_COLUMNS},
                     status=status, warm=warm_new if operators.comm.rank == 0 else None)
     return CycleResult(records, obstacle, factors, final, outs if keep else None, True)

@@ -5,8 +5,10 @@ When no load is force controlled, an increment's right-hand side is known in adv
     q_abs = g0 + g_w - G D + sum_l s_l q_l      (normal rows: gaps; tangential rows: positions)
     q     = q_abs - y_prev   in the tangential rows  (so x_t is the slip increment, paper eq. 3)
 
-with D the obstacle's rigid translation, G its local effect (``ContactSet.rigid_modes``), s_l the factor
-of load l and q_l = H K^-1 f_l the contact displacement per unit factor of that load. So a whole cycle (thousands in a run) can run in one compiled call:
+with D the obstacle's rigid translation (each zone's in turn with several contact zones), G its local effect
+(``ContactSet.rigid_modes``; block-diagonal over the zones), s_l the factor of load l and q_l = H K^-1 f_l the
+contact displacement per unit factor of that load. So a whole cycle (thousands in a run) can run in one compiled
+call:
 local Uzawa solve (:mod:`dolfinx_fretting.local_solvers`; on the normal rows alone when ``mu = 0``, with
 the same iterates), then :func:`dolfinx_fretting.wear.commit_increment`.
 Python only sees a cycle's outputs. The result is the same as the per-increment Python path (a test
@@ -26,7 +28,7 @@ rounding); otherwise the Uzawa sweeps start from it. Patterns change rarely once
 so most increments cost one triangular solve and one residual check.
 
 A failed increment stops the loop: the converged increments before it are committed (their wear is
-legitimate), the failed one leaves no trace in ``gw``, ``y`` or ``r_warm``.
+legitimate), the failed one leaves no trace in ``wear_gap``, ``y`` or ``r_warm``.
 """
 
 from __future__ import annotations
@@ -160,11 +162,11 @@ def _pattern_rhs(q: np.ndarray, pattern: np.ndarray, b: np.ndarray) -> None:
 
 @numba.njit(cache=True)
 def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0: np.ndarray,
-                   gw: np.ndarray, G: np.ndarray, D: np.ndarray, Q: np.ndarray, S: np.ndarray,
+                   wear_gap: np.ndarray, G: np.ndarray, D: np.ndarray, Q: np.ndarray, S: np.ndarray,
                    tributary: np.ndarray, abscissa: np.ndarray, y: np.ndarray, r_last: np.ndarray,
                    r_warm: np.ndarray, warm: int, k: float, tol: float, max_iter: int, refresh: int,
-                   keep: bool, out_r: np.ndarray, out_x: np.ndarray, out_y: np.ndarray, out_gw: np.ndarray,
-                   out_states: np.ndarray, hist: np.ndarray, active: bool, pattern: np.ndarray,
+                   keep: bool, out_r: np.ndarray, out_x: np.ndarray, out_y: np.ndarray, out_wear: np.ndarray,
+                   out_states: np.ndarray, rows: np.ndarray, active: bool, pattern: np.ndarray,
                    lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray
                    ) -> tuple[int, int, float]:
     """Solve ``D.shape[0]`` increments in sequence, committing each converged one.
@@ -175,7 +177,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         mu: Friction coefficient per contact.
         dim: 2 or 3.
         g0: Initial normal gap per contact.
-        gw: Wear gap per contact (in/out).
+        wear_gap: Wear gap per contact (in/out).
         G: (m, gdim) local relative displacement per unit rigid translation of the obstacle
             (``ContactSet.rigid_modes``).
         D: (n, gdim) obstacle translation per increment, global coordinates.
@@ -189,8 +191,8 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         warm: 1: start increment j from ``r_warm[j]``; 0: from ``r_last``.
         k: Wear coefficient applied (1/MPa).
         tol, max_iter, refresh: Local solver settings.
-        keep: Store every increment's r, x, y, gw and states in the ``out_*`` arrays ((n, ...) each).
-        hist: (n, N_ROW) output rows.
+        keep: Store every increment's r, x, y, wear_gap and states in the ``out_*`` arrays ((n, ...) each).
+        rows: (n, N_ROW) output rows.
         active: Try the previous cycle's contact pattern first (2D only); ``pattern``, ``lu``, ``piv``,
             ``lu_ok`` and ``counts`` are the arrays of an :class:`ActivePatternCache` (in/out).
 
@@ -233,7 +235,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         for a in range(nc):
             o = a * dim
             for c in range(dim):
-                v = g0[a] + gw[a] if c == 0 else 0.0
+                v = g0[a] + wear_gap[a] if c == 0 else 0.0
                 for comp in range(gdim):   # (not k: that is the wear coefficient)
                     v += -G[o + c, comp] * D[j, comp]
                 for load in range(n_loads):
@@ -301,7 +303,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         # y = W r + q_abs = x + (q_abs - q)
         for i in range(m):
             y[i] = x[i] + q_abs[i] - q[i]
-        commit_increment(r, x, y, mu, dim, tributary, abscissa, k, gw, states, row)
+        commit_increment(r, x, y, mu, dim, tributary, abscissa, k, wear_gap, states, row)
         if active:
             same = pattern[j, 0] >= 0
             for a in range(nc):
@@ -314,9 +316,9 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
             if not same:
                 lu_ok[j] = False
         for i in range(nfields):
-            hist[j, i] = row[i]
-        hist[j, nfields] = its
-        hist[j, nfields + 1] = err
+            rows[j, i] = row[i]
+        rows[j, nfields] = its
+        rows[j, nfields + 1] = err
         for i in range(m):
             r_warm[j, i] = r[i]
             r_last[i] = r[i]
@@ -326,6 +328,6 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                 out_x[j, i] = x[i]
                 out_y[j, i] = y[i]
             for a in range(nc):
-                out_gw[j, a] = gw[a]
+                out_wear[j, a] = wear_gap[a]
                 out_states[j, a] = states[a]
     return n, 1, 0.0

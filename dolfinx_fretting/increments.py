@@ -138,25 +138,24 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
                         targets: np.ndarray, controlled: np.ndarray, factors: np.ndarray,
                         q_body: np.ndarray | None, W: np.ndarray | None,
                         r_warm: np.ndarray | None) -> IncrementResult:
-    cs = operators.contact.contact_set
-    dim = cs.dim
+    contact_set = operators.contact.contact_set
+    dim = contact_set.dim
     Wm = operators.W if W is None else W
-    sv = solver
     d = state.obstacle.astype(float).copy()
     warm = [state.forces.copy() if r_warm is None else r_warm.copy()]
     count = {"solves": 0, "iterations": 0}
     last: dict[str, Any] = {}
 
-    def local(dd: np.ndarray) -> np.ndarray:
-        q, q_abs = operators.q(dd, factors, state.positions, state.wear_gap, q_body)
-        res = local_solvers.solve(Wm, q, operators.contact.mu, dim, method=sv.method, tol=sv.tol,
-                                  max_iter=sv.max_iter, r0=warm[0])
+    def local(trial: np.ndarray) -> np.ndarray:
+        q, q_abs = operators.q(trial, factors, state.positions, state.wear_gap, q_body)
+        solved = local_solvers.solve(Wm, q, operators.contact.mu, dim, method=solver.method, tol=solver.tol,
+                                  max_iter=solver.max_iter, r0=warm[0])
         count["solves"] += 1
-        count["iterations"] += res.iterations
-        if not res.converged:
-            raise ConvergenceError(f"local solver did not converge: {res.message}")
-        warm[0] = res.r
-        last.update(res=res, d=dd.copy(), q_abs=q_abs, F=operators.contact.obstacle_forces(res.r))
+        count["iterations"] += solved.iterations
+        if not solved.converged:
+            raise ConvergenceError(f"local solver did not converge: {solved.message}")
+        warm[0] = solved.r
+        last.update(solved=solved, d=trial.copy(), q_abs=q_abs, F=operators.contact.obstacle_forces(solved.r))
         return last["F"]
 
     d[~controlled] = targets[~controlled]
@@ -168,15 +167,15 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
         F = local(d)
         # Tolerance relative to the loads in play (a zero tangential target is held to the normal force).
         scale = max(np.abs(targets[controlled]).max(initial=0.0), np.abs(F).max(), 1e-300)
-        ftol = sv.force_tol * scale
+        ftol = solver.force_tol * scale
         for _sweep in range(100):
             if np.all(np.abs(F - targets)[controlled] <= ftol):
                 break
             for k in np.flatnonzero(controlled):
                 def force_k(v: float, k: int = k) -> float:
-                    dd = d.copy()
-                    dd[k] = v
-                    return local(dd)[k]
+                    trial = d.copy()
+                    trial[k] = v
+                    return local(trial)[k]
                 d_old, F_old = d[k], F[k]
                 d[k], _, _ = find_displacement(force_k, targets[k], d[k], operators.stiffness[k], ftol, name=names[k])
                 F = last["F"]  # the root finder's last evaluation is at the returned d[k]
@@ -187,10 +186,10 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
                                    f"{np.abs(F - targets)[controlled]}, tolerance {ftol:.3g})")
     except LoadControlError as exc:
         raise ConvergenceError(str(exc)) from None
-    res = last["res"]
-    y = Wm @ res.r + last["q_abs"]
-    return IncrementResult(res.r.copy(), res.x.copy(), y, last["d"].copy(), factors.copy(), False,
-                           count["iterations"], targets.copy(), controlled.copy(), res.error, count["solves"])
+    solved = last["solved"]
+    y = Wm @ solved.r + last["q_abs"]
+    return IncrementResult(solved.r.copy(), solved.x.copy(), y, last["d"].copy(), factors.copy(), False,
+                           count["iterations"], targets.copy(), controlled.copy(), solved.error, count["solves"])
 
 
 def solve_plastic(operators: ContactOperators, solver: LocalSolver, body: ElastoplasticBody, state: ContactState,
@@ -225,9 +224,9 @@ def solve_plastic(operators: ContactOperators, solver: LocalSolver, body: Elasto
             info = dict(info, full_newton_fallback=1)
     except (NewtonError, ConvergenceError) as exc:
         raise ConvergenceError(str(exc)) from None
-    st = body.state
-    history = PlasticHistory(body._trial.x.array.copy(), st.trial_sigma.copy(), st.trial_eps_p.copy(),
-                             st.trial_p.copy())
+    points = body.state
+    history = PlasticHistory(body._trial.x.array.copy(), points.trial_sigma.copy(), points.trial_eps_p.copy(),
+                             points.trial_p.copy())
     return replace(solved, in_cycle=in_cycle, newton=info, plastic=history,
                    iterations=total["iterations"], local_solves=total["solves"])
 
@@ -237,8 +236,8 @@ def load_plastic(body: ElastoplasticBody, history: PlasticHistory | None) -> Non
         raise ValueError("this elastic-plastic problem needs a state with its plastic history "
                          "(from initial_state() or commit())")
     body.u.x.array[:] = history.u
-    st = body.state
-    st.sigma, st.eps_p, st.p = history.sigma.copy(), history.eps_p.copy(), history.p.copy()
+    points = body.state
+    points.sigma, points.eps_p, points.p = history.sigma.copy(), history.eps_p.copy(), history.p.copy()
 
 
 def advance(operators: ContactOperators, solve: Callable[..., IncrementResult],

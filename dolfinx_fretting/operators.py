@@ -167,19 +167,19 @@ class ContactOperators:
     def build(self, keep_slope: bool = False) -> None:
         """W on the free dofs (one copy broadcast from rank 0) and each load's contact response (finite sliding:
         formed from the surface compliance, no communication)."""
-        cs = self.contact.contact_set
+        contact_set = self.contact.contact_set
         out_responses = None   # the loads' responses at the nodes outside the window (finite sliding: made once)
         if self.surface_compliance is not None:
-            self.W, self.responses = self.surface_compliance.operators(cs)
+            self.W, self.responses = self.surface_compliance.operators(contact_set)
         else:
             W = self.delassus.build(self.contact.H_free)
             self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
-            self.responses = np.zeros((len(self.vectors), cs.nc * cs.dim))
+            self.responses = np.zeros((len(self.vectors), contact_set.nc * contact_set.dim))
             outside = self.contact.outside
             H_out = outside.H[0::outside.dim] if outside is not None else None
             out_responses = np.zeros((len(self.vectors), 0 if outside is None else outside.nc))
             for i, f in enumerate(self.vectors):
-                self.responses[i], out_responses[i] = self._responses(f, cs.H, H_out)
+                self.responses[i], out_responses[i] = self._responses(f, contact_set.H, H_out)
         self._hold_directions()
         self._watch_outside(out_responses)
         if not (keep_slope and self.stiffness is not None):
@@ -189,9 +189,10 @@ class ContactOperators:
             stiffness = []
             for zone in range(len(self.contact.zones)):
                 rows = self.contact.zone_slice(zone)
-                k = rows.start + int(np.argmin(cs.gap0[rows]))
-                blk = self.W[k * cs.dim:(k + 1) * cs.dim, k * cs.dim:(k + 1) * cs.dim]
-                stiffness += [1.0 / blk[c, c] for c in range(cs.dim)]
+                k = rows.start + int(np.argmin(contact_set.gap0[rows]))
+                rows = slice(k * contact_set.dim, (k + 1) * contact_set.dim)
+                block = self.W[rows, rows]
+                stiffness += [1.0 / block[c, c] for c in range(contact_set.dim)]
             self.stiffness = np.array(stiffness)
         self._kernel = None
 
@@ -202,8 +203,8 @@ class ContactOperators:
         them (then ``x = c r`` there: sticking gives r = 0, sliding ``r = -mu r_n x_t/|x_t|`` gives r = 0 too).
         Obstacle components along them are refused (:meth:`_check_held`), as are loads that move them.
         Then every contact's diagonal block must be positive definite."""
-        cs = self.contact.contact_set
-        dim = cs.dim
+        contact_set = self.contact.contact_set
+        dim = contact_set.dim
         held = self.contact.held_rows
         if held.size:
             normal_rows = held - held % dim
@@ -213,18 +214,20 @@ class ContactOperators:
             if moved > 1e-12 * scale:
                 c, k = divmod(int(held[np.argmax(np.abs(self.responses[:, held]).max(axis=0))]), dim)
                 raise ValueError(
-                    f"FrettingProblem: a load or Dirichlet value moves contact {c} (node at {cs.coords[c].tolist()}) "
+                    f"FrettingProblem: a load or Dirichlet value moves contact {c} (node at "
+                    f"{contact_set.coords[c].tolist()}) "
                     f"along its direction t{k}, which the conditions hold (a roller): a half model's loads must be "
                     "symmetric about its symmetry plane")
         # Obstacle components (rows of each zone's obstacle frame) with a component along a held direction.
         self.held_components = self.contact.held_components()
-        blocks = np.array([self.W[c * dim:(c + 1) * dim, c * dim:(c + 1) * dim] for c in range(cs.nc)])
-        eig = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1))) if cs.nc else np.zeros((0, dim))
+        blocks = np.array([self.W[c * dim:(c + 1) * dim, c * dim:(c + 1) * dim] for c in range(contact_set.nc)])
+        eig = np.linalg.eigvalsh(0.5 * (blocks + blocks.transpose(0, 2, 1))) if contact_set.nc else np.zeros((0, dim))
         bad = np.flatnonzero(eig[:, 0] <= 1e-10 * eig[:, -1])
         if bad.size:
             c = int(bad[0])
             raise ValueError(
-                f"FrettingProblem: the compliance of contact {c} (node at {cs.coords[c].tolist()}) is singular "
+                f"FrettingProblem: the compliance of contact {c} (node at {contact_set.coords[c].tolist()}) is "
+                "singular "
                 f"(eigenvalues {eig[c].tolist()}): the conditions fix a combination of its directions n, t1"
                 f"{', t2' if dim == 3 else ''} that is not one of them (a roller must fix the component along one "
                 "of the contact frame's directions, e.g. u_y on a symmetry plane y = 0 with the obstacle normal in "
@@ -341,14 +344,14 @@ class ContactOperators:
 
     def _build_surface_compliance(self) -> sliding.SurfaceCompliance:
         """K^-1 on the dofs of both contact surfaces and the loads' responses there (finite sliding). Collective."""
-        cs = self.contact.contact_set
-        faces, nodes = sliding.surface_nodes(cs, self.contact.obstacle.reach)
-        paired = cs.master_nodes[cs.master_nodes >= 0]
+        contact_set = self.contact.contact_set
+        faces, nodes = sliding.surface_nodes(contact_set, self.contact.obstacle.reach)
+        paired = contact_set.master_nodes[contact_set.master_nodes >= 0]
         if not np.isin(paired, nodes).all():  # before the build: the reference pairing must lie within reach
             raise ValueError(f"ElasticBody.reach = {self.contact.obstacle.reach!r}: too short for the reference "
                              "pairing itself (a slave candidate's closest master facet lies beyond it); allowed a "
                              "reach at least the candidates' largest initial gap, or None")
-        dim = cs.dim
+        dim = contact_set.dim
         dofs = (dim * nodes[:, None] + np.arange(dim)).ravel()
         S = sp.csr_matrix((np.ones(dofs.size), (np.arange(dofs.size), dofs)), shape=(dofs.size, self.n_dofs))
         free = np.ones(self.n_dofs)
@@ -362,7 +365,7 @@ class ContactOperators:
         # rank 0's sums on every rank: each rank decides the re-pairings from these, so they must be the same bits
         responses = self.comm.bcast(responses if self.comm.rank == 0 else None, root=0)
         return sliding.SurfaceCompliance(nodes, dim, C, responses, faces,
-                                         sliding.master_node_areas(cs.master_surface, nodes))
+                                         sliding.master_node_areas(contact_set.master_surface, nodes))
 
     def contact_set_of(self, state: ContactState) -> ContactSet:
         """The contact set ``state``'s per-contact arrays refer to (its pairing under finite sliding), without
@@ -412,18 +415,19 @@ class ContactOperators:
         return s
 
 
-    def q(self, d: np.ndarray, factors: np.ndarray, y_prev: np.ndarray, gw: np.ndarray,
+    def q(self, d: np.ndarray, factors: np.ndarray, y_prev: np.ndarray, wear_gap: np.ndarray,
            q_body: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(q for the local problem, q_abs) of an increment; ``q_body`` replaces the loads' response."""
-        cs = self.contact.contact_set
+        contact_set = self.contact.contact_set
         if q_body is None:  # sum_l s_l q_l, in load order (one load: s q, as the compiled loop adds it)
-            q_body = np.zeros(cs.nc * cs.dim) if not len(self.load_names) else factors[0] * self.responses[0]
+            q_body = (np.zeros(contact_set.nc * contact_set.dim) if not len(self.load_names)
+                      else factors[0] * self.responses[0])
             for i in range(1, len(self.load_names)):
                 q_body = q_body + factors[i] * self.responses[i]
         q_abs = -self.contact.rigid_motion(d) + q_body
-        q_abs[0::cs.dim] += cs.gap0 + gw
+        q_abs[0::contact_set.dim] += contact_set.gap0 + wear_gap
         q = q_abs.copy()
-        normal = np.arange(q.size) % cs.dim == 0
+        normal = np.arange(q.size) % contact_set.dim == 0
         q[~normal] -= y_prev[~normal]
         return q, q_abs
 
@@ -432,9 +436,9 @@ class ContactOperators:
     def kernel_data(self, n: int):
         """W transposed, the Uzawa steps and the contact-pattern cache of cycles of ``n`` increments (rank 0)."""
         if self._kernel is None or self._kernel[2].pattern.shape[0] not in (n, 1):
-            cs = self.contact.contact_set
-            self._kernel = (np.ascontiguousarray(self.W.T), local_solvers.block_rho(self.W, cs.dim),
-                            ActivePatternCache(n, cs.nc, cs.dim))
+            contact_set = self.contact.contact_set
+            self._kernel = (np.ascontiguousarray(self.W.T), local_solvers.block_rho(self.W, contact_set.dim),
+                            ActivePatternCache(n, contact_set.nc, contact_set.dim))
         return self._kernel
 
     @property
@@ -479,11 +483,11 @@ class ContactOperators:
             out[..., had, :] = values.reshape(lead + (old.nc, per_contact))[..., src[had], :]
             return out.reshape(lead + (new.nc * per_contact,))
 
-        gw = carry(state.wear_gap, 1)
+        wear_gap = carry(state.wear_gap, 1)
         r = carry(state.forces, dim)
-        _, q_abs = self.q(state.obstacle, state.load_factors, np.zeros(new.nc * dim), gw)
+        _, q_abs = self.q(state.obstacle, state.load_factors, np.zeros(new.nc * dim), wear_gap)
         status = None if state.status is None else carry(state.status.astype(float), 1).astype(np.int8)
-        return replace(state, forces=r, wear_gap=gw, positions=self.W @ r + q_abs, slip=carry(state.slip, dim),
+        return replace(state, forces=r, wear_gap=wear_gap, positions=self.W @ r + q_abs, slip=carry(state.slip, dim),
                        warm=carry(state.warm, dim), status=status)
 
 

@@ -216,15 +216,15 @@ def contact_measures(problem, state, model_fraction: float = 1.0) -> dict[str, f
     cut by its symmetry plane t2 = 0 through the contact's centre: its extent across is twice the largest
     ``|t2|`` of a loaded node. Empty for a 2D contact (its widths are in the history).
     """
-    cs = problem.contact.contact_set
-    if cs.dim != 3 or state.status is None:
+    contact_set = problem.contact.contact_set
+    if contact_set.dim != 3 or state.status is None:
         return {}
     loaded = state.status > 0
     sticking = state.status == 1
-    along = np.einsum("ij,ij->i", cs.coords, cs.frames[:, 1])
-    across = np.einsum("ij,ij->i", cs.coords, cs.frames[:, 2])
-    area = float(cs.tributary[loaded].sum()) / model_fraction
-    stick_area = float(cs.tributary[sticking].sum()) / model_fraction
+    along = np.einsum("ij,ij->i", contact_set.coords, contact_set.frames[:, 1])
+    across = np.einsum("ij,ij->i", contact_set.coords, contact_set.frames[:, 2])
+    area = float(contact_set.tributary[loaded].sum()) / model_fraction
+    stick_area = float(contact_set.tributary[sticking].sum()) / model_fraction
 
     def span(values: np.ndarray) -> float:
         return float(values.max() - values.min()) if values.size else 0.0
@@ -406,9 +406,9 @@ class FrettingWriter:
         if profiles:
             if result.kept is None:
                 raise ValueError("write_cycle(profiles=True) needs the cycle solved with keep=True")
-            out_r, out_x, out_y, out_gw, out_status = result.kept
+            out_r, out_x, out_y, out_wear, out_status = result.kept
             for j in range(n):
-                self.write_profile(start.increment + j + 1, cycle, j + 1, out_x[j], out_y[j], out_r[j], out_gw[j],
+                self.write_profile(start.increment + j + 1, cycle, j + 1, out_x[j], out_y[j], out_r[j], out_wear[j],
                                    out_status[j])
             self.write_flat_profile(start.increment + n, cycle, result.final)
         if profiles if fields is None else fields:
@@ -425,10 +425,10 @@ class FrettingWriter:
         if self.problem.body is not None or result.kept is None:
             return n - 1, result.final
         j = int(np.argmax(result.records["normal_force"] + np.abs(result.records["tangential_force"])))
-        out_r, out_x, out_y, out_gw, out_status = result.kept
+        out_r, out_x, out_y, out_wear, out_status = result.kept
         # finite sliding: the increment's arrays are in its own pairing's frames
         pairing = result.kept_pairings[j] if result.kept_pairings is not None else result.final.pairing
-        return j, replace(result.final, forces=out_r[j], slip=out_x[j], positions=out_y[j], wear_gap=out_gw[j],
+        return j, replace(result.final, forces=out_r[j], slip=out_x[j], positions=out_y[j], wear_gap=out_wear[j],
                           status=out_status[j], obstacle=result.obstacle[j], load_factors=result.load_factors[j],
                           pairing=pairing)
 
@@ -437,14 +437,15 @@ class FrettingWriter:
         """Append one increment's contact profile (rank 0): the columns of
         :func:`~dolfinx_fretting.io.profile_fields` (t1 components, and in 3D the t2 ones and the position
         along t2)."""
-        cs = self.problem.contact.contact_set
-        dim = cs.dim
+        contact_set = self.problem.contact.contact_set
+        dim = contact_set.dim
         if status is None:
-            status = np.zeros(cs.nc, dtype=np.int8)
-        columns = [cs.abscissa, positions[0::dim], forces[0::dim] / cs.tributary, forces[1::dim] / cs.tributary,
+            status = np.zeros(contact_set.nc, dtype=np.int8)
+        tributary = contact_set.tributary
+        columns = [contact_set.abscissa, positions[0::dim], forces[0::dim] / tributary, forces[1::dim] / tributary,
                    slip[1::dim], positions[1::dim], wear_gap]
         if dim == 3:
-            columns += [np.einsum("ij,ij->i", cs.coords, cs.frames[:, 2]), forces[2::dim] / cs.tributary,
+            columns += [np.einsum("ij,ij->i", contact_set.coords, contact_set.frames[:, 2]), forces[2::dim] / tributary,
                         slip[2::dim], positions[2::dim]]
         self.tables.profile_block(increment, cycle, step, [*columns, status])
 
@@ -511,19 +512,21 @@ class FrettingWriter:
             return
         import csv
 
-        cs = self.problem.contact_set_of(state)
-        gw = state.wear_gap
+        contact_set = self.problem.contact_set_of(state)
+        wear_gap = state.wear_gap
         rows = []
-        if not cs.two_body:
-            rows = zip(cs.abscissa, gw, gw, np.full(cs.nc, np.nan), np.zeros(cs.nc))
+        if not contact_set.two_body:
+            nc = contact_set.nc
+            rows = zip(contact_set.abscissa, wear_gap, wear_gap, np.full(nc, np.nan), np.zeros(nc))
         else:
             worn = self.problem.body_wear(state)
             flat_x = worn["master_coordinates"] @ self.problem.contact.frame[1]
-            if self.problem.operators.surface_compliance is None:   # the flat's share placed at each contact's paired point
-                rows = zip(cs.abscissa, gw, worn["slave"], flat_x, worn["master"])
+            # the flat's share placed at each contact's paired point
+            if self.problem.operators.surface_compliance is None:
+                rows = zip(contact_set.abscissa, wear_gap, worn["slave"], flat_x, worn["master"])
             else:   # finite sliding: the cylinder's rows, then the flat's nodes (blank where a body has none)
-                blank, blank_flat = np.full(cs.nc, np.nan), np.full(flat_x.size, np.nan)
-                rows = [*zip(cs.abscissa, gw, worn["slave"], blank, blank),
+                blank, blank_flat = np.full(contact_set.nc, np.nan), np.full(flat_x.size, np.nan)
+                rows = [*zip(contact_set.abscissa, wear_gap, worn["slave"], blank, blank),
                         *zip(blank_flat, blank_flat, blank_flat, flat_x, worn["master"])]
         with open(self.folder / "worn_profiles.csv", "w", newline="") as f:
             w = csv.writer(f)

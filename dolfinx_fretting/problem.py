@@ -149,9 +149,10 @@ class FrettingProblem:
         self.sliding = SlidingMonitor()
         self.body: ElastoplasticBody | None = None
         if plasticity is not None:
-            ops = self.operators
+            operators = self.operators
             self.body = ElastoplasticBody(
-                ops, plasticity.law, ops.contact.H_free, ops.W, ops.vectors[0] if ops.vectors else None,
+                operators, plasticity.law, operators.contact.H_free, operators.W,
+                operators.vectors[0] if operators.vectors else None,
                 tangent=plasticity.tangent, max_iter=plasticity.max_iter, delta_1=plasticity.residual_tol,
                 delta_2=plasticity.displacement_tol, quadrature_degree=plasticity.quadrature_degree,
                 elastic_cells=plasticity.elastic_cells)
@@ -202,24 +203,24 @@ class FrettingProblem:
     def initial_state(self) -> ContactState:
         """The unloaded, unworn state (obstacle at its initial position, every load factor 0; finite sliding:
         the reference configuration's pairing)."""
-        ops = self.operators
-        finite = ops.surface_compliance is not None
-        cs = ops.reference_pairing if finite else ops.contact.contact_set
-        m = cs.nc * cs.dim
+        operators = self.operators
+        finite = operators.surface_compliance is not None
+        contact_set = operators.reference_pairing if finite else operators.contact.contact_set
+        m = contact_set.nc * contact_set.dim
         y = np.zeros(m)
-        y[0::cs.dim] = cs.gap0
-        factors = np.zeros(len(ops.load_names))
-        factors[ops.fixed_factor] = 1.0
+        y[0::contact_set.dim] = contact_set.gap0
+        factors = np.zeros(len(operators.load_names))
+        factors[operators.fixed_factor] = 1.0
         plastic = None
         if self.body is not None:
             points = self.body.state
             plastic = PlasticHistory(np.zeros_like(self.body.u.x.array), np.zeros_like(points.sigma),
                                      np.zeros_like(points.eps_p), np.zeros_like(points.p))
-        size = ops.contact.obstacle_size
-        return ContactState(np.zeros(m), y, np.zeros(m), np.zeros(cs.nc), np.zeros(size), factors,
+        size = operators.contact.obstacle_size
+        return ContactState(np.zeros(m), y, np.zeros(m), np.zeros(contact_set.nc), np.zeros(size), factors,
                             targets=np.zeros(size), force_controlled=np.zeros(size, dtype=bool), plastic=plastic,
-                            pairing=cs if finite else None,
-                            master_wear=np.zeros(ops.surface_compliance.nodes.size) if finite else None)
+                            pairing=contact_set if finite else None,
+                            master_wear=np.zeros(operators.surface_compliance.nodes.size) if finite else None)
 
     def solve(self, state: ContactState, normal: float | Displacement | Force | None = None,
               tangential: float | Sequence[float] | Displacement | Force | None = None,
@@ -249,28 +250,29 @@ class FrettingProblem:
                 ``grow_window``: the result must belong to ``state``'s window; :meth:`advance` and
                 :meth:`run_cycle` grow it.
         """
-        ops = self.operators
-        ops.activate(state)
-        targets, controlled = increment_targets(ops, state, normal, tangential)
-        factors = ops.factors(state, loads)
+        operators = self.operators
+        operators.activate(state)
+        targets, controlled = increment_targets(operators, state, normal, tangential)
+        factors = operators.factors(state, loads)
         if self.body is not None:
-            result = solve_plastic(ops, self.solver, self.body, state, targets, controlled, factors, in_cycle)
+            result = solve_plastic(operators, self.solver, self.body, state, targets, controlled, factors, in_cycle)
         else:
-            result = replace(solve_contact(ops, self.solver, state, targets, controlled, factors), in_cycle=in_cycle)
+            result = replace(solve_contact(operators, self.solver, state, targets, controlled, factors),
+                             in_cycle=in_cycle)
         self._check_window(result)
         return result
 
     def _check_window(self, result: IncrementResult) -> None:
         """Raise WindowError on every rank if a node outside the window penetrates in ``result`` (the decision is
         rank 0's, broadcast). Collective; nothing to do (no communication) without a window."""
-        ops = self.operators
-        if ops.outside is None:
+        operators = self.operators
+        if operators.outside is None:
             return
         gaps, newton_tol = None, 0.0
         if result.plastic is not None:  # the displacement holds the plastic strains: gaps from it (a reduction)
-            gaps = ops.outside_gaps_of(result.plastic.u, result.obstacle)
+            gaps = operators.outside_gaps_of(result.plastic.u, result.obstacle)
             newton_tol = self.plasticity.displacement_tol
-        on_rank0(ops.comm, lambda: ops.check_window(result.forces, result.obstacle, result.load_factors,
+        on_rank0(operators.comm, lambda: operators.check_window(result.forces, result.obstacle, result.load_factors,
                                                     self.solver.tol, displacement_gaps=gaps,
                                                     displacement_tol=newton_tol))
 
@@ -347,17 +349,18 @@ class FrettingProblem:
                 increment is checked; ``step`` is the first); with ``Contact(..., grow_window=True)`` the window
                 is widened instead and the whole cycle solved again from ``state``.
         """
-        ops = self.operators
-        obstacle, forced, factors = cycle_targets(ops, state, path)
-        ops.activate(state)
-        ops.check_held(obstacle, forced)
+        operators = self.operators
+        obstacle, forced, factors = cycle_targets(operators, state, path)
+        operators.activate(state)
+        operators.check_held(obstacle, forced)
 
         def attempt(start: ContactState) -> CycleResult:
             # Finite sliding pairs anew between increments: increment by increment.
             if (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
-                    and not forced.any() and ops.surface_compliance is None):
-                return compiled_cycle(ops, self.solver, self.wear_coefficient(True), start, obstacle, factors, keep)
-            return stepwise_cycle(ops, self._advance_once, start, obstacle, forced, factors, keep, check)
+                    and not forced.any() and operators.surface_compliance is None):
+                return compiled_cycle(operators, self.solver, self.wear_coefficient(True), start, obstacle, factors,
+                                      keep)
+            return stepwise_cycle(operators, self._advance_once, start, obstacle, forced, factors, keep, check)
         # A growth solves the whole cycle again from ``state`` in the wider window (its increments then all refer
         # to one contact set).
         return self._growing(state, attempt)

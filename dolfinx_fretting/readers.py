@@ -80,19 +80,19 @@ def contact_fields(operators: ContactOperators, state: ContactState, contact=Non
     (force / tributary measure; shear has dim-1 components), ``gap``, ``slip`` (last increment's slip
     increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip).
     ``contact``: one zone's nodes only (default every zone's, in turn)."""
-    cs = operators.contact_set_of(state)
-    dim = cs.dim
-    r = state.forces.reshape(cs.nc, dim)
-    y = state.positions.reshape(cs.nc, dim)
-    x = state.slip.reshape(cs.nc, dim)
-    status = state.status if state.status is not None else np.zeros(cs.nc, dtype=np.int8)
+    contact_set = operators.contact_set_of(state)
+    dim = contact_set.dim
+    r = state.forces.reshape(contact_set.nc, dim)
+    y = state.positions.reshape(contact_set.nc, dim)
+    x = state.slip.reshape(contact_set.nc, dim)
+    status = state.status if state.status is not None else np.zeros(contact_set.nc, dtype=np.int8)
     zone = zone_index(operators, contact, "contact_fields")
     if zone is not None:
         rows = operators.contact.zone_slice(zone)
         fields = contact_fields(operators, state)
         return {name: values[rows].copy() for name, values in fields.items()}
-    return {"coordinates": cs.coords.copy(), "global_node": cs.global_nodes.copy(),
-            "pressure": r[:, 0] / cs.tributary, "shear": r[:, 1:] / cs.tributary[:, None],
+    return {"coordinates": contact_set.coords.copy(), "global_node": contact_set.global_nodes.copy(),
+            "pressure": r[:, 0] / contact_set.tributary, "shear": r[:, 1:] / contact_set.tributary[:, None],
             "gap": y[:, 0].copy(), "slip": x[:, 1:].copy(), "relative_tangential": y[:, 1:].copy(),
             "wear": state.wear_gap.copy(), "status": status.copy()}
 
@@ -102,30 +102,31 @@ def body_wear(operators: ContactOperators, wear: WearLaw | None, state: ContactS
     (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`), with small sliding each contact's
     paired point (the pairing is fixed, so
     the master's share is carried per contact). Reads ``state`` only (the problem's pairing is not changed)."""
-    cs = operators.contact_set_of(state)
-    if not cs.two_body:
+    contact_set = operators.contact_set_of(state)
+    if not contact_set.two_body:
         raise ValueError("body_wear: the obstacle is rigid (the wear gap is the body's: contact_fields)")
     if operators.surface_compliance is None:
         share = wear.slave_share if wear is not None else 1.0
         return {"slave": share * state.wear_gap, "master": (1 - share) * state.wear_gap,
-                "master_coordinates": cs.master_points.copy()}
+                "master_coordinates": contact_set.master_points.copy()}
     on_master = operators.surface_compliance.master_areas > 0
-    surface = cs.master_surface
+    surface = contact_set.master_surface
     flat_nodes, first = np.unique(surface.nodes.ravel(), return_index=True)
     master_nodes = operators.surface_compliance.nodes[on_master]
     x = surface.x.reshape(-1, surface.dim)[first[np.searchsorted(flat_nodes, master_nodes)]]
-    return {"slave": state.wear_gap - sliding.interpolate_master(cs, operators.surface_compliance, state.master_wear),
+    slave = state.wear_gap - sliding.interpolate_master(contact_set, operators.surface_compliance, state.master_wear)
+    return {"slave": slave,
             "master": state.master_wear[on_master].copy(), "master_coordinates": x}
 
 def worn_measure(operators: ContactOperators, state: ContactState) -> float:
     """The worn area (2D, mm^2 per mm) or volume (3D) of ``state``: the wear gap times the tributary measures;
     with finite sliding the slave's part per contact plus the master's on its own nodes (the master's wear
     left behind by the slide is under no contact)."""
-    cs = operators.contact_set_of(state)
+    contact_set = operators.contact_set_of(state)
     if operators.surface_compliance is None:
-        return float(state.wear_gap @ cs.tributary)
-    slave = state.wear_gap - sliding.interpolate_master(cs, operators.surface_compliance, state.master_wear)
-    return float(slave @ cs.tributary + state.master_wear @ operators.surface_compliance.master_areas)
+        return float(state.wear_gap @ contact_set.tributary)
+    slave = state.wear_gap - sliding.interpolate_master(contact_set, operators.surface_compliance, state.master_wear)
+    return float(slave @ contact_set.tributary + state.master_wear @ operators.surface_compliance.master_areas)
 
 def total_force(operators: ContactOperators, state: ContactState, contact=None) -> np.ndarray:
     """Total contact force on the body in the obstacle frame (n, t1[, t2]); with several zones the force of zone
