@@ -28,7 +28,7 @@ from .contact import Contact, ContactSet, constrained_global_dofs
 from .cycling import ActivePatternCache
 from .settings import finite
 from .state import ContactState
-from .window_check import OutsideRows, check_window
+from .window_check import OutsideRows, carry_state, check_window, outside_gaps_of, outside_on_surfaces, watch_outside
 from .zones import ContactZones
 
 __all__ = ["ContactOperators"]
@@ -121,7 +121,7 @@ class ContactOperators:
         self.surface_compliance: sliding.SurfaceCompliance | None = None
         if isinstance(contact, Contact) and contact.obstacle.finite_sliding:
             self.surface_compliance = self._build_surface_compliance()
-            self._surface_outside = self._outside_on_surfaces()
+            self._surface_outside = outside_on_surfaces(self)
         #: The first guess of each obstacle component's load-displacement slope (force control).
         self.stiffness: np.ndarray | None = None
         self.build()
@@ -233,57 +233,12 @@ class ContactOperators:
                 "of the contact frame's directions, e.g. u_y on a symmetry plane y = 0 with the obstacle normal in "
                 "that plane)")
 
-    def _outside_normal_rows(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-        """The outside nodes' normal rows of H: (full, without the fixed dofs' columns)."""
-        outside = self.contact.outside
-        H = sp.csr_matrix(outside.H[0::outside.dim])
-        free = np.ones(H.shape[1])
-        free[self.contact.fixed_global] = 0.0
-        H_free = sp.csr_matrix(H @ sp.diags(free))
-        H_free.eliminate_zeros()
-        return H, H_free
-
-    def _outside_on_surfaces(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Finite sliding: ``H_out K^-1 S^T`` on the surface compliance's dofs S and the loads' responses at the
-        outside nodes, once (a pairing's coupling is then ``(H_out K^-1 S^T) L^T``, no solve: see
-        :meth:`_watch_outside`); None without outside nodes. The outside nodes keep their reference pairing.
-        Collective."""
-        if self.contact.outside is None:
-            return None
-        H, H_free = self._outside_normal_rows()
-        dofs = self.surface_compliance.dofs
-        S = sp.csr_matrix((np.ones(dofs.size), (np.arange(dofs.size), dofs)), shape=(dofs.size, self.n_dofs))
-        free = np.ones(self.n_dofs)
-        free[self.contact.fixed_global] = 0.0
-        S_free = sp.csr_matrix(S @ sp.diags(free))
-        S_free.eliminate_zeros()
-        responses = np.array([self.local_response(f, H) for f in self.vectors]).reshape(len(self.vectors), H.shape[0])
-        return self.delassus.coupling(H_free, S_free), responses
-
     def _watch_outside(self, responses: np.ndarray | None) -> None:
-        """The operators of the surface's nodes outside the window (:class:`OutsideRows`), or None (no window, or
-        no node outside it). C is formed from entries of K^-1
-        (:meth:`~dolfinx_fretting.compliance.DelassusOperator.coupling`; its cost is measured in
-        ``benchmarks/results/window_check.md``); under finite sliding from ``H_out K^-1 S^T`` on the surface
-        compliance's dofs, made once (:meth:`_outside_on_surfaces`), and each pairing's columns L: no solve."""
-        outside = self.contact.outside
-        self.outside: OutsideRows | None = None
-        if outside is None:
-            return
+        """The outside rows of the window held (:func:`~dolfinx_fretting.window_check.watch_outside`)."""
         t0 = time.perf_counter()
-        dim = outside.dim
-        if self.surface_compliance is not None:
-            on_surfaces, responses = self._surface_outside
-            L = self.surface_compliance.restrict(self.contact.contact_set)
-            coupling = np.asarray((L @ on_surfaces.T).T)
-        else:
-            coupling = self.delassus.coupling(self._outside_normal_rows()[1], self.contact.H_free)
-        rho = local_solvers.block_rho(self.W, dim) if self.contact.contact_set.nc else np.ones(1)
-        centres = tuple(zone.window_centre for zone in self.contact.zones)
-        self.outside = OutsideRows(outside, coupling, responses, self.contact.outside_motion(),
-                                   self.contact.outside_distance(), float(1.0 / rho.min()),
-                                   self.contact.outside_zone, self.contact.windows, centres)
-        self.timings["outside_s"] = time.perf_counter() - t0
+        self.outside: OutsideRows | None = watch_outside(self, responses)
+        if self.outside is not None:
+            self.timings["outside_s"] = time.perf_counter() - t0
 
     def check_window(self, forces: np.ndarray, obstacle: np.ndarray, factors: np.ndarray, local_tol: float,
                      cycle: bool = False, displacement_gaps: np.ndarray | None = None,
@@ -297,17 +252,8 @@ class ContactOperators:
                      local_tol, cycle, displacement_gaps, displacement_tol)
 
     def outside_gaps_of(self, u: np.ndarray, obstacle: np.ndarray) -> np.ndarray | None:
-        """The outside nodes' normal gaps for this rank's displacement ``u`` (a ``fem.Function``'s array: owned
-        then ghost values) and the obstacle position ``obstacle`` (obstacle frame); None without outside nodes.
-        Collective (the same sum on every rank)."""
-        out = self.outside
-        if out is None:
-            return None
-        rstart, rend = self.K.getOwnershipRange()
-        part = out.nodes.H[0::out.nodes.dim][:, rstart:rend] @ u[:rend - rstart]
-        moved = self.comm.allreduce(part, op=MPI.SUM)
-        moved = self.comm.bcast(moved if self.comm.rank == 0 else None, root=0)
-        return out.nodes.gap0 + moved - out.motion @ obstacle
+        """:func:`~dolfinx_fretting.window_check.outside_gaps_of` with the outside rows held. Collective."""
+        return outside_gaps_of(self, u, obstacle)
 
     def check_held(self, obstacle: np.ndarray, force_controlled: np.ndarray) -> None:
         """Refuse obstacle motions and forces along a held contact direction (see :meth:`_hold_directions`)."""
@@ -464,32 +410,9 @@ class ContactOperators:
             self.contact, self.W, self.responses = old_contact, old_W, old_resp
             self._kernel = None
             raise
-        old, new = old_contact.contact_set, self.contact.contact_set
-
-        def keys(contact) -> list[tuple[int, int]]:  # (zone, global node): a corner's node is in two zones
-            zone_of = np.repeat(np.arange(len(contact.zones)), np.diff([contact.zone_slice(i).start for i in
-                                                                        range(len(contact.zones))] + [contact.nc]))
-            return list(zip(zone_of.tolist(), contact.contact_set.global_nodes.tolist()))
-        where_old = {key: i for i, key in enumerate(keys(old_contact))}
-        src = np.array([where_old.get(key, -1) for key in keys(self.contact)])
-        had = src >= 0
-        dim = new.dim
-
-        def carry(values: np.ndarray | None, per_contact: int) -> np.ndarray | None:
-            if values is None:
-                return None
-            lead = values.shape[:-1]
-            out = np.zeros(lead + (new.nc, per_contact))
-            out[..., had, :] = values.reshape(lead + (old.nc, per_contact))[..., src[had], :]
-            return out.reshape(lead + (new.nc * per_contact,))
-
-        wear_gap = carry(state.wear_gap, 1)
-        r = carry(state.forces, dim)
-        _, q_abs = self.q(state.obstacle, state.load_factors, np.zeros(new.nc * dim), wear_gap)
-        status = None if state.status is None else carry(state.status.astype(float), 1).astype(np.int8)
-        return replace(state, forces=r, wear_gap=wear_gap, positions=self.W @ r + q_abs, slip=carry(state.slip, dim),
-                       warm=carry(state.warm, dim), status=status)
-
+        carried = carry_state(old_contact, self.contact, state)
+        _, q_abs = self.q(state.obstacle, state.load_factors, np.zeros(carried["forces"].size), carried["wear_gap"])
+        return replace(state, positions=self.W @ carried["forces"] + q_abs, **carried)
 
     def destroy(self) -> None:
         """Free the PETSc objects (factorisation, K if assembled here, load vectors)."""

@@ -1,20 +1,26 @@
 """The watch over the contact surface outside a candidate window: no node there may penetrate the obstacle
-unnoticed (:class:`~dolfinx_fretting.contact.Contact`'s ``window``).
+unnoticed (:class:`~dolfinx_fretting.contact.Contact`'s ``window``); and a state carried into a new window.
 
-The operators (:class:`~dolfinx_fretting.operators.ContactOperators`) form :class:`OutsideRows` from their factor;
-every increment's answer is checked by :func:`check_window`, a product with C and no solve. Pure NumPy: no mesh.
+:func:`watch_outside` forms :class:`OutsideRows` from the operators' factor
+(:class:`~dolfinx_fretting.operators.ContactOperators`); every increment's answer is checked by
+:func:`check_window`, a product with C and no solve; :func:`carry_state` carries a state's per-contact arrays
+into the contact set of another window. No DOLFINx here: the operators' factor and communicator do the work.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
+from mpi4py import MPI
 
+from . import local_solvers
 from .contact import ContactSet
-from .state import WindowError
+from .state import ContactState, WindowError
 
-__all__ = ["OutsideRows", "check_window"]
+__all__ = ["OutsideRows", "check_window", "watch_outside", "outside_on_surfaces", "outside_gaps_of", "carry_state"]
 
 
 @dataclass(frozen=True)
@@ -137,3 +143,97 @@ def check_window(outside: OutsideRows | None, forces: np.ndarray, obstacle: np.n
         terms = np.maximum(terms, np.abs(factors) @ np.abs(outside.responses).max(axis=1))
     tolerance = outside.tolerance(forces, local_tol, terms) + displacement_tol * moved
     outside.check(gaps, tolerance, cycle)
+
+
+def _normal_rows(outside: ContactSet, fixed_global: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """The outside nodes' normal rows of H: (full, without the fixed dofs' columns)."""
+    H = sp.csr_matrix(outside.H[0::outside.dim])
+    free = np.ones(H.shape[1])
+    free[fixed_global] = 0.0
+    H_free = sp.csr_matrix(H @ sp.diags(free))
+    H_free.eliminate_zeros()
+    return H, H_free
+
+
+def outside_on_surfaces(operators) -> tuple[np.ndarray, np.ndarray] | None:
+    """Finite sliding: ``H_out K^-1 S^T`` on the surface compliance's dofs S and the loads' responses at the outside
+    nodes, once (a pairing's coupling is then ``(H_out K^-1 S^T) L^T``, no solve: see :func:`watch_outside`); None
+    without outside nodes. The outside nodes keep their reference pairing. Collective."""
+    contact = operators.contact
+    if contact.outside is None:
+        return None
+    H, H_free = _normal_rows(contact.outside, contact.fixed_global)
+    dofs = operators.surface_compliance.dofs
+    S = sp.csr_matrix((np.ones(dofs.size), (np.arange(dofs.size), dofs)), shape=(dofs.size, operators.n_dofs))
+    free = np.ones(operators.n_dofs)
+    free[contact.fixed_global] = 0.0
+    S_free = sp.csr_matrix(S @ sp.diags(free))
+    S_free.eliminate_zeros()
+    responses = np.array([operators.local_response(f, H) for f in operators.vectors]).reshape(
+        len(operators.vectors), H.shape[0])
+    return operators.delassus.coupling(H_free, S_free), responses
+
+
+def watch_outside(operators, responses: np.ndarray | None) -> OutsideRows | None:
+    """The :class:`OutsideRows` of the contact the operators hold, or None (no window, or no node outside it).
+    C is formed from entries of K^-1 (:meth:`~dolfinx_fretting.compliance.DelassusOperator.coupling`; its cost is
+    measured in ``benchmarks/results/window_check.md``); under finite sliding from ``H_out K^-1 S^T`` on the
+    surface compliance's dofs, made once (:func:`outside_on_surfaces`), and each pairing's columns L: no solve.
+    ``responses``: the loads' normal responses at the outside nodes (finite sliding: made with the surfaces').
+    Collective."""
+    contact = operators.contact
+    outside = contact.outside
+    if outside is None:
+        return None
+    if operators.surface_compliance is not None:
+        on_surfaces, responses = operators._surface_outside
+        L = operators.surface_compliance.restrict(contact.contact_set)
+        coupling = np.asarray((L @ on_surfaces.T).T)
+    else:
+        coupling = operators.delassus.coupling(_normal_rows(outside, contact.fixed_global)[1], contact.H_free)
+    rho = local_solvers.block_rho(operators.W, outside.dim) if contact.contact_set.nc else np.ones(1)
+    centres = tuple(zone.window_centre for zone in contact.zones)
+    return OutsideRows(outside, coupling, responses, contact.outside_motion(), contact.outside_distance(),
+                       float(1.0 / rho.min()), contact.outside_zone, contact.windows, centres)
+
+
+def outside_gaps_of(operators, u: np.ndarray, obstacle: np.ndarray) -> np.ndarray | None:
+    """The outside nodes' normal gaps for this rank's displacement ``u`` (a ``fem.Function``'s array: owned then
+    ghost values) and the obstacle position ``obstacle`` (obstacle frames); None without outside nodes. Collective
+    (the same sum on every rank)."""
+    out = operators.outside
+    if out is None:
+        return None
+    rstart, rend = operators.K.getOwnershipRange()
+    part = out.nodes.H[0::out.nodes.dim][:, rstart:rend] @ u[:rend - rstart]
+    moved = operators.comm.allreduce(part, op=MPI.SUM)
+    moved = operators.comm.bcast(moved if operators.comm.rank == 0 else None, root=0)
+    return out.nodes.gap0 + moved - out.motion @ obstacle
+
+
+def carry_state(old_contact, new_contact, state: ContactState) -> dict[str, Any]:
+    """``state``'s per-contact arrays (forces, slip, wear gap, warm starts, status) carried from ``old_contact``'s
+    contact set into ``new_contact``'s (another window): by (zone, global node), a corner's node being in two zones;
+    new candidates start open and unworn."""
+    old, new = old_contact.contact_set, new_contact.contact_set
+
+    def keys(contact) -> list[tuple[int, int]]:
+        zone_of = np.repeat(np.arange(len(contact.zones)), [contact.zone_slice(i).stop - contact.zone_slice(i).start
+                                                            for i in range(len(contact.zones))])
+        return list(zip(zone_of.tolist(), contact.contact_set.global_nodes.tolist()))
+    where_old = {key: i for i, key in enumerate(keys(old_contact))}
+    src = np.array([where_old.get(key, -1) for key in keys(new_contact)])
+    had = src >= 0
+    dim = new.dim
+
+    def carry(values: np.ndarray | None, per_contact: int) -> np.ndarray | None:
+        if values is None:
+            return None
+        lead = values.shape[:-1]
+        out = np.zeros(lead + (new.nc, per_contact))
+        out[..., had, :] = values.reshape(lead + (old.nc, per_contact))[..., src[had], :]
+        return out.reshape(lead + (new.nc * per_contact,))
+
+    status = None if state.status is None else carry(state.status.astype(float), 1).astype(np.int8)
+    return {"forces": carry(state.forces, dim), "wear_gap": carry(state.wear_gap, 1), "slip": carry(state.slip, dim),
+            "warm": carry(state.warm, dim), "status": status}
