@@ -281,8 +281,8 @@ def _run(args: argparse.Namespace, scene) -> int:
         _say_error("dolfinx-fretting", exc)
         return 2
 
-    # Lazy: these import petsc4py and DOLFINx (PETSc initialised), which the other commands and a refused
-    # output folder never need
+    # Lazy: petsc4py and DOLFINx (PETSc initialised; io: numba), which the other commands and a refused output
+    # folder never need
     from petsc4py import PETSc
 
     from .compliance import DelassusError
