@@ -18,6 +18,7 @@ from __future__ import annotations
 import os
 import shutil
 import sys
+import warnings
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
@@ -29,6 +30,7 @@ import dolfinx.fem.petsc  # noqa: E402,F401  (0.11 does not import it with dolfi
 import ufl  # noqa: E402
 from dolfinx import fem  # noqa: E402
 from dolfinx import mesh as dmesh  # noqa: E402
+from dolfinx import plot  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
 if TYPE_CHECKING:  # for the annotations only: gmsh is imported by whoever builds a model
@@ -47,8 +49,6 @@ LEGACY_API: bool = DOLFINX_VERSION < (0, 10)
 #: The (major, minor) versions ./tasks.sh test runs on.
 TESTED_VERSIONS = ((0, 5), (0, 11))
 if DOLFINX_VERSION not in TESTED_VERSIONS:
-    import warnings
-
     warnings.warn(f"DOLFINx {dolfinx.__version__} is not tested by dolfinx_fretting (tested: 0.5.2 and 0.11; "
                   f"this one gets the {'0.5' if LEGACY_API else '0.11'} calls)", RuntimeWarning, stacklevel=2)
 
@@ -147,7 +147,7 @@ def quadrature_space(msh, degree: int, shape: Sequence[int]) -> fem.FunctionSpac
         else:
             element = ufl.TensorElement("Quadrature", cell, degree=degree, shape=shape, quad_scheme="default")
         return fem.FunctionSpace(msh, element)
-    import basix.ufl
+    import basix.ufl  # lazy: 0.10+ only (basix 0.5 has no basix.ufl)
 
     element = basix.ufl.quadrature_element(msh.basix_cell(), value_shape=shape, scheme="default",
                                            degree=degree)
@@ -281,11 +281,11 @@ def model_to_mesh(model: gmsh.model, comm: MPI.Comm, rank: int,
         ``tdim - 1``), whose values are the physical groups' tags.
     """
     if LEGACY_API:
-        from dolfinx.io import gmshio
+        from dolfinx.io import gmshio  # lazy: exists on 0.5-0.9 only (0.10+: dolfinx.io.gmsh); loads gmsh
 
         msh, cell_tags, facet_tags = gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
         return msh, cell_tags, facet_tags
-    from dolfinx.io import gmsh as dgmsh
+    from dolfinx.io import gmsh as dgmsh  # lazy: 0.10+ only, as above
 
     data = dgmsh.model_to_mesh(model, comm, rank, gdim=gdim)
     return data.mesh, data.cell_tags, data.facet_tags
@@ -301,7 +301,7 @@ def create_mesh(comm: MPI.Comm, cells: np.ndarray, points: np.ndarray, cell_type
     if LEGACY_API:
         domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell_type, 1))
         return dmesh.create_mesh(comm, cells, points, domain)
-    import basix.ufl
+    import basix.ufl  # lazy: 0.10+ only (basix 0.5 has no basix.ufl)
 
     element = basix.ufl.element("Lagrange", cell_type, 1, shape=(gdim,))
     return dmesh.create_mesh(comm, cells, element, points)
@@ -321,8 +321,6 @@ def vtk_mesh(msh, dim: int | None = None, entities: np.ndarray | None = None):
     The cell types are VTK's linear ones on 0.5 (5 triangle, 9 quadrilateral) and its Lagrange cells on 0.11
     (69, 70); pyvista draws both, with the same first-order node order.
     """
-    from dolfinx import plot
-
     if LEGACY_API:
         return plot.create_vtk_mesh(msh, dim, entities)
     return plot.vtk_mesh(msh, dim, entities)

@@ -19,8 +19,14 @@ import logging
 import sys
 import time
 import traceback
+import warnings
 
+from mpi4py import MPI
+
+from . import study
+from .outdir import OutputFolderError, check_output_folder
 from .scenes import SceneError, builtin_scenes, load_scene
+from .sizes import check_size
 
 __all__ = ["main"]
 
@@ -58,29 +64,28 @@ def _parser() -> argparse.ArgumentParser:
                      help="cycles of compare_cycles.png (default: the snapshot cycles the runs share)")
     cmp.add_argument("--node", type=_node_position, default=0.0, metavar="X",
                      help="position (mm) of the node of compare_node_history.png, or 'centre' (default 0.0)")
-    st = sub.add_parser("study", help="speed-vs-accuracy trade study: a fine reference run and a sweep of "
-                                      "numerics, with errors against the reference (study.csv, .md, .png)")
-    st.add_argument("scene", help="built-in scene name or path to a scene TOML file")
-    st.add_argument("--out", required=True, help="output folder (the runs go to DIR/runs/)")
-    st.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
-                    help="override a scene value for every run, reference included (e.g. loading.cycles=20)")
-    st.add_argument("--reference", action="append", default=None, metavar="SECTION.KEY=VALUE",
-                    help="the reference's overrides; repeatable (default: contact elements halved, twice the "
-                         "increments, local_tol 1e-12, no wear acceleration)")
-    st.add_argument("--sweep", action="append", default=None, metavar="SECTION.KEY=V1,V2,...",
-                    help="a key and its values, swept one at a time around the reference; repeatable (default: "
-                         "contact element size, increments per cycle, local_tol, wear acceleration)")
-    st.add_argument("--point", action="append", default=[], metavar='"K=V K=V"',
-                    help="a combination of overrides on top of the reference's, run as one point; repeatable")
-    st.add_argument("--no-warm-up", dest="warm_up", action="store_false",
-                    help="skip the untimed one-cycle run that loads the compiled kernels first")
-    st.add_argument("--quiet", action="store_true", help="print only the final table")
-    st.add_argument("--verbose", action="store_true",
-                    help="also print the form compiler's build log (hidden by default)")
-    st.add_argument("--overwrite", action="store_true",
-                    help="replace the study --out holds (its table, picture and runs)")
-    st.add_argument("--ignore-size", action="store_true",
-                    help="run even if a run's size estimate exceeds the memory available (refused by default)")
+    study_parser = sub.add_parser("study", help="speed-vs-accuracy trade study: a fine reference run and a "
+                                  "sweep of numerics, with errors against the reference (study.csv, .md, .png)")
+    add = study_parser.add_argument
+    add("scene", help="built-in scene name or path to a scene TOML file")
+    add("--out", required=True, help="output folder (the runs go to DIR/runs/)")
+    add("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
+        help="override a scene value for every run, reference included (e.g. loading.cycles=20)")
+    add("--reference", action="append", default=None, metavar="SECTION.KEY=VALUE",
+        help="the reference's overrides; repeatable (default: contact elements halved, twice the "
+             "increments, local_tol 1e-12, no wear acceleration)")
+    add("--sweep", action="append", default=None, metavar="SECTION.KEY=V1,V2,...",
+        help="a key and its values, swept one at a time around the reference; repeatable (default: "
+             "contact element size, increments per cycle, local_tol, wear acceleration)")
+    add("--point", action="append", default=[], metavar='"K=V K=V"',
+        help="a combination of overrides on top of the reference's, run as one point; repeatable")
+    add("--no-warm-up", dest="warm_up", action="store_false",
+        help="skip the untimed one-cycle run that loads the compiled kernels first")
+    add("--quiet", action="store_true", help="print only the final table")
+    add("--verbose", action="store_true", help="also print the form compiler's build log (hidden by default)")
+    add("--overwrite", action="store_true", help="replace the study --out holds (its table, picture and runs)")
+    add("--ignore-size", action="store_true",
+        help="run even if a run's size estimate exceeds the memory available (refused by default)")
     return p
 
 
@@ -104,7 +109,9 @@ def _quiet_form_compiler(verbose: bool) -> None:
     out of the run's output unless ``verbose``. FFCx 0.5 installs a root handler (``logging.basicConfig``)
     and cffi lowers the root logger's threshold while it compiles, so the handlers' own level is what holds;
     ``verbose`` makes sure there is a handler (newer FFCx installs none)."""
-    import ffcx  # noqa: F401 - FFCx 0.5's import installs the root handler this adjusts
+    # Lazy: the form compiler is heavy and only a run needs it. FFCx 0.5's import installs the root handler
+    # this adjusts.
+    import ffcx  # noqa: F401
 
     if verbose:
         logging.basicConfig()  # no-op if a handler exists
@@ -148,25 +155,19 @@ _exit_comm = None
 
 def _study(args: argparse.Namespace) -> int:
     """``dolfinx-fretting study``: the trade study; 2 for bad input, 1 if the reference run fails."""
-    from mpi4py import MPI
-
-    from .outdir import OutputFolderError
-    from .sizes import check_size
-    from .study import check_study_folder, format_markdown, parse_point, parse_sweep, plan_study, run_study
-
     try:
-        sweep = parse_sweep(args.sweep) if args.sweep is not None else None
-        points = [parse_point(p) for p in args.point]
-        plan = plan_study(args.scene, args.overrides, args.reference, sweep, points)
+        sweep = study.parse_sweep(args.sweep) if args.sweep is not None else None
+        points = [study.parse_point(p) for p in args.point]
+        plan = study.plan_study(args.scene, args.overrides, args.reference, sweep, points)
         for point in plan:  # every run's size before the first starts (SizeError is a SceneError)
             check_size(point.scene, MPI.COMM_WORLD, ignore=args.ignore_size)
-        check_study_folder(args.out, overwrite=args.overwrite)
+        study.check_study_folder(args.out, overwrite=args.overwrite)
     except (SceneError, OutputFolderError) as exc:
         _say_error("dolfinx-fretting study", exc)
         return 2
     _quiet_form_compiler(args.verbose)
     try:
-        rows = run_study(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet, warm_up=args.warm_up,
+        rows = study.run_study(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet, warm_up=args.warm_up,
                          overwrite=args.overwrite, ignore_size=args.ignore_size)
     except OutputFolderError as exc:
         _say_error("dolfinx-fretting study", exc)
@@ -175,7 +176,7 @@ def _study(args: argparse.Namespace) -> int:
         _say_error("dolfinx-fretting study", exc)
         return 1
     if MPI.COMM_WORLD.rank == 0:
-        print(format_markdown(rows))
+        print(study.format_markdown(rows))
         print(f"wrote {args.out}/study.csv, study.md, study.png")
     return 0
 
@@ -211,9 +212,8 @@ def _node_position(text: str) -> float | None:
 
 def _compare(args: argparse.Namespace) -> int:
     """``dolfinx-fretting compare``: pictures and summary table; 2 for bad input."""
+    # Lazy: compare imports numba (through output -> state -> wear), about 0.4 s the other commands do not need
     from .compare import compare_runs, format_table, read_summary_csv
-
-    import warnings
 
     try:
         with warnings.catch_warnings(record=True) as caught:
@@ -238,8 +238,6 @@ def main(argv: list[str] | None = None) -> int:
     _failure.clear()
     if args.command not in ("run", "study"):
         return _finish(_command(args), None)
-    from mpi4py import MPI
-
     comm = MPI.COMM_WORLD
     if _exit_comm is None and comm.size > 1:
         _exit_comm = comm.Dup()  # the end-of-run meeting never matches a collective of the run itself
@@ -257,9 +255,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def _command(args: argparse.Namespace) -> int:
     if args.command == "scenes":
-        from .scenes import load_scene as _load
         for name in sorted(builtin_scenes()):
-            print(f"{name:20s} {_load(name).description}")
+            print(f"{name:20s} {load_scene(name).description}")
         return 0
     if args.command == "compare":
         return _compare(args)
@@ -278,15 +275,14 @@ def _command(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, scene) -> int:
     """``dolfinx-fretting run``: the output folder checked before DOLFINx is imported, then the run."""
-    from .outdir import OutputFolderError, check_output_folder
-
     try:  # each rank checks (the same answer: a file, not writable, holds a run); run_scene locks it
         check_output_folder(args.out, resume=args.resume, overwrite=args.overwrite)
     except OutputFolderError as exc:
         _say_error("dolfinx-fretting", exc)
         return 2
 
-    from mpi4py import MPI
+    # Lazy: petsc4py and DOLFINx (PETSc initialised; io: numba), which the other commands and a refused output
+    # folder never need
     from petsc4py import PETSc
 
     from .compliance import DelassusError

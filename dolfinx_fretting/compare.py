@@ -357,22 +357,22 @@ def _profile_axes(ax_w, ax_p, window, unit: str, wear_all: np.ndarray, empty_tex
 
 def _x_window(curves: list[tuple[np.ndarray, np.ndarray]]) -> tuple[float, float] | None:
     """x limits around the nodes where some curve is non-zero (in contact or worn), with a margin."""
-    lo, hi, full_lo, full_hi = np.inf, -np.inf, np.inf, -np.inf
+    x_min, x_max, full_min, full_max = np.inf, -np.inf, np.inf, -np.inf
     for x, y in curves:
         if x.size == 0:
             continue
-        full_lo, full_hi = min(full_lo, float(x.min())), max(full_hi, float(x.max()))
+        full_min, full_max = min(full_min, float(x.min())), max(full_max, float(x.max()))
         on = np.flatnonzero(np.abs(np.nan_to_num(y)) > 0)
         if on.size:
             # one node beyond the last non-zero one on each side
             a, b = max(on.min() - 1, 0), min(on.max() + 1, x.size - 1)
-            lo, hi = min(lo, float(x[a])), max(hi, float(x[b]))
-    if not np.isfinite(full_lo):
+            x_min, x_max = min(x_min, float(x[a])), max(x_max, float(x[b]))
+    if not np.isfinite(full_min):
         return None
-    if not np.isfinite(lo) or hi <= lo:
-        return full_lo, full_hi
-    pad = 0.15 * (hi - lo)
-    return max(full_lo, lo - pad), min(full_hi, hi + pad)
+    if not np.isfinite(x_min) or x_max <= x_min:
+        return full_min, full_max
+    pad = 0.15 * (x_max - x_min)
+    return max(full_min, x_min - pad), min(full_max, x_max + pad)
 
 
 def _preload_groups(runs: Sequence[RunData]) -> list[list[RunData]]:
@@ -479,6 +479,7 @@ def plot_compare_cycles(path: Path, runs: Sequence[RunData], cycles: Sequence[in
     Returns:
         ``path``, or ``None`` when no chosen cycle is kept by any run.
     """
+    # Lazy: matplotlib (heavy) only where a picture is drawn, as in plots
     import matplotlib
     from matplotlib.lines import Line2D
 
@@ -582,6 +583,7 @@ def plot_compare_node_history(path: Path, runs: Sequence[RunData],
     Returns:
         ``path``, or ``None`` when no run kept cycle 1.
     """
+    # Lazy: matplotlib (heavy) only where a picture is drawn, as in plots
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -630,8 +632,8 @@ def plot_compare_node_history(path: Path, runs: Sequence[RunData],
         ax_t.plot(steps, prof.values["shear"][rows, j], **kw)
         states = prof.values["state"][rows, j]
         y = nr - 1 - k
-        for s, st in zip(steps, states):
-            ax_state.add_patch(_state_box(s, y, int(st)))
+        for step, state in zip(steps, states):
+            ax_state.add_patch(_state_box(step, y, int(state)))
         titles.append((r.label, f"node {int(prof.nodes[j])} at x = {_mm(prof.position[j])} mm"))
     for ax in axes[:4]:
         ax.axhline(0.0, color="k", lw=0.5, zorder=1)
@@ -675,7 +677,7 @@ def plot_compare_node_history(path: Path, runs: Sequence[RunData],
 
 
 def _state_box(step: float, y: float, state: int):
-    from matplotlib.patches import Rectangle
+    from matplotlib.patches import Rectangle  # lazy: matplotlib is heavy, as above
 
     return Rectangle((step - 0.5, y - 0.38), 1.0, 0.76, facecolor=_STATE_COLORS.get(state, "white"),
                      edgecolor="white", lw=0.5)

@@ -53,6 +53,8 @@ from contextlib import contextmanager
 from typing import Iterator
 
 import numpy as np
+import petsc4py
+import scipy.linalg as sla
 import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -151,8 +153,6 @@ def _petsc_c_api() -> ctypes.CDLL:
     would have its own global state). Then the libpetsc already mapped into the process, then the
     library of petsc4py's configuration.
     """
-    import petsc4py
-
     candidates = [PETSc.__file__, *_loaded_petsc_paths()]
     try:
         cfg = petsc4py.get_config()
@@ -526,8 +526,8 @@ class DelassusOperator:
             barr = b.getArray()
             for i in range(m):
                 barr[:] = 0.0
-                lo, hi = Hown.indptr[i], Hown.indptr[i + 1]
-                barr[Hown.indices[lo:hi]] = Hown.data[lo:hi]
+                start, stop = Hown.indptr[i], Hown.indptr[i + 1]
+                barr[Hown.indices[start:stop]] = Hown.data[start:stop]
                 self.solve(b, x)
                 Yloc[:, i] = x.getArray(readonly=True)[loc]
         finally:
@@ -689,15 +689,15 @@ class DelassusOperator:
         """W from each rank's columns W[:, J] = H_S (K^-1)_{S, S_J} H_J^T on its own factor, all-gathered."""
         m = H.shape[0]
         size, rank = self.comm.size, self.comm.rank
-        lo, hi = (m * rank) // size, (m * (rank + 1)) // size
+        start, stop = (m * rank) // size, (m * (rank + 1)) // size
         t0 = time.perf_counter()
         own = self._own_factor()
         self.stats["own_factorize_time"] = time.perf_counter() - t0
         WJ = np.zeros((m, 0))
         error = None
-        if hi > lo:
+        if stop > start:
             try:
-                HJ = H[lo:hi].tocsr()
+                HJ = H[start:stop].tocsr()
                 C = np.unique(HJ.indices).astype(np.int64)
                 inv = own._inverse_entries(S, C)  # (|C|, |S|) = ((K^-1)_{S, C})^T
                 WJ = HS @ (HJ[:, C] @ inv).T
@@ -783,8 +783,6 @@ class DelassusOperator:
 
     def _build_schur(self, HS: sp.csr_matrix, S: np.ndarray) -> np.ndarray:
         """W = H_S S_K^-1 H_S^T, S_K the Schur complement of K on the dofs S (serial)."""
-        import scipy.linalg as sla
-
         SK = self._schur_factor(S)._schur_complement()
         self.stats["schur_size"] = int(SK.shape[0])
         try:

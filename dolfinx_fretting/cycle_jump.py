@@ -66,6 +66,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from mpi4py import MPI
 
 __all__ = ["CycleAnalysis", "PlasticCycle", "analyse_cycle", "analyse_plastic_cycle", "choose_jump",
            "extrapolate", "extrapolate_plastic_history", "jump_error", "hertz_jump_limit", "plastic_jump_error",
@@ -232,13 +233,7 @@ class PlasticCycle:
 
 
 def _global_max(value: float, comm) -> float:
-    return float(value if comm is None or comm.size == 1 else comm.allreduce(value, op=_mpi_max()))
-
-
-def _mpi_max():
-    from mpi4py import MPI
-
-    return MPI.MAX
+    return float(value if comm is None or comm.size == 1 else comm.allreduce(value, op=MPI.MAX))
 
 
 def analyse_plastic_cycle(eps_p_start: np.ndarray, p_start: np.ndarray, eps_p_end: np.ndarray,

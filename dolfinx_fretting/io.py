@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from .outdir import check_resume_tables
 from .state import INCREMENT_COLUMNS
 from .units import Units
 
@@ -177,8 +178,6 @@ class ResultWriter:
         # with NUL bytes (or a new table would start without them). Checked on rank 0, raised on every rank.
         problem = None
         if self.rank0 and resume_sizes is not None:
-            from .outdir import check_resume_tables
-
             problem = check_resume_tables(self.out, {k: v for k, v in resume_sizes.items() if k in names})
         if comm.size > 1:
             problem = comm.bcast(problem, root=0)
@@ -247,6 +246,8 @@ class ResultWriter:
     def fields(self, t: float, functions: list) -> None:
         """Append functions at time ``t`` to ``fields.xdmf`` (collective); the file is closed after each
         write so what is on disk is always complete."""
+        # Lazy: DOLFINx only to write fields; compare and the pictures' child process read tables through this
+        # module without it
         from dolfinx.io import XDMFFile
 
         msh = functions[0].function_space.mesh
@@ -286,7 +287,7 @@ def plot_profiles(path: Path, position: np.ndarray, curves: list[tuple[str, np.n
         units: The :class:`~dolfinx_fretting.units.Units` of the labels (default: the scenes' mm, N, MPa).
     """
     units = units or Units.mm_N_MPa()
-    import matplotlib
+    import matplotlib  # lazy: heavy, only for this picture (and its backend chosen before pyplot loads)
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

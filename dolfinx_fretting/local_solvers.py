@@ -378,13 +378,13 @@ def _contact_2d(B: np.ndarray, bn: float, bt: float, mu: float, rho: float, rn: 
         return 0.0, 0.0
     b00, b01, b10, b11 = B[0, 0], B[0, 1], B[1, 0], B[1, 1]
     det = b00 * b11 - b01 * b10
-    sn = st = 0.0
+    stick_n = stick_t = 0.0
     have_stick = abs(det) > 1e-13 * (abs(b00 * b11) + abs(b01 * b10))
     if have_stick:
-        sn = -(b11 * bn - b01 * bt) / det
-        st = (b10 * bn - b00 * bt) / det
-        if sn >= 0.0 and abs(st) <= mu * sn:
-            return sn, st
+        stick_n = -(b11 * bn - b01 * bt) / det
+        stick_t = (b10 * bn - b00 * bt) / det
+        if stick_n >= 0.0 and abs(stick_t) <= mu * stick_n:
+            return stick_n, stick_t
     # Sliding with x_t in direction s: x_n = (b00 - s mu b01) r_n + b_n = 0.
     found = 0
     cn = ct = 0.0
@@ -410,7 +410,7 @@ def _contact_2d(B: np.ndarray, bn: float, bt: float, mu: float, rho: float, rn: 
     cands[nc, 0], cands[nc, 1] = 0.0, 0.0
     nc += 1
     if have_stick:
-        pn, pt, _ = _project(sn, st, 0.0, mu)
+        pn, pt, _ = _project(stick_n, stick_t, 0.0, mu)
         cands[nc, 0], cands[nc, 1] = pn, pt
         nc += 1
     for k in range(2):
@@ -468,28 +468,28 @@ def _slip_candidate(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, t
 
 
 @numba.njit(cache=True)
-def _newton_angle(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, t: float, lo: float,
-                  hi: float, bracketed: bool) -> tuple[bool, float]:
+def _newton_angle(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, t: float, lower: float,
+                  upper: float, bracketed: bool) -> tuple[bool, float]:
     """Root of :func:`_slip_h` in the angle, Newton's method (safeguarded by bisection when bracketed)."""
-    hlo = 0.0
+    h_lower = 0.0
     if bracketed:
-        hlo = _slip_h(B, bn, b1, b2, mu, math.cos(lo), math.sin(lo))[0]
+        h_lower = _slip_h(B, bn, b1, b2, mu, math.cos(lower), math.sin(lower))[0]
     for _ in range(60):
         h, dh, _ = _slip_h(B, bn, b1, b2, mu, math.cos(t), math.sin(t))
         if h == 0.0:
             return True, t
         if bracketed:
-            if (h > 0.0) == (hlo > 0.0):
-                lo, hlo = t, h
+            if (h > 0.0) == (h_lower > 0.0):
+                lower, h_lower = t, h
             else:
-                hi = t
+                upper = t
         step = -h / dh if dh != 0.0 else np.inf
         if bracketed:
             tn = t + step
-            if not (min(lo, hi) < tn < max(lo, hi)) or not math.isfinite(tn):
-                tn = 0.5 * (lo + hi)
+            if not (min(lower, upper) < tn < max(lower, upper)) or not math.isfinite(tn):
+                tn = 0.5 * (lower + upper)
             step = tn - t
-            if abs(hi - lo) < 1e-15:
+            if abs(upper - lower) < 1e-15:
                 return True, tn
         else:
             if not math.isfinite(step):
@@ -523,7 +523,7 @@ def _contact_3d(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, rho: 
     det = B[0, 0] * c00 + B[0, 1] * c01 + B[0, 2] * c02
     scale = abs(B[0, 0] * c00) + abs(B[0, 1] * c01) + abs(B[0, 2] * c02)
     have_stick = abs(det) > 1e-13 * scale
-    sn = s1 = s2 = 0.0
+    stick_n = stick_1 = stick_2 = 0.0
     if have_stick:
         c10 = B[0, 2] * B[2, 1] - B[0, 1] * B[2, 2]
         c11 = B[0, 0] * B[2, 2] - B[0, 2] * B[2, 0]
@@ -532,17 +532,17 @@ def _contact_3d(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, rho: 
         c21 = B[0, 2] * B[1, 0] - B[0, 0] * B[1, 2]
         c22 = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
         # inverse = adj / det, adj[i, j] = cofactor[j, i]
-        sn = -(c00 * bn + c10 * b1 + c20 * b2) / det
-        s1 = -(c01 * bn + c11 * b1 + c21 * b2) / det
-        s2 = -(c02 * bn + c12 * b1 + c22 * b2) / det
-        if sn >= 0.0 and math.sqrt(s1 * s1 + s2 * s2) <= mu * sn:
-            return sn, s1, s2
+        stick_n = -(c00 * bn + c10 * b1 + c20 * b2) / det
+        stick_1 = -(c01 * bn + c11 * b1 + c21 * b2) / det
+        stick_2 = -(c02 * bn + c12 * b1 + c22 * b2) / det
+        if stick_n >= 0.0 and math.sqrt(stick_1 * stick_1 + stick_2 * stick_2) <= mu * stick_n:
+            return stick_n, stick_1, stick_2
     # Sliding: warm start from the current direction, else from the stick force's (the force that would
     # hold the contact, capped on the cone).
     if r1 != 0.0 or r2 != 0.0:
         t0 = math.atan2(r2, r1)
-    elif have_stick and (s1 != 0.0 or s2 != 0.0):
-        t0 = math.atan2(s2, s1)
+    elif have_stick and (stick_1 != 0.0 or stick_2 != 0.0):
+        t0 = math.atan2(stick_2, stick_1)
     else:
         t0 = math.atan2(-b2, -b1)
     ok, t = _newton_angle(B, bn, b1, b2, mu, t0, 0.0, 0.0, False)
@@ -564,9 +564,9 @@ def _contact_3d(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, rho: 
         kn = (k + 1) % n
         hk = _slip_h(B, bn, b1, b2, mu, scan_c[kn], scan_s[kn])[0] if kn else h0
         if (hprev > 0.0) != (hk > 0.0) or hk == 0.0:
-            lo = 2.0 * np.pi * k / n
-            hi = 2.0 * np.pi * (k + 1) / n
-            ok, t = _newton_angle(B, bn, b1, b2, mu, 0.5 * (lo + hi), lo, hi, True)
+            lower = 2.0 * np.pi * k / n
+            upper = 2.0 * np.pi * (k + 1) / n
+            ok, t = _newton_angle(B, bn, b1, b2, mu, 0.5 * (lower + upper), lower, upper, True)
             valid, pn, p1, p2 = _slip_candidate(B, bn, b1, b2, mu, t)
             if pn != 0.0 or p1 != 0.0 or p2 != 0.0:
                 e = _local_res(B, 3, bn, b1, b2, mu, rho, pn, p1, p2)
@@ -580,7 +580,7 @@ def _contact_3d(B: np.ndarray, bn: float, b1: float, b2: float, mu: float, rho: 
     if cur < best:
         best, best_n, best_1, best_2 = cur, rn, r1, r2
     if have_stick:
-        pn, p1, p2 = _project(sn, s1, s2, mu)
+        pn, p1, p2 = _project(stick_n, stick_1, stick_2, mu)
         e = _local_res(B, 3, bn, b1, b2, mu, rho, pn, p1, p2)
         if e < best:
             best, best_n, best_1, best_2 = e, pn, p1, p2

@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 from mpi4py import MPI
 
+# DOLFINx (and _dolfinx, which imports it) and gmsh are imported inside the functions that mesh: the geometries
+# registry and the size estimate import this module (the meshers' defaults, BodyMesh) without DOLFINx or gmsh.
 if TYPE_CHECKING:
     from dolfinx.cpp.mesh import MeshTags_int32
     from dolfinx.mesh import Mesh
@@ -495,9 +497,9 @@ def _gmsh_to_dolfinx(comm: MPI.Comm, build: Callable, verbose: bool):
     gmsh is initialised and finalised here (so do not call this inside an open gmsh session of your
     own). A failure on rank 0 is broadcast before ``model_to_mesh`` so that no rank is left waiting.
     """
-    import gmsh
+    import gmsh  # lazy: heavy, only to mesh (see the note at the imports)
 
-    from ._dolfinx import model_to_mesh
+    from ._dolfinx import model_to_mesh  # lazy: DOLFINx
 
     root = 0
     error = None
@@ -528,7 +530,7 @@ def _gmsh_to_dolfinx(comm: MPI.Comm, build: Callable, verbose: bool):
 
 def _facet_midpoints(msh, facets: np.ndarray) -> np.ndarray:
     """(n, 3) midpoints of the given local facets."""
-    from dolfinx.mesh import compute_midpoints
+    from dolfinx.mesh import compute_midpoints  # lazy: DOLFINx (see the note at the imports)
 
     msh.topology.create_connectivity(msh.topology.dim - 1, 0)
     if facets.size == 0:
@@ -557,7 +559,7 @@ def rectangle(comm: MPI.Comm, width: float, height: float, nx: int, ny: int, qua
     Raises:
         ValueError: if an argument is out of range (the message names it and the allowed range).
     """
-    from dolfinx import mesh as dmesh
+    from dolfinx import mesh as dmesh  # lazy: DOLFINx (see the note at the imports)
 
     _check("width", width, _is_real(width) and width > 0, "width > 0 (mm)")
     _check("height", height, _is_real(height) and height > 0, "height > 0 (mm)")
@@ -616,7 +618,7 @@ def boundary_nodes(body: BodyMesh, tag_name: str, owned_only: bool = False) -> n
     Returns:
         Sorted unique int32 indices.
     """
-    from ._dolfinx import entities_to_geometry
+    from ._dolfinx import entities_to_geometry  # lazy: DOLFINx (see the note at the imports)
 
     msh = body.mesh
     fdim = msh.topology.dim - 1
@@ -646,7 +648,7 @@ def facet_dofs(V, body: BodyMesh, tag_name: str, owned_only: bool = False) -> np
     Returns:
         Sorted unique int32 block indices (owned and, unless ``owned_only``, ghost).
     """
-    from dolfinx import fem
+    from dolfinx import fem  # lazy: DOLFINx (see the note at the imports)
 
     msh = body.mesh
     fdim = msh.topology.dim - 1

@@ -76,13 +76,13 @@ def graded_coordinates(h: float, uniform: float, total: float, growth: float) ->
     n = 1
     while length(growth, n + 1) <= rest or abs(length(growth, n + 1) - rest) < abs(length(growth, n) - rest):
         n += 1
-    lo, hi = 1e-3, max(growth, 2.0)
-    while length(hi, n) < rest:
-        hi *= 2.0
+    lower, upper = 1e-3, max(growth, 2.0)
+    while length(upper, n) < rest:
+        upper *= 2.0
     for _ in range(200):  # bisection on the ratio: the graded steps end at total
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if length(mid, n) < rest else (lo, mid)
-    g = 0.5 * (lo + hi)
+        mid = 0.5 * (lower + upper)
+        lower, upper = (mid, upper) if length(mid, n) < rest else (lower, mid)
+    g = 0.5 * (lower + upper)
     steps = h * g ** np.arange(1, n + 1)
     steps *= rest / steps.sum()
     return np.concatenate([x, x[-1] + np.cumsum(steps)])
@@ -196,6 +196,8 @@ def sphere_on_flat(comm: MPI.Comm, radius: float, contact_radius: float, contact
         ValueError: an argument out of range (the message names it and the allowed range), on every rank before
             any collective call.
     """
+    # Lazy: DOLFINx (and _dolfinx, which imports it) only to build; the geometries registry and the size
+    # estimate import this module without DOLFINx
     from dolfinx import mesh as dmesh
 
     from . import _dolfinx as dfx

@@ -19,6 +19,7 @@ that does not load, tables shorter than it records (their rows would be lost: a 
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import socket
@@ -27,6 +28,9 @@ import time
 import zipfile
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+from mpi4py import MPI
 
 __all__ = ["OutputFolderError", "OutputLock", "check_output_folder", "ensure_writable_folder", "claim_output_folder",
            "held_run_files", "clear_run_files", "check_resume_tables", "load_checkpoint", "lock_holder", "LOCK_NAME", "RUN_FILES",
@@ -173,8 +177,6 @@ class OutputLock:
         """Delete the lock file and drop the lock (idempotent; not collective)."""
         if self._fd is None:
             return
-        import fcntl
-
         fd, self._fd = self._fd, None
         try:
             # unlink while still holding it: a run that opened the old file finds it gone and retries
@@ -198,8 +200,6 @@ class OutputLock:
 
 def _acquire(folder: Path) -> OutputLock:
     """Take the folder's lock (flock, non-blocking) and write this process's record into it."""
-    import fcntl
-
     path = folder / LOCK_NAME
     for _attempt in range(20):
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
@@ -252,8 +252,6 @@ def claim_output_folder(path: str | Path, comm: Any = None, resume: bool = False
             (its pid named), or holds a run and neither ``resume`` nor ``overwrite`` was given.
     """
     if comm is None:
-        from mpi4py import MPI
-
         comm = MPI.COMM_WORLD
     folder = Path(path)
     lock: OutputLock | None = None
@@ -317,8 +315,6 @@ def load_checkpoint(path: str | Path, planned_cycles: int | None = None) -> dict
             table missing or shorter than recorded; ``loading.cycles`` below the cycles done. The message names
             the file or the key.
     """
-    import numpy as np
-
     path = Path(path)
     if not path.is_file():
         raise OutputFolderError(f"no checkpoint {path}; run without --resume to start afresh")

@@ -43,7 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .contact_output import read_profiles
+from .contact_output import read_contact_xdmf, read_profiles
+from .io import read_run_description
 from .units import Units
 
 __all__ = ["Fields", "read_fields", "field_times", "contact_surface", "nice_factor", "deformed_plotter",
@@ -121,7 +122,7 @@ def read_fields(folder: str | Path, time: float | None = None) -> Fields:
         ValueError: a mesh this module does not draw (not linear triangles or quadrilaterals), or no time
             with both fields.
     """
-    import h5py
+    import h5py  # lazy: not a declared dependency (installed with DOLFINx by scripts/setup.sh)
 
     folder = Path(folder)
     path = folder / "fields.xdmf"
@@ -193,8 +194,8 @@ def contact_surface(points: np.ndarray, position: np.ndarray, normal: np.ndarray
     order = np.argsort(s)
     nodes = np.empty(position.size, dtype=np.int64)
     for i, p in enumerate(position):
-        lo, hi = np.searchsorted(s[order], [p - tol, p + tol])
-        cand = order[lo:hi]
+        start, stop = np.searchsorted(s[order], [p - tol, p + tol])
+        cand = order[start:stop]
         if cand.size == 0:
             raise ValueError(f"no mesh node at contact position {p:.10g} (along t1 = {t1.tolist()}): "
                              "the plane normal or the folder's files do not match")
@@ -221,7 +222,7 @@ def _pyvista():
     """pyvista, off screen; EGL when there is no X display (set before VTK is loaded)."""
     if not os.environ.get("DISPLAY"):
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    import pyvista as pv
+    import pyvista as pv  # lazy: optional and heavy (VTK); its backend is chosen above, before VTK loads
 
     pv.OFF_SCREEN = True
     return pv
@@ -262,13 +263,13 @@ def _view_2d(renderer, centre: np.ndarray, half_width: float, half_height: float
     cam.up = (0.0, 1.0, 0.0)
     cam.parallel_scale = S
     renderer.camera_set = True  # else pyvista resets the camera to fit everything at the first render
-    lo = np.array([centre[0] - S * aspect, cy - S + 2 * bar_room * S])
-    hi = np.array([centre[0] + S * aspect, cy + S])
-    return lo, hi
+    lower = np.array([centre[0] - S * aspect, cy - S + 2 * bar_room * S])
+    upper = np.array([centre[0] + S * aspect, cy + S])
+    return lower, upper
 
 
-def _outline(pv, lo: np.ndarray, hi: np.ndarray):
-    pts = np.array([[lo[0], lo[1], 0], [hi[0], lo[1], 0], [hi[0], hi[1], 0], [lo[0], hi[1], 0]])
+def _outline(pv, lower: np.ndarray, upper: np.ndarray):
+    pts = np.array([[lower[0], lower[1], 0], [upper[0], lower[1], 0], [upper[0], upper[1], 0], [lower[0], upper[1], 0]])
     return pv.lines_from_points(np.vstack([pts, pts[:1]]))
 
 
@@ -300,8 +301,8 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
     vm_bar = vm_title(folder_units(folder))
     n, t1 = _frame(plane_normal)
     p0 = np.asarray(plane_point, dtype=float)[:2]
-    lo, hi = f.points.min(axis=0), f.points.max(axis=0)
-    size = float(np.max(hi - lo))
+    lower, upper = f.points.min(axis=0), f.points.max(axis=0)
+    size = float(np.max(upper - lower))
     umax = float(np.linalg.norm(f.displacement, axis=1).max())
     # Magnify so that the largest displacement shows as ~4 % of the body's size.
     scale = nice_factor(0.04 * size / umax) if umax > 0 else 1.0
@@ -320,7 +321,7 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
     # The contact zone: the loaded contact nodes at the fields' increment, else at the last kept one (all
     # of them when none is loaded).
     prof = read_profiles(folder)
-    zlo, zhi = lo[:2], hi[:2]
+    zlo, zhi = lower[:2], upper[:2]
     if prof is not None:
         nodes = contact_surface(f.points, prof.position, n, p0)
         row = prof.index(int(round(f.time)))  # the fields' increment (time = increment number)
@@ -366,14 +367,14 @@ def deformed_plotter(folder: str | Path, plane_point, plane_normal, f: Fields | 
         _scalar_bar(pl, vm_bar + " " * col, actor.mapper)
         bar_room = 0.2  # bottom share of the viewport kept for the colour bar
         if col == 0:
-            c, hw, hh = 0.5 * (lo + hi)[:2], 0.55 * (hi - lo)[0], 0.55 * (hi - lo)[1]
+            c, hw, hh = 0.5 * (lower + upper)[:2], 0.55 * (upper - lower)[0], 0.55 * (upper - lower)[1]
         else:
             c, hw, hh = 0.5 * (zlo + zhi), 0.5 * (zhi - zlo)[0], 0.5 * (zhi - zlo)[1]
         shown = _view_2d(pl.renderer, c, hw, hh, aspect, bar_room)
         if col == 1:
             pl.subplot(1, 0)
             margin = 0.03 * size  # the frame: what the zoom shows, within the body's box plus a margin
-            frame = _outline(pv, np.maximum(shown[0], lo[:2] - margin), np.minimum(shown[1], hi[:2] + margin))
+            frame = _outline(pv, np.maximum(shown[0], lower[:2] - margin), np.minimum(shown[1], upper[:2] + margin))
             pl.add_mesh(frame, color="red", line_width=2)
     return pl, {"clim": clim, "scale": scale, "zoom": (zlo, zhi), "time": f.time, "fields": f}
 
@@ -447,12 +448,12 @@ def worn_plotter(folder: str | Path, plane_normal, f: Fields | None = None, plan
     h0 = float((x0 @ n)[worn_zone].min())
     depth = mag * float(wear.max())
     centre = c_s * t1 + (h0 + 0.5 * depth * (1.0 if len(layers) == 1 else share - (1 - share))) * n
-    lo, hi = _view_2d(pl.renderer, centre, 0.5 * width, 0.9 * depth, _WINDOW[0] / _WINDOW[1])
+    lower, upper = _view_2d(pl.renderer, centre, 0.5 * width, 0.9 * depth, _WINDOW[0] / _WINDOW[1])
     # The undeformed mesh around the contact for scale, below the title (top 12 % of the view).
-    top = hi[1] - 0.12 * (hi[1] - lo[1])
+    top = upper[1] - 0.12 * (upper[1] - lower[1])
     body = _grid(pv, f, f.points)
     centres = body.cell_centers().points[:, :2]
-    near = body.extract_cells(np.flatnonzero(np.all((centres > lo) & (centres < [hi[0], top]), axis=1)))
+    near = body.extract_cells(np.flatnonzero(np.all((centres > lower) & (centres < [upper[0], top]), axis=1)))
     if near.n_cells:
         pl.add_mesh(near, style="wireframe", color="#c8c8c8", line_width=1)
     info.update(magnification=mag)
@@ -488,8 +489,8 @@ def deformed_plotter_3d(folder: str | Path, f: Fields | None = None):
     f = read_fields(folder) if f is None else f
     if f.gdim != 3:
         raise ValueError("deformed_plotter_3d draws 3D meshes; deformed_plotter draws 2D ones")
-    lo, hi = f.points.min(axis=0), f.points.max(axis=0)
-    size = float(np.max(hi - lo))
+    lower, upper = f.points.min(axis=0), f.points.max(axis=0)
+    size = float(np.max(upper - lower))
     umax = float(np.linalg.norm(f.displacement, axis=1).max())
     scale = nice_factor(0.04 * size / umax) if umax > 0 else 1.0
     clim = (float(f.von_mises.min()), float(f.von_mises.max()))
@@ -527,8 +528,6 @@ def worn_plotter_3d(folder: str | Path, plane_normal):
     Returns:
         (plotter, info) with ``magnification``, ``max_wear`` (in the folder's length unit), ``cycle`` and ``increment``.
     """
-    from .contact_output import read_contact_xdmf
-
     pv = _pyvista()
     folder = Path(folder)
     units = folder_units(folder)
@@ -569,8 +568,6 @@ def worn_plotter_3d(folder: str | Path, plane_normal):
 def folder_units(folder: str | Path) -> Units:
     """The units of a run's output folder (``run.json``). A folder without declared units (no ``run.json``, or
     one of format 1 or 2, written before units were declared) is labelled as its release did: mm, N, MPa."""
-    from .io import read_run_description
-
     run = read_run_description(folder)
     if run is None or int(run.get("format", 1)) < 3 or "units" not in run:
         return Units.mm_N_MPa()
@@ -589,8 +586,6 @@ def wear_title(units: Units) -> str:
 
 def _plane_from_description(folder: Path) -> tuple[list[float], list[float]] | None:
     """The obstacle plane (point, normal) recorded in the folder's ``run.json``, if any."""
-    from .io import read_run_description
-
     run = read_run_description(folder)
     if run is None:
         return None
@@ -599,8 +594,6 @@ def _plane_from_description(folder: Path) -> tuple[list[float], list[float]] | N
 
 def _slave_share(folder: Path) -> float | None:
     """The cylinder's share of the wear gap when the obstacle is a meshed body (``run.json``), else None."""
-    from .io import read_run_description
-
     run = read_run_description(folder)
     if run is None or run["obstacle"]["kind"] != "elastic_body" or run.get("slave_wear_share") is None:
         return None
@@ -609,8 +602,6 @@ def _slave_share(folder: Path) -> float | None:
 
 def _obstacle_is_a_body(folder: Path) -> bool:
     """Whether the run's obstacle is a meshed body (``run.json``)."""
-    from .io import read_run_description
-
     run = read_run_description(folder)
     return run is not None and run["obstacle"]["kind"] == "elastic_body"
 
@@ -716,7 +707,7 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         point, normal = v[:half], v[half:]
     try:
-        import pyvista  # noqa: F401
+        import pyvista  # noqa: F401 - lazy: optional (the pictures extra); tried here to fail with a message
     except Exception as exc:  # noqa: BLE001 - ImportError, or a VTK that cannot load
         print(f"pyvista not importable ({type(exc).__name__}: {exc}); install it with scripts/setup.sh",
               file=sys.stderr)

@@ -22,16 +22,20 @@ while the out-of-plane stress ``sigma_zz`` is kept in the state (it enters von M
 from __future__ import annotations
 
 import math
+import time
 
+import basix
 import numpy as np
+import scipy.sparse as sp
 import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import _dolfinx as dfx
 from ._dolfinx import fem
+from .compliance import DelassusOperator
 from .contact import constrained_global_dofs
-from .materials import J2Plasticity, return_mapping
+from .materials import J2Plasticity, return_mapping, von_mises
 from .plastic_zone import (MAX_ZONE_DOFS, ZONE_MARGIN, LowRankTangent, point_strains, rows_axpy,
                            zone_tangent_matrix, zone_update)
 
@@ -104,8 +108,6 @@ class PlasticState:
 
     def __init__(self, V: fem.FunctionSpace, law: J2Plasticity, quadrature_degree: int = 2,
                  elastic_cells: np.ndarray | None = None):
-        import basix
-
         self.V = V
         self.law = law
         msh = V.mesh
@@ -203,8 +205,6 @@ class PlasticState:
         Raises:
             ValueError: the displacement space is not continuous Lagrange (any degree; tested 1 to 3).
         """
-        import basix
-
         if not hasattr(self, "_grad_expr"):
             # The gradients of the scalar basis of the same element give B (DOLFINx 0.5.2 tabulates an
             # Expression with a *scalar* argument correctly; a blocked one comes back wrong).
@@ -260,8 +260,6 @@ class PlasticState:
         return values.reshape(self.cells.size, self.nq).mean(axis=1)
 
     def von_mises(self, sigma: np.ndarray | None = None) -> np.ndarray:
-        from .materials import von_mises
-
         return von_mises(self.sigma if sigma is None else sigma)
 
 
@@ -352,10 +350,6 @@ class PlasticZone:
 
     def _build(self) -> None:
         """X, Z, HZ, aX and the zone's points for the current cells. Collective."""
-        import time
-
-        import scipy.sparse as sp
-
         t0 = time.perf_counter()
         body, state = self.body, self.body.state
         cells = np.flatnonzero(self.cell_mask)
@@ -433,9 +427,9 @@ class PlasticZone:
 
     def load_committed(self) -> None:
         """The committed plastic state at the zone's points (the return mapping starts from it)."""
-        st = self.body.state
-        self.eps_p_old = np.ascontiguousarray(st.eps_p[self.points])
-        self.p_old = np.ascontiguousarray(st.p[self.points])
+        state = self.body.state
+        self.eps_p_old = np.ascontiguousarray(state.eps_p[self.points])
+        self.p_old = np.ascontiguousarray(state.p[self.points])
 
     def evaluate(self, uX: np.ndarray) -> tuple[np.ndarray, int]:
         """Return mapping at the zone's points for ``uX``: (plastic forces on X, yielded points). Collective."""
@@ -682,8 +676,6 @@ class ElastoplasticBody:
             return self.operators.delassus, self.W_elastic
         if not refresh:
             return self._tangent_op, self._W_tangent
-        from .compliance import DelassusOperator
-
         if self._KT is None:
             self._KT = self.state.create_tangent(self.operators.bcs)
             self._tangent_op = DelassusOperator(self._KT, self.comm, method="auto",
@@ -938,25 +930,25 @@ class ElastoplasticBody:
             _CondensedMismatch: the whole body's out-of-balance force misses delta_1, or the zone's stresses
                 differ from the whole body's (refactorise this increment instead).
         """
-        st, z = self.state, self.zone
-        st.update(self._trial, tangent=False, eps=z.strain_all(self._trial))
-        outside = st.yielded & ~z.point_mask
+        state, zone = self.state, self.zone
+        state.update(self._trial, tangent=False, eps=zone.strain_all(self._trial))
+        outside = state.yielded & ~zone.point_mask
         if self.comm.allreduce(int(outside.any()), op=self.MPI.MAX):
             self._grow(outside)
             self.zone_growths += 1
             raise _ZoneGrew
         # The zone's stresses from its own strains against DOLFINx's at the same displacement (rounding).
-        gap = np.abs(st.trial_sigma[z.points] - z.out["sigma"]).max(initial=0.0)
+        gap = np.abs(state.trial_sigma[zone.points] - zone.out["sigma"]).max(initial=0.0)
         R = self._assembled_residual(s)
         out_of_balance = R.getArray(readonly=True) - self._contact_force(r)
         fc = self._contact_force(r)
-        sums = np.array([out_of_balance @ out_of_balance, fc @ fc, float(st.yielded.sum()),
+        sums = np.array([out_of_balance @ out_of_balance, fc @ fc, float(state.yielded.sum()),
                          R.getArray(readonly=True) @ R.getArray(readonly=True)])
         sums = self.comm.allreduce(sums, op=self.MPI.SUM)
         gap = self.comm.allreduce(gap, op=self.MPI.MAX)
         fscale = max(math.sqrt(sums[1]), abs(s) * self._face_norm(), math.sqrt(sums[3]), 1e-300)
         d1 = math.sqrt(sums[0]) / fscale
-        if not d1 <= self.delta_1 or gap > 1e-6 * st.law.sigma_y0:
+        if not d1 <= self.delta_1 or gap > 1e-6 * state.law.sigma_y0:
             raise _CondensedMismatch(f"delta_1 = {d1:.3g} on the whole body, zone stress gap {gap:.3g} MPa")
         return {"newton_iterations": iterations, "delta_1": d1, "delta_2": d2, "yielded_points": int(sums[2])}
 

@@ -38,10 +38,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .analytic import hertz_pressure
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
+from .io import plot_profiles
 from .output import RunDescription, read_description
 from .units import Units
 
+# matplotlib (heavy: ~0.5 s to import) is imported inside the functions that draw, so that importing this
+# module (the runner does, at its top) costs nothing until a picture is drawn.
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -63,7 +67,7 @@ def _figure(figsize: tuple[float, float]) -> Figure:
     The pictures use fixed margins (``gridspec_kw``) rather than ``tight_layout``, which draws every
     figure twice.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # lazy: matplotlib (see the note at the imports)
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=figsize)
@@ -265,7 +269,7 @@ def plot_wear_evolution(path: Path, run: RunDescription, prof: ContactProfiles, 
     Returns:
         ``path``, or ``None`` when no cycle was kept.
     """
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (see the note at the imports)
 
     cycles = _snapshot_cycles(prof)
     if not cycles:
@@ -316,7 +320,7 @@ def plot_node_history(path: Path, run: RunDescription, prof: ContactProfiles) ->
     Returns:
         ``path``, or ``None`` when no cycle was kept.
     """
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # lazy: matplotlib (see the note at the imports)
     from matplotlib.patches import Patch
 
     cycles = _snapshot_cycles(prof)
@@ -427,7 +431,7 @@ def plot_fretting_loops(path: Path, run: RunDescription, hist: _History) -> Path
     Returns:
         ``path``, or ``None`` when the table has no cyclic row.
     """
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (see the note at the imports)
 
     present = [int(c) for c in hist.cycles() if c >= 1]
     if not present:
@@ -532,7 +536,7 @@ def plot_contact_maps(path: Path, run: RunDescription, prof: ContactProfiles) ->
     Returns:
         ``path``, or ``None`` for a 2D contact or fewer than three nodes.
     """
-    import matplotlib.tri as mtri
+    import matplotlib.tri as mtri  # lazy: matplotlib (see the note at the imports)
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     if prof.position_2 is None or prof.position.size < 3:
@@ -580,9 +584,6 @@ def _plot_profiles(out: Path, run: RunDescription, prof: ContactProfiles, hist: 
                    name: str = "profiles.png", direction: str = "") -> Path | None:
     """``profiles.png`` (or ``name``): pressure and shear at the end of the preload and at the last kept increment,
     along ``prof``'s positions (``direction`` names them in the title, 3D)."""
-    from .analytic import hertz_pressure
-    from .io import plot_profiles
-
     pre = run.preload_increments
     chosen = [i for i in (pre, int(prof.increments.max())) if prof.index(i) is not None]
     if not chosen:

@@ -97,9 +97,9 @@ class SceneModel:
 
 def _elasticity(scene: Scene, V, quadrature_degree: int | None):
     """The user's model: plane-strain linear elasticity and its von Mises stress."""
-    import ufl
+    import ufl  # lazy: see the module docstring
 
-    from .materials import LinearElastic  # (numba: not for the schema's and the size estimate's imports either)
+    from .materials import LinearElastic  # lazy: numba, which the schema's and the size estimate's imports avoid too
 
     lmbda, mu = LinearElastic(scene.material.E, scene.material.nu).lame
     gdim = V.mesh.geometry.dim
@@ -126,7 +126,7 @@ def _elasticity(scene: Scene, V, quadrature_degree: int | None):
 
 
 def _clamped(V, body: BodyMesh, names: list[str]) -> list:
-    from dolfinx import fem
+    from dolfinx import fem  # lazy: see the module docstring
     from petsc4py import PETSc
 
     fdim = V.mesh.topology.dim - 1
@@ -136,7 +136,7 @@ def _clamped(V, body: BodyMesh, names: list[str]) -> list:
 
 def _pressure_load(V, body: BodyMesh, face: str):
     """A unit pressure on a named face, pushing into the body (traction -n)."""
-    import ufl
+    import ufl  # lazy: see the module docstring
 
     ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=body.facet_tags)
     return -ufl.dot(ufl.FacetNormal(V.mesh), ufl.TestFunction(V)) * ds(body.tags[face])
@@ -177,7 +177,7 @@ def elastic_model(scene: Scene, body: BodyMesh, fixed: list[str]) -> tuple[Any, 
     Raises:
         ValueError: ``loading.pressure_face`` is not a face of the mesh.
     """
-    from . import _dolfinx as dfx
+    from . import _dolfinx as dfx  # lazy: see the module docstring
 
     quadrature_degree = scene.solver.quadrature_degree
     if quadrature_degree is None and scene.material.model == "elastoplastic":
@@ -215,7 +215,7 @@ def rigid_plane(scene: Scene) -> RigidPlane:
 
 def roller(V, facets: np.ndarray, axis: int):
     """A roller on a plane face normal to the coordinate ``axis``: the displacement component along it is zero."""
-    from dolfinx import fem
+    from dolfinx import fem  # lazy: see the module docstring
 
     fdim = V.mesh.topology.dim - 1
     component, _ = V.sub(axis).collapse()
@@ -225,7 +225,7 @@ def roller(V, facets: np.ndarray, axis: int):
 
 def displacement_conditions(V, body: BodyMesh, displacements: dict[str, list[float]]) -> list:
     """Dirichlet conditions prescribing a displacement vector (mm) on each named face."""
-    from dolfinx import fem
+    from dolfinx import fem  # lazy: see the module docstring
 
     gdim = body.mesh.geometry.dim
     fdim = gdim - 1
@@ -239,7 +239,7 @@ def displacement_conditions(V, body: BodyMesh, displacements: dict[str, list[flo
 
 def boundary_pressure(V, body: BodyMesh, pressures: dict[str, float]):
     """The load of pressures (MPa) on named faces, pushing into the body (traction -p n)."""
-    import ufl
+    import ufl  # lazy: see the module docstring
 
     ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=body.facet_tags)
     n, v = ufl.FacetNormal(V.mesh), ufl.TestFunction(V)
@@ -253,9 +253,9 @@ def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[s
     The file is read on rank 0; the physical names (not carried by DOLFINx's reader) are read there too and
     broadcast. Returns the body (facet names in ``tags``) and the names of the cell groups.
     """
-    from . import _dolfinx as dfx
+    from . import _dolfinx as dfx  # lazy: see the module docstring
 
-    import gmsh
+    import gmsh  # lazy: see the module docstring
 
     names = failure = None
     if comm.rank == 0:
@@ -309,7 +309,7 @@ def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -
     (``"3"``). Returns the body and the names of the cell groups (all cells one group ``"body"`` unless the file
     has cell markers).
     """
-    from dolfinx import mesh as dmesh
+    from dolfinx import mesh as dmesh  # lazy: see the module docstring
     from dolfinx.io import XDMFFile
 
     found = failure = None
@@ -365,7 +365,7 @@ def facet_length(V, facets: np.ndarray) -> float:
     fdim = msh.topology.dim - 1
     msh.topology.create_connectivity(fdim, 0)
     owned = facets[facets < msh.topology.index_map(fdim).size_local]
-    from . import _dolfinx as dfx
+    from . import _dolfinx as dfx  # lazy: see the module docstring
 
     nodes = dfx.entities_to_geometry(msh, fdim, owned)
     x = msh.geometry.x
@@ -378,7 +378,7 @@ def axis_normal(V, facets: np.ndarray, name: str) -> int:
     """The coordinate axis normal to a plane boundary (for a roller condition on one component)."""
     msh = V.mesh
     fdim = msh.topology.dim - 1
-    from . import _dolfinx as dfx
+    from . import _dolfinx as dfx  # lazy: see the module docstring
 
     owned = facets[facets < msh.topology.index_map(fdim).size_local]
     x = msh.geometry.x[dfx.entities_to_geometry(msh, fdim, owned).ravel(), :msh.geometry.dim] if owned.size else \

@@ -461,10 +461,10 @@ def check_petsc_option(key: str, value: Any) -> None:
         allowed = (f"an integer in [{values.start}, {values.stop - 1}]" if isinstance(values, range)
                    else "one of " + ", ".join(str(v) for v in values))
     else:
-        lo, hi = MUMPS_CNTL[index]
+        lower, upper = MUMPS_CNTL[index]
         ok = (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-              and lo <= value <= hi)
-        allowed = f"a finite number in [{lo:g}, {hi:g}]"
+              and lower <= value <= upper)
+        allowed = f"a finite number in [{lower:g}, {upper:g}]"
     if not ok:
         raise range_error(name, value, allowed)
 
@@ -681,8 +681,8 @@ class Scene(_Section):
         """Checks of the loads against the friction and the body that need no mesh: |Q| < mu P for prescribed
         forces, and the estimated elastic strain of each load at most MAX_ELASTIC_STRAIN (the normal load's by the
         geometry kind: it knows its body)."""
-        c, m, lo = self.contact, self.material, self.loading
-        mu, P, Q = c.mu, lo.normal_force, lo.tangential_force
+        c, m, loading = self.contact, self.material, self.loading
+        mu, P, Q = c.mu, loading.normal_force, loading.tangential_force
         if Q is not None and Q != 0 and mu == 0:
             raise range_error("loading.tangential_force", Q, "0 with contact.mu = 0 (a frictionless contact "
                               "carries no tangential force)")
@@ -693,7 +693,7 @@ class Scene(_Section):
                               "(at or beyond mu P the contact slides and no displacement gives Q)")
         GEOMETRIES[self.geometry.kind].check_loads(self)
         eps = MAX_ELASTIC_STRAIN
-        s_face = lo.tangential_pressure
+        s_face = loading.tangential_pressure
         if s_face is not None and abs(s_face) > eps * m.E:
             raise range_error("loading.tangential_pressure", s_face,
                               f"|s| <= {eps:g} x material.E = {eps * m.E:.4g} MPa (small-strain elasticity)")

@@ -22,7 +22,9 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 import sys
+import threading
 import time
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -30,12 +32,18 @@ from typing import Any
 
 import numpy as np
 from mpi4py import MPI
+from tqdm import tqdm
 
 from .analytic import hertz_line_contact
 from .contact import Contact
-from .cycle_jump import PlasticCycle
+from .contact_output import write_contact_xdmf
+from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, extrapolate_plastic_history,
+                         hertz_jump_limit, jump_error, plastic_jump_error, plastic_jump_limit)
 from .io import non_finite_keys
+from .materials import J2Plasticity, elastic_stiffness
 from .output import FrettingWriter, RunDescription, contact_measures
+from .pictures import draw_in_subprocess
+from .plots import plot_run
 from .units import Units
 from .scene_paths import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
@@ -108,8 +116,6 @@ class ContactModel:
         wear = scene.wear.archard() if scene.wear.law == "archard" else None
         plasticity = None
         if m.model == "elastoplastic":
-            from .materials import J2Plasticity
-
             plasticity = Plasticity(J2Plasticity(m.E, m.nu, m.yield_stress, m.plastic_modulus),
                                     quadrature_degree=sv.quadrature_degree or 2, tangent=sv.newton_tangent,
                                     max_iter=sv.newton_max_iter, residual_tol=sv.newton_residual_tol,
@@ -259,12 +265,12 @@ def _cycle_path(scene: Scene, problem: FrettingProblem, setup: SceneModel) -> Cy
 
 def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> RunDescription:
     """The scene's run described for the folder's readers (``run.json``)."""
-    lo, hertz = scene.loading, model.setup.hertz
+    loading, hertz = scene.loading, model.setup.hertz
     return RunDescription.of(
-        model.problem, scene.name, path=path, cycles=lo.cycles, preload_increments=lo.normal_increments,
-        plane_point=scene.contact.plane_point, tangential_control=lo.tangential_kind,
-        tangential_amplitude=float(lo.tangential_amplitude or 0.0),
-        pressure_face=lo.pressure_face if lo.tangential_kind == "pressure" else None,
+        model.problem, scene.name, path=path, cycles=loading.cycles, preload_increments=loading.normal_increments,
+        plane_point=scene.contact.plane_point, tangential_control=loading.tangential_kind,
+        tangential_amplitude=float(loading.tangential_amplitude or 0.0),
+        pressure_face=loading.pressure_face if loading.tangential_kind == "pressure" else None,
         wear_acceleration=scene.wear.acceleration, hertz=hertz[:2] if hertz is not None else None,
         track_positions=tuple(scene.output.track_positions), loop_cycles=tuple(scene.output.loop_cycles),
         model_fraction=model.setup.model_fraction, units=Units.mm_N_MPa())
@@ -366,7 +372,7 @@ class _Run:
             self._window_edge_reached(where)
 
     def _window_edge_reached(self, where: str, outside: WindowError | None = None) -> None:
-        model, cs = self.model, self.model.contact
+        model, contact = self.model, self.model.contact
         if model.window_can_grow:
             raise _WindowTooSmall(where)
         if self.scene.geometry.kind == "sphere":
@@ -381,7 +387,8 @@ class _Run:
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) and "
                       "geometry.contact_half_width (the refined zone, now "
                       f"{self.scene.geometry.refined_half_width} mm)")
-        what = (f"the outermost contact candidates (x = {cs.abscissa[0]:.4g} .. {cs.abscissa[-1]:.4g} mm) carry load: "
+        what = (f"the outermost contact candidates (x = {contact.abscissa[0]:.4g} .. {contact.abscissa[-1]:.4g} mm) "
+                "carry load: "
                 "the contact reaches the edge of the candidate window and would be truncated" if outside is None else
                 f"the contact reaches the edge of the candidate window and beyond: {outside.positions.shape[0]} "
                 f"node(s) outside it penetrate the obstacle (by up to {outside.penetration:.3g} mm, the deepest at "
@@ -502,18 +509,17 @@ class _Run:
                                       + _HINT) from None
 
     def run_cycles(self) -> None:
-        sc = self.scene
-        lo = sc.loading
-        N = lo.cycles
-        every = sc.output.history_every
-        loop_cycles = set(sc.output.loop_cycles)
+        scene = self.scene
+        loading = scene.loading
+        N = loading.cycles
+        every = scene.output.history_every
+        loop_cycles = set(scene.output.loop_cycles)
         t_report = time.perf_counter()
         progress_bar = None
-        if self.rank0 and sc.output.progress and sys.stderr.isatty():
-            from tqdm import tqdm
-            progress_bar = tqdm(total=N, initial=self.progress.cycle, unit="cycle", desc=sc.name, leave=False,
+        if self.rank0 and scene.output.progress and sys.stderr.isatty():
+            progress_bar = tqdm(total=N, initial=self.progress.cycle, unit="cycle", desc=scene.name, leave=False,
                                 mininterval=1.0)
-        jumping = sc.wear.cycle_jump
+        jumping = scene.wear.cycle_jump
         # A jump lands on (never skips) the cycles whose outputs are asked for, and on the last one.
         landings = sorted((self.snapshots | {c for c in loop_cycles if 1 <= c <= N}) | {N})
         path = self.path
@@ -548,7 +554,7 @@ class _Run:
             if progress_bar is not None:
                 progress_bar.update(self.progress.cycle - cycle + 1)
             now = time.perf_counter()
-            due = now - self.last_checkpoint >= sc.output.checkpoint_interval
+            due = now - self.last_checkpoint >= scene.output.checkpoint_interval
             if self.comm.size > 1:  # clocks differ between ranks: rank 0 decides for all (collective below)
                 due = self.comm.bcast(due, root=0)
             if keep or cycle == N or due:
@@ -556,7 +562,7 @@ class _Run:
             self._stop_if_signalled()
             if progress_bar is None and (keep or now - t_report > 10.0):
                 t_report = now
-                self.say(f"[{sc.name}] cycle {cycle}/{N}: max wear depth {crow['max_wear_depth']:.4g} mm, "
+                self.say(f"[{scene.name}] cycle {cycle}/{N}: max wear depth {crow['max_wear_depth']:.4g} mm, "
                          f"energy {crow['dissipated_energy']:.4g}, {crow['regime']}, p_max(end) "
                          f"{crow['max_pressure_end']:.4g} MPa"
                          + (f", {crow['plastic_regime']}" if plastic is not None else "")
@@ -580,8 +586,6 @@ class _Run:
         """What a simulated cycle did to an elastic-plastic body's state: its regime (elastic shakedown,
         plastic shakedown, ratcheting; ``material.shakedown_tolerance``) and changes. Collective; None for an
         elastic body."""
-        from .cycle_jump import analyse_plastic_cycle
-
         if new.plastic is None or start.plastic is None:
             return None
         a, b = start.plastic, new.plastic
@@ -603,24 +607,23 @@ class _Run:
         once). Until that successor is simulated the estimate holds the bound from the settling cycle itself
         (``plastic_error_pending``), which is also what stays if the run ends or is resumed in between.
         """
-        from .cycle_jump import plastic_jump_error, plastic_jump_limit
-
         if plastic is None:
             return math.inf, False
-        m, js = self.scene.material, self.progress.jump
+        m, jumps = self.scene.material, self.progress.jump
         limit = plastic_jump_limit(plastic, self.scene.wear.jump_plastic_fraction, m.yield_stress, m.E,
                                    m.plastic_modulus)
-        previous, last, pending = self._plastic_previous, js["last"], self._plastic_pending
+        previous, last, pending = self._plastic_previous, jumps["last"], self._plastic_pending
         self._plastic_previous, self._plastic_pending = plastic, None
         settling = False
         if pending is not None:  # the cycle after a settling cycle: the jump's estimate from the settled rate
             before, jump, settling_cycle = pending
             error = ((jump - 1) * max(plastic_jump_error(before, plastic, 2, self.comm))
                      + max(plastic_jump_error(plastic, settling_cycle, 2, self.comm)))
-            js.update(plastic_error=js["plastic_error"] + error, plastic_error_pending=0.0)
+            jumps.update(plastic_error=jumps["plastic_error"] + error, plastic_error_pending=0.0)
         elif last > 1:  # the cycle after a jump
             if previous is None:  # resumed: the changes per point are not checkpointed; bound them by their maxima
-                error = (last - 1) * max(plastic.net + js["plastic_net"], plastic.flow + js["plastic_flow"])
+                error = (last - 1) * max(plastic.net + jumps["plastic_net"],
+                                         plastic.flow + jumps["plastic_flow"])
                 settled = False
             else:
                 change_eps, change_p = plastic_jump_error(previous, plastic, 2, self.comm)  # per cycle
@@ -631,10 +634,10 @@ class _Run:
                         and self.scene.wear.jump_forced is None)
             if settling and previous is not None:
                 self._plastic_pending = (previous, last, plastic)
-                js["plastic_error_pending"] = error
+                jumps["plastic_error_pending"] = error
             else:
-                js["plastic_error"] += error
-        js.update(plastic_net=plastic.net, plastic_flow=plastic.flow)
+                jumps["plastic_error"] += error
+        jumps.update(plastic_net=plastic.net, plastic_flow=plastic.flow)
         return limit, settling
 
     def _jump(self, cycle: int, start: ContactState, new: ContactState, result: CycleResult, room: int,
@@ -645,11 +648,8 @@ class _Run:
         than a contact element. ``regrown``: the candidate window grew during the cycle (new contact set).
         ``plastic``: an elastic-plastic body's cycle (:meth:`_plastic_cycle`): the jump is bounded by the
         plastic state's change too, and the plastic history is extrapolated with the wear gap."""
-        from .cycle_jump import analyse_cycle, choose_jump, extrapolate_plastic_history, jump_error
-        from .materials import elastic_stiffness
-
-        sc, cs, js = self.scene, self.model.contact, self.progress.jump
-        w = sc.wear
+        scene, contact, jumps = self.scene, self.model.contact, self.progress.jump
+        w = scene.wear
         h_e = self.model.setup.element_size
         k = self.problem.wear_coefficient(True)
         out_r, out_x, _, _, out_status = result.kept
@@ -658,31 +658,31 @@ class _Run:
             # The contact set changed: no per-contact rate to compare with or to extrapolate from. The previous
             # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
             # stands for itself; jumps restart from one.
-            dim = cs.dim
+            dim = contact.dim
             n = out_r.shape[0]
-            slip = out_x.reshape(n, cs.nc, dim)[:, :, 1:]  # both tangential components in 3D
-            wear = self.problem.wear.increment(out_r[:, 0::dim] / cs.tributary, slip, in_cycle=True)
+            slip = out_x.reshape(n, contact.nc, dim)[:, :, 1:]  # both tangential components in 3D
+            wear = self.problem.wear.increment(out_r[:, 0::dim] / contact.tributary, slip, in_cycle=True)
             wear = wear * (out_status == 2)
             this = float(wear.sum(axis=0).max(initial=0.0))
-            old = float(js["rate"].max(initial=0.0)) if js["rate"] is not None else 0.0
-            err = (js["last"] - 1) * max(old, this)
-            js.update(rate=None, last=1, free=1, simulated=js["simulated"] + 1, error=js["error"] + err,
-                      bound="window_grown")
-            return new, {"jump": 1, "bound": "window_grown", "stability_limit": js["stability_limit"], "error": err,
-                         "error_total": js["error"]}
+            old = float(jumps["rate"].max(initial=0.0)) if jumps["rate"] is not None else 0.0
+            err = (jumps["last"] - 1) * max(old, this)
+            jumps.update(rate=None, last=1, free=1, simulated=jumps["simulated"] + 1, error=jumps["error"] + err,
+                         bound="window_grown")
+            return new, {"jump": 1, "bound": "window_grown", "stability_limit": jumps["stability_limit"],
+                         "error": err, "error_total": jumps["error"]}
         decided = None
         if self.rank0:
-            a = analyse_cycle(self.problem.operators.W, cs.dim, cs.tributary, out_status, out_x, out_r, start.wear_gap,
-                              new.wear_gap, sc.loading.normal_force_controlled)
-            err = jump_error(js["rate"], a.rate, js["last"]) if js["rate"] is not None else 0.0
+            a = analyse_cycle(self.problem.operators.W, contact.dim, contact.tributary, out_status, out_x, out_r,
+                              start.wear_gap, new.wear_gap, scene.loading.normal_force_controlled)
+            err = jump_error(jumps["rate"], a.rate, jumps["last"]) if jumps["rate"] is not None else 0.0
             dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction, w.jump_pressure_change, w.jump_max,
-                                          js["free"], room, plastic_limit)
+                                          jumps["free"], room, plastic_limit)
             if w.jump_forced is not None:
                 dN, bound, free = min(w.jump_forced, room), "forced", w.jump_forced
             if cycle == 1:  # it starts from the preload, not from a cycle: its wear is not the cycles' rate
                 dN, bound = 1, "first_cycle"
             elif settling:
-                dN, bound, free = 1, "plastic_settling", js["free"]
+                dN, bound, free = 1, "plastic_settling", jumps["free"]
             decided = (a.rate, err, dN, bound, free, a.stability_limit(k), a.monotone_limit(k))
         if self.comm.size > 1:
             decided = self.comm.bcast(decided, root=0)
@@ -696,87 +696,93 @@ class _Run:
         if dN > 1:
             extra = dN - 1
             new = replace(new, wear_gap=new.wear_gap + extra * rate,
-                          increment=new.increment + extra * sc.loading.increments_per_cycle,
+                          increment=new.increment + extra * scene.loading.increments_per_cycle,
                           dissipated_energy=new.dissipated_energy
                           + extra * float(result.records["dissipated_energy"].sum()))
             if plastic is not None and plastic.regime != "elastic_shakedown":  # eps_p and p follow the wear gap
-                before, after, m = start.plastic, new.plastic, sc.material
+                before, after, m = start.plastic, new.plastic, scene.material
                 sigma, eps_p, p = extrapolate_plastic_history(after.sigma, before.eps_p, after.eps_p, before.p,
                                                               after.p, dN, elastic_stiffness(m.E, m.nu))
                 new = replace(new, plastic=PlasticHistory(after.u, sigma, eps_p, p))
-        js.update(rate=rate, last=dN, free=free, simulated=js["simulated"] + 1, jumps=js["jumps"] + (dN > 1),
-                  largest=max(js["largest"], dN), error=js["error"] + err, bound=bound,
-                  stability_limit=stab, monotone_limit=mono, exceeded=js["exceeded"] + (dN > stab),
-                  min_stability_limit=min(js["min_stability_limit"], stab))
-        if dN > stab and js["exceeded"] == 1:
-            self.say(f"[{sc.name}] WARNING: cycle {cycle}: forced jump {dN} exceeds the stability limit "
+        jumps.update(rate=rate, last=dN, free=free, simulated=jumps["simulated"] + 1,
+                     jumps=jumps["jumps"] + (dN > 1), largest=max(jumps["largest"], dN), error=jumps["error"] + err,
+                     bound=bound, stability_limit=stab, monotone_limit=mono, exceeded=jumps["exceeded"] + (dN > stab),
+                     min_stability_limit=min(jumps["min_stability_limit"], stab))
+        if dN > stab and jumps["exceeded"] == 1:
+            self.say(f"[{scene.name}] WARNING: cycle {cycle}: forced jump {dN} exceeds the stability limit "
                      f"{stab:.4g} cycles: expect oscillating edge spikes")
-        return new, {"jump": dN, "bound": bound, "stability_limit": stab, "error": err, "error_total": js["error"],
-                     "plastic_error_total": js["plastic_error"] + js["plastic_error_pending"]}
+        return new, {"jump": dN, "bound": bound, "stability_limit": stab, "error": err,
+                     "error_total": jumps["error"],
+                     "plastic_error_total": jumps["plastic_error"] + jumps["plastic_error_pending"]}
 
     # Outputs at the end ---------------------------------------------------------------------------------
     def summary(self, error: str | None) -> dict[str, Any]:
-        sc, model, st, pr = self.scene, self.model, self.state, self.progress
+        scene, model, state, progress = self.scene, self.model, self.state, self.progress
         problem = self.problem
         summary: dict[str, Any] = {
-            "scene": sc.name, "dofs": problem.n_dofs, "contacts": model.contact.nc,
+            "scene": scene.name, "dofs": problem.n_dofs, "contacts": model.contact.nc,
             "delassus_method": problem.operators.delassus.method, **{k: round(v, 6) for k, v in model.timings.items()},
-            "increments": st.increment, "cycles": pr.cycle, "converged": error is None,
+            "increments": state.increment, "cycles": progress.cycle, "converged": error is None,
             "resumed_from_cycle": self.resumed_from_cycle,
-            "cycles_this_run": pr.cycle - (self.resumed_from_cycle or 0),
-            "local_iterations": st.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
-            "wear_law": sc.wear.law, "wear_k": sc.wear.k_total, "wear_acceleration": sc.wear.acceleration,
-            "wear_k_effective": problem.wear_coefficient(True), "equivalent_cycles": pr.cycle * sc.wear.acceleration,
-            "dissipated_energy": st.dissipated_energy / model.setup.model_fraction, "material_model": sc.material.model,
-            "obstacle": "rigid plane (the flat is rigid)" if sc.contact.obstacle == "rigid_plane"
-            else f"elastic flat (two deformable bodies of the same material, {sc.contact.sliding}-sliding pairing)",
+            "cycles_this_run": progress.cycle - (self.resumed_from_cycle or 0),
+            "local_iterations": state.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
+            "wear_law": scene.wear.law, "wear_k": scene.wear.k_total, "wear_acceleration": scene.wear.acceleration,
+            "wear_k_effective": problem.wear_coefficient(True),
+            "equivalent_cycles": progress.cycle * scene.wear.acceleration,
+            "dissipated_energy": state.dissipated_energy / model.setup.model_fraction,
+            "material_model": scene.material.model,
+            "obstacle": "rigid plane (the flat is rigid)" if scene.contact.obstacle == "rigid_plane"
+            else f"elastic flat (two deformable bodies of the same material, {scene.contact.sliding}-sliding pairing)",
         }
         if model.contact.two_body:
             share = problem.wear.slave_share if problem.wear is not None else 1.0
-            worn = problem.body_wear(st)
-            summary.update({"wear_k_slave": sc.wear.k_total * share, "wear_k_master": sc.wear.k_total * (1 - share),
+            worn = problem.body_wear(state)
+            summary.update({"wear_k_slave": scene.wear.k_total * share,
+                            "wear_k_master": scene.wear.k_total * (1 - share),
                             "max_wear_depth_slave": float(worn["slave"].max(initial=0.0)),
                             "max_wear_depth_master": float(worn["master"].max(initial=0.0)),
-                            "max_relative_tangential": pr.max_relative_tangential,
-                            "small_sliding_warning": pr.sliding_warned, "sliding": sc.contact.sliding})
+                            "max_relative_tangential": progress.max_relative_tangential,
+                            "small_sliding_warning": progress.sliding_warned, "sliding": scene.contact.sliding})
             if problem.operators.surface_compliance is not None:
                 loaded = worn["master"] > 0
                 along = worn["master_coordinates"][loaded] @ problem.contact.frame[1]
                 summary.update({"repairs": problem.sliding.repairs,
                                 "master_scar_width": float(np.ptp(along)) if along.size else 0.0})
         if problem.body is not None:
-            ps = problem.plastic_state(st)
+            ps = problem.plastic_state(state)
             local = np.array([ps.p.max(initial=0.0), ps.von_mises().max(initial=0.0)])
             gmax = np.empty(2)
             self.comm.Allreduce(local, gmax, op=MPI.MAX)  # elementwise (the pickle-based max is not)
             summary.update({"max_equivalent_plastic_strain": float(gmax[0]), "max_von_mises": float(gmax[1]),
-                            "newton_tangent": sc.solver.newton_tangent, "newton_full_fallbacks": pr.newton_fallbacks,
+                            "newton_tangent": scene.solver.newton_tangent,
+                            "newton_full_fallbacks": progress.newton_fallbacks,
                             "tangent_refactorizations": problem.body.refactorizations})
-            if sc.loading.cycles > 0:  # elastic_shakedown, plastic_shakedown or ratcheting (cycles.csv: every cycle's)
-                summary["plastic_regime_last_cycle"] = pr.plastic_regime
-        if sc.loading.cycles > 0:
+            # elastic_shakedown, plastic_shakedown or ratcheting (cycles.csv: every cycle's)
+            if scene.loading.cycles > 0:
+                summary["plastic_regime_last_cycle"] = progress.plastic_regime
+        if scene.loading.cycles > 0:
             summary["cycle_path"] = getattr(self, "cycle_mode", "python")
-            if sc.wear.cycle_jump:
+            if scene.wear.cycle_jump:
                 summary["cycle_jump"] = self._jump_summary()
             counts = problem.operators.pattern_counts
             if counts is not None and self.rank0:
                 summary["pattern_solves"] = {"accepted": int(counts[0]), "rejected": int(counts[1]),
                                              "factorizations": int(counts[2])}
-        if pr.last_row:
-            r = pr.last_row
+        if progress.last_row:
+            r = progress.last_row
             summary.update({k: r[k] for k in ("normal_force", "tangential_force", "max_pressure", "contact_width",
                                               "stick_width", "max_wear_depth", "wear_area")})
             summary.update({k: int(r[k]) for k in ("n_open", "n_stick", "n_slip")})
             summary["edge_loaded"] = bool(r.get("edge_loaded", 0))
-            summary.update(contact_measures(problem, st, model.setup.model_fraction))
-        if pr.last_cycle_row:
-            summary["regime"] = pr.last_cycle_row["regime"]
-        if model.setup.hertz is not None and pr.last_row:
+            summary.update(contact_measures(problem, state, model.setup.model_fraction))
+        if progress.last_cycle_row:
+            summary["regime"] = progress.last_cycle_row["regime"]
+        if model.setup.hertz is not None and progress.last_row:
             radius, E_star, label = model.setup.hertz
-            a, p0 = hertz_line_contact(pr.last_row["normal_force"], radius, E_star)
+            a, p0 = hertz_line_contact(progress.last_row["normal_force"], radius, E_star)
             summary.update({"hertz_reference": label, "hertz_half_width": a, "hertz_max_pressure": p0})
         summary["contact_window"] = model.half_width
-        summary["window_growths"] = pr.window_growths
+        summary["window_growths"] = progress.window_growths
         summary["modelled"] = self._modelled()
         summary["units"] = self.writer.description.units.to_json(model.contact.dim)
         if self.size_estimate is not None:  # the estimate made before meshing, to compare with what was built
@@ -787,59 +793,59 @@ class _Run:
 
     def _jump_summary(self) -> dict[str, Any]:
         """The jumps taken, the error estimate and the stability limits (``summary.cycle_jump``)."""
-        from .cycle_jump import hertz_jump_limit
-
-        sc, js = self.scene, self.progress.jump
+        scene, jumps = self.scene, self.progress.jump
         finite = lambda v: v if math.isfinite(v) else None  # noqa: E731 - JSON has no infinity
-        out = {"simulated_cycles": js["simulated"], "jumps": js["jumps"], "largest_jump": js["largest"],
-               "wear_error_estimate": js["error"], "last_bound": js["bound"],
-               "stability_limit_last": finite(js["stability_limit"]),
-               "monotone_limit_last": finite(js["monotone_limit"]),
-               "stability_limit_min": finite(js["min_stability_limit"]),
-               "jumps_past_stability_limit": js["exceeded"], "forced": sc.wear.jump_forced,
-               "bounds": {"wear_fraction": sc.wear.jump_wear_fraction,
-                          "pressure_change": sc.wear.jump_pressure_change, "max_jump": sc.wear.jump_max}}
+        out = {"simulated_cycles": jumps["simulated"], "jumps": jumps["jumps"],
+               "largest_jump": jumps["largest"],
+               "wear_error_estimate": jumps["error"], "last_bound": jumps["bound"],
+               "stability_limit_last": finite(jumps["stability_limit"]),
+               "monotone_limit_last": finite(jumps["monotone_limit"]),
+               "stability_limit_min": finite(jumps["min_stability_limit"]),
+               "jumps_past_stability_limit": jumps["exceeded"], "forced": scene.wear.jump_forced,
+               "bounds": {"wear_fraction": scene.wear.jump_wear_fraction,
+                          "pressure_change": scene.wear.jump_pressure_change, "max_jump": scene.wear.jump_max}}
         if self.problem.body is not None:
-            out["plastic_error_estimate"] = js["plastic_error"] + js["plastic_error_pending"]
-            out["bounds"]["plastic_fraction"] = sc.wear.jump_plastic_fraction
-            out["shakedown_strain"] = sc.material.shakedown_strain
+            out["plastic_error_estimate"] = jumps["plastic_error"] + jumps["plastic_error_pending"]
+            out["bounds"]["plastic_fraction"] = scene.wear.jump_plastic_fraction
+            out["shakedown_strain"] = scene.material.shakedown_strain
         k = self.problem.wear_coefficient(True)
-        if self.model.setup.hertz is not None and sc.loading.tangential_kind == "displacement" and k > 0:
+        if self.model.setup.hertz is not None and scene.loading.tangential_kind == "displacement" and k > 0:
             _, E_star, _ = self.model.setup.hertz
             out["hertz_estimate_0.37h/(k delta E*)"] = hertz_jump_limit(
-                self.model.setup.element_size, k, abs(sc.loading.tangential_amplitude), E_star)
+                self.model.setup.element_size, k, abs(scene.loading.tangential_amplitude), E_star)
         return out
 
     def _modelled(self) -> dict[str, str]:
         """What this run assembled and iterated, and what it skipped (the scene decides)."""
-        sc, model = self.scene, self.model
-        cs, body, setup = model.contact, self.problem.body, model.setup
+        scene, model = self.scene, self.model
+        contact, body, setup = model.contact, self.problem.body, model.setup
         window = model.half_width
         growths = self.progress.window_growths
-        two_body = cs.two_body
+        two_body = contact.two_body
         newton = body.describe() if body is not None else None
         return {
             "material": ("J2 plasticity: Newton with the contact inside each iteration, tangent "
-                         f"'{sc.solver.newton_tangent}', {newton['iteration']}"
+                         f"'{scene.solver.newton_tangent}', {newton['iteration']}"
                          if body is not None else "linear elastic: no Newton loop, no plastic state"),
             "delassus": "W of the elastic K built once" + (f"; {newton['delassus']}" if body is not None else ""),
-            "friction": self.problem.contact.friction.describe() if sc.contact.mu > 0 else "frictionless (mu = 0): "
+            "friction": self.problem.contact.friction.describe() if scene.contact.mu > 0 else "frictionless (mu = 0): "
                         "normal-only contact, the local problem solved on the normal rows of W alone",
             "wear": (self.problem.wear.describe()
-                     + (f" (cylinder {sc.wear.slave_share:.3g}, flat {1 - sc.wear.slave_share:.3g} of the wear gap)"
+                     + (f" (cylinder {scene.wear.slave_share:.3g}, flat {1 - scene.wear.slave_share:.3g} of the "
+                        "wear gap)"
                         if two_body else "")
                      + ((", cycle jumps (wear gap and plastic state extrapolated between simulated cycles)"
                          if body is not None else ", cycle jumps (wear gap extrapolated between simulated cycles)")
-                        if sc.wear.cycle_jump else "")
-                     if sc.wear.law == "archard" else "none (wear gap stays zero)"),
-            "contact": f"{cs.nc} candidate nodes" + (f" within {window:.4g} mm of the first contact point"
+                        if scene.wear.cycle_jump else "")
+                     if scene.wear.law == "archard" else "none (wear gap stays zero)"),
+            "contact": f"{contact.nc} candidate nodes" + (f" within {window:.4g} mm of the first contact point"
                                                      + (" (automatic: Hertz estimate plus margin"
                                                         + (f", grown {len(growths)} time(s)" if growths else "") + ")"
                                                         if setup.window_automatic else "")
                                                      if window is not None else " (whole contact face)")
                        + setup.contact_text,
-            "loads": (f"{sc.loading.cycles} cycles ({getattr(self, 'cycle_mode', 'python')} path)"
-                      if sc.loading.cycles > 0 else "preload and a monotonic tangential load")
+            "loads": (f"{scene.loading.cycles} cycles ({getattr(self, 'cycle_mode', 'python')} path)"
+                      if scene.loading.cycles > 0 else "preload and a monotonic tangential load")
                      + ("; face pressure load" if PRESSURE_LOAD in self.problem.load_names else ""),
         }
 
@@ -880,9 +886,6 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
 
 def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: bool,
                size: SizeEstimate | None = None) -> dict[str, Any]:
-    import signal
-    import threading
-
     run = _Run(scene, out, comm, quiet, resume, size)
     error = None
     # SIGINT / SIGTERM: finish the current increment or cycle, checkpoint, write the summary, then raise
@@ -922,19 +925,16 @@ def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: boo
         run.writer.write_worn_profiles(run.state)
     run.writer.close()
     if run.rank0 and scene.output.xdmf and scene.output.contact_profiles:
-        from .contact_output import write_contact_xdmf
         try:
             write_contact_xdmf(out)
         except Exception as exc:  # noqa: BLE001 - the CSV it comes from is on disk whatever happens here
             run.say(f"[{scene.name}] WARNING: contact.xdmf not written: {type(exc).__name__}: {exc}")
     if run.rank0 and scene.output.plots and run.progress.last_row:
-        from .plots import plot_run
         try:
             plot_run(out, run.writer.description)
         except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
             run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
         if scene.output.xdmf:  # pyvista pictures, in a child process: a VTK failure costs only them
-            from .pictures import draw_in_subprocess
             pictures = draw_in_subprocess(out, scene.contact.plane_point, scene.contact.plane_normal)
             run.say(f"[{scene.name}] {pictures}")
     force = "N/mm" if run.problem.contact.dim == 2 else "N"

@@ -168,7 +168,7 @@ def _plastic_zone_dofs(scene: Scene, geometry: Geometry, contacts: int | None) -
     ``plastic_zone.ZONE_MARGIN`` layers around) in each plastic body, and the contact's dofs; at most
     ``plastic_zone.MAX_ZONE_DOFS``, past which the body refactorises K_T instead (a second factor). A mesh file
     or a rectangle (no expected contact size): the cap. Returns (the zone's dofs, whether the cap is reached)."""
-    from .plastic_zone import MAX_ZONE_DOFS, ZONE_MARGIN  # (numba, as the elastic-plastic run itself)
+    from .plastic_zone import MAX_ZONE_DOFS, ZONE_MARGIN  # lazy: plastic_zone imports numba, as only plastic runs do
 
     dim, a = scene.dim, geometry.contact_size(scene)
     if a is None:
@@ -187,10 +187,10 @@ def _plastic_zone_dofs(scene: Scene, geometry: Geometry, contacts: int | None) -
 def _compiled_2d_cycles(scene: Scene, dim: int) -> bool:
     """The 2D compiled cycle loop runs (and keeps its per-increment pattern LU factors): see
     FrettingProblem.run_cycle (displacement or pressure control, Uzawa, elastic, kernel on, pattern reuse on)."""
-    sv, lo = scene.solver, scene.loading
-    return (dim == 2 and lo.cycles > 0 and sv.cycle_kernel and sv.pattern_reuse and sv.local_method == "uzawa"
-            and scene.material.model == "elastic" and not lo.normal_force_controlled
-            and not lo.tangential_force_controlled and scene.contact.sliding == "small")
+    sv, loading = scene.solver, scene.loading
+    return (dim == 2 and loading.cycles > 0 and sv.cycle_kernel and sv.pattern_reuse and sv.local_method == "uzawa"
+            and scene.material.model == "elastic" and not loading.normal_force_controlled
+            and not loading.tangential_force_controlled and scene.contact.sliding == "small")
 
 
 def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:

@@ -32,18 +32,18 @@ __all__ = ["SurfaceCompliance", "surface_nodes", "master_node_areas", "offsets",
            "interpolate_master", "spread_wear"]
 
 
-def surface_nodes(cs: ContactSet, reach: float | None) -> tuple[np.ndarray, np.ndarray]:
+def surface_nodes(pairing: ContactSet, reach: float | None) -> tuple[np.ndarray, np.ndarray]:
     """The master facets a slave node may slide onto, and the surface nodes of the compliance.
 
     Args:
-        cs: The reference pairing (:func:`~dolfinx_fretting.contact.find_pairs`).
+        pairing: The reference pairing (:func:`~dolfinx_fretting.contact.find_pairs`).
         reach: Sliding reach (length), or None for the whole master surface.
 
     Returns:
-        (the facets of ``cs.master_surface`` within ``reach`` of a slave node, sorted; the global block nodes of
+        (the facets of ``pairing.master_surface`` within ``reach`` of a slave node, sorted; the global block nodes of
         the slave candidates and of those facets, sorted).
     """
-    surface = cs.master_surface
+    surface = pairing.master_surface
     nf = surface.nodes.shape[0]
     if reach is None:
         faces = np.arange(nf)
@@ -52,12 +52,12 @@ def surface_nodes(cs: ContactSet, reach: float | None) -> tuple[np.ndarray, np.n
         radius = np.array([np.linalg.norm(x[:k] - c, axis=1).max() for x, k, c in zip(surface.x, surface.nv, centre)])
         # distance from each facet's centre to the nearest slave node, in chunks of facets (slaves x facets)
         nearest = np.empty(nf)
-        for lo in range(0, nf, 512):
-            d = np.linalg.norm(centre[lo:lo + 512, None, :] - cs.coords[None], axis=2)
-            nearest[lo:lo + 512] = d.min(axis=1)
+        for start in range(0, nf, 512):
+            d = np.linalg.norm(centre[start:start + 512, None, :] - pairing.coords[None], axis=2)
+            nearest[start:start + 512] = d.min(axis=1)
         faces = np.flatnonzero(nearest - radius <= reach)
     masters = surface.nodes[faces].ravel()
-    nodes = np.union1d(cs.global_nodes, masters[masters >= 0])
+    nodes = np.union1d(pairing.global_nodes, masters[masters >= 0])
     return faces, nodes
 
 
@@ -107,21 +107,21 @@ class SurfaceCompliance:
     def dofs(self) -> np.ndarray:
         return (self.dim * self.nodes[:, None] + np.arange(self.dim)).ravel()
 
-    def restrict(self, cs: ContactSet) -> sp.csr_matrix:
+    def restrict(self, pairing: ContactSet) -> sp.csr_matrix:
         """L: H's columns at the surface dofs (``H = L S``).
 
         Raises:
             ValueError: H touches a dof outside the surfaces (a pairing beyond the reach).
         """
-        L = sp.csr_matrix(cs.H[:, self.dofs])
-        if L.nnz != cs.H.nnz:
+        L = sp.csr_matrix(pairing.H[:, self.dofs])
+        if L.nnz != pairing.H.nnz:
             raise ValueError("finite sliding: the pairing touches nodes outside the surface compliance: "
                              "ElasticBody.reach is shorter than the pairing needs")
         return L
 
-    def operators(self, cs: ContactSet) -> tuple[np.ndarray, np.ndarray]:
-        """(W, the load responses) of the pairing ``cs``: ``L C L^T`` and ``L S K^-1 f_l``."""
-        L = self.restrict(cs)
+    def operators(self, pairing: ContactSet) -> tuple[np.ndarray, np.ndarray]:
+        """(W, the load responses) of ``pairing``: ``L C L^T`` and ``L S K^-1 f_l``."""
+        L = self.restrict(pairing)
         LC = np.asarray(L @ self.C)
         W = np.asarray(L @ LC.T)
         W = 0.5 * (W + W.T)  # exactly symmetric, as the factorisation's W
@@ -130,10 +130,10 @@ class SurfaceCompliance:
             responses[:] = np.asarray(L @ self.responses.T).T
         return W, responses
 
-    def displacement(self, cs: ContactSet, forces: np.ndarray, factors: np.ndarray) -> np.ndarray:
-        """The surface nodes' displacement (nodes, dim) under the contact forces of pairing ``cs`` and the loads
+    def displacement(self, pairing: ContactSet, forces: np.ndarray, factors: np.ndarray) -> np.ndarray:
+        """The surface nodes' displacement (nodes, dim) under the contact forces of ``pairing`` and the loads
         at ``factors``: ``C L^T r + sum_l s_l S K^-1 f_l`` (without the master's rigid translation)."""
-        L = self.restrict(cs)
+        L = self.restrict(pairing)
         u = self.C @ (L.T @ forces)
         if self.responses.shape[0]:
             u = u + factors @ self.responses
@@ -163,12 +163,12 @@ def _master_motion(compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray, 
     return u[rows] + D
 
 
-def offsets(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> np.ndarray:
+def offsets(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> np.ndarray:
     """How far each contact's paired master point has moved from its slave node, in the contact plane, in
     master elements: ``|t . ((X_s + u_s) - sum_i w_i (X_i + u_i + D))| / size``.
 
     Args:
-        cs: The pairing.
+        pairing: The pairing.
         compliance: The surface compliance (its node rows).
         u: (nodes, dim) displacement of the surface nodes (:meth:`SurfaceCompliance.displacement`).
         D: The master's rigid translation.
@@ -176,22 +176,22 @@ def offsets(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.
     Returns:
         (nc,) the offsets, in master facet sizes.
     """
-    slave = cs.coords + u[compliance.rows(cs.global_nodes)]
-    moved = _master_motion(compliance, u, D, compliance.rows(cs.master_nodes))
-    master = np.einsum("ci,cij->cj", cs.master_weights, cs.master_surface.x[cs.master_faces] + moved)
-    tangential = np.einsum("ckj,cj->ck", cs.frames[:, 1:], slave - master)
-    return np.linalg.norm(tangential, axis=1) / cs.master_sizes
+    slave = pairing.coords + u[compliance.rows(pairing.global_nodes)]
+    moved = _master_motion(compliance, u, D, compliance.rows(pairing.master_nodes))
+    master = np.einsum("ci,cij->cj", pairing.master_weights, pairing.master_surface.x[pairing.master_faces] + moved)
+    tangential = np.einsum("ckj,cj->ck", pairing.frames[:, 1:], slave - master)
+    return np.linalg.norm(tangential, axis=1) / pairing.master_sizes
 
 
-def repair(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> ContactSet:
-    """Pair the slave nodes of ``cs`` anew with the closest points of the master facets within reach, both moved
+def repair(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> ContactSet:
+    """Pair the slave nodes of ``pairing`` anew with the closest points of the master facets within reach, both moved
     by their displacement in the contact plane (surface displacement ``u``, the master translated by ``D``;
     their components along the obstacle's normal are left out). A node that has
     slid beyond the reach pairs with the nearest facet within it; its :func:`offsets` then stay large (the
     problem reports it).
 
     Args:
-        cs: The current pairing (its slave nodes are kept, in order).
+        pairing: The current pairing (its slave nodes are kept, in order).
         compliance: The surface compliance (the facets within reach, the node rows).
         u: (nodes, dim) displacement of the surface nodes.
         D: The master's rigid translation.
@@ -199,7 +199,7 @@ def repair(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.n
     Returns:
         The new pairing's contact set (:func:`~dolfinx_fretting.contact.paired_contact_set`).
     """
-    surface = cs.master_surface
+    surface = pairing.master_surface
     # The motion in the contact plane only (the obstacle frame's tangents): the approach along n is micrometres
     # and does not change which points face each other, and leaving it out keeps a flat master's facets flat,
     # so that a node on a symmetry plane pairs with a point on it exactly (the closest point of a facet warped by
@@ -210,36 +210,36 @@ def repair(cs: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.n
     faces = compliance.faces
     rows = compliance.rows(surface.nodes[faces])
     current = surface.x[faces] + _master_motion(compliance, u, D, rows)
-    slave = cs.coords + u[compliance.rows(cs.global_nodes)]
+    slave = pairing.coords + u[compliance.rows(pairing.global_nodes)]
     pairs = MasterSurface(surface.nodes[faces], current, surface.nv[faces], surface.inside[faces] + D,
                           surface.reference_frame).pair(slave)
     chosen = faces[pairs["face"]]
-    return paired_contact_set(surface, cs.global_nodes, cs.coords, cs.tributary, cs.abscissa, chosen,
-                              pairs["weights"], cs.H.shape[1])
+    return paired_contact_set(surface, pairing.global_nodes, pairing.coords, pairing.tributary, pairing.abscissa,
+                              chosen, pairs["weights"], pairing.H.shape[1])
 
 
-def interpolate_master(cs: ContactSet, compliance: SurfaceCompliance, master_wear: np.ndarray) -> np.ndarray:
+def interpolate_master(pairing: ContactSet, compliance: SurfaceCompliance, master_wear: np.ndarray) -> np.ndarray:
     """The master's wear depth at each contact's paired point (weights of the pairing).
 
     Args:
-        cs: The pairing.
+        pairing: The pairing.
         compliance: The surface compliance (the node rows of ``master_wear``).
         master_wear: The master's depth at the compliance's nodes.
 
     Returns:
         (nc,) the depth at each paired point.
     """
-    rows = compliance.rows(cs.master_nodes)
-    return np.einsum("ci,ci->c", cs.master_weights, np.where(rows >= 0, master_wear[np.maximum(rows, 0)], 0.0))
+    rows = compliance.rows(pairing.master_nodes)
+    return np.einsum("ci,ci->c", pairing.master_weights, np.where(rows >= 0, master_wear[np.maximum(rows, 0)], 0.0))
 
 
-def spread_wear(cs: ContactSet, compliance: SurfaceCompliance, depth: np.ndarray) -> np.ndarray:
+def spread_wear(pairing: ContactSet, compliance: SurfaceCompliance, depth: np.ndarray) -> np.ndarray:
     """The master's wear depth added at its nodes when each contact's paired point wears by ``depth``: the
     worn measure ``depth_c A_c`` (A_c the slave node's tributary measure) shared among the facet's nodes by the
     pairing's weights and divided by each node's own measure, so the worn volume is kept exactly.
 
     Args:
-        cs: The pairing.
+        pairing: The pairing.
         compliance: The surface compliance (node rows, the master's node measures).
         depth: (nc,) the master's wear depth added at each paired point.
 
@@ -249,9 +249,9 @@ def spread_wear(cs: ContactSet, compliance: SurfaceCompliance, depth: np.ndarray
     Raises:
         RuntimeError: wear at a node of no master facet.
     """
-    rows = compliance.rows(cs.master_nodes)
+    rows = compliance.rows(pairing.master_nodes)
     volume = np.zeros(compliance.nodes.size)
-    share = cs.master_weights * (depth * cs.tributary)[:, None]
+    share = pairing.master_weights * (depth * pairing.tributary)[:, None]
     valid = rows >= 0
     np.add.at(volume, rows[valid], share[valid])
     areas = compliance.master_areas

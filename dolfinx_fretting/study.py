@@ -39,8 +39,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from mpi4py import MPI
 
 from .geometries import GEOMETRIES
+from .outdir import OutputFolderError, ensure_writable_folder
 from .scenes import Scene, SceneError, load_scene
 
 __all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
@@ -268,12 +270,13 @@ def plan_study(source: str | Path | dict, base_overrides: Sequence[str] | None =
         labels.add(label)
         over = ref_over + extra
         try:
-            sc = load_scene(source, over + QUIET_OUTPUT)
+            point_scene = load_scene(source, over + QUIET_OUTPUT)
         except SceneError as exc:
             raise SceneError(f"sweep point {' '.join(extra)}: {exc}") from None
-        over = over + _cycles_override(sc, physical, f"sweep point {' '.join(extra)}")
-        sc = load_scene(source, over + QUIET_OUTPUT + [f"output.snapshot_cycles=[{max(sc.loading.cycles, 1)}]"])
-        plan.append(StudyPoint(label, key, value, over, sc))
+        over = over + _cycles_override(point_scene, physical, f"sweep point {' '.join(extra)}")
+        point_scene = load_scene(source, over + QUIET_OUTPUT
+                                 + [f"output.snapshot_cycles=[{max(point_scene.loading.cycles, 1)}]"])
+        plan.append(StudyPoint(label, key, value, over, point_scene))
     ref_scene = load_scene(source, ref_over + QUIET_OUTPUT
                            + [f"output.snapshot_cycles=[{max(ref_scene.loading.cycles, 1)}]"])
     plan[0].scene = ref_scene
@@ -329,12 +332,12 @@ def map_l2_error(xy: np.ndarray, w: np.ndarray, xy_ref: np.ndarray, w_ref: np.nd
         w, w_ref: Values at the points.
         n: Grid points per side.
     """
-    from scipy.interpolate import LinearNDInterpolator
+    from scipy.interpolate import LinearNDInterpolator  # lazy: scipy.interpolate takes ~0.1 s to import
 
     xy, xy_ref = np.asarray(xy, dtype=float), np.asarray(xy_ref, dtype=float)
-    lo = np.minimum(xy.min(axis=0), xy_ref.min(axis=0))
-    hi = np.maximum(xy.max(axis=0), xy_ref.max(axis=0))
-    gx, gy = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n))
+    lower = np.minimum(xy.min(axis=0), xy_ref.min(axis=0))
+    upper = np.maximum(xy.max(axis=0), xy_ref.max(axis=0))
+    gx, gy = np.meshgrid(np.linspace(lower[0], upper[0], n), np.linspace(lower[1], upper[1], n))
     grid = np.column_stack([gx.ravel(), gy.ravel()])
     a = LinearNDInterpolator(xy, np.asarray(w, dtype=float), fill_value=0.0)(grid)
     b = LinearNDInterpolator(xy_ref, np.asarray(w_ref, dtype=float), fill_value=0.0)(grid)
@@ -366,7 +369,7 @@ class _Outcome:
 
 
 def _outcome(folder: Path) -> _Outcome:
-    from .compare import _number, load_run
+    from .compare import _number, load_run  # lazy: compare imports numba (output -> state -> wear), ~0.4 s
 
     run = load_run(folder)
     s = run.summary
@@ -441,8 +444,6 @@ def check_study_folder(out: str | Path, overwrite: bool = False) -> Path:
     Raises:
         OutputFolderError: naming the folder and the reason.
     """
-    from .outdir import OutputFolderError, ensure_writable_folder
-
     folder = ensure_writable_folder(out)
     held = [name for name in STUDY_FILES if (folder / name).exists()]
     if held and not overwrite:
@@ -453,14 +454,14 @@ def check_study_folder(out: str | Path, overwrite: bool = False) -> Path:
 
 def _warm_up(point: StudyPoint, out: Path, comm, ignore_size: bool = False) -> None:
     """An untimed short run (one cycle) so that the first timed run does not pay for loading the kernels."""
-    from .simulation import SimulationError, run_scene
+    from .simulation import SimulationError, run_scene  # lazy: the runner imports DOLFINx and petsc4py (PETSc)
 
-    sc = point.scene.model_copy(deep=True)
-    if sc.loading.cycles > 0:
-        sc.loading.cycles = 1
-        sc.output.snapshot_cycles = [1]
+    scene = point.scene.model_copy(deep=True)
+    if scene.loading.cycles > 0:
+        scene.loading.cycles = 1
+        scene.output.snapshot_cycles = [1]
     try:
-        run_scene(sc, out / "warmup", comm, quiet=True, overwrite=True, ignore_size=ignore_size)
+        run_scene(scene, out / "warmup", comm, quiet=True, overwrite=True, ignore_size=ignore_size)
     except SimulationError:
         pass  # a warm-up only loads code; the real runs report their own failures
 
@@ -491,10 +492,9 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
             ``overwrite``.
         RuntimeError: The reference run failed (its message included).
     """
-    from mpi4py import MPI
-
+    # Lazy: these import petsc4py and DOLFINx (PETSc initialised); planning a study, and the CLI's checks
+    # before it, need neither
     from .compliance import DelassusError
-    from .outdir import OutputFolderError
     from .simulation import SimulationError, run_scene
 
     comm = comm or MPI.COMM_WORLD
@@ -639,6 +639,7 @@ def plot_study(rows: Sequence[dict[str, Any]], path: str | Path, title: str = ""
     """Wall time against each relative error (log-log), one panel per error, one colour per swept key,
     each point labelled with its value; the reference's time as a dashed line (its error is zero) and the
     Pareto frontier of the points in grey. Errors below 1e-16 are drawn at 1e-16."""
+    # Lazy: matplotlib is heavy and only the picture needs it; plots imports numba (through output)
     from matplotlib import ticker
 
     from .plots import _figure, _save

@@ -53,9 +53,9 @@ _STATE_TOL = 1e-6  # same relative tests as local_solvers.contact_states
 
 @numba.njit(cache=True)
 def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray, dim: int,
-                     tributary: np.ndarray, abscissa: np.ndarray, k: float, gw: np.ndarray,
+                     tributary: np.ndarray, abscissa: np.ndarray, k: float, wear_gap: np.ndarray,
                      states: np.ndarray, row: np.ndarray) -> None:
-    """Classify the contacts of a converged increment, apply Archard's law to ``gw`` and fill ``row``.
+    """Classify the contacts of a converged increment, apply Archard's law to ``wear_gap`` and fill ``row``.
 
     Args:
         r: Contact forces ``(n, t...)`` per contact.
@@ -66,7 +66,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
         tributary: Tributary length/area per contact.
         abscissa: Position of each contact along the surface (for widths).
         k: Wear coefficient (1/MPa); 0 disables wear.
-        gw: Wear gap per contact, updated in place.
+        wear_gap: Wear gap per contact, updated in place.
         states: Output, contact state codes (0 open, 1 stick, 2 slip).
         row: Output, ``len(ROW_FIELDS)`` values (see :data:`ROW_FIELDS`).
     """
@@ -113,7 +113,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
             n_slip += 1
             if k > 0.0:
                 dg = k * p * math.sqrt(xt2)
-                gw[a] += dg
+                wear_gap[a] += dg
                 dwear += dg * tributary[a]
         else:
             states[a] = _STICK
@@ -124,8 +124,8 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
     wmax = 0.0
     warea = 0.0
     for a in range(nc):
-        wmax = max(wmax, gw[a])
-        warea += gw[a] * tributary[a]
+        wmax = max(wmax, wear_gap[a])
+        warea += wear_gap[a] * tributary[a]
     row[0] = fn
     row[1] = ft
     row[2] = pmax
@@ -144,6 +144,6 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
     row[15] = area_stick
 
 
-def wear_area(gw: np.ndarray, tributary: np.ndarray) -> float:
+def wear_area(wear_gap: np.ndarray, tributary: np.ndarray) -> float:
     """Worn area (2D, mm^2 per mm of thickness) or volume (3D): the lumped integral of the wear gap."""
-    return float(np.dot(gw, tributary))
+    return float(np.dot(wear_gap, tributary))
