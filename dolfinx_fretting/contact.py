@@ -25,6 +25,11 @@ from mpi4py import MPI
 
 from .laws import Coulomb, FrictionLaw
 
+# DOLFINx, UFL and petsc4py are imported inside the functions that read the mesh: this module's value types
+# (ContactSet, MasterSurface, RigidPlane, ElasticBody and the pure pairing functions) are imported by modules that
+# must load without DOLFINx (state, sliding, the scene models behind the schema), and the pure modules stay usable
+# without it (docs/architecture.md).
+
 __all__ = ["Obstacle", "RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates",
            "find_pairs",
            "tangent_frame", "constrained_dofs", "constrained_global_dofs", "pair_with_faces", "pair_with_segments",
@@ -214,11 +219,11 @@ class ContactSet:
 
 def _tributary_measure(V, facets: np.ndarray, fdim: int) -> np.ndarray:
     """Lumped boundary measure per node: assemble the integral of each P1 hat function over ``facets``."""
-    import ufl
+    import ufl  # lazy: DOLFINx (see the note at the imports)
     from dolfinx import mesh as dmesh
     from petsc4py import PETSc
 
-    from ._dolfinx import fem, scalar_space
+    from ._dolfinx import fem, scalar_space  # lazy: DOLFINx (see the note at the imports)
 
     msh = V.mesh
     Q = scalar_space(msh, "Lagrange", 1)
@@ -241,7 +246,7 @@ def _node_coordinates(V) -> np.ndarray:
     input coordinates, the same bits on every partition. A P1 space and a first-order geometry number a
     cell's nodes alike.
     """
-    from ._dolfinx import cell_dofmap, geometry_dofmap
+    from ._dolfinx import cell_dofmap, geometry_dofmap  # lazy: DOLFINx (see the note at the imports)
 
     msh = V.mesh
     gdim = msh.geometry.dim
@@ -286,7 +291,7 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
         ValueError: if ``facets`` hold no node outside ``exclude_nodes`` on any rank, no candidate is found within
             the window, or the dimensions disagree.
     """
-    from dolfinx import fem
+    from dolfinx import fem  # lazy: DOLFINx (see the note at the imports)
 
     msh = V.mesh
     comm = msh.comm
@@ -409,7 +414,7 @@ def _boundary_segments(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
 
 def _vertex_geometry(msh, vertices: np.ndarray) -> np.ndarray:
     """Geometry node index of each topological vertex (first-order mesh)."""
-    from ._dolfinx import geometry_dofmap
+    from ._dolfinx import geometry_dofmap  # lazy: DOLFINx (see the note at the imports)
 
     # Cached per mesh: the vertex -> geometry node map through the cell -> geometry dofmap.
     cache = getattr(msh, "_vertex_to_node", None)
@@ -476,7 +481,7 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     Raises:
         ValueError: if no slave node or master facet is found.
     """
-    from dolfinx import fem
+    from dolfinx import fem  # lazy: DOLFINx (see the note at the imports)
 
     msh = V.mesh
     gdim = msh.geometry.dim
@@ -886,7 +891,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
     the reference frame. The window and the order of the contacts are measured in the reference frame's
     tangent plane, as for a rigid plane.
     """
-    from dolfinx import fem
+    from dolfinx import fem  # lazy: DOLFINx (see the note at the imports)
 
     msh = V.mesh
     comm = msh.comm
@@ -1027,7 +1032,7 @@ class ElasticBody(Obstacle):
 
 def _check_vector_p1(V) -> None:
     """Refuse a space that is not a vector P1 (Lagrange degree 1, one component per space dimension)."""
-    from . import _dolfinx as dfx
+    from . import _dolfinx as dfx  # lazy: DOLFINx (see the note at the imports)
 
     gdim = V.mesh.geometry.dim
     degree, family, value_size = dfx.element_degree(V), dfx.element_family(V), dfx.value_size(V)
@@ -1080,7 +1085,7 @@ def _refuse_fixed_surface(V, facets: np.ndarray, fixed_nodes: np.ndarray, marker
     Such a surface cannot move towards the obstacle; without this check the candidate search would find no node
     and fail further on. Decided on the sums over ranks, so every rank raises or none does.
     """
-    from dolfinx import fem
+    from dolfinx import fem  # lazy: DOLFINx (see the note at the imports)
 
     fdim = V.mesh.topology.dim - 1
     nodes = fem.locate_dofs_topological(V, fdim, facets)
