@@ -18,6 +18,7 @@ from __future__ import annotations
 import copy
 from abc import ABCMeta, abstractmethod
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -366,6 +367,19 @@ def find_candidates(V, facets: np.ndarray, obstacle: RigidPlane, half_width: flo
 
 
 # Two deformable bodies -------------------------------------------------------------------------------------
+def _owned_facet_topology(msh, facets: np.ndarray) -> tuple[np.ndarray, Any, Any, Any]:
+    """The owned ones of ``facets`` (each facet once across ranks) and the facet-to-cell, facet-to-vertex and
+    cell-to-vertex connectivities of ``msh`` (created if missing)."""
+    tdim = msh.topology.dim
+    fdim = tdim - 1
+    msh.topology.create_connectivity(fdim, tdim)
+    msh.topology.create_connectivity(fdim, 0)
+    facets = np.asarray(facets, dtype=np.int32)
+    owned = facets[facets < msh.topology.index_map(fdim).size_local]
+    return (owned, msh.topology.connectivity(fdim, tdim), msh.topology.connectivity(fdim, 0),
+            msh.topology.connectivity(tdim, 0))
+
+
 def _boundary_segments(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The owned facets of a 2D boundary as segments of P1 nodes, gathered on every rank. Collective.
 
@@ -373,18 +387,8 @@ def _boundary_segments(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
         (global node pairs (n, 2), end coordinates (n, 2, gdim), the centroid of each facet's cell (n, gdim));
         the cell centroid tells on which side of the segment the body lies.
     """
-    msh = V.mesh
-    comm = msh.comm
-    tdim, gdim = msh.topology.dim, msh.geometry.dim
-    fdim = tdim - 1
-    msh.topology.create_connectivity(fdim, tdim)
-    msh.topology.create_connectivity(fdim, 0)
-    f_to_c = msh.topology.connectivity(fdim, tdim)
-    f_to_v = msh.topology.connectivity(fdim, 0)
-    c_to_v = msh.topology.connectivity(tdim, 0)
-    n_owned_facets = msh.topology.index_map(fdim).size_local
-    facets = np.asarray(facets, dtype=np.int32)
-    facets = facets[facets < n_owned_facets]  # each facet once across ranks
+    msh, comm, gdim = V.mesh, V.mesh.comm, V.mesh.geometry.dim
+    facets, f_to_c, f_to_v, c_to_v = _owned_facet_topology(msh, facets)
     dof_x = V.tabulate_dof_coordinates()[:, :gdim]
     imap = V.dofmap.index_map
     pairs, ends, centroids = [], [], []
@@ -441,6 +445,27 @@ def _tied_gaps(gaps: np.ndarray, coords: np.ndarray) -> np.ndarray:
     smallest = gaps.min()
     return np.where(gaps > smallest + 1e-9 * extent, gaps, smallest)
 
+def _slave_nodes(V, slave_facets: np.ndarray, exclude_nodes: np.ndarray | None,
+                 coordinates: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The slave surface's owned nodes (less ``exclude_nodes``), gathered on every rank: (global node numbers,
+    coordinates from ``coordinates``, tributary measures). Collective."""
+    from dolfinx import fem  # lazy: DOLFINx (see the note at the imports)
+
+    fdim = V.mesh.topology.dim - 1
+    imap = V.dofmap.index_map
+    slave_facets = np.asarray(slave_facets, dtype=np.int32)
+    nodes = fem.locate_dofs_topological(V, fdim, slave_facets)
+    nodes = nodes[nodes < imap.size_local]
+    if exclude_nodes is not None and len(exclude_nodes):
+        nodes = np.setdiff1d(nodes, exclude_nodes)
+    measure = _tributary_measure(V, slave_facets, fdim)
+    gathered = V.mesh.comm.allgather((imap.local_to_global(nodes.astype(np.int32)).astype(np.int64),
+                                      coordinates[nodes], measure[nodes]))
+    return (np.concatenate([g[0] for g in gathered]),
+            np.concatenate([g[1] for g in gathered]).reshape(-1, coordinates.shape[1]),
+            np.concatenate([g[2] for g in gathered]))
+
+
 def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
                exclude_nodes: np.ndarray | None = None, reference_frame: np.ndarray | None = None) -> ContactSet:
     """Pair each slave node with a point of the master surface, in the reference configuration. Collective.
@@ -481,14 +506,9 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     Raises:
         ValueError: if no slave node or master facet is found.
     """
-    from dolfinx import fem  # lazy: DOLFINx (see the note at the imports)
-
-    msh = V.mesh
-    gdim = msh.geometry.dim
+    gdim = V.mesh.geometry.dim
     if gdim == 3:
         return _find_pairs_3d(V, slave_facets, master_facets, half_width, exclude_nodes, reference_frame)
-    comm = msh.comm
-    fdim = msh.topology.dim - 1
     if gdim != 2:
         raise ValueError(f"two-body contact needs a 2D or 3D mesh; the mesh is {gdim}D")
     imap = V.dofmap.index_map
@@ -498,17 +518,7 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
     ref = tangent_frame([0.0, 1.0]) if reference_frame is None else np.asarray(reference_frame, dtype=float)
     surface = MasterSurface(seg_nodes, seg_x, np.full(seg_nodes.shape[0], 2), seg_inside, ref)
 
-    slave_facets = np.asarray(slave_facets, dtype=np.int32)
-    nodes = fem.locate_dofs_topological(V, fdim, slave_facets)
-    nodes = nodes[nodes < imap.size_local]
-    if exclude_nodes is not None and len(exclude_nodes):
-        nodes = np.setdiff1d(nodes, exclude_nodes)
-    measure = _tributary_measure(V, slave_facets, fdim)
-    gathered = comm.allgather((imap.local_to_global(nodes.astype(np.int32)).astype(np.int64),
-                               V.tabulate_dof_coordinates()[nodes, :gdim], measure[nodes]))
-    gnodes = np.concatenate([g[0] for g in gathered])
-    coords = np.concatenate([g[1] for g in gathered]).reshape(-1, gdim)
-    trib = np.concatenate([g[2] for g in gathered])
+    gnodes, coords, trib = _slave_nodes(V, slave_facets, exclude_nodes, V.tabulate_dof_coordinates()[:, :gdim])
     if gnodes.size == 0:
         raise ValueError("contact: no slave node on the contact surface")
 
@@ -522,7 +532,7 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
         keep = np.abs(np.einsum("ij,ij->i", coords - closest, frames[:, 1])) <= half_width * (1 + 1e-12)
     order = np.flatnonzero(keep)[np.argsort(abscissa[keep], kind="stable")]
     contact_set = paired_contact_set(surface, gnodes[order], coords[order], trib[order], abscissa[order],
-                            pairs["face"][order], pairs["weights"][order], imap.size_global * gdim)
+                                     pairs["face"][order], pairs["weights"][order], imap.size_global * gdim)
     contact_set.window_centre = closest
     return contact_set
 
@@ -702,18 +712,8 @@ def _boundary_faces(V, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
         a triangle's fourth repeating its third; number of vertices (n,); the centroid of each facet's cell
         (n, 3), which tells on which side the body lies).
     """
-    msh = V.mesh
-    comm = msh.comm
-    tdim, gdim = msh.topology.dim, msh.geometry.dim
-    fdim = tdim - 1
-    msh.topology.create_connectivity(fdim, tdim)
-    msh.topology.create_connectivity(fdim, 0)
-    f_to_c = msh.topology.connectivity(fdim, tdim)
-    f_to_v = msh.topology.connectivity(fdim, 0)
-    c_to_v = msh.topology.connectivity(tdim, 0)
-    n_owned_facets = msh.topology.index_map(fdim).size_local
-    facets = np.asarray(facets, dtype=np.int32)
-    facets = facets[facets < n_owned_facets]  # each facet once across ranks
+    msh, comm, gdim = V.mesh, V.mesh.comm, V.mesh.geometry.dim
+    facets, f_to_c, f_to_v, c_to_v = _owned_facet_topology(msh, facets)
     dof_x = _node_coordinates(V)
     imap = V.dofmap.index_map
     nodes = np.full((facets.size, 4), -1, dtype=np.int64)
@@ -891,12 +891,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
     the reference frame. The window and the order of the contacts are measured in the reference frame's
     tangent plane, as for a rigid plane.
     """
-    from dolfinx import fem  # lazy: DOLFINx (see the note at the imports)
-
-    msh = V.mesh
-    comm = msh.comm
     gdim = 3
-    fdim = msh.topology.dim - 1
     imap = V.dofmap.index_map
     ref = tangent_frame([0.0, 0.0, 1.0]) if reference_frame is None else np.asarray(reference_frame, dtype=float)
     face_nodes, face_x, face_nv, face_inside = _boundary_faces(V, master_facets)
@@ -904,17 +899,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
         raise ValueError("contact: the master surface has no facet")
     surface = MasterSurface(face_nodes, face_x, face_nv, face_inside, ref)
 
-    slave_facets = np.asarray(slave_facets, dtype=np.int32)
-    nodes = fem.locate_dofs_topological(V, fdim, slave_facets)
-    nodes = nodes[nodes < imap.size_local]
-    if exclude_nodes is not None and len(exclude_nodes):
-        nodes = np.setdiff1d(nodes, exclude_nodes)
-    measure = _tributary_measure(V, slave_facets, fdim)
-    gathered = comm.allgather((imap.local_to_global(nodes.astype(np.int32)).astype(np.int64),
-                               _node_coordinates(V)[nodes], measure[nodes]))
-    gnodes = np.concatenate([g[0] for g in gathered])
-    coords = np.concatenate([g[1] for g in gathered]).reshape(-1, gdim)
-    trib = np.concatenate([g[2] for g in gathered])
+    gnodes, coords, trib = _slave_nodes(V, slave_facets, exclude_nodes, _node_coordinates(V))
     if gnodes.size == 0:
         raise ValueError("contact: no slave node on the contact surface")
     # The slave nodes in a partition-free order (by position) before anything depends on their order.
@@ -934,7 +919,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
     sel = np.flatnonzero(keep)
     sel = sel[_in_plane_order(in_plane[sel], np.ptp(coords, axis=0).max())]  # along t1, then t2 (as find_candidates)
     contact_set = paired_contact_set(surface, gnodes[sel], coords[sel], trib[sel], in_plane[sel, 0].copy(),
-                            pairs["face"][sel], pairs["weights"][sel], imap.size_global * gdim)
+                                     pairs["face"][sel], pairs["weights"][sel], imap.size_global * gdim)
     contact_set.window_centre = closest
     return contact_set
 
