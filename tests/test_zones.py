@@ -5,7 +5,8 @@
   exactly; each zone's force and the displacement field are checked, under displacement and force control.
 - Two independent blocks in one mesh, each pressed by its own plane: uniaxial plane-strain stress in each, the
   zones independent (W has no coupling between the bodies), one zone sliding (Q = mu P) while the other sticks.
-- A compiled cycle with two zones against the same cycle increment by increment; a zone's window grown on its
+- A compiled cycle with two zones against the same cycle increment by increment; an elastic-plastic body with two
+  zones; a zone's window grown on its
   own; the errors of a problem with several zones.
 """
 
@@ -17,7 +18,7 @@ from dolfinx import mesh  # noqa: E402
 
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import compat  # noqa: E402
-from support.blocks import (E_PLANE, LMBDA, MU_LAME, TIGHT, component, elasticity, plane_above,  # noqa: E402
+from support.blocks import (E, E_PLANE, LMBDA, MU_LAME, NU, TIGHT, component, elasticity, plane_above,  # noqa: E402
                             tagged, two_blocks)
 
 
@@ -217,3 +218,26 @@ def test_several_zones_refuse_what_is_ambiguous():
         dfr.FrettingProblem(elasticity(V), [a, tilted], bcs)
     # One zone in a list is the single Contact (its problem's arithmetic unchanged).
     assert dfr.FrettingProblem(elasticity(V), [a], bcs).contact is a
+
+
+def test_an_elastic_plastic_body_with_two_zones():
+    """Newton with the contact inside (elastic-plastic, J2, yield 400 MPa) on the two blocks: block A, pressed by
+    1e-3 and rubbed by 2e-3 (its friction shear makes it yield), block B under P = 200 N/mm, below yield. The
+    blocks are independent, so B's answer is the elastic problem's (to 1e-8: Newton and the local solver converged
+    far below it; measured 1.4e-16 on the force, 0 on the approach), and A, having yielded, carries less than
+    elastic."""
+    V, tags, bcs = two_blocks()
+    answers = []
+    for plasticity in (None, dfr.Plasticity(dfr.J2Plasticity(E, NU, 400.0, 1000.0))):
+        a = dfr.Contact(V, (tags, 1), plane_above(), mu=0.3, bcs=bcs)
+        b = dfr.Contact(V, (tags, 2), plane_above(), mu=0.3, bcs=bcs)
+        problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, solver=TIGHT, plasticity=plasticity)
+        state, _ = problem.advance(problem.initial_state(), normal={a: 1e-3, b: dfr.Force(200.0)})
+        state, _ = problem.advance(state, tangential={a: 2e-3})
+        yielded = problem.plastic_state(state).p.max() if plasticity is not None else 0.0
+        answers.append((problem.total_force(state, a), problem.total_force(state, b), state.obstacle, yielded))
+    elastic, plastic = answers
+    assert plastic[3] > 1e-4                                 # A yielded
+    assert plastic[0][0] < elastic[0][0]                     # and carries less at the same approach
+    assert plastic[1] == pytest.approx(elastic[1], rel=1e-8)  # B: the elastic answer
+    assert plastic[2][2] == pytest.approx(elastic[2][2], rel=1e-8)
