@@ -6,8 +6,7 @@
 - Two independent blocks in one mesh, each pressed by its own plane: uniaxial plane-strain stress in each, the
   zones independent (W has no coupling between the bodies), one zone sliding (Q = mu P) while the other sticks.
 - A compiled cycle with two zones against the same cycle increment by increment; an elastic-plastic body with two
-  zones; a zone's window grown on its
-  own; the errors of a problem with several zones.
+  zones; a zone's window grown on its own; the errors of a problem with several zones.
 """
 
 import numpy as np
