@@ -71,11 +71,13 @@ def test_demo_runs(tmp_path_factory, demo):
     assert pngs and all(p.stat().st_size > 1000 for p in pngs)
 
 
-#: Demos whose 2-rank run is ``slow`` (9-19 s each here): they drive a built-in scene through
-#: ``run_scene``, whose parallel answers tests/test_parallel.py checks on 2 and 3 ranks for the same scenes
-#: (cylinder-flat, stromberg-block, mccoll); the default run keeps the 2-rank runs of demo_hertz (a scene
-#: demo: summaries, prints once, the same pictures), demo_plugin and demo_sphere_flat (the API demos, 2D, 3D).
-MPI_SLOW = {"demo_cylinder_flat", "demo_example1", "demo_mccoll"}
+#: Demos whose 2-rank run is ``slow`` (9-19 s each here). Three drive a built-in scene through ``run_scene``,
+#: whose parallel answers tests/test_parallel.py checks on 2 and 3 ranks for the same scenes (cylinder-flat,
+#: stromberg-block, mccoll); demo_sphere_flat drives the API in 3D, which tests/test_parallel.py checks on 2
+#: and 3 ranks (the half ball on an identical flat through the API, and the sphere-flat scene with its 3D
+#: output). The default run keeps the 2-rank runs of demo_hertz (a scene demo: its summaries, each line
+#: printed once, the same pictures) and demo_plugin (an API demo with the user's own mesh and forms).
+MPI_SLOW = {"demo_cylinder_flat", "demo_example1", "demo_mccoll", "demo_sphere_flat"}
 
 
 @pytest.mark.mpi
