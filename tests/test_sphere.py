@@ -238,6 +238,10 @@ def _steady_cycle_energy(problem, state, tangential, increments=40, cycles=2):
     return 2 * float(cycle.records["dissipated_energy"].sum()), cycle
 
 
+# slow (8 s): the same closed form (Johnson eq. 7.60, phi = 0.8, identical spheres, P held, partial slip) is
+# checked by default through the runner, which drives this API's run_cycle: test_sphere_scene.py's
+# test_mindlin_deresiewicz_energy_of_a_force_controlled_cycle (a/h = 5, 3 %).
+@pytest.mark.slow
 def test_mindlin_deresiewicz_energy_of_a_steady_partial_slip_cycle():
     """Energy of a steady cycle Q = +-Q*, P held, identical spheres (Mindlin & Deresiewicz 1953; Johnson §7.3):
     Mindlin's load-displacement curve delta(Q) = (3 mu P (2 - nu) / (8 a G)) [1 - (1 - Q/(mu P))^(2/3)] (Johnson
