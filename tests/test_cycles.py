@@ -214,13 +214,24 @@ def test_failed_increment_is_reported_and_leaves_no_trace(tmp_path, monkeypatch)
     assert list(read_table(out / "cycles.csv")["cycle"]) == [1, 2, 3, 4]
 
 
+LOCAL_METHODS_BASE = SMALL_BLOCK + ["loading.cycles=2", "solver.local_tol=1e-12",
+                                    "output.contact_profiles=false"]
+
+
+@pytest.fixture(scope="module")
+def uzawa_run(tmp_path_factory):
+    """The Uzawa run both local methods are compared with (run once for the module: a serial run is
+    deterministic, so each method meets the same reference it would have run itself)."""
+    return run_scene(load_scene("stromberg-block", LOCAL_METHODS_BASE), tmp_path_factory.mktemp("uzawa"),
+                     quiet=True)
+
+
 @pytest.mark.parametrize("method", ["newton", "auto"])
-def test_local_methods_give_the_same_run(tmp_path, method):
+def test_local_methods_give_the_same_run(tmp_path, method, uzawa_run):
     """The scene's solver.local_method reaches the per-increment path and gives the Uzawa run's answer.
     (Plain NSGS cycles without converging at this scene's load reversal, cycle 1 step 40: natural-map error
     0.17 after 20000 sweeps; the run stops and says so — see test_nsgs_stall_is_reported.)"""
-    base = SMALL_BLOCK + ["loading.cycles=2", "solver.local_tol=1e-12", "output.contact_profiles=false"]
-    ref = run_scene(load_scene("stromberg-block", base), tmp_path / "uzawa", quiet=True)
+    base, ref = LOCAL_METHODS_BASE, uzawa_run
     other = run_scene(load_scene("stromberg-block", base + [f"solver.local_method='{method}'"]), tmp_path / method,
                       quiet=True)
     assert other["cycle_path"] == "python"

@@ -25,8 +25,15 @@ CASES = {
 }
 
 
+#: Cases ``slow`` here (6-10 s each, mostly starting 2 ranks): tests/test_parallel.py runs the same scenes
+#: with the same overrides on 2 and 3 ranks against the serial run (hertz; cylinder-flat elastic-plastic) and
+#: checks the history written once; the default run keeps stromberg-block here (the CLI under ``mpirun``).
+SLOW = {"hertz", "cylinder-flat"}
+
+
 @pytest.mark.mpi
-@pytest.mark.parametrize("name", sorted(CASES))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=[pytest.mark.slow] if n in SLOW else [])
+                                  for n in sorted(CASES)])
 def test_mpi_matches_serial(tmp_path, name, mpirun_env):
     overrides = CASES[name]
     serial = run_scene(load_scene(name, overrides), tmp_path / "serial", quiet=True)
