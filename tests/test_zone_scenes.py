@@ -138,6 +138,10 @@ REFUSALS = [
     ({"contact1": {"plane_normal": [0.0, 0.0]}}, "contact[1].plane_normal = [0.0, 0.0] is out of range"),
     ({"contact0": {"approach": 1e-3}}, "contact[0].approach = 0.001 is out of range"),
     ({"contact1": {"surface": "side"}}, "contact[1].surface = 'side' is not a physical group of", 1),
+    # a further zone's window too narrow for its interference: its nodes outside penetrate; its window does not
+    # grow, the run stops naming the key (exit 1, a failed run's, after the increment that found it)
+    ({"contact1": {"candidate_half_width": 0.1, "approach": 2e-4}},
+     "contact[1].candidate_half_width (now 0.1 mm) or leave it out", 1),
     ({"material": {"model": "elastoplastic", "yield_stress": 500.0, "hardening_modulus": 1000.0}},
      "material.model = 'elastoplastic' is out of range"),
 ]
@@ -179,7 +183,8 @@ def scene_with(changes: dict) -> dict:
 def test_every_refusal_is_one_line(block_file, tmp_path, capsys, changes, message, exit_code):
     """A scene file with several zones that cannot run is refused in one line naming the key, its value and the
     allowed values, without a traceback: exit 2 for the schema's refusals (before any mesh), 1 for a surface the
-    file does not have (found when the file is read, before any factorisation)."""
+    file does not have (found when the file is read, before any factorisation) and for a further zone's window
+    too narrow."""
     path = block_file.parent / f"bad_{abs(hash(message))}.toml"
     if COMM.rank == 0:
         path.write_text(toml_of(scene_with(changes)))
