@@ -31,7 +31,7 @@ __all__ = ["read_table", "read_profiles", "ContactProfiles", "write_contact_xdmf
 _TEXT_COLUMNS = frozenset({"stage", "regime", "jump_bound", "plastic_regime"})
 #: Numeric columns that hold integers (counts, indices, state codes).
 _INT_COLUMNS = frozenset({"increment", "cycle", "step", "node", "state", "n_open", "n_stick", "n_slip",
-                          "local_iterations", "load_solves", "jump"})
+                          "local_iterations", "load_solves", "jump", "zone"})
 #: Per-node columns of ``contact_profiles.csv`` after ``position``.
 _PROFILE_VALUES = ("gap", "pressure", "shear", "slip", "relative_tangential", "wear", "state")
 #: The t2 columns of a 3D contact's profiles (besides ``position_2``, the node's position along t2).
@@ -199,7 +199,7 @@ class ContactProfiles:
         return int(np.argmin(np.hypot(self.position - position, self.position_2 - position_2)))
 
 
-def read_profiles(path: str | Path) -> ContactProfiles | None:
+def read_profiles(path: str | Path, zone: int | None = None) -> ContactProfiles | None:
     """Read ``contact_profiles.csv`` into a :class:`ContactProfiles`.
 
     An increment is kept when it has exactly one row for each of its contact nodes 0..n-1; a partly
@@ -207,8 +207,13 @@ def read_profiles(path: str | Path) -> ContactProfiles | None:
     dropped. When the candidate window grew during the run, the node set grows too: every increment is
     placed on the union of the positions, with NaN (state -1) for nodes that were not candidates yet.
 
+    A run with several contact zones has a ``zone`` column: one zone's rows are read (each zone is a profile of
+    its own, along its own surface).
+
     Args:
         path: ``contact_profiles.csv`` or the output folder holding it.
+        zone: With several zones, the zone read (default 0: the first, the one a scene's ``[loading]`` drives);
+            ignored by a table without zones.
 
     Returns:
         The profiles, or ``None`` when the file is missing, empty or has no complete increment.
@@ -223,6 +228,8 @@ def read_profiles(path: str | Path) -> ContactProfiles | None:
         return None
     ok = np.isfinite(np.asarray(table["increment"], dtype=float)) & np.isfinite(
         np.asarray(table["node"], dtype=float))
+    if "zone" in table:
+        ok &= np.asarray(table["zone"], dtype=float) == (zone or 0)
     inc = np.asarray(table["increment"][ok], dtype=np.int64)
     node = np.asarray(table["node"][ok], dtype=np.int64)
     order = np.lexsort((node, inc))
@@ -287,7 +294,7 @@ def _data_item(parent: ET.Element, h5_name: str, dataset: str, shape: tuple[int,
     item.text = f"{h5_name}:{dataset}"
 
 
-def write_contact_xdmf(out_dir: str | Path) -> Path | None:
+def write_contact_xdmf(out_dir: str | Path, zone: int | None = None) -> Path | None:
     """Write the contact profiles of a run as ``contact.xdmf`` + ``contact.h5`` in ``out_dir``.
 
     Reads ``out_dir/contact_profiles.csv`` (complete increments only, see :func:`read_profiles`). HDF5
@@ -299,10 +306,12 @@ def write_contact_xdmf(out_dir: str | Path) -> Path | None:
     the contact plane: coordinates ``(position, position_2, 0)`` (along t1, t2), triangles of their Delaunay
     triangulation, and the t2 components as ``shear_2``, ``slip_2``, ``relative_tangential_2``. Both files are written under temporary
     names and renamed, so an existing pair is replaced only by a complete one. Plain Python; call on
-    one rank only.
+    one rank only. A run with several contact zones: zone ``zone``'s nodes (:func:`read_profiles`), written as
+    ``contact.xdmf`` for zone 0 (the default) and ``contact_zone<i>.xdmf`` for the others.
 
     Args:
         out_dir: A run's output folder.
+        zone: The zone written (several zones; default 0).
 
     Returns:
         The path of ``contact.xdmf``, or ``None`` when there is no complete contact profile to write.
@@ -310,12 +319,13 @@ def write_contact_xdmf(out_dir: str | Path) -> Path | None:
     import h5py  # lazy: not a declared dependency (installed with DOLFINx by scripts/setup.sh)
 
     out = Path(out_dir)
-    prof = read_profiles(out / "contact_profiles.csv")
+    prof = read_profiles(out / "contact_profiles.csv", zone)
     if prof is None:
         return None
     n = prof.nodes.size
-    xdmf_path, h5_path = out / "contact.xdmf", out / "contact.h5"
-    tmp_xdmf, tmp_h5 = out / "contact.xdmf.tmp", out / "contact.h5.tmp"
+    stem = f"contact_zone{zone}" if zone else "contact"
+    xdmf_path, h5_path = out / f"{stem}.xdmf", out / f"{stem}.h5"
+    tmp_xdmf, tmp_h5 = out / f"{stem}.xdmf.tmp", out / f"{stem}.h5.tmp"
 
     geometry = np.zeros((n, 3))
     geometry[:, 0] = prof.position

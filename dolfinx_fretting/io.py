@@ -25,7 +25,8 @@ from .units import Units
 
 __all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys", "TableError", "HISTORY_FIELDS",
            "CYCLE_FIELDS", "PROFILE_FIELDS", "PROFILE_FIELDS_3D", "profile_fields", "plot_profiles",
-           "RUN_DESCRIPTION", "read_run_description"]
+           "RUN_DESCRIPTION", "read_run_description", "ZONE_HISTORY_FIELDS", "ZONE_HISTORY_FIELDS_3D",
+           "ZONE_CYCLE_FIELDS", "zone_columns", "zone_history_fields", "history_fields", "cycle_fields"]
 
 #: The machine-readable description of a run in its output folder: what was modelled (obstacle, bodies,
 #: wear shares, dimension) and the columns of every table, for the readers (pictures, plots, compare).
@@ -52,13 +53,53 @@ FLAT_PROFILE_FIELDS = ["increment", "cycle", "node", "position", "position_2", "
 _TABLES = {"history": HISTORY_FIELDS, "cycles": CYCLE_FIELDS, "contact_profiles": PROFILE_FIELDS,
            "flat_profiles": FLAT_PROFILE_FIELDS}
 
+#: Each zone's columns of ``history.csv`` when a problem has several contact zones (named ``zone<i>_<name>``,
+#: :func:`zone_columns`; ``i`` the zone's place in the problem's list, 0 the first): its obstacle's position and
+#: its total contact force on the body, both in the zone's own frame (n, t1), its peak pressure, the energy its
+#: contacts dissipated in the increment and its worn area after it. The columns without a zone sum over every
+#: zone's contacts (``normal_force``: each contact's normal component, whatever its zone's normal) and hold the
+#: first zone's obstacle (``normal_displacement``, ``tangential_displacement``).
+ZONE_HISTORY_FIELDS = ("normal_displacement", "tangential_displacement", "normal_force", "tangential_force",
+                       "max_pressure", "dissipated_energy", "wear_area")
+#: The t2 components a 3D zone adds to :data:`ZONE_HISTORY_FIELDS` (after them).
+ZONE_HISTORY_FIELDS_3D = ("tangential_displacement_2", "tangential_force_2")
+#: Each zone's columns of ``cycles.csv`` (``zone<i>_<name>``): the energy its contacts dissipated over the cycle,
+#: its worn area at the cycle's end, the extremes of its normal and tangential (t1) forces over the cycle and its
+#: peak pressure at the end.
+ZONE_CYCLE_FIELDS = ("dissipated_energy", "wear_area", "normal_force_max", "normal_force_min",
+                     "tangential_force_max", "tangential_force_min", "max_pressure_end")
 
-def profile_fields(dim: int) -> list[str]:
+
+def zone_columns(fields: tuple[str, ...] | list[str], zones: int) -> list[str]:
+    """``zone0_<field>``, ... for each of ``zones`` zones in turn; none for one zone (its columns are the
+    table's own, so a one-zone run's tables are those of a release without zones)."""
+    return [f"zone{i}_{name}" for i in range(zones) for name in fields] if zones > 1 else []
+
+
+def zone_history_fields(dim: int) -> tuple[str, ...]:
+    """A zone's ``history.csv`` columns for a contact of dimension ``dim`` (without the ``zone<i>_`` prefix)."""
+    return ZONE_HISTORY_FIELDS + (ZONE_HISTORY_FIELDS_3D if dim == 3 else ())
+
+
+def history_fields(zones: int = 1, dim: int = 2) -> list[str]:
+    """Columns of ``history.csv``: :data:`HISTORY_FIELDS`, then with several zones each zone's
+    (:func:`zone_history_fields`)."""
+    return [*HISTORY_FIELDS, *zone_columns(zone_history_fields(dim), zones)]
+
+
+def cycle_fields(zones: int = 1) -> list[str]:
+    """Columns of ``cycles.csv``: :data:`CYCLE_FIELDS`, then with several zones each zone's
+    (:data:`ZONE_CYCLE_FIELDS`)."""
+    return [*CYCLE_FIELDS, *zone_columns(ZONE_CYCLE_FIELDS, zones)]
+
+
+def profile_fields(dim: int, zones: int = 1) -> list[str]:
     """Columns of ``contact_profiles.csv`` for a contact of dimension ``dim``: :data:`PROFILE_FIELDS` in 2D; in
-    3D the t2 columns :data:`PROFILE_FIELDS_3D` before ``state`` (the integer column stays last)."""
-    if dim == 2:
-        return list(PROFILE_FIELDS)
-    return [*PROFILE_FIELDS[:-1], *PROFILE_FIELDS_3D, PROFILE_FIELDS[-1]]
+    3D the t2 columns :data:`PROFILE_FIELDS_3D` before ``state`` (the integer column stays last). With several
+    zones a last column ``zone`` (the zone's place in the problem's list), and ``node`` numbers each zone's
+    contacts from 0: each zone's rows are a profile of their own."""
+    columns = list(PROFILE_FIELDS) if dim == 2 else [*PROFILE_FIELDS[:-1], *PROFILE_FIELDS_3D, PROFILE_FIELDS[-1]]
+    return columns + (["zone"] if zones > 1 else [])
 
 
 def read_run_description(folder: str | Path) -> dict[str, Any] | None:
@@ -159,11 +200,13 @@ class ResultWriter:
             truncated to them and appended to. ``None``: new tables.
         xdmf_started: The XDMF file already holds the mesh (resume).
         dim: Dimension of the contact (the columns of ``contact_profiles.csv``, :func:`profile_fields`).
+        zones: Contact zones of the problem (with several, each zone's columns: :func:`history_fields`,
+            :func:`cycle_fields`, :func:`profile_fields`).
     """
 
     def __init__(self, out_dir: str | Path, comm: MPI.Comm, profiles: bool = True,
                  resume_sizes: dict[str, int] | None = None, xdmf_started: bool = False, dim: int = 2,
-                 flat_profiles: bool = False):
+                 flat_profiles: bool = False, zones: int = 1):
         self.out = Path(out_dir)
         self.comm = comm
         self.rank0 = comm.rank == 0
@@ -171,7 +214,8 @@ class ResultWriter:
             self.out.mkdir(parents=True, exist_ok=True)
         comm.barrier()
         self._files: dict[str, Any] = {}
-        self._columns = {**_TABLES, "contact_profiles": profile_fields(dim)}
+        self._columns = {**_TABLES, "history": history_fields(zones, dim), "cycles": cycle_fields(zones),
+                         "contact_profiles": profile_fields(dim, zones)}
         names = ["history", "cycles"] + (["contact_profiles"] if profiles else []) + \
             (["flat_profiles"] if profiles and flat_profiles else [])
         # A table shorter than the checkpoint records (or missing) has lost rows: truncate() would extend it
@@ -210,20 +254,26 @@ class ResultWriter:
 
     def history_block(self, head: list[tuple], table: np.ndarray, stage: str) -> None:
         """Fast path for many increments: ``head`` holds (increment, cycle, step) per row, ``table`` the
-        remaining numeric columns of :data:`HISTORY_FIELDS` after ``stage``, in order."""
+        remaining numeric columns of :func:`history_fields` after ``stage``, in order."""
         if "history" not in self._files:
             return
         fmt = "%d,%d,%d," + stage + "," + ",".join(["%.10g"] * table.shape[1])
         self._write("history", [fmt % (*h, *row) for h, row in zip(head, table.tolist())])
 
-    def profile_block(self, increment: int, cycle: int, step: int, columns: list[np.ndarray]) -> None:
-        """Append one increment's contact profile; ``columns`` follow :func:`profile_fields` from ``position``."""
+    def profile_block(self, increment: int, cycle: int, step: int, columns: list[np.ndarray],
+                      zone: np.ndarray | None = None) -> None:
+        """Append one increment's contact profile; ``columns`` follow :func:`profile_fields` from ``position`` to
+        ``state``; ``zone``: each contact's zone (several zones: the ``zone`` column, ``node`` counted per zone)."""
         if "contact_profiles" not in self._files:
             return
         n = columns[0].size
-        data = np.column_stack([np.full(n, increment), np.full(n, cycle), np.full(n, step), np.arange(n),
-                                *columns])
-        fmt = "%d,%d,%d,%d," + ",".join(["%.10g"] * (len(columns) - 1)) + ",%d"
+        if zone is None:
+            node, extra, tail = np.arange(n), [], ",%d"
+        else:  # each zone's contacts numbered from 0 (a zone's contacts are consecutive)
+            starts = np.searchsorted(zone, zone)
+            node, extra, tail = np.arange(n) - starts, [zone], ",%d,%d"
+        data = np.column_stack([np.full(n, increment), np.full(n, cycle), np.full(n, step), node, *columns, *extra])
+        fmt = "%d,%d,%d,%d," + ",".join(["%.10g"] * (len(columns) - 1)) + tail
         self._write("contact_profiles", [fmt % tuple(r) for r in data.tolist()])
 
     def flat_block(self, increment: int, cycle: int, positions: np.ndarray, wear: np.ndarray) -> None:

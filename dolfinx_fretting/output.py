@@ -18,6 +18,10 @@ What goes where (the columns are declared once, in :mod:`dolfinx_fretting.io`):
 - ``history.csv``: one row per increment (:data:`~dolfinx_fretting.io.HISTORY_FIELDS`);
 - ``cycles.csv``: one row per cycle (:data:`~dolfinx_fretting.io.CYCLE_FIELDS`, :func:`cycle_row`);
 - ``contact_profiles.csv``: one row per contact node of every written increment;
+- with several contact zones, each zone's columns too (``zone0_normal_force``, ...:
+  :data:`~dolfinx_fretting.io.ZONE_HISTORY_FIELDS`, :data:`~dolfinx_fretting.io.ZONE_CYCLE_FIELDS`, a ``zone``
+  column in the profiles) and every zone in ``run.json`` (:class:`ZoneDescription`); a one-zone run's files are
+  those of a release without zones;
 - ``flat_profiles.csv``: finite sliding only, the master's worn depth at its nodes at the end of each profiled
   cycle (its wear lives there, not on the contacts);
 - ``fields.xdmf``: displacement, von Mises stress (and the equivalent plastic strain), collective;
@@ -33,17 +37,18 @@ import json
 import warnings
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from .io import CYCLE_FIELDS, HISTORY_FIELDS, RUN_DESCRIPTION, ResultWriter, profile_fields, write_json_atomic
+from .io import (RUN_DESCRIPTION, ZONE_CYCLE_FIELDS, ResultWriter, cycle_fields, history_fields, profile_fields,
+                 write_json_atomic, zone_columns, zone_history_fields)
 from .obstacles import obstacle_kind
 from .state import INCREMENT_COLUMNS
 from .units import Units
 
-__all__ = ["RunDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT", "EXTENSIVE_COLUMNS",
-           "contact_measures"]
+__all__ = ["RunDescription", "ZoneDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT",
+           "EXTENSIVE_COLUMNS", "contact_measures", "zone_records", "zone_cycle_columns"]
 
 #: What each kind of obstacle is, in words (pictures and ``compare`` label runs with it).
 OBSTACLE_TEXT = {"rigid_plane": "rigid plane",
@@ -52,8 +57,53 @@ OBSTACLE_TEXT = {"rigid_plane": "rigid plane",
 #: of the bodies (a half model about a symmetry plane) reports them divided by that fraction, the whole contact's.
 EXTENSIVE_COLUMNS = ("normal_force", "tangential_force", "dissipated_energy", "wear_area_increment", "wear_area",
                      "contact_area", "stick_area")
+#: A zone's columns (:data:`~dolfinx_fretting.io.ZONE_HISTORY_FIELDS`) that sum over its contacts (divided by the
+#: model's fraction like :data:`EXTENSIVE_COLUMNS`).
+ZONE_EXTENSIVE = ("normal_force", "tangential_force", "tangential_force_2", "dissipated_energy", "wear_area")
 #: How the tangential load of a run is controlled (:attr:`RunDescription.tangential_control`).
 TANGENTIAL_CONTROLS = ("displacement", "force", "pressure", "none")
+
+
+@dataclass(frozen=True)
+class ZoneDescription:
+    """One contact zone of a run with several (``run.json``'s ``zones``).
+
+    Attributes:
+        obstacle: ``"rigid_plane"`` or ``"elastic_body"``.
+        plane_point, plane_normal: The zone's obstacle plane (normal from the obstacle into the body): its frame's
+            n, the direction of its ``zone<i>_normal_*`` columns.
+        plane_tangent: The frame's t1 (its ``zone<i>_tangential_*`` columns).
+        marker: The facet marker of the zone's surface in the user's facet tags, or None.
+        surface: The surface's name (a scene's physical group), or None.
+    """
+
+    obstacle: str
+    plane_point: tuple[float, ...]
+    plane_normal: tuple[float, ...]
+    plane_tangent: tuple[float, ...] = ()
+    marker: int | None = None
+    surface: str | None = None
+
+    def to_json(self, zone: int) -> dict[str, Any]:
+        return {"zone": zone, "kind": self.obstacle, "point": list(self.plane_point),
+                "normal": list(self.plane_normal), "tangent": list(self.plane_tangent), "marker": self.marker,
+                "surface": self.surface}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> ZoneDescription:
+        return cls(obstacle=data["kind"], plane_point=tuple(data["point"]), plane_normal=tuple(data["normal"]),
+                   plane_tangent=tuple(data.get("tangent", ())), marker=data.get("marker"),
+                   surface=data.get("surface"))
+
+    @classmethod
+    def of(cls, contact, surface: str | None = None) -> ZoneDescription:
+        """The description of a :class:`~dolfinx_fretting.contact.Contact`'s zone."""
+        obstacle = contact.obstacle
+        return cls(obstacle=obstacle_kind(obstacle),
+                   plane_point=tuple(float(v) for v in getattr(obstacle, "point", np.zeros(contact.dim))),
+                   plane_normal=tuple(float(v) for v in contact.frame[0]),
+                   plane_tangent=tuple(float(v) for v in contact.frame[1]), marker=int(contact.surface[1]),
+                   surface=surface)
 
 
 @dataclass(frozen=True)
@@ -86,6 +136,8 @@ class RunDescription:
             wrongly (issue 22); requiring them would break every script written before. The scene runner passes
             :meth:`Units.mm_N_MPa() <dolfinx_fretting.units.Units.mm_N_MPa>`; declare yours with
             ``RunDescription.of(problem, name, units=Units.si())``.
+        zones: With several contact zones, each one's :class:`ZoneDescription` in the problem's order (the
+            attributes above describe the first, the zone a scene's ``[loading]`` drives); empty with one zone.
     """
 
     name: str
@@ -106,6 +158,7 @@ class RunDescription:
     loop_cycles: tuple[int, ...] = field(default_factory=tuple)
     model_fraction: float = 1.0
     units: Units = field(default_factory=Units)
+    zones: tuple[ZoneDescription, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.units, Units):
@@ -117,10 +170,13 @@ class RunDescription:
         if self.tangential_control not in TANGENTIAL_CONTROLS:
             raise ValueError(f"RunDescription.tangential_control must be one of {TANGENTIAL_CONTROLS}, got "
                              f"{self.tangential_control!r}")
+        if len(self.zones) == 1 or not all(isinstance(z, ZoneDescription) for z in self.zones):
+            raise ValueError(f"RunDescription.zones: expected no zone (one contact zone) or a ZoneDescription for "
+                             f"each of 2 or more, got {self.zones!r}")
 
     @classmethod
     def of(cls, problem, name: str, *, path=None, cycles: int = 0, preload_increments: int = 0,
-           plane_point=None, **extra: Any) -> RunDescription:
+           plane_point=None, surfaces=None, **extra: Any) -> RunDescription:
         """The description of a run of ``problem``, the rest read from ``problem`` and the cycle ``path``.
 
         Args:
@@ -130,26 +186,36 @@ class RunDescription:
                 and the tangential control), or None.
             cycles: Cycles asked for.
             preload_increments: Increments before the first cycle.
-            plane_point: A point of the obstacle plane (default: the rigid plane's, else the origin).
+            plane_point: A point of the obstacle plane (default: the rigid plane's, else the origin); with several
+                zones, the first zone's.
+            surfaces: The name of each zone's surface (a scene's physical groups), or None.
             **extra: Any other attribute (``units``, ``tangential_control``, ``hertz``, ``track_positions`` ...).
         """
         from .problem import Displacement, Force
 
-        contact = problem.contact
-        obstacle = contact.obstacle
+        contacts = problem.contacts
+        first = contacts[0]   # with several zones the first describes the run's obstacle (what [loading] drives)
+        obstacle = first.obstacle
         if plane_point is None:
-            plane_point = getattr(obstacle, "point", np.zeros(contact.dim))
+            plane_point = getattr(obstacle, "point", np.zeros(first.dim))
         wear = problem.wear
+        names = list(surfaces) if surfaces is not None else [None] * len(contacts)
         values: dict[str, Any] = {
-            "dim": contact.dim, "obstacle": obstacle_kind(obstacle),
+            "dim": first.dim, "obstacle": obstacle_kind(obstacle),
             "plane_point": tuple(float(v) for v in plane_point),
-            "plane_normal": tuple(float(v) for v in contact.frame[0]),
-            "slave_wear_share": wear.slave_share if wear is not None and contact.contact_set.two_body else None,
+            "plane_normal": tuple(float(v) for v in first.frame[0]),
+            "slave_wear_share": (wear.slave_share if wear is not None and problem.contact.contact_set.two_body
+                                 else None),
+            "zones": (tuple(ZoneDescription.of(zone, name) for zone, name in zip(contacts, names))
+                      if len(contacts) > 1 else ()),
             "cycles": cycles, "preload_increments": preload_increments,
             "wear_acceleration": float(wear.acceleration) if wear is not None else 1.0}
         if path is not None:
             values["increments_per_cycle"] = path.increments
             tangential = path.tangential
+            if isinstance(tangential, Mapping):   # several zones: the first zone's (what a scene's [loading] drives)
+                tangential = next((item for zone, item in tangential.items()
+                                   if problem.operators.zone_of(zone) == 0), None)
             if isinstance(tangential, (Displacement, Force)):
                 amplitude = float(np.abs(np.asarray(tangential.value, dtype=float)).max(initial=0.0))
                 if amplitude > 0:
@@ -166,13 +232,16 @@ class RunDescription:
     def to_json(self) -> dict[str, Any]:
         """The ``run.json`` document (with the tables' columns and the units)."""
         data = asdict(self)
-        return {"format": 3, "scene": self.name, "dim": self.dim,
+        zones = max(len(self.zones), 1)
+        head = {"format": 3, "scene": self.name, "dim": self.dim,
                 "obstacle": {"kind": self.obstacle, "point": list(self.plane_point),
-                             "normal": list(self.plane_normal)},
-                "slave_wear_share": self.slave_wear_share,
+                             "normal": list(self.plane_normal)}}
+        if self.zones:  # only with several: a one-zone run.json is that of a release without zones
+            head["zones"] = [zone.to_json(i) for i, zone in enumerate(self.zones)]
+        return {**head, "slave_wear_share": self.slave_wear_share,
                 "units": self.units.to_json(self.dim),
-                "tables": {"history.csv": HISTORY_FIELDS, "cycles.csv": CYCLE_FIELDS,
-                           "contact_profiles.csv": profile_fields(self.dim)},
+                "tables": {"history.csv": history_fields(zones, self.dim), "cycles.csv": cycle_fields(zones),
+                           "contact_profiles.csv": profile_fields(self.dim, zones)},
                 "run": {k: data[k] for k in ("cycles", "preload_increments", "increments_per_cycle",
                                              "tangential_control", "tangential_amplitude", "pressure_face",
                                              "wear_acceleration", "hertz", "track_positions", "loop_cycles",
@@ -182,7 +251,8 @@ class RunDescription:
     def from_json(cls, data: dict[str, Any]) -> RunDescription:
         """The description of a ``run.json``. Formats 1 and 2 (before units were declared) always labelled mm, N,
         MPa: they read as :meth:`Units.mm_N_MPa() <dolfinx_fretting.units.Units.mm_N_MPa>`, with a
-        :class:`UserWarning` saying so."""
+        :class:`UserWarning` saying so. A run.json without ``zones`` (one zone, or a release before zones) has
+        none."""
         run = dict(data.get("run", {}))  # format 1 (no "run" section): the defaults
         for key in ("track_positions", "loop_cycles", "hertz"):
             if run.get(key) is not None:
@@ -195,7 +265,8 @@ class RunDescription:
                           "labelled mm, N, MPa as its release did", UserWarning, stacklevel=2)
         return cls(name=data["scene"], dim=int(data["dim"]), obstacle=data["obstacle"]["kind"],
                    plane_point=tuple(data["obstacle"]["point"]), plane_normal=tuple(data["obstacle"]["normal"]),
-                   slave_wear_share=data.get("slave_wear_share"), units=units, **run)
+                   slave_wear_share=data.get("slave_wear_share"), units=units,
+                   zones=tuple(ZoneDescription.from_json(z) for z in data.get("zones", ())), **run)
 
 
 def read_description(folder: str | Path) -> RunDescription | None:
@@ -282,6 +353,67 @@ def cycle_row(cycle: int, records: dict[str, np.ndarray], *, displacement_contro
             "local_iterations": int(records["local_iterations"].sum()), "wall_time_s": round(wall, 6)}
 
 
+def zone_records(problem, forces: np.ndarray, slip: np.ndarray, wear_gap: np.ndarray, obstacle: np.ndarray,
+                 model_fraction: float = 1.0) -> dict[str, np.ndarray]:
+    """Each zone's ``history.csv`` columns (``zone<i>_...``, :func:`~dolfinx_fretting.io.zone_history_fields`) of
+    increments of a problem with several contact zones, from their arrays.
+
+    The force is :meth:`~dolfinx_fretting.problem.FrettingProblem.total_force`'s (the zone's contact forces along its
+    obstacle's frame); the peak pressure, energy and worn area are those of the increment's bookkeeping
+    (:func:`~dolfinx_fretting.wear.commit_increment`) restricted to the zone's contacts: ``max r_n / A``,
+    ``-sum r_t . x_t``, ``sum A g_w``. The sums over the zones are the totals of the zone-less columns.
+
+    Args:
+        problem: The :class:`~dolfinx_fretting.problem.FrettingProblem` (several zones).
+        forces, slip: (n, m) contact forces and local solutions of n increments (m = dim x contacts).
+        wear_gap: (n, contacts) the wear gap after each increment.
+        obstacle: (n, dim x zones) each zone's obstacle position.
+        model_fraction: The model's fraction of the bodies (the sums are the whole contact's).
+
+    Returns:
+        Column name -> (n,) array.
+    """
+    contacts, stacked = problem.contacts, problem.contact
+    dim = contacts[0].dim
+    tributary = stacked.contact_set.tributary
+    forces, slip = np.atleast_2d(forces), np.atleast_2d(slip)
+    wear_gap, obstacle = np.atleast_2d(wear_gap), np.atleast_2d(obstacle)
+    n = forces.shape[0]
+    r = forces.reshape(n, -1, dim)
+    x = slip.reshape(n, -1, dim)
+    totals = np.array([stacked.obstacle_forces(f) for f in forces]).reshape(n, len(contacts), dim)
+    components = ("normal", "tangential", "tangential_2")[:dim]
+    out: dict[str, np.ndarray] = {}
+    for i in range(len(contacts)):
+        rows = stacked.zone_slice(i)
+        area = tributary[rows]
+        values = {f"{c}_displacement": obstacle[:, dim * i + k] for k, c in enumerate(components)}
+        values.update({f"{c}_force": totals[:, i, k] for k, c in enumerate(components)})
+        values["max_pressure"] = np.maximum((r[:, rows, 0] / area).max(axis=1, initial=0.0), 0.0)
+        values["dissipated_energy"] = -np.einsum("nac,nac->n", r[:, rows, 1:], x[:, rows, 1:])
+        values["wear_area"] = wear_gap[:, rows] @ area
+        for name in zone_history_fields(dim):
+            column = values[name]
+            out[f"zone{i}_{name}"] = column / model_fraction if name in ZONE_EXTENSIVE else column
+    return out
+
+
+def zone_cycle_columns(records: dict[str, np.ndarray], zones: int) -> dict[str, float]:
+    """Each zone's ``cycles.csv`` columns (:data:`~dolfinx_fretting.io.ZONE_CYCLE_FIELDS`) from a cycle's
+    :func:`zone_records`."""
+    out: dict[str, float] = {}
+    for i in range(zones if zones > 1 else 0):
+        zone = {name: records[f"zone{i}_{name}"] for name in ("normal_force", "tangential_force", "max_pressure",
+                                                               "dissipated_energy", "wear_area")}
+        values = {"dissipated_energy": zone["dissipated_energy"].sum(), "wear_area": zone["wear_area"][-1],
+                  "normal_force_max": zone["normal_force"].max(), "normal_force_min": zone["normal_force"].min(),
+                  "tangential_force_max": zone["tangential_force"].max(),
+                  "tangential_force_min": zone["tangential_force"].min(),
+                  "max_pressure_end": zone["max_pressure"][-1]}
+        out.update({f"zone{i}_{name}": float(values[name]) for name in ZONE_CYCLE_FIELDS})
+    return out
+
+
 class FrettingWriter:
     """Writes a :class:`~dolfinx_fretting.problem.FrettingProblem`'s states into a folder. Collective.
 
@@ -299,6 +431,9 @@ class FrettingWriter:
             driven as the paper does: the obstacle body held, the contact body moved); None: none.
         resume: ``checkpoint_info()`` of a checkpoint to continue from: the tables are truncated to its sizes
             and appended to (a table shorter than recorded raises :class:`~dolfinx_fretting.io.TableError`).
+
+    With several contact zones each zone's columns follow the tables' own (:func:`zone_records`); they are computed
+    from every increment's contact forces, so a cycle written with its history is solved with ``keep=True``.
     """
 
     def __init__(self, problem, folder: str | Path, description: RunDescription | None = None, *,
@@ -315,9 +450,11 @@ class FrettingWriter:
         names = problem.load_names
         self._pressure_index = names.index(pressure_load) if pressure_load in names else None
         resume = resume or {}
+        #: The problem's contact zones (with several, each zone's columns).
+        self.zones = len(problem.contacts)
         self.tables = ResultWriter(self.folder, self.comm, profiles=profiles, resume_sizes=resume.get("sizes"),
                                    xdmf_started=bool(resume.get("xdmf_started", False)), dim=problem.contact.dim,
-                                   flat_profiles=problem.operators.surface_compliance is not None)
+                                   flat_profiles=problem.operators.surface_compliance is not None, zones=self.zones)
         self._functions = None
         if self.comm.rank == 0:
             write_json_atomic(self.folder / RUN_DESCRIPTION, self.description.to_json())
@@ -338,10 +475,15 @@ class FrettingWriter:
     def history_row(self, state, *, stage: str, cycle: int = 0, step: int = 0) -> dict[str, Any]:
         """The ``history.csv`` row of a committed state (sums over the contacts: the whole contact's)."""
         values = self._whole(state.record)
-        return {"increment": state.increment, "cycle": cycle, "step": step, "stage": stage,
-                "normal_displacement": float(state.obstacle[0]), "tangential_displacement": float(state.obstacle[1]),
-                "face_pressure": float(self._face_pressure(state.load_factors)),
-                **{k: values[k] for k in INCREMENT_COLUMNS}}
+        row = {"increment": state.increment, "cycle": cycle, "step": step, "stage": stage,
+               "normal_displacement": float(state.obstacle[0]), "tangential_displacement": float(state.obstacle[1]),
+               "face_pressure": float(self._face_pressure(state.load_factors)),
+               **{k: values[k] for k in INCREMENT_COLUMNS}}
+        if self.zones > 1:
+            zones = zone_records(self.problem, state.forces, state.slip, state.wear_gap, state.obstacle,
+                                 self.description.model_fraction)
+            row.update({k: float(v[0]) for k, v in zones.items()})
+        return row
 
     def write_increment(self, state, *, stage: str = "increment", profile: bool = True,
                         fields: bool = True) -> dict[str, Any]:
@@ -367,13 +509,23 @@ class FrettingWriter:
         last = {k: (v[-1].item() if hasattr(v[-1], "item") else v[-1]) for k, v in records.items()}
         return {"increment": start.increment + n, "cycle": cycle, "step": n, "stage": "cycle",
                 **{k: last[k] for k in ("normal_displacement", "tangential_displacement", "face_pressure")},
-                **{k: last[k] for k in INCREMENT_COLUMNS}}
+                **{k: last[k] for k in INCREMENT_COLUMNS},
+                **{k: last[k] for k in zone_columns(zone_history_fields(self.problem.contact.dim), self.zones)}}
 
     def cycle_records(self, result) -> dict[str, np.ndarray]:
-        """A cycle's per-increment columns with the obstacle's displacement and the face pressure."""
-        return {**self._whole(result.records), "normal_displacement": result.obstacle[:, 0],
-                "tangential_displacement": result.obstacle[:, 1],
-                "face_pressure": self._face_pressure(result.load_factors)}
+        """A cycle's per-increment columns with the obstacle's displacement and the face pressure (and, with
+        several zones, each zone's: :func:`zone_records`, from the cycle's kept increments)."""
+        records = {**self._whole(result.records), "normal_displacement": result.obstacle[:, 0],
+                   "tangential_displacement": result.obstacle[:, 1],
+                   "face_pressure": self._face_pressure(result.load_factors)}
+        if self.zones > 1:
+            if result.kept is None:
+                raise ValueError("FrettingWriter: a problem with several contact zones writes each zone's columns "
+                                 "from every increment's forces: solve the cycle with run_cycle(..., keep=True)")
+            out_r, out_x, _, out_wear, _ = result.kept
+            records.update(zone_records(self.problem, out_r, out_x, out_wear, result.obstacle,
+                                        self.description.model_fraction))
+        return records
 
     def write_cycle(self, cycle: int, start, result, *, history: bool = True, profiles: bool = False,
                     fields: bool | None = None, wall: float = 0.0, jump: dict[str, Any] | None = None
@@ -398,10 +550,11 @@ class FrettingWriter:
         n = records["normal_force"].size
         if history:
             head = list(zip(range(start.increment + 1, start.increment + n + 1), [cycle] * n, range(1, n + 1)))
-            columns = ["normal_displacement", "tangential_displacement", "face_pressure", *INCREMENT_COLUMNS]
+            columns = history_fields(self.zones, self.problem.contact.dim)[4:]   # after stage
             self.tables.history_block(head, np.column_stack([records[c] for c in columns]), "cycle")
         row = cycle_row(cycle, records, displacement_controlled=self.description.displacement_controlled,
                         wear_acceleration=self.description.wear_acceleration, wall=wall, jump=jump)
+        row.update(zone_cycle_columns(records, self.zones))
         self.tables.rows("cycles", [row])
         if profiles:
             if result.kept is None:
@@ -447,7 +600,10 @@ class FrettingWriter:
         if dim == 3:
             columns += [np.einsum("ij,ij->i", contact_set.coords, contact_set.frames[:, 2]), forces[2::dim] / tributary,
                         slip[2::dim], positions[2::dim]]
-        self.tables.profile_block(increment, cycle, step, [*columns, status])
+        zone = None
+        if self.zones > 1:
+            zone = np.repeat(np.arange(self.zones), np.diff(self.problem.contact.offsets))
+        self.tables.profile_block(increment, cycle, step, [*columns, status], zone)
 
     def write_flat_profile(self, increment: int, cycle: int, state) -> None:
         """Finite sliding: append the master's worn depth at its nodes (``flat_profiles.csv``, rank 0): there the
@@ -506,7 +662,8 @@ class FrettingWriter:
         """``worn_profiles.csv`` (rank 0): each body's worn depth along the contact.
 
         Both bodies see the same pressure and slip, so each wears its share ``k_body / k_total`` of the wear
-        gap; the obstacle body's depth is placed at the master point paired with each contact node.
+        gap; the obstacle body's depth is placed at the master point paired with each contact node. With several
+        contact zones a last column ``zone`` says whose (positions along each zone's own t1).
         """
         if self.comm.rank != 0:
             return
@@ -520,7 +677,10 @@ class FrettingWriter:
             rows = zip(contact_set.abscissa, wear_gap, wear_gap, np.full(nc, np.nan), np.zeros(nc))
         else:
             worn = self.problem.body_wear(state)
-            flat_x = worn["master_coordinates"] @ self.problem.contact.frame[1]
+            if self.zones > 1:   # each zone's master points along its own t1 (its contacts' frames: small sliding)
+                flat_x = np.einsum("ij,ij->i", worn["master_coordinates"], contact_set.frames[:, 1])
+            else:
+                flat_x = worn["master_coordinates"] @ self.problem.contact.frame[1]
             # the flat's share placed at each contact's paired point
             if self.problem.operators.surface_compliance is None:
                 rows = zip(contact_set.abscissa, wear_gap, worn["slave"], flat_x, worn["master"])
@@ -528,11 +688,16 @@ class FrettingWriter:
                 blank, blank_flat = np.full(contact_set.nc, np.nan), np.full(flat_x.size, np.nan)
                 rows = [*zip(contact_set.abscissa, wear_gap, worn["slave"], blank, blank),
                         *zip(blank_flat, blank_flat, blank_flat, flat_x, worn["master"])]
+        header = ["position", "wear_gap", "cylinder_wear", "flat_position", "flat_wear"]
+        if self.zones > 1:   # (finite sliding, whose rows differ, has one zone)
+            zone = np.repeat(np.arange(self.zones), np.diff(self.problem.contact.offsets))
+            header.append("zone")
+            rows = [(*values, z) for values, z in zip(rows, zone)]
         with open(self.folder / "worn_profiles.csv", "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["position", "wear_gap", "cylinder_wear", "flat_position", "flat_wear"])
+            w.writerow(header)
             for values in rows:
-                w.writerow([f"{v:.12g}" for v in values])
+                w.writerow([f"{v:.12g}" for v in values[:5]] + [str(int(v)) for v in values[5:]])
 
     def write_summary(self, summary: dict[str, Any]) -> None:
         """``summary.json`` (rank 0, atomically; non-finite numbers as null with their keys listed)."""

@@ -25,6 +25,11 @@ Pictures (all in the output folder):
   - ``fretting_loops.png``: tangential contact force against displacement for the loop cycles;
   - ``wear_growth.png``: maximum wear depth, wear area and dissipated energy per cycle.
 
+A run with several contact zones is drawn for its first zone (the one a scene's ``[loading]`` drives): its
+profiles (the ``zone`` column of ``contact_profiles.csv``) and its forces (``zone0_normal_force``,
+``zone0_tangential_force``: in its own frame, where the zone-less columns sum every zone's contacts); the fretting
+loops add each other zone's tangential force against the same abscissa.
+
 Each picture is drawn independently: one whose data are missing (a partly written folder) is left
 out, one that fails is left out with a :class:`RuntimeWarning`, and :func:`plot_run` never raises.
 """
@@ -99,6 +104,15 @@ class _History:
         self.t = table
         self.n = table["increment"].size if "increment" in table else 0
 
+    def force(self, name: str, zone: int = 0) -> np.ndarray:
+        """Column ``name`` (``normal_force``, ``tangential_force``) of zone ``zone`` when the run has several zones
+        (``zone<i>_<name>``), else the table's own."""
+        return self.t.get(f"zone{zone}_{name}", self.t[name])
+
+    def zones(self) -> int:
+        """The run's contact zones (1 without zone columns)."""
+        return sum(1 for i in range(len(self.t)) if f"zone{i}_tangential_force" in self.t) or 1
+
     def row(self, cycle: int, step: int) -> int | None:
         """Row of (cycle, step), or ``None`` when it is not in the table."""
         if not self.n:
@@ -131,7 +145,7 @@ def _load_label(run: RunDescription, hist: _History, cycle: int, step: int) -> s
     column, symbol, unit = {"pressure": ("face_pressure", "q", units.stress),
                             "displacement": ("tangential_displacement", "δ", units.length),
                             "force": ("tangential_force", "Q", units.contact_force(run.dim))}[kind]
-    value = float(hist.t[column][r])
+    value = float((hist.force(column) if column == "tangential_force" else hist.t[column])[r])
     if abs(value) <= 1e-6 * abs(run.tangential_amplitude):
         return f"{symbol} = 0 {unit}"
     return f"{symbol} = {value:+.3g} {unit}"
@@ -454,10 +468,15 @@ def plot_fretting_loops(path: Path, run: RunDescription, hist: _History) -> Path
     fig = _figure((12.5, 5.2) if pressure else (7, 5.2))
     axes = list(np.atleast_1d(fig.subplots(1, 2 if pressure else 1, gridspec_kw=dict(
         left=0.065 if pressure else 0.12, right=0.985, bottom=0.11, top=0.9, wspace=0.2))))
-    Q = hist.t["tangential_force"]
+    Q = hist.force("tangential_force")
+    zones = hist.zones()
     for k, (c, rows) in enumerate(loops):
         colour = cmap(k / max(len(loops) - 1, 1) * 0.9)
-        axes[0].plot(x_all[rows] * f, Q[rows], ".-", ms=3, lw=1.2, color=colour, label=f"cycle {c}")
+        axes[0].plot(x_all[rows] * f, Q[rows], ".-", ms=3, lw=1.2, color=colour,
+                     label=f"cycle {c}" + (", zone 0" if zones > 1 else ""))
+        for zone in range(1, zones):  # the other zones' tangential forces against the same abscissa, dashed
+            axes[0].plot(x_all[rows] * f, hist.force("tangential_force", zone)[rows], "--", lw=1.0, color=colour,
+                         label=f"cycle {c}, zone {zone}")
         if pressure:
             axes[1].plot(hist.t["face_pressure"][rows], Q[rows], ".-", ms=3, lw=1.2, color=colour,
                          label=f"cycle {c}")
@@ -596,7 +615,7 @@ def _plot_profiles(out: Path, run: RunDescription, prof: ContactProfiles, hist: 
     reference = None
     pre_rows = np.flatnonzero(hist.t["increment"] == pre) if hist.n else np.zeros(0, int)
     if run.hertz is not None and pre_rows.size:
-        P = float(hist.t["normal_force"][pre_rows[-1]])
+        P = float(hist.force("normal_force")[pre_rows[-1]])
         xs = np.linspace(prof.position.min(), prof.position.max(), 400)
         radius, E_star = run.hertz
         two_bodies = run.obstacle == "elastic_body"

@@ -24,15 +24,44 @@ from mpi4py import MPI
 from .contact import ElasticBody, RigidPlane
 from .meshes import BODY_CELL_TAG, BodyMesh
 
-__all__ = ["SceneModel", "elastic_model", "contact_surface", "rigid_plane", "elastic_flat", "two_body_cells",
-           "roller", "displacement_conditions", "boundary_pressure", "facet_length", "axis_normal", "read_msh",
-           "read_xdmf", "PAIRING", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT", "BOUNDARY_PRESSURE"]
+__all__ = ["SceneModel", "FurtherZone", "further_zones", "elastic_model", "contact_surface", "rigid_plane",
+           "elastic_flat", "two_body_cells", "roller", "displacement_conditions", "boundary_pressure", "facet_length",
+           "axis_normal", "read_msh", "read_xdmf", "PAIRING", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT",
+           "BOUNDARY_PRESSURE"]
 
 #: Name of the face-pressure load of a scene (``loading.tangential_pressure``), factor in MPa.
 PRESSURE_LOAD = "face_pressure"
 #: Names of the ``[boundary]`` loads of a mesh file's scene (ramped with the preload, then held).
 BOUNDARY_DISPLACEMENT = "boundary_displacement"
 BOUNDARY_PRESSURE = "boundary_pressure"
+
+
+@dataclass(frozen=True)
+class FurtherZone:
+    """A further contact zone of a scene (its second or later ``[[contact]]`` table) as the API takes it.
+
+    Attributes:
+        name: The surface's name (the mesh file's physical group).
+        surface: ``(facet_tags, marker)`` of the surface.
+        obstacle: The zone's rigid plane.
+        mu: Its friction coefficient.
+        window: Its candidate half-width (None: the whole surface).
+        approach: The plane's approach along its normal, reached with the preload and held (mm).
+    """
+
+    name: str
+    surface: tuple
+    obstacle: RigidPlane
+    mu: float
+    window: float | None
+    approach: float
+
+
+def further_zones(scene: Scene, body: BodyMesh) -> tuple[FurtherZone, ...]:
+    """The scene's further contact zones on ``body`` (its named facet groups; the names checked before)."""
+    return tuple(FurtherZone(zone.surface, (body.facet_tags, body.tags[zone.surface]),
+                             RigidPlane(np.array(zone.plane_point), np.array(zone.plane_normal)), zone.mu,
+                             zone.candidate_half_width, zone.approach) for zone in scene.zones)
 
 
 @dataclass
@@ -62,6 +91,8 @@ class SceneModel:
         timings: Wall times of the mesh.
         prescribed: Named sets of Dirichlet conditions with non-zero values (see ``FrettingProblem``).
         ramped: Loads and prescribed sets whose factor ramps from 0 to 1 with the normal preload, then stays 1.
+        zones: The scene's further contact zones (:class:`FurtherZone`; a mesh file's ``[[contact]]`` tables after
+            the first, which ``surface``, ``obstacle`` and ``window`` describe).
     """
 
     body: BodyMesh
@@ -93,6 +124,7 @@ class SceneModel:
     #: half model's roller on y = 0 holds t2): the API refuses a force along them, so a driver prescribes a zero
     #: displacement there when the scene's tangential load (along t1) is a force.
     held_tangential: tuple[int, ...] = ()
+    zones: tuple[FurtherZone, ...] = ()
 
 
 def _elasticity(scene: Scene, V, quadrature_degree: int | None):

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import annotated_types
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_serializer, model_validator
 
 from .analytic import plane_strain_modulus
 from .geometries import GEOMETRIES
@@ -228,6 +228,29 @@ class ContactSettings(_Section):
         if sum(c * c for c in self.plane_normal) < 1e-24:
             raise range_error("contact.plane_normal", self.plane_normal, "a non-zero vector")
         return self
+
+
+class ZoneSettings(_Section):
+    """A further contact zone: the second and later ``[[contact]]`` tables of a scene (``contact[1]``, ...).
+
+    Its rigid plane is held at a fixed ``approach`` (a wall, a stop), reached during the preload ramp with the
+    first zone's normal load, and stays there: the scene's ``[loading]`` drives the first table only.
+    """
+
+    #: The facet group of the body that may touch this zone's plane (a physical group of the mesh file).
+    surface: str
+    #: A point of the zone's rigid plane (mm) and its normal pointing from the plane into the body.
+    plane_point: list[FiniteFloat] = Field(min_length=2, max_length=3)
+    plane_normal: list[FiniteFloat] = Field(min_length=2, max_length=3)
+    #: Coulomb friction coefficient of this zone.
+    mu: float = Field(0.9, ge=0, le=100)
+    #: The plane's approach along its normal (mm, into the body), held after the preload: 0 places it at
+    #: ``plane_point`` (a wall the body may come to touch), > 0 an interference, < 0 a clearance.
+    approach: FiniteFloat = 0.0
+    #: Candidate window of this zone (mm); ``None``: its whole surface.
+    candidate_half_width: Length | None = None
+    #: Only ``"rigid_plane"``: a further zone's obstacle is a rigid plane.
+    obstacle: str = "rigid_plane"
 
 
 class WearSettings(_Section):
@@ -636,11 +659,72 @@ class Scene(_Section):
     boundary: BoundarySettings = Field(default_factory=BoundarySettings)
     material: MaterialSettings = Field(default_factory=MaterialSettings)
     contact: ContactSettings = Field(default_factory=ContactSettings)
+    #: The further contact zones: a scene file's second and later ``[[contact]]`` tables (``contact[1]``, ...; the
+    #: first is ``contact``). Empty with one ``[contact]`` table.
+    zones: list[ZoneSettings] = Field(default_factory=list)
     wear: WearSettings = Field(default_factory=WearSettings)
     #: Required: the normal load (loading.normal_force or loading.normal_displacement) has no default.
     loading: LoadingSettings
     solver: SolverSettings = Field(default_factory=SolverSettings)
     output: OutputSettings = Field(default_factory=OutputSettings)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _contact_tables(cls, data: Any) -> Any:
+        """``[[contact]]`` (a list of tables): the first is ``contact``, the others ``zones``; one table in a list
+        is the ``[contact]`` table."""
+        if not isinstance(data, dict) or not isinstance(data.get("contact"), list):
+            return data
+        tables = data["contact"]
+        if not tables:
+            raise ValueError("contact = []: expected one [contact] table or several [[contact]] tables")
+        if "zones" in data:
+            raise ValueError("zones: the further contact zones are the second and later [[contact]] tables, not a "
+                             "zones key")
+        if isinstance(tables[0], dict) and "approach" in tables[0]:
+            raise range_error("contact[0].approach", tables[0]["approach"], "unset in the first [[contact]] table "
+                              "([loading] drives its plane); the further tables hold theirs at an approach")
+        return {**data, "contact": tables[0], "zones": tables[1:]}
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler) -> dict[str, Any]:
+        """The scene as data; ``zones`` only when there are some, so a one-zone scene dumps (``show``, a checkpoint's
+        identity) as before zones existed."""
+        data = handler(self)
+        if not data.get("zones"):
+            data.pop("zones", None)
+        return data
+
+    @model_validator(mode="after")
+    def _zones_fit(self) -> Scene:
+        """Several zones: a mesh file's facet groups, rigid planes of the scene's dimension, an elastic body, plastic
+        one or cycle jumps refused (one line each, before any mesh)."""
+        if not self.zones:
+            return self
+        n = len(self.zones) + 1
+        if self.geometry.kind != "file":
+            raise range_error("contact", f"{n} [[contact]] tables", f"one [contact] table with geometry.kind = "
+                              f"{self.geometry.kind!r} (its mesh has one contact surface); several with "
+                              "geometry.kind = 'file' (a mesh file's facet groups)")
+        if self.contact.obstacle != "rigid_plane":
+            raise range_error("contact[0].obstacle", self.contact.obstacle, "'rigid_plane' with several [[contact]] "
+                              "tables")
+        if self.material.model != "elastic":
+            raise range_error("material.model", self.material.model, "'elastic' with several [[contact]] tables")
+        if self.wear.cycle_jump:
+            raise range_error("wear.cycle_jump", True, "false with several [[contact]] tables (cycle jumps are "
+                              "for one contact zone)")
+        for i, zone in enumerate(self.zones, start=1):
+            if zone.obstacle != "rigid_plane":
+                raise range_error(f"contact[{i}].obstacle", zone.obstacle, "'rigid_plane' (a further zone's "
+                                  "obstacle is a rigid plane)")
+            for key in ("plane_point", "plane_normal"):
+                if len(getattr(zone, key)) != self.dim:
+                    raise range_error(f"contact[{i}].{key}", getattr(zone, key), f"a {self.dim}-vector (the "
+                                      "first table's dimension)")
+            if sum(c * c for c in zone.plane_normal) < 1e-24:
+                raise range_error(f"contact[{i}].plane_normal", zone.plane_normal, "a non-zero vector")
+        return self
 
     @model_validator(mode="after")
     def _window_fits(self) -> Scene:
@@ -734,8 +818,9 @@ class Scene(_Section):
 
 
 #: Every key name of a scene (to tell keys from pydantic's union tags in an error's location).
-_KEY_NAMES = {name for model in (Scene, GeometrySettings, MaterialSettings, ContactSettings, WearSettings,
-                                 LoadingSettings, SolverSettings, OutputSettings) for name in model.model_fields}
+_KEY_NAMES = {name for model in (Scene, GeometrySettings, MaterialSettings, ContactSettings, ZoneSettings,
+                                 WearSettings, LoadingSettings, SolverSettings, OutputSettings)
+              for name in model.model_fields}
 
 
 def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
@@ -782,11 +867,19 @@ def describe_differences(a: Scene | dict[str, Any], b: Scene | dict[str, Any],
                      for k in scene_differences(a, b, ignore))
 
 
+def _element_model(annotation: Any) -> Any:
+    """A list's element type (``zones: list[ZoneSettings]``), else ``annotation``."""
+    args = typing.get_args(annotation)
+    return args[0] if typing.get_origin(annotation) is list and args else annotation
+
+
 def _allowed_keys(loc: tuple) -> list[str]:
     model: type[BaseModel] = Scene
     for part in loc:
+        if isinstance(part, int):   # an element of a list of tables (zones[0])
+            continue
         field = model.model_fields.get(str(part))
-        annotation = field.annotation if field else None
+        annotation = _element_model(field.annotation) if field else None
         if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
             return []
         model = annotation
@@ -801,7 +894,7 @@ def _field_at(loc: tuple) -> tuple[Any, Any]:
     for part in loc:
         if isinstance(model, type) and issubclass(model, BaseModel) and str(part) in model.model_fields:
             field = model.model_fields[str(part)]
-            model = field.annotation
+            model = _element_model(field.annotation)
             continue
         break
     return (field.annotation, field) if field is not None else (None, None)
@@ -858,6 +951,10 @@ def _format_validation_error(err: ValidationError, source: str) -> str:
                or (e["type"] == "extra_forbidden" and i == len(e["loc"]) - 1)]
         key = ".".join(str(p) for p in loc if not isinstance(p, int)) + "".join(f"[{p}]" for p in loc
                                                                                 if isinstance(p, int))
+        if len(loc) >= 2 and loc[0] == "zones" and isinstance(loc[1], int):
+            # a further [[contact]] table: named as the scene file numbers it (the first table is contact[0])
+            rest = [p for p in loc[2:]]
+            key = f"contact[{loc[1] + 1}]" + "".join(f".{p}" if not isinstance(p, int) else f"[{p}]" for p in rest)
         msg = e["msg"].removeprefix("Value error, ")
         if e["type"] == "extra_forbidden":
             msg = f"unknown key {key!r}; allowed keys here: {', '.join(_allowed_keys(e['loc'][:-1]))}"
@@ -950,6 +1047,9 @@ def load_scene(source: str | Path | dict[str, Any], overrides: list[str] | None 
         except OSError as exc:
             raise SceneError(f"{path}: cannot be read: {exc.strerror or exc}") from None
         label = str(path)
+    if not isinstance(source, dict) and isinstance(data, dict) and "zones" in data:
+        raise SceneError(f"invalid scene ({label}): unknown key 'zones'; further contact zones are [[contact]] "
+                         "tables (docs/scenes.md)")
     data = apply_overrides(data, overrides)
     geometry = data.get("geometry") if isinstance(data, dict) else None
     if (not isinstance(source, dict) and isinstance(geometry, dict) and isinstance(geometry.get("path"), str)

@@ -111,8 +111,12 @@ class ContactModel:
         try:
             all_bcs = s.bcs + [bc for conditions in s.prescribed.values() for bc in conditions]
             contact = Contact(s.V, s.surface, s.obstacle, scene.contact.mu, all_bcs, self.half_width)
+            # further zones (a mesh file's [[contact]] tables): each its surface, plane, friction and window
+            zones = [Contact(s.V, zone.surface, zone.obstacle, zone.mu, all_bcs, zone.window) for zone in s.zones]
         except ValueError as exc:
             raise SimulationError(str(exc)) from None
+        #: The zones as given to the problem (the API's keys of their targets), the scene's first table first.
+        self.contacts = (contact, *zones)
         wear = scene.wear.archard() if scene.wear.law == "archard" else None
         plasticity = None
         if m.model == "elastoplastic":
@@ -124,7 +128,8 @@ class ContactModel:
         solver = LocalSolver(method=sv.local_method, tol=sv.local_tol, max_iter=sv.local_max_iter,
                              force_tol=sv.force_tol, compiled_cycles=sv.cycle_kernel, warm_start=sv.warm_start,
                              pattern_reuse=sv.pattern_reuse)
-        self.problem = FrettingProblem(s.form, contact, s.bcs, wear=wear, loads=s.loads, prescribed=s.prescribed,
+        self.problem = FrettingProblem(s.form, list(self.contacts) if zones else contact, s.bcs, wear=wear,
+                                       loads=s.loads, prescribed=s.prescribed,
                                        petsc_options=sv.petsc_options, delassus_method=sv.delassus_method,
                                        solver=solver, plasticity=plasticity,
                                        options_prefix="dolfinx_fretting_delassus_")
@@ -160,10 +165,11 @@ class ContactModel:
                 and self.half_width is not None and self.half_width < s.window_limit)
 
     def grow_window(self, state: ContactState) -> ContactState:
-        """Widen the window by half (at least 3 elements, at most its limit); the state carried over."""
+        """Widen the first zone's window by half (at least 3 elements, at most its limit); the state carried over.
+        (Only the built-in geometries' windows grow, and they have one zone.)"""
         s = self.setup
         new = min(s.window_limit, max(1.5 * self.half_width, self.half_width + 3 * s.element_size))
-        state = self.problem.set_window(state, new)
+        state = self.problem.set_window(state, new, zone=0)
         self.half_width = new
         return state
 
@@ -247,20 +253,30 @@ def _step_targets(step: LoadStep, model: ContactModel, normal_increments: int) -
     for name in model.setup.ramped:
         loads[name] = min(1.0, step.increment / normal_increments) if step.stage == "normal" else 1.0
     fraction = model.setup.model_fraction
-    return {"normal": _target(step.normal_force_controlled, step.normal, fraction),
-            "tangential": _tangential_target(step.tangential_force_controlled, step.tangential, model.setup),
-            "loads": loads}
+    normal = _target(step.normal_force_controlled, step.normal, fraction)
+    tangential = _tangential_target(step.tangential_force_controlled, step.tangential, model.setup)
+    if len(model.contacts) > 1:  # [loading] drives the first zone; the others reach their approach with the preload
+        ramp = min(1.0, step.increment / normal_increments) if step.stage == "normal" else 1.0
+        first, *others = model.contacts
+        normal = {first: normal, **{contact: Displacement(ramp * zone.approach)
+                                    for contact, zone in zip(others, model.setup.zones)}}
+        tangential = {first: tangential}
+    return {"normal": normal, "tangential": tangential, "loads": loads}
 
 
-def _cycle_path(scene: Scene, problem: FrettingProblem, setup: SceneModel) -> CyclePath:
-    """The targets of every cycle of the scene (the same each cycle: built once)."""
+def _cycle_path(scene: Scene, model: ContactModel) -> CyclePath:
+    """The targets of every cycle of the scene (the same each cycle: built once); with several zones the first
+    zone's (the others keep their approach: a zone not named keeps its targets)."""
     steps = cycle_path(scene.loading, 1)
     first = steps[0]
+    setup = model.setup
     pressures = np.array([s.pressure for s in steps])
-    loads = {PRESSURE_LOAD: pressures} if PRESSURE_LOAD in problem.load_names else {}
-    return CyclePath(_target(first.normal_force_controlled, [s.normal for s in steps], setup.model_fraction),
-                     _tangential_target(first.tangential_force_controlled, [s.tangential for s in steps], setup),
-                     loads)
+    loads = {PRESSURE_LOAD: pressures} if PRESSURE_LOAD in model.problem.load_names else {}
+    normal = _target(first.normal_force_controlled, [s.normal for s in steps], setup.model_fraction)
+    tangential = _tangential_target(first.tangential_force_controlled, [s.tangential for s in steps], setup)
+    if len(model.contacts) > 1:
+        normal, tangential = {model.contacts[0]: normal}, {model.contacts[0]: tangential}
+    return CyclePath(normal, tangential, loads)
 
 
 def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> RunDescription:
@@ -273,7 +289,8 @@ def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> R
         pressure_face=loading.pressure_face if loading.tangential_kind == "pressure" else None,
         wear_acceleration=scene.wear.acceleration, hertz=hertz[:2] if hertz is not None else None,
         track_positions=tuple(scene.output.track_positions), loop_cycles=tuple(scene.output.loop_cycles),
-        model_fraction=model.setup.model_fraction, units=Units.mm_N_MPa())
+        model_fraction=model.setup.model_fraction, units=Units.mm_N_MPa(),
+        surfaces=[scene.contact.surface, *(zone.surface for zone in scene.zones)])
 
 
 class _Run:
@@ -304,8 +321,7 @@ class _Run:
             sizes, xdmf_started = None, False
         else:
             self.state, sizes, xdmf_started = self._restore(meta)
-        self.path = (_cycle_path(scene, self.problem, self.model.setup) if scene.loading.cycles > 0
-                     else None)
+        self.path = _cycle_path(scene, self.model) if scene.loading.cycles > 0 else None
         self.writer = FrettingWriter(
             self.problem, out_dir, _description(scene, self.model, self.path), profiles=scene.output.contact_profiles,
             fields=scene.output.xdmf, von_mises=self.model.setup.von_mises, pressure_load=PRESSURE_LOAD,
@@ -367,12 +383,20 @@ class _Run:
 
     def _check_window_edge(self, forces: np.ndarray, where: str) -> None:
         """The window's ends carry load: a truncated contact. Grow the window, or stop with a message."""
-        rn = forces[0::self.model.contact.dim]
+        rn = forces[0::self.model.contact.dim][:self.problem.contacts[0].nc]   # the first zone's (it grows)
         if self.model.setup.window_edges_matter and (rn[0] > 0 or rn[-1] > 0):
             self._window_edge_reached(where)
 
     def _window_edge_reached(self, where: str, outside: WindowError | None = None) -> None:
         model, contact = self.model, self.model.contact
+        if outside is not None and outside.zone > 0:  # a further [[contact]] table's window (it does not grow)
+            zone = self.scene.zones[outside.zone - 1]
+            raise SimulationError(
+                f"{where}: {outside.positions.shape[0]} node(s) of contact[{outside.zone}] (surface "
+                f"{zone.surface!r}) outside its candidate window penetrate its plane (by up to "
+                f"{outside.penetration:.3g} mm); the window needed is {outside.window_needed:.4g} mm: widen "
+                f"contact[{outside.zone}].candidate_half_width (now {zone.candidate_half_width:.4g} mm) or leave it "
+                "out (its whole surface)")
         if model.window_can_grow:
             raise _WindowTooSmall(where)
         if self.scene.geometry.kind == "sphere":
@@ -424,7 +448,7 @@ class _Run:
         elements, up to the refined zone), not straight to ``exc.window_needed``: its windows stay the ones an
         edge-triggered growth makes (the same checkpoints, summaries and reference runs), and the increment solved
         again is checked again, so a window still too small grows again."""
-        if not self.model.window_can_grow:
+        if not self.model.window_can_grow or exc.zone != 0:
             self._window_edge_reached(where, exc)
         self._grow_window(where, exc)
 
@@ -529,7 +553,8 @@ class _Run:
             keep = cycle in self.snapshots
             write_history = keep or cycle == 1 or cycle % every == 0 or cycle in loop_cycles
             growths = len(self.progress.window_growths)
-            result = self._cycle(cycle, keep or jumping, path)
+            # (several zones: the writer reads each zone's columns from every increment's forces)
+            result = self._cycle(cycle, keep or jumping or len(self.model.contacts) > 1, path)
             self.cycle_mode = "compiled" if result.compiled else "python"
             start = self.state
             new_state = self.problem.commit(start, result)
@@ -775,6 +800,11 @@ class _Run:
             summary.update({k: int(r[k]) for k in ("n_open", "n_stick", "n_slip")})
             summary["edge_loaded"] = bool(r.get("edge_loaded", 0))
             summary.update(contact_measures(problem, state, model.setup.model_fraction))
+            if len(model.contacts) > 1:  # each zone's forces in its own frame (the totals above sum every zone)
+                names = [scene.contact.surface, *(zone.surface for zone in scene.zones)]
+                summary["zones"] = [{"surface": name, **{k: r[f"zone{i}_{k}"] for k in (
+                    "normal_displacement", "normal_force", "tangential_force", "max_pressure", "wear_area")}}
+                    for i, name in enumerate(names)]
         if progress.last_cycle_row:
             summary["regime"] = progress.last_cycle_row["regime"]
         if model.setup.hertz is not None and progress.last_row:
@@ -828,8 +858,9 @@ class _Run:
                          f"'{scene.solver.newton_tangent}', {newton['iteration']}"
                          if body is not None else "linear elastic: no Newton loop, no plastic state"),
             "delassus": "W of the elastic K built once" + (f"; {newton['delassus']}" if body is not None else ""),
-            "friction": self.problem.contact.friction.describe() if scene.contact.mu > 0 else "frictionless (mu = 0): "
-                        "normal-only contact, the local problem solved on the normal rows of W alone",
+            "friction": self.problem.contacts[0].friction.describe() if scene.contact.mu > 0 else
+                        "frictionless (mu = 0): normal-only contact, the local problem solved on the normal rows of "
+                        "W alone",
             "wear": (self.problem.wear.describe()
                      + (f" (cylinder {scene.wear.slave_share:.3g}, flat {1 - scene.wear.slave_share:.3g} of the "
                         "wear gap)"
@@ -926,7 +957,8 @@ def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: boo
     run.writer.close()
     if run.rank0 and scene.output.xdmf and scene.output.contact_profiles:
         try:
-            write_contact_xdmf(out)
+            for zone in range(len(run.model.contacts)):  # contact.xdmf, then contact_zone<i>.xdmf of other zones
+                write_contact_xdmf(out, zone)
         except Exception as exc:  # noqa: BLE001 - the CSV it comes from is on disk whatever happens here
             run.say(f"[{scene.name}] WARNING: contact.xdmf not written: {type(exc).__name__}: {exc}")
     if run.rank0 and scene.output.plots and run.progress.last_row:

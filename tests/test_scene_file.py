@@ -22,6 +22,7 @@ from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 from dolfinx_fretting.materials import LinearElastic  # noqa: E402
 from dolfinx_fretting.scenes import load_scene  # noqa: E402
 from dolfinx_fretting.simulation import SimulationError, run_scene  # noqa: E402
+from support.mesh_files import shared_folder, write_msh  # noqa: E402
 
 COMM = MPI.COMM_WORLD
 E, NU, B, R, P = 210000.0, 0.3, 0.5, 10.0, 3000.0
@@ -29,9 +30,7 @@ E, NU, B, R, P = 210000.0, 0.3, 0.5, 10.0, 3000.0
 
 def write_punch(path: Path, h: float = 0.04, half_width: float = 6.0, height: float = 12.0) -> None:
     """The punch of demos/demo_plugin.py with physical groups "face", "top" (curves) and "punch"."""
-    if COMM.rank == 0:
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
+    def build():
         g = gmsh.model.geo
         theta = np.arcsin((half_width - B) / R)
         c_r, c_l = g.addPoint(B, R, 0), g.addPoint(-B, R, 0)
@@ -54,16 +53,12 @@ def write_punch(path: Path, h: float = 0.04, half_width: float = 6.0, height: fl
         gmsh.model.mesh.field.setAsBackgroundMesh(thr)
         for opt in ("Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature"):
             gmsh.option.setNumber(opt, 0)
-        gmsh.model.mesh.generate(2)
-        gmsh.write(str(path))
-        gmsh.finalize()
-    COMM.barrier()
+    write_msh(path, build)
 
 
 @pytest.fixture(scope="module")
 def punch_file(tmp_path_factory):
-    folder = Path(COMM.bcast(str(tmp_path_factory.mktemp("punch")) if COMM.rank == 0 else None, root=0))
-    path = folder / "punch.msh"
+    path = shared_folder(tmp_path_factory, "punch") / "punch.msh"
     write_punch(path)
     return path
 

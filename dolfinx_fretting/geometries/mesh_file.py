@@ -1,6 +1,7 @@
 """A mesh file (``geometry.kind = "file"``, 2D): the user's gmsh ``.msh`` file with physical groups, or a DOLFINx
 XDMF file with its facet meshtags, held by the conditions of the ``[boundary]`` section (by the names of its
-groups) and pressed on a rigid plane.
+groups) and pressed on a rigid plane; with several ``[[contact]]`` tables, one rigid plane per named facet group
+(the only kind with several contact surfaces).
 
 Nothing of the body is known before the file is read: no load check, no preset, no Hertz reference, no mesh
 refinement in a study; its size estimate counts the nodes in the file's header.
@@ -18,8 +19,8 @@ from mpi4py import MPI
 
 from ..meshes import BodyMesh
 from ..scene_models import (BOUNDARY_DISPLACEMENT, BOUNDARY_PRESSURE, SceneModel, axis_normal, boundary_pressure,
-                            contact_surface, displacement_conditions, elastic_model, facet_length, read_msh,
-                            read_xdmf, rigid_plane, roller)
+                            contact_surface, displacement_conditions, elastic_model, facet_length, further_zones,
+                            read_msh, read_xdmf, rigid_plane, roller)
 from .base import Geometry, MeshSize, check_plane_strain, range_error
 
 __all__ = ["MeshFile", "check_names", "msh_node_count", "xdmf_node_count"]
@@ -100,7 +101,8 @@ class MeshFile(Geometry):
                           hertz=None, small_sliding=False, contact_text=", against a rigid plane",
                           von_mises=von_mises, timings={"mesh_s": mesh_s}, prescribed=prescribed,
                           ramped=[name for name in (BOUNDARY_DISPLACEMENT, BOUNDARY_PRESSURE)
-                                  if name in prescribed or name in loads])
+                                  if name in prescribed or name in loads],
+                          zones=further_zones(scene, body))
 
 
 def check_names(scene: Scene, facet_names: dict[str, int]) -> None:
@@ -109,7 +111,9 @@ def check_names(scene: Scene, facet_names: dict[str, int]) -> None:
     Raises:
         ValueError: naming the key, the name and the file's groups.
     """
-    used = [("contact.surface", scene.contact.surface), *scene.boundary.names]
+    used = [("contact.surface", scene.contact.surface),
+            *[(f"contact[{i}].surface", zone.surface) for i, zone in enumerate(scene.zones, start=1)],
+            *scene.boundary.names]
     if scene.loading.tangential_kind == "pressure":
         used.append(("loading.pressure_face", scene.loading.pressure_face))
     for key, name in used:
