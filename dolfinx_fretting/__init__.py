@@ -79,7 +79,7 @@ __all__ = sorted(_API)
 
 def __getattr__(name: str):
     if name in _API:
-        import importlib
+        import importlib  # lazy: stdlib, needed only on the first use of an export (PEP 562)
 
         return getattr(importlib.import_module(f".{_API[name]}", __name__), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -33,6 +33,7 @@ Tables are written by rank 0; fields by every rank (collective), like DOLFINx's 
 
 from __future__ import annotations
 
+import csv
 import json
 import warnings
 from dataclasses import asdict, dataclass, field, replace
@@ -43,6 +44,7 @@ import numpy as np
 
 from .io import (RUN_DESCRIPTION, ZONE_CYCLE_FIELDS, ResultWriter, cycle_fields, history_fields, profile_fields,
                  write_json_atomic, zone_columns, zone_history_fields)
+from .loading import Displacement, Force
 from .obstacles import obstacle_kind
 from .state import INCREMENT_COLUMNS
 from .units import Units
@@ -191,8 +193,6 @@ class RunDescription:
             surfaces: The name of each zone's surface (a scene's physical groups), or None.
             **extra: Any other attribute (``units``, ``tangential_control``, ``hertz``, ``track_positions`` ...).
         """
-        from .problem import Displacement, Force
-
         contacts = problem.contacts
         first = contacts[0]   # with several zones the first describes the run's obstacle (what [loading] drives)
         obstacle = first.obstacle
@@ -623,6 +623,8 @@ class FrettingWriter:
         to ``fields.xdmf``. Collective."""
         if not self.fields_enabled:
             return
+        # Lazy: DOLFINx only to write fields; compare, plots and the pictures read the tables through this module
+        # without it
         from dolfinx import fem
 
         from . import _dolfinx as dfx
@@ -667,8 +669,6 @@ class FrettingWriter:
         """
         if self.comm.rank != 0:
             return
-        import csv
-
         contact_set = self.problem.contact_set_of(state)
         wear_gap = state.wear_gap
         rows = []
