@@ -83,9 +83,9 @@ def test_wear_energy_identity_and_no_wear_without_slip(tmp_path, monkeypatch):
     kept = []
     profile_block = ResultWriter.profile_block
 
-    def keep_profile(self, increment, cycle, step, columns):
+    def keep_profile(self, increment, cycle, step, columns, zone=None):
         kept.append((cycle, [np.array(c, copy=True) for c in columns]))
-        profile_block(self, increment, cycle, step, columns)
+        profile_block(self, increment, cycle, step, columns, zone)
 
     monkeypatch.setattr(ResultWriter, "profile_block", keep_profile)
     s = run_scene(scene, tmp_path, quiet=True)
