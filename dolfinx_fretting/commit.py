@@ -19,7 +19,7 @@ from .readers import worn_measure
 from .state import ContactState, CycleResult, IncrementResult, solver_columns
 from .wear import ROW, ROW_FIELDS, commit_increment
 
-__all__ = ["SlidingMonitor", "commit", "relative_slip_ratio", "wear_coefficient"]
+__all__ = ["SlidingMonitor", "commit", "relative_slip_ratio", "wear_coefficient", "wear_coefficients"]
 
 
 @dataclass
@@ -44,12 +44,20 @@ def wear_coefficient(wear: WearLaw | None, in_cycle: bool) -> float:
     return 0.0 if wear is None else wear.coefficient(in_cycle)
 
 
-def commit(operators: ContactOperators, wear: WearLaw | None, monitor: SlidingMonitor, state: ContactState,
+def wear_coefficients(operators: ContactOperators, laws: tuple, in_cycle: bool) -> np.ndarray:
+    """Each contact's wear coefficient of an increment: its zone's law's (``laws``, one per zone; 0 where None)."""
+    contacts = operators.contact
+    coefficients = np.empty(contacts.nc)
+    for zone, law in enumerate(laws):
+        coefficients[contacts.zone_slice(zone)] = wear_coefficient(law, in_cycle)
+    return coefficients
+
+
+def commit(operators: ContactOperators, laws: tuple, monitor: SlidingMonitor, state: ContactState,
            result: IncrementResult | CycleResult) -> ContactState:
-    """The new state after a converged increment or cycle: Archard's law (increments), the plastic history,
-    the totals of :attr:`~dolfinx_fretting.state.ContactState.record`. ``state`` itself is not changed. Collective
-    only in name
-    (no communication: every rank holds the same contact data)."""
+    """The new state after a converged increment or cycle: each zone's wear law (``laws``, one per zone;
+    increments), the plastic history, the totals of :attr:`~dolfinx_fretting.state.ContactState.record`. ``state``
+    itself is not changed. Collective only in name (no communication: every rank holds the same contact data)."""
     if isinstance(result, CycleResult):
         check_sliding(operators, monitor, result.final)
         return result.final
@@ -58,10 +66,11 @@ def commit(operators: ContactOperators, wear: WearLaw | None, monitor: SlidingMo
     states = np.empty(contact_set.nc, dtype=np.int8)
     row = np.empty(len(ROW_FIELDS))
     wear_gap = state.wear_gap.copy()
+    coefficients = wear_coefficients(operators, laws, result.in_cycle)
     commit_increment(result.forces, result.slip, result.positions, operators.contact.mu, contact_set.dim,
-                     contact_set.tributary, contact_set.abscissa, wear_coefficient(wear, result.in_cycle), wear_gap,
-                     states, row)
+                     contact_set.tributary, contact_set.abscissa, coefficients, wear_gap, states, row)
     master_wear = state.master_wear
+    wear = laws[0]   # finite sliding: one zone
     if operators.surface_compliance is not None and wear is not None:
         # The master's share of the wear stays on the master's nodes (it follows its material points).
         master_share = (1.0 - wear.slave_share) * (wear_gap - state.wear_gap)

@@ -100,10 +100,10 @@ def stepwise_cycle(operators: ContactOperators, advance: Callable[..., tuple[Con
                        tuple(pairings) if keep and current.pairing is not None else None)
 
 
-def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coefficient: float, state: ContactState,
-                   obstacle: np.ndarray, factors: np.ndarray, keep: bool) -> CycleResult:
+def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coefficients: np.ndarray,
+                   state: ContactState, obstacle: np.ndarray, factors: np.ndarray, keep: bool) -> CycleResult:
     """The cycle in the compiled loop (rank 0, broadcast; the warm start of the next cycle stays on rank 0), with
-    ``wear_coefficient`` the wear gap's coefficient in cycles. Collective."""
+    ``wear_coefficients`` each contact's wear coefficient in cycles. Collective."""
     contact_set = operators.contact.contact_set
     n, m, dim = obstacle.shape[0], contact_set.nc * contact_set.dim, contact_set.dim
     # Each zone's translation against G's block of its contacts (one zone: G = its rigid modes).
@@ -127,7 +127,7 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
         done, status, err = run_increments(
             Wc, rho, operators.contact.mu, dim, contact_set.gap0, wear_gap, G, D, Q, S, contact_set.tributary,
             contact_set.abscissa, y, r_last,
-            r_warm, warm, wear_coefficient, solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r, out_x,
+            r_warm, warm, wear_coefficients, solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r, out_x,
             out_y, out_wear, out_states, rows, active, cache.pattern, cache.lu, cache.piv, cache.lu_ok,
             cache.counts)
         if done < n:

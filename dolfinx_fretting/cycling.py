@@ -164,7 +164,7 @@ def _pattern_rhs(q: np.ndarray, pattern: np.ndarray, b: np.ndarray) -> None:
 def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0: np.ndarray,
                    wear_gap: np.ndarray, G: np.ndarray, D: np.ndarray, Q: np.ndarray, S: np.ndarray,
                    tributary: np.ndarray, abscissa: np.ndarray, y: np.ndarray, r_last: np.ndarray,
-                   r_warm: np.ndarray, warm: int, k: float, tol: float, max_iter: int, refresh: int,
+                   r_warm: np.ndarray, warm: int, k: np.ndarray, tol: float, max_iter: int, refresh: int,
                    keep: bool, out_r: np.ndarray, out_x: np.ndarray, out_y: np.ndarray, out_wear: np.ndarray,
                    out_states: np.ndarray, rows: np.ndarray, active: bool, pattern: np.ndarray,
                    lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray
@@ -189,7 +189,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         r_warm: (n, m) forces of the same increments of the previous cycle (in/out: overwritten with
             this cycle's).
         warm: 1: start increment j from ``r_warm[j]``; 0: from ``r_last``.
-        k: Wear coefficient applied (1/MPa).
+        k: Wear coefficient applied per contact (1/MPa).
         tol, max_iter, refresh: Local solver settings.
         keep: Store every increment's r, x, y, wear_gap and states in the ``out_*`` arrays ((n, ...) each).
         rows: (n, N_ROW) output rows.

@@ -198,7 +198,7 @@ class RunDescription:
         obstacle = first.obstacle
         if plane_point is None:
             plane_point = getattr(obstacle, "point", np.zeros(first.dim))
-        wear = problem.wear
+        wear = problem.wear_laws[0]   # the first zone's (the laws share their acceleration)
         names = list(surfaces) if surfaces is not None else [None] * len(contacts)
         values: dict[str, Any] = {
             "dim": first.dim, "obstacle": obstacle_kind(obstacle),

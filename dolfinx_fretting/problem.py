@@ -53,7 +53,7 @@ import numpy as np
 from mpi4py import MPI
 
 from . import checkpoint, readers
-from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficient
+from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficient, wear_coefficients
 from .compliance import METHODS
 from .contact import Contact, ContactSet
 from .cycles import compiled_cycle, cycle_targets, stepwise_cycle
@@ -62,7 +62,7 @@ from .laws import Archard, WearLaw
 from .loading import CyclePath, Displacement, Force
 from .materials import J2Plasticity
 from .operators import ContactOperators
-from .zones import ContactZones, as_zones
+from .zones import ContactZones, as_zones, zone_wear_laws
 from .plasticity import ElastoplasticBody
 from .settings import LocalSolver, Plasticity
 from .state import (INCREMENT_COLUMNS, STATUS_NAMES, ContactState, ConvergenceError, CycleResult, IncrementResult,
@@ -87,7 +87,9 @@ class FrettingProblem:
         bcs: Dirichlet conditions. Their values are part of the model (applied in full at every increment);
             to scale a Dirichlet value along a load path, give it in ``prescribed`` instead.
         wear: A wear law (the :class:`~dolfinx_fretting.laws.WearLaw` protocol, e.g.
-            :class:`~dolfinx_fretting.laws.Archard`), or None (no wear).
+            :class:`~dolfinx_fretting.laws.Archard`), or None (no wear); with several zones, one law for all or a
+            mapping from each zone's Contact to its law (a zone not named does not wear; the laws share one
+            ``acceleration``).
         loads: Named linear forms (UFL or ``fem.Form``) or assembled PETSc vectors; each is applied times its
             factor (``loads={"face": 2.0}`` in :meth:`solve`).
         prescribed: Named lists of Dirichlet conditions with non-zero values (``fem.Function`` or
@@ -108,7 +110,8 @@ class FrettingProblem:
 
     _count = 0
 
-    def __init__(self, a, contact: Contact | Sequence[Contact], bcs: Sequence = (), *, wear: WearLaw | None = None,
+    def __init__(self, a, contact: Contact | Sequence[Contact], bcs: Sequence = (), *,
+                 wear: WearLaw | Mapping[Contact, WearLaw | None] | None = None,
                  loads: Mapping[str, Any] | None = None, prescribed: Mapping[str, Sequence] | None = None,
                  petsc_options: Mapping[str, Any] | None = None, delassus_method: str = "auto",
                  solver: LocalSolver | None = None, plasticity: Plasticity | None = None,
@@ -117,9 +120,7 @@ class FrettingProblem:
         contact = as_zones(contact)
         if delassus_method not in METHODS:
             raise ValueError(f"FrettingProblem: delassus_method = {delassus_method!r}: allowed {', '.join(METHODS)}")
-        if wear is not None and not isinstance(wear, WearLaw):
-            raise TypeError(f"FrettingProblem: wear = {type(wear).__name__}: expected a wear law (the WearLaw protocol "
-                            "of dolfinx_fretting.laws, e.g. Archard) or None")
+        wear_laws = zone_wear_laws(contact.zones, wear)
         names = list(loads or {}) + list(prescribed or {})
         for name in names:
             if not isinstance(name, str) or not name:
@@ -138,6 +139,8 @@ class FrettingProblem:
                     and (hasattr(law, "update") or isinstance(law, J2Plasticity))):
                 raise TypeError("Plasticity.law must have E, nu and update(strain, eps_p, p) (see Plasticity)")
         self.wear = wear
+        #: Each zone's wear law (None: the zone does not wear).
+        self.wear_laws = wear_laws
         self.solver = solver or LocalSolver()
         self.plasticity = plasticity
         self.bcs = list(bcs)
@@ -196,8 +199,20 @@ class FrettingProblem:
 
     def wear_coefficient(self, in_cycle: bool) -> float:
         """The wear gap's coefficient applied to an increment (the wear law's, times its acceleration in cycles; 0
-        without wear)."""
-        return wear_coefficient(self.wear, in_cycle)
+        without wear); with a law per zone, the one they share.
+
+        Raises:
+            ValueError: the zones' laws give different coefficients (:meth:`wear_coefficients` has them).
+        """
+        values = {wear_coefficient(law, in_cycle) for law in self.wear_laws}
+        if len(values) > 1:
+            raise ValueError(f"wear_coefficient: the zones' wear laws differ ({sorted(values)}): read "
+                             "wear_coefficients(in_cycle), one per contact")
+        return values.pop()
+
+    def wear_coefficients(self, in_cycle: bool) -> np.ndarray:
+        """Each contact's wear coefficient of an increment (its zone's law's; 0 where a zone does not wear)."""
+        return wear_coefficients(self.operators, self.wear_laws, in_cycle)
 
     # States and increments --------------------------------------------------------------------------------
     def initial_state(self) -> ContactState:
@@ -281,7 +296,7 @@ class FrettingProblem:
         law, the plastic history, the totals of :attr:`~dolfinx_fretting.state.ContactState.record`, finite sliding's
         re-pairing).
         ``state`` itself is not changed; rollback is not committing."""
-        return commit(self.operators, self.wear, self.sliding, state, result)
+        return commit(self.operators, self.wear_laws, self.sliding, state, result)
 
     def advance(self, state: ContactState, normal=None, tangential=None, loads=None, *, in_cycle: bool = False,
                 max_cutbacks: int | None = None,
@@ -358,7 +373,7 @@ class FrettingProblem:
             # Finite sliding pairs anew between increments: increment by increment.
             if (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
                     and not forced.any() and operators.surface_compliance is None):
-                return compiled_cycle(operators, self.solver, self.wear_coefficient(True), start, obstacle, factors,
+                return compiled_cycle(operators, self.solver, self.wear_coefficients(True), start, obstacle, factors,
                                       keep)
             return stepwise_cycle(operators, self._advance_once, start, obstacle, forced, factors, keep, check)
         # A growth solves the whole cycle again from ``state`` in the wider window (its increments then all refer
@@ -401,7 +416,7 @@ class FrettingProblem:
 
     def body_wear(self, state: ContactState) -> dict[str, np.ndarray]:
         """Two bodies: each body's worn depth (:func:`dolfinx_fretting.readers.body_wear`)."""
-        return readers.body_wear(self.operators, self.wear, state)
+        return readers.body_wear(self.operators, self.wear_laws, state)
 
     def worn_measure(self, state: ContactState) -> float:
         """The worn area (2D, per unit thickness) or volume (3D) of ``state``, both bodies'."""

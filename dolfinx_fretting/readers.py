@@ -11,7 +11,6 @@ from petsc4py import PETSc
 from . import _dolfinx as dfx
 from . import sliding
 from ._dolfinx import cell_dofmap, fem
-from .laws import WearLaw
 from .operators import ContactOperators
 from .state import ContactState
 
@@ -96,7 +95,7 @@ def contact_fields(operators: ContactOperators, state: ContactState, contact=Non
             "gap": y[:, 0].copy(), "slip": x[:, 1:].copy(), "relative_tangential": y[:, 1:].copy(),
             "wear": state.wear_gap.copy(), "status": status.copy()}
 
-def body_wear(operators: ContactOperators, wear: WearLaw | None, state: ContactState) -> dict[str, np.ndarray]:
+def body_wear(operators: ContactOperators, laws: tuple, state: ContactState) -> dict[str, np.ndarray]:
     """Two bodies: each body's worn depth. ``slave`` per contact node; ``master`` and
     ``master_coordinates`` (reference) at the master's points: with finite sliding the master's nodes
     (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`), with small sliding each contact's
@@ -106,7 +105,10 @@ def body_wear(operators: ContactOperators, wear: WearLaw | None, state: ContactS
     if not contact_set.two_body:
         raise ValueError("body_wear: the obstacle is rigid (the wear gap is the body's: contact_fields)")
     if operators.surface_compliance is None:
-        share = wear.slave_share if wear is not None else 1.0
+        # each contact's slave share, its zone's law's (``laws``, one per zone)
+        share = np.empty(contact_set.nc)
+        for zone, law in enumerate(laws):
+            share[operators.contact.zone_slice(zone)] = law.slave_share if law is not None else 1.0
         return {"slave": share * state.wear_gap, "master": (1 - share) * state.wear_gap,
                 "master_coordinates": contact_set.master_points.copy()}
     on_master = operators.surface_compliance.master_areas > 0

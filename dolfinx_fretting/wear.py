@@ -53,7 +53,7 @@ _STATE_TOL = 1e-6  # same relative tests as local_solvers.contact_states
 
 @numba.njit(cache=True)
 def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray, dim: int,
-                     tributary: np.ndarray, abscissa: np.ndarray, k: float, wear_gap: np.ndarray,
+                     tributary: np.ndarray, abscissa: np.ndarray, k: np.ndarray, wear_gap: np.ndarray,
                      states: np.ndarray, row: np.ndarray) -> None:
     """Classify the contacts of a converged increment, apply Archard's law to ``wear_gap`` and fill ``row``.
 
@@ -65,7 +65,7 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
         dim: 2 or 3.
         tributary: Tributary length/area per contact.
         abscissa: Position of each contact along the surface (for widths).
-        k: Wear coefficient (1/MPa); 0 disables wear.
+        k: Wear coefficient per contact (1/MPa; each contact zone's wear law's); 0 disables wear there.
         wear_gap: Wear gap per contact, updated in place.
         states: Output, contact state codes (0 open, 1 stick, 2 slip).
         row: Output, ``len(ROW_FIELDS)`` values (see :data:`ROW_FIELDS`).
@@ -111,8 +111,8 @@ def commit_increment(r: np.ndarray, x: np.ndarray, y: np.ndarray, mu: np.ndarray
         if rt >= (1.0 - _STATE_TOL) * mu[a] * rn:
             states[a] = _SLIP
             n_slip += 1
-            if k > 0.0:
-                dg = k * p * math.sqrt(xt2)
+            if k[a] > 0.0:
+                dg = k[a] * p * math.sqrt(xt2)
                 wear_gap[a] += dg
                 dwear += dg * tributary[a]
         else:

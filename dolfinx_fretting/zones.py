@@ -17,14 +17,15 @@ operators, increments and cycles do not branch on the number of zones.
 from __future__ import annotations
 
 import warnings
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
 from .contact import Contact, ContactSet
+from .laws import WearLaw
 
-__all__ = ["ContactZones", "concatenate", "as_zones"]
+__all__ = ["ContactZones", "concatenate", "as_zones", "zone_wear_laws"]
 
 
 def concatenate(sets: Sequence[ContactSet]) -> ContactSet:
@@ -227,6 +228,41 @@ class ContactZones:
         zones = list(self.zones)
         zones[zone] = zones[zone].with_window(window)
         return ContactZones(zones)
+
+
+def zone_wear_laws(zones: tuple[Contact, ...], wear) -> tuple:
+    """Each zone's wear law from the problem's ``wear``: None (no wear), one law for every zone, or a mapping from
+    each zone's :class:`~dolfinx_fretting.contact.Contact` to its law (a zone not named does not wear). The laws
+    must agree on ``acceleration`` (each simulated cycle stands for that many physical ones: one number per run).
+
+    Raises:
+        TypeError: a value is not a wear law (the :class:`~dolfinx_fretting.laws.WearLaw` protocol) or None.
+        ValueError: a key is not one of the zones; the laws' accelerations differ.
+    """
+    if not isinstance(wear, Mapping):
+        laws = (wear,) * len(zones)
+        named = {}
+    else:
+        where = {id(zone): i for i, zone in enumerate(zones)}
+        laws = [None] * len(zones)
+        named = {}
+        for key, law in wear.items():
+            if id(key) not in where:
+                raise ValueError(f"FrettingProblem: wear: a key is not one of this problem's contact zones ({key!r}): "
+                                 "name each zone by the Contact given to FrettingProblem")
+            laws[where[id(key)]] = law
+            named[where[id(key)]] = law
+        laws = tuple(laws)
+    for i, law in enumerate(laws):
+        if law is not None and not isinstance(law, WearLaw):
+            where = f"wear[contact[{i}]]" if named else "wear"
+            raise TypeError(f"FrettingProblem: {where} = {type(law).__name__}: expected a wear law (the WearLaw "
+                            "protocol of dolfinx_fretting.laws, e.g. Archard) or None")
+    accelerations = {float(law.acceleration) for law in laws if law is not None}
+    if len(accelerations) > 1:
+        raise ValueError(f"FrettingProblem: wear: the zones' laws have accelerations {sorted(accelerations)}: "
+                         "allowed one value for every zone (each simulated cycle stands for that many physical ones)")
+    return laws
 
 
 def as_zones(contact: Contact | Sequence[Contact]) -> Contact | ContactZones:

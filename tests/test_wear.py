@@ -26,7 +26,7 @@ def _commit(r, x, mu, k, gw=None):
     row = np.empty(len(ROW_FIELDS))
     y = np.array(x, float)
     commit_increment(np.array(r, float), np.array(x, float), y, np.full(nc, mu), 2, np.full(nc, 0.5),
-                     np.arange(nc, dtype=float), k, gw, states, row)
+                     np.arange(nc, dtype=float), np.full(nc, float(k)), gw, states, row)
     return gw, states, row
 
 

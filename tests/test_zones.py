@@ -240,3 +240,44 @@ def test_an_elastic_plastic_body_with_two_zones():
     assert plastic[0][0] < elastic[0][0]                     # and carries less at the same approach
     assert plastic[1] == pytest.approx(elastic[1], rel=1e-8)  # B: the elastic answer
     assert plastic[2][2] == pytest.approx(elastic[2][2], rel=1e-8)
+
+
+def test_each_zone_wears_by_its_own_law():
+    """Both blocks rubbed in gross slip, each zone with its Archard coefficient (block B's four times A's), and a
+    zone left out of the mapping that does not wear. Archard's wear-energy identity holds zone by zone: the worn
+    area of a zone is (k / mu) times the energy its contacts dissipate (to 1e-10: an identity of the committed
+    increments' arithmetic, as tests/test_wear.py checks for one zone); the compiled cycle equals the cycle
+    increment by increment with the laws per zone (1e-8)."""
+    V, tags, bcs = two_blocks()
+    a = dfr.Contact(V, (tags, 1), plane_above(), mu=0.5, bcs=bcs)
+    b = dfr.Contact(V, (tags, 2), plane_above(), mu=0.4, bcs=bcs)
+    laws = {a: dfr.Archard(1e-6), b: dfr.Archard(4e-6)}
+    finals = []
+    for compiled in (True, False):
+        problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, wear=laws,
+                                      solver=dfr.LocalSolver(tol=1e-12, compiled_cycles=compiled))
+        state, _ = problem.advance(problem.initial_state(), normal={a: 1e-3, b: 1e-3})
+        result = problem.run_cycle(state, dfr.CyclePath.waveform(8, tangential={a: 3e-3, b: 3e-3}), keep=True)
+        forces, slips = result.kept[0], result.kept[1]
+        start, state = state, problem.commit(state, result)
+        finals.append(state)
+        # each zone's dissipated energy, -sum r_t . dx_t over its contacts and the cycle's increments
+        for zone, mu in ((a, 0.5), (b, 0.4)):
+            rows = problem.contact.zone_slice(problem.contacts.index(zone))
+            r_t = forces.reshape(8, -1, 2)[:, rows, 1]
+            dx_t = slips.reshape(8, -1, 2)[:, rows, 1]
+            energy = -float((r_t * dx_t).sum())
+            added = problem.contact_fields(state, zone)["wear"] - problem.contact_fields(start, zone)["wear"]
+            worn = float(added @ problem.contact.contact_set.tributary[rows])   # over the cycle (the preload slid)
+            assert energy > 0 and worn == pytest.approx(laws[zone].k / mu * energy, rel=1e-10)
+    assert finals[0].wear_gap == pytest.approx(finals[1].wear_gap, rel=1e-8, abs=1e-8 * finals[1].wear_gap.max())
+    # a zone not named does not wear
+    problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, wear={a: dfr.Archard(1e-6)})
+    state, _ = problem.advance(problem.initial_state(), normal={a: 1e-3, b: 1e-3})
+    state, _ = problem.advance(state, tangential={a: 3e-3, b: 3e-3})
+    assert problem.contact_fields(state, a)["wear"].max() > 0 and not problem.contact_fields(state, b)["wear"].any()
+    with pytest.raises(ValueError, match="accelerations"):
+        dfr.FrettingProblem(elasticity(V), [a, b], bcs, wear={a: dfr.Archard(1e-6, acceleration=10.0),
+                                                               b: dfr.Archard(1e-6)})
+    with pytest.raises(TypeError, match=r"wear\[contact\[1\]\] = float"):
+        dfr.FrettingProblem(elasticity(V), [a, b], bcs, wear={a: dfr.Archard(1e-6), b: 1e-6})
