@@ -18,7 +18,7 @@ from dolfinx import mesh  # noqa: E402
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import compat  # noqa: E402
 from support.blocks import (E, E_PLANE, LMBDA, MU_LAME, NU, TIGHT, component, elasticity, plane_above,  # noqa: E402
-                            tagged, two_blocks)
+                            tagged, two_blocks, unit_squares)
 
 
 # A corner touching two walls ---------------------------------------------------------------------------------
@@ -281,3 +281,34 @@ def test_each_zone_wears_by_its_own_law():
                                                                b: dfr.Archard(1e-6)})
     with pytest.raises(TypeError, match=r"wear\[contact\[1\]\] = float"):
         dfr.FrettingProblem(elasticity(V), [a, b], bcs, wear={a: dfr.Archard(1e-6), b: 1e-6})
+
+
+def test_a_rigid_plane_zone_and_an_elastic_body_zone():
+    """Block A under a rigid plane (zone 0) and, beside it, block D on block C (zone 1, node-to-segment on matching
+    faces, C the master moved by its zone's approach), frictionless, rollers on A's and C's bottoms and on D's top.
+    Uniaxial plane-strain stress everywhere: zone 0 carries E' d_0, zone 1, the stack of two unit heights, E' d_1 / 2,
+    uniform along its face (matching faces pass the patch test: to 1e-8, the local tolerance 1e-12; measured 1.7e-13
+    and 8e-14 on the forces)."""
+    msh = unit_squares([(0.0, 0.0), (1.5, 0.0), (1.5, 1.0)], 4)
+    V = compat.vector_space(msh, 1)
+    fdim = 1
+    msh.topology.create_connectivity(fdim, 2)
+    faces = mesh.locate_entities_boundary(msh, fdim, lambda x: np.isclose(x[1], 1.0))
+    cell_y = np.array([mesh.compute_midpoints(msh, 2, msh.topology.connectivity(fdim, 2).links(f))[0, 1]
+                       for f in faces])
+    centre_x = mesh.compute_midpoints(msh, fdim, faces)[:, 0]
+    markers = np.where(centre_x < 1.2, 1, np.where(cell_y > 1.0, 2, 3)).astype(np.int32)  # A top, D bottom, C top
+    order = np.argsort(faces)
+    tags = mesh.meshtags(msh, fdim, faces[order], markers[order])
+    pins = [(0.0, 0.0), (1.5, 0.0), (1.5, 2.0)]
+    bcs = [component(V, 1, lambda x: np.isclose(x[1], 0.0) | np.isclose(x[1], 2.0)),
+           component(V, 0, lambda x: np.any([np.isclose(x[0], px) & np.isclose(x[1], py) for px, py in pins],
+                                            axis=0))]
+    rigid = dfr.Contact(V, (tags, 1), plane_above(), mu=0.0, bcs=bcs)
+    stacked = dfr.Contact(V, (tags, 2), dfr.ElasticBody((tags, 3), [0.0, 1.0]), mu=0.0, bcs=bcs)
+    problem = dfr.FrettingProblem(elasticity(V), [rigid, stacked], bcs, solver=TIGHT)
+    d_rigid, d_stack = 1e-3, 6e-4
+    state, _ = problem.advance(problem.initial_state(), normal={rigid: d_rigid, stacked: d_stack})
+    assert problem.total_force(state, rigid)[0] == pytest.approx(E_PLANE * d_rigid, rel=1e-8)
+    assert problem.total_force(state, stacked)[0] == pytest.approx(E_PLANE * d_stack / 2, rel=1e-8)
+    assert np.allclose(problem.contact_fields(state, stacked)["pressure"], E_PLANE * d_stack / 2, rtol=1e-8)

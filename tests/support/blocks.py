@@ -41,20 +41,26 @@ def component(V, i, where):
 LEFT_X, RIGHT_X = 0.0, 1.5   # the blocks' left edges (unit squares, 0.5 apart)
 
 
-def two_blocks(n: int = 6, comm: MPI.Comm = MPI.COMM_WORLD):
-    """Two unit squares (n x n quadrilaterals each) side by side in one mesh, not touching; markers 1 and 2 their
-    tops; rollers on their bottoms (u_y = 0) and u_x = 0 at each bottom-left corner (no rigid motion)."""
+def unit_squares(origins, n: int, comm: MPI.Comm = MPI.COMM_WORLD):
+    """One mesh of unit squares (n x n quadrilaterals each) with their lower-left corners at ``origins``, each with
+    its own nodes (squares that touch share positions, not nodes: separate bodies)."""
     points, cells = [], []
-    for x0 in (LEFT_X, RIGHT_X):
+    for x0, y0 in origins:
         first = len(points) and sum(len(p) for p in points)
-        xs, ys = np.meshgrid(np.linspace(x0, x0 + 1, n + 1), np.linspace(0, 1, n + 1), indexing="ij")
+        xs, ys = np.meshgrid(np.linspace(x0, x0 + 1, n + 1), np.linspace(y0, y0 + 1, n + 1), indexing="ij")
         points.append(np.column_stack([xs.ravel(), ys.ravel()]))
         index = lambda i, j, first=first: first + i * (n + 1) + j  # noqa: E731
         cells += [[index(i, j), index(i + 1, j), index(i, j + 1), index(i + 1, j + 1)]
                   for i in range(n) for j in range(n)]
     points = np.vstack(points) if comm.rank == 0 else np.zeros((0, 2))
     cells = np.array(cells) if comm.rank == 0 else np.zeros((0, 4), dtype=np.int64)
-    msh = compat.create_mesh(comm, cells, points, "quadrilateral")
+    return compat.create_mesh(comm, cells, points, "quadrilateral")
+
+
+def two_blocks(n: int = 6, comm: MPI.Comm = MPI.COMM_WORLD):
+    """Two unit squares (n x n quadrilaterals each) side by side in one mesh, not touching; markers 1 and 2 their
+    tops; rollers on their bottoms (u_y = 0) and u_x = 0 at each bottom-left corner (no rigid motion)."""
+    msh = unit_squares([(LEFT_X, 0.0), (RIGHT_X, 0.0)], n, comm)
     V = compat.vector_space(msh, 1)
     tags = tagged(msh, {1: lambda x: np.isclose(x[1], 1.0) & (x[0] < 1.2),
                         2: lambda x: np.isclose(x[1], 1.0) & (x[0] > 1.2)})
