@@ -376,10 +376,11 @@ class _Run:
         if model.window_can_grow:
             raise _WindowTooSmall(where)
         if self.scene.geometry.kind == "sphere":
-            # A sphere has no geometry.contact_half_width (refused): its uniform zone is 1.5 a of the mesh, and
+            # A sphere's uniform zone is sized from the contact radius expected after wear (geometries.sphere);
             # the window may reach past it onto the graded cells.
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm; the mesh's uniform zone "
-                      f"ends at {model.setup.window_limit:.4g} mm, beyond it the cells grow)")
+                      f"ends at {model.setup.window_limit:.4g} mm, beyond it the cells grow) or "
+                      "geometry.contact_half_width (the uniform zone)")
         elif model.setup.window_limit is None:  # a window the scene gives on a mesh with no refined zone
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) or leave it out (the "
                       "whole surface)")
