@@ -289,7 +289,10 @@ class _Run:
         self.say = (lambda msg: print(msg, flush=True)) if (self.rank0 and not quiet) else (lambda msg: None)
         self.t_start = time.perf_counter()
         meta = self._read_checkpoint_meta() if resume else None
-        self.model = ContactModel(scene, comm, window=meta["window"] if meta else None)
+        # the model as checkpointed: a mesh sized from loading.cycles (a sphere's uniform zone) is not resized
+        sized = meta.get("mesh_cycles", scene.loading.cycles) if meta else scene.loading.cycles
+        built = scene.model_copy(update={"loading": scene.loading.model_copy(update={"cycles": sized})})
+        self.model = ContactModel(built, comm, window=meta["window"] if meta else None)
         self.problem = self.model.problem
         self.snapshots = _snapshot_cycles(scene)
         self.progress = Progress()
@@ -355,7 +358,7 @@ class _Run:
         rate = self.progress.jump["rate"]
         progress["jump"]["rate"] = rate.tolist() if rate is not None else None
         meta = {"identity": _scene_identity(self.scene), **self.writer.checkpoint_info(),
-                "window": self.model.half_width, "progress": progress,
+                "window": self.model.half_width, "mesh_cycles": self.model.scene.loading.cycles, "progress": progress,
                 "written": time.strftime("%Y-%m-%dT%H:%M:%S")}
         self.problem.save_state(self.state, self.out / CHECKPOINT, meta=meta)
         self.last_checkpoint = time.perf_counter()

@@ -304,3 +304,18 @@ def test_the_default_sphere_finishes_ten_thousand_cycles_with_jumps(tmp_path):
 
     _check_worn_sphere(summary, scene, 10000, GEOMETRIES["sphere"].element_size(scene))
 
+
+def test_a_resumed_sphere_keeps_the_mesh_it_was_sized_for(tmp_path):
+    """A run extended by more cycles (``--resume`` with a larger loading.cycles) continues on the mesh of its
+    checkpoint: the uniform zone sized for 1 cycle (0.35 mm on 0.07 mm cubes, k = 4e-6 1/MPa), not the one 12
+    cycles would have (0.42 mm), whose contact set the checkpoint's state does not fit."""
+    from dolfinx_fretting.sizes import estimate
+
+    common = ["geometry.contact_mesh_size=0.07", "wear.k=4e-6", "loading.increments_per_cycle=8",
+              "loading.normal_increments=2", *TERSE]
+    first = run_scene(load_scene("sphere-flat", common + ["loading.cycles=1"]), tmp_path, quiet=True)
+    longer = load_scene("sphere-flat", common + ["loading.cycles=12"])
+    assert estimate(longer).dofs > first["dofs"]  # sized afresh, 12 cycles would mesh a wider zone
+    resumed = run_scene(longer, tmp_path, quiet=True, resume=True)
+    assert resumed["converged"] and resumed["cycles"] == 12 and resumed["resumed_from_cycle"] == 1
+    assert resumed["dofs"] == first["dofs"]
