@@ -34,7 +34,7 @@ __all__ = ["Sphere"]
 
 #: Keys of the 2D geometries a sphere does not use (its mesh is sized from the expected contact radius).
 NOT_FOR_SPHERE = ("coarse_mesh_size", "width", "height", "nx", "ny", "quadrilateral", "flat_width", "flat_height")
-#: The uniform zone's half-width over the largest contact radius the run expects (:meth:`Sphere.worn_contact_radius`):
+#: The uniform zone's half-width over the largest contact radius the run expects (Sphere.worn_contact_radius):
 #: the mesher's default over Hertz's a. Measured on ``sphere-flat`` (a/4 cubes): the window's edge at 1.02 times
 #: the loaded area's equivalent radius already carries load (cycle 4769 of 10^4 on the 1.5 a zone), so the
 #: margin must exceed about one element; 1.5 leaves 50 % for the estimate's error (0.5 % measured at 4768 cycles,
@@ -105,7 +105,7 @@ class Sphere(Geometry):
 
     def _check_zone(self, scene: Scene) -> None:
         """The uniform zone holds the unworn contact and a whole element, and the mesh around it
-        (:data:`EXTENT_OVER_ZONE` zones wide) stays on the sphere: the cap's corner ``sqrt(2)`` times its half-size
+        (``EXTENT_OVER_ZONE`` zones wide) stays on the sphere: the cap's corner ``sqrt(2)`` times its half-size
         from the axis is inside the radius."""
         geometry = scene.geometry
         a, h = self.contact_size(scene), self.element_size(scene)
@@ -226,7 +226,7 @@ class Sphere(Geometry):
 
     def zone_half_width(self, scene: Scene) -> float:
         """The uniform zone's half-width (mm) before its rounding to whole cubes: ``geometry.contact_half_width``
-        if the scene sets it, else :data:`ZONE_OVER_CONTACT` times the larger of Hertz's contact radius and the
+        if the scene sets it, else ``ZONE_OVER_CONTACT`` times the larger of Hertz's contact radius and the
         :meth:`worn_contact_radius`."""
         geometry = scene.geometry
         if "contact_half_width" in geometry.model_fields_set:
@@ -236,7 +236,7 @@ class Sphere(Geometry):
     def mesh_options(self, scene: Scene) -> dict[str, float]:
         """The keyword arguments ``zone``, ``depth_zone``, ``extent``, ``growth`` of
         :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat` (lengths over Hertz's a): the mesher's defaults, with the
-        uniform zone of :meth:`zone_half_width` and the bodies at least :data:`EXTENT_OVER_ZONE` zones wide (the
+        uniform zone of :meth:`zone_half_width` and the bodies at least ``EXTENT_OVER_ZONE`` zones wide (the
         defaults' 1.5 and 9 a while Hertz's radius is the largest expected). The size estimate and the build both
         read them."""
         options = {name: mesher_default(meshes_3d.sphere_on_flat, name)
