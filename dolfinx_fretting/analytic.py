@@ -15,7 +15,8 @@ import numpy as np
 
 __all__ = ["plane_strain_modulus", "hertz_line_contact", "hertz_pressure", "hertz_sphere",
            "cattaneo_mindlin_stick_half_width", "mindlin_shear_modulus", "cattaneo_mindlin_stick_radius",
-           "mindlin_tangential_displacement", "mindlin_deresiewicz_energy"]
+           "mindlin_tangential_displacement", "mindlin_deresiewicz_energy", "worn_sphere_volume",
+           "worn_sphere_contact_radius"]
 
 
 def plane_strain_modulus(E1: float, nu1: float, E2: float | None = None, nu2: float | None = None) -> float:
@@ -108,3 +109,60 @@ def mindlin_deresiewicz_energy(Q_amplitude: float, mu: float, P: float, a: float
     rest = 1.0 - phi
     return float(9.0 * mu**2 * P**2 / (10.0 * a * G_star)
                  * (1.0 - rest ** (5.0 / 3.0) - 5.0 * phi / 6.0 * (1.0 + rest ** (2.0 / 3.0))))
+
+
+#: gamma of :func:`worn_sphere_volume`: the mean surface displacement of a uniform pressure p on a circle of radius
+#: c, 16 p c / (3 pi E*), less its value at the edge, 4 p c / (pi E*) (Johnson eq. 3.32), in units of p c / E*.
+_UNIFORM_DISC_SAG = 16.0 / (3.0 * math.pi) - 4.0 / math.pi
+
+
+def worn_sphere_volume(c: float, P: float, R: float, E_star: float) -> float:
+    """The worn volume (mm^3) at which a sphere worn flat in gross slip touches a flat over a radius ``c``.
+
+    The model: in gross slip every contact point slides the same distance, so Archard's wear is fastest where the
+    pressure is highest until the pressure is uniform, ``p = P / (pi c^2)``: the worn contact carries a uniform
+    pressure. The gap closes inside c: the wear depth there is the initial gap r^2/(2R) and the surfaces'
+    elastic approach under that pressure measured from the edge (Johnson eq. 3.32: the displacement of a uniform
+    pressure is ``(4 p c / (pi E*)) E(r/c)``, 2 p c / E* at the centre, 4 p c / (pi E*) at the edge, its mean over
+    the disc 16 p c / (3 pi E*)), so the worn volume is
+
+        V(c) = pi c^4 / (4 R) - (4 / (3 pi)) P c / E*
+
+    (the rigid cap's pi c^4 / (4 R), less the elastic sag of the loaded disc below its edge). Measured on the
+    ``sphere-flat`` scene (R = 10 mm, P = 100 N, E* = 115 GPa, a/4 cubes): after 4768 cycles its worn volume
+    3.397e-4 mm^3 gives c = 0.2735 mm here and 0.2748 mm on the mesh (the equivalent radius of the loaded area).
+
+    Args:
+        c: Contact radius of the worn sphere (mm).
+        P: Normal force (N).
+        R: Sphere radius (mm).
+        E_star: Contact modulus (MPa), as in :func:`hertz_sphere`.
+    """
+    return math.pi * c**4 / (4.0 * R) - _UNIFORM_DISC_SAG * P * c / E_star
+
+
+def worn_sphere_contact_radius(volume: float, P: float, R: float, E_star: float) -> float:
+    """The contact radius (mm) of a sphere on a flat after wearing ``volume`` (mm^3) in gross slip: the root of
+    :func:`worn_sphere_volume` ``= volume``, and at least Hertz's radius a (:func:`hertz_sphere`, the unworn
+    contact; the uniform-pressure model gives more than a once ``volume > 0.219 a^4 / R``).
+
+    ``V(c)`` falls from 0 to a minimum at ``c^3 = gamma P R / (pi E*)`` and then grows without bound: the root
+    beyond the minimum is unique, found by bisection to 1e-12 relative.
+
+    Args:
+        volume: Worn volume, both bodies' (mm^3, >= 0).
+        P: Normal force (N, > 0).
+        R: Sphere radius (mm, > 0).
+        E_star: Contact modulus (MPa, > 0).
+    """
+    if not (volume >= 0 and P > 0 and R > 0 and E_star > 0):
+        raise ValueError(f"worn_sphere_contact_radius: volume = {volume} >= 0, P = {P}, R = {R}, "
+                         f"E_star = {E_star} > 0 needed")
+    lower = (_UNIFORM_DISC_SAG * P * R / (math.pi * E_star)) ** (1.0 / 3.0)  # the minimum of V(c)
+    upper = 2.0 * lower
+    while worn_sphere_volume(upper, P, R, E_star) < volume:
+        upper *= 2.0
+    while upper - lower > 1e-12 * upper:
+        middle = 0.5 * (lower + upper)
+        lower, upper = (middle, upper) if worn_sphere_volume(middle, P, R, E_star) < volume else (lower, middle)
+    return max(hertz_sphere(P, R, E_star)[0], 0.5 * (lower + upper))

@@ -306,7 +306,10 @@ class _Run:
         self.say = (lambda msg: print(msg, flush=True)) if (self.rank0 and not quiet) else (lambda msg: None)
         self.t_start = time.perf_counter()
         meta = self._read_checkpoint_meta() if resume else None
-        self.model = ContactModel(scene, comm, window=meta["window"] if meta else None)
+        # the model as checkpointed: a mesh sized from loading.cycles (a sphere's uniform zone) is not resized
+        sized = meta.get("mesh_cycles", scene.loading.cycles) if meta else scene.loading.cycles
+        built = scene.model_copy(update={"loading": scene.loading.model_copy(update={"cycles": sized})})
+        self.model = ContactModel(built, comm, window=meta["window"] if meta else None)
         self.problem = self.model.problem
         self.snapshots = _snapshot_cycles(scene)
         self.progress = Progress()
@@ -371,7 +374,7 @@ class _Run:
         rate = self.progress.jump["rate"]
         progress["jump"]["rate"] = rate.tolist() if rate is not None else None
         meta = {"identity": _scene_identity(self.scene), **self.writer.checkpoint_info(),
-                "window": self.model.half_width, "progress": progress,
+                "window": self.model.half_width, "mesh_cycles": self.model.scene.loading.cycles, "progress": progress,
                 "written": time.strftime("%Y-%m-%dT%H:%M:%S")}
         self.problem.save_state(self.state, self.out / CHECKPOINT, meta=meta)
         self.last_checkpoint = time.perf_counter()
@@ -400,10 +403,11 @@ class _Run:
         if model.window_can_grow:
             raise _WindowTooSmall(where)
         if self.scene.geometry.kind == "sphere":
-            # A sphere has no geometry.contact_half_width (refused): its uniform zone is 1.5 a of the mesh, and
+            # A sphere's uniform zone is sized from the contact radius expected after wear (geometries.sphere);
             # the window may reach past it onto the graded cells.
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm; the mesh's uniform zone "
-                      f"ends at {model.setup.window_limit:.4g} mm, beyond it the cells grow)")
+                      f"ends at {model.setup.window_limit:.4g} mm, beyond it the cells grow) or "
+                      "geometry.contact_half_width (the uniform zone)")
         elif model.setup.window_limit is None:  # a window the scene gives on a mesh with no refined zone
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) or leave it out (the "
                       "whole surface)")

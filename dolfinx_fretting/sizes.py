@@ -101,6 +101,8 @@ class SizeEstimate:
             ``plastic`` (see the module's docstring).
         drivers: The scene keys that set the size, with their values (for the refusal's message).
         note: What was not estimated, and why ("" if everything was).
+        sizing: How the geometry kind sized its contact zone from the scene (the sphere's uniform zone from the
+            contact radius expected after wear), in words; "" if from the scene's keys alone.
     """
 
     kind: str
@@ -113,6 +115,7 @@ class SizeEstimate:
     memory: dict[str, int] = field(default_factory=dict)
     drivers: dict[str, Any] = field(default_factory=dict)
     note: str = ""
+    sizing: str = ""
 
     @property
     def total_bytes(self) -> int:
@@ -135,7 +138,7 @@ class SizeEstimate:
         text = (f"size estimate: {approx}{count(self.dofs)} dofs ({approx}{count(self.nodes)} nodes), "
                 f"{count(self.contacts)} contacts, peak memory ~{_size(self.total_bytes)} "
                 f"({self.breakdown()}{f'; {self.ranks} ranks' if self.ranks > 1 else ''})")
-        return text + (f"; {self.note}" if self.note else "")
+        return text + (f"; {self.note}" if self.note else "") + (f"; {self.sizing}" if self.sizing else "")
 
     def as_dict(self) -> dict[str, Any]:
         """The estimate as JSON-ready data (``summary.json``'s ``size_estimate``), with ``total_bytes``."""
@@ -238,7 +241,7 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
         if _compiled_2d_cycles(scene, dim):
             memory["cycle_cache"] = int(8 * m * m * scene.loading.increments_per_cycle)
     return SizeEstimate(scene.geometry.kind, nodes, dofs, contacts, dim, ranks, mesh.exact, memory,
-                        _drivers(scene, mesh, memory), "; ".join(mesh.notes))
+                        _drivers(scene, mesh, memory), "; ".join(mesh.notes), mesh.sizing)
 
 
 # The machine -------------------------------------------------------------------------------------------------

@@ -78,6 +78,7 @@ class MeshSize:
         drivers: The scene keys that set the mesh's size, with their values (for a refusal's message).
         window_default: What an unset ``contact.candidate_half_width`` means, in words.
         notes: What was not counted, and why.
+        sizing: How the kind sized its contact zone from the scene, in words ("" if from the scene's keys alone).
     """
 
     nodes: int | None
@@ -88,6 +89,7 @@ class MeshSize:
     drivers: dict[str, Any] = field(default_factory=dict)
     window_default: str = "automatic"
     notes: tuple[str, ...] = ()
+    sizing: str = ""
 
 
 #: A mesh point of the speed-vs-accuracy study: (the swept key, its value as text, the overrides that make it).

@@ -5,6 +5,12 @@ Its mesh (:func:`dolfinx_fretting.meshes_3d.sphere_on_flat`): structured hexahed
 contact graded away from it, sized from the Hertz contact radius a (h = a/4 unless ``contact_mesh_size`` is set);
 by default half of it (and of the flat) about the plane y = 0, with a roller there. Its Hertz reference is the
 sphere's (``analytic.hertz_sphere``).
+
+The uniform zone of cubes (where the candidate window may grow) is sized from the largest contact radius the run
+expects: Hertz's a, or the radius the sphere wears to over the scene's cycles (:meth:`Sphere.worn_contact_radius`:
+Archard's worn volume bounded from the stroke, ``analytic.worn_sphere_contact_radius``), whichever is larger;
+``geometry.contact_half_width`` sets it by hand. The size estimate (:meth:`Sphere.mesh_size`) and the build use the
+same :meth:`Sphere.mesh_options`.
 """
 
 from __future__ import annotations
@@ -17,7 +23,8 @@ import numpy as np
 from mpi4py import MPI
 
 from .. import meshes_3d
-from ..analytic import hertz_sphere
+from ..analytic import (hertz_sphere, mindlin_deresiewicz_energy, mindlin_shear_modulus, worn_sphere_contact_radius,
+                        worn_sphere_volume)
 from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane, roller,
                             two_body_cells)
 from .base import (MAX_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary, coarser_contact_mesh,
@@ -25,9 +32,19 @@ from .base import (MAX_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_
 
 __all__ = ["Sphere"]
 
-#: Keys of the 2D geometries a sphere does not use (its mesh is sized from the Hertz contact radius).
-NOT_FOR_SPHERE = ("contact_half_width", "coarse_mesh_size", "width", "height", "nx", "ny", "quadrilateral",
-                  "flat_width", "flat_height")
+#: Keys of the 2D geometries a sphere does not use (its mesh is sized from the expected contact radius).
+NOT_FOR_SPHERE = ("coarse_mesh_size", "width", "height", "nx", "ny", "quadrilateral", "flat_width", "flat_height")
+#: The uniform zone's half-width over the largest contact radius the run expects (Sphere.worn_contact_radius):
+#: the mesher's default over Hertz's a. Measured on ``sphere-flat`` (a/4 cubes): the window's edge at 1.02 times
+#: the loaded area's equivalent radius already carries load (cycle 4769 of 10^4 on the 1.5 a zone), so the
+#: margin must exceed about one element; 1.5 leaves 50 % for the estimate's error (0.5 % measured at 4768 cycles,
+#: analytic.worn_sphere_volume) and for shapes the uniform-pressure model does not describe (partial slip).
+ZONE_OVER_CONTACT = 1.5
+#: The bodies' lateral half-size, cap height and flat depth over the uniform zone's half-width, at least: 3, the
+#: mesher's default 9 a over its 1.5 a zone (a cap 9 a high is within 0.05 % of a large body on Hertz's peak
+#: pressure, 4.5 a +0.25 %: ../shared/notes/3d-contact.md), so a zone grown for wear keeps the body as deep in
+#: zone widths as Hertz's.
+EXTENT_OVER_ZONE = 3.0
 
 
 class Sphere(Geometry):
@@ -43,8 +60,8 @@ class Sphere(Geometry):
         unused = [key for key in NOT_FOR_SPHERE if key in geometry.model_fields_set]
         if unused:
             raise ValueError(f"geometry.{unused[0]} is not a key of geometry.kind = 'sphere' (its mesh of "
-                             "hexahedra is sized from the Hertz contact radius: geometry.radius, "
-                             "geometry.contact_mesh_size, geometry.half_model)")
+                             "hexahedra is sized from the expected contact radius: geometry.radius, "
+                             "geometry.contact_mesh_size, geometry.contact_half_width, geometry.half_model)")
         if "contact_mesh_size" in geometry.model_fields_set and geometry.contact_mesh_size >= geometry.radius / 20:
             raise range_error("geometry.contact_mesh_size", geometry.contact_mesh_size,
                               f"< geometry.radius / 20 = {geometry.radius / 20:g} mm")
@@ -84,6 +101,36 @@ class Sphere(Geometry):
             raise range_error("loading.normal_displacement", approach,
                               f"<= {eps**2 * radius:.4g} mm: the strain sqrt(d / R) of an approach d on "
                               f"geometry.radius = {radius:g} mm must stay <= {eps:g} (small-strain elasticity)")
+        self._check_zone(scene)
+
+    def _check_zone(self, scene: Scene) -> None:
+        """The uniform zone holds the unworn contact and a whole element, and the mesh around it
+        (``EXTENT_OVER_ZONE`` zones wide) stays on the sphere: the cap's corner ``sqrt(2)`` times its half-size
+        from the axis is inside the radius."""
+        geometry = scene.geometry
+        a, h = self.contact_size(scene), self.element_size(scene)
+        zone = self.zone_half_width(scene)
+        given = "contact_half_width" in geometry.model_fields_set
+        if given and not max(a, h) <= zone:
+            raise range_error("geometry.contact_half_width", zone,
+                              f">= {max(a, h):.4g} mm: the sphere's uniform zone holds the Hertz contact radius a = "
+                              f"{a:.4g} mm and at least one contact element (h = {h:.4g} mm)")
+        largest = geometry.radius / (math.sqrt(2.0) * EXTENT_OVER_ZONE) * (1 - 1e-9)
+        if zone * (1 + 1e-9) < largest:
+            return
+        if given:
+            raise range_error("geometry.contact_half_width", zone,
+                              f"< {largest:.4g} mm: the mesh around the uniform zone is {EXTENT_OVER_ZONE:g} zones "
+                              f"wide and must stay on the sphere (geometry.radius = {geometry.radius:g} mm)")
+        cycles, volume = scene.loading.cycles, self.worn_volume_bound(scene)
+        most = math.floor(cycles * self.worn_volume_at(scene, largest / ZONE_OVER_CONTACT) / volume)
+        raise range_error("loading.cycles", cycles,
+                          f"<= {most} with these loads and wear.k: the sphere wears to a contact radius of "
+                          f"{self.worn_contact_radius(scene):.4g} mm over {cycles} cycles (worn volume <= "
+                          f"{volume:.3g} mm^3), and the mesh sized for it ({ZONE_OVER_CONTACT:g} x that radius, "
+                          f"{EXTENT_OVER_ZONE:g} times wider around) would not fit on the sphere of geometry.radius "
+                          f"= {geometry.radius:g} mm; or set geometry.contact_half_width below {largest:.4g} mm and "
+                          "the run stops when the scar reaches its edge")
 
     def preset_values(self, scene: Scene, preset: dict[str, float]) -> dict[str, Any]:
         """Under a normal force, ``contact_mesh_size``: a quarter of the preset's elements per contact radius
@@ -123,13 +170,107 @@ class Sphere(Geometry):
         """0.5 for a half model (``geometry.half_model``), else 1."""
         return 0.5 if scene.geometry.half_model else 1.0
 
-    def mesh_size(self, scene: Scene) -> MeshSize:
-        """Exact: the tensor grid of :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat` (its axes from the mesher's
-        own defaults), once per body; the candidates: the grid's points within the window."""
+    def worn_volume_bound(self, scene: Scene) -> float:
+        """An upper bound of the volume (mm^3, the wear gap's, the whole contact) worn over the scene's cycles.
+
+        Archard's wear gap grows by ``k p |slip|`` (k: ``wear.k``, or ``k_slave + k_master``, times
+        ``wear.acceleration``), so the volume worn in a cycle is k times the normal force times the slip distance
+        where it slides. Under a stroke ``+-delta`` (``loading.tangential_displacement``) no point slides more than
+        ``4 delta`` a cycle: ``V <= 4 k P delta N`` for N cycles (measured on ``sphere-flat``: the dissipated energy
+        is 89-90 % of ``4 mu P delta``, the rest taken by the contact's elastic compliance before it slips). Under a
+        tangential force ``+-Q`` (partial slip, ``|Q| < mu P``) the slip is the Mindlin-Deresiewicz loop's: the
+        volume is ``k / mu`` times its energy (``analytic.mindlin_deresiewicz_energy``; the wear-energy identity of
+        tests/test_sphere.py). Under an approach d the force is Hertz's of ``a = sqrt(R d)`` (an overestimate). 0
+        without wear or cycles.
+        """
+        wear, loading, contact = scene.wear, scene.loading, scene.contact
+        if (wear.law != "archard" or loading.cycles == 0 or loading.tangential_kind == "none"
+                or loading.tangential_amplitude == 0):
+            return 0.0
+        k = wear.k_total * wear.acceleration
+        P, a = self._normal_force(scene), self.contact_size(scene)
+        if loading.tangential_kind == "displacement":
+            return 4.0 * k * P * abs(loading.tangential_amplitude) * loading.cycles
+        m = scene.material
+        two_body = contact.obstacle == "elastic_flat"
+        G_star = mindlin_shear_modulus(m.E, m.nu, m.E if two_body else None, m.nu if two_body else None)
+        energy = mindlin_deresiewicz_energy(abs(loading.tangential_amplitude), contact.mu, P, a, G_star)
+        return k / contact.mu * energy * loading.cycles
+
+    def _normal_force(self, scene: Scene) -> float:
+        """The normal force (N): the scene's, or Hertz's ``4 E* a^3 / (3 R)`` of an approach's
+        :meth:`contact_size`."""
+        if scene.loading.normal_force is not None:
+            return float(scene.loading.normal_force)
+        return 4.0 * scene.contact_modulus * self.contact_size(scene) ** 3 / (3.0 * scene.geometry.radius)
+
+    def worn_contact_radius(self, scene: Scene) -> float:
+        """The contact radius (mm) the sphere wears to over the scene's cycles, at least :meth:`contact_size`:
+        ``analytic.worn_sphere_contact_radius`` of :meth:`worn_volume_bound` (the worn sphere's flat scar under a
+        uniform pressure, with the surfaces' elastic sag). Under an approach d at most ``sqrt(2 R d)``, where the
+        undeformed bodies overlap: wear only opens the gap and the contact's pressure only pushes the surfaces
+        apart."""
+        radius, a = scene.geometry.radius, self.contact_size(scene)
+        volume = self.worn_volume_bound(scene)
+        if volume == 0.0:
+            return a
+        worn = worn_sphere_contact_radius(volume, self._normal_force(scene), radius, scene.contact_modulus)
+        if scene.loading.normal_displacement is not None:
+            worn = min(worn, math.sqrt(2.0 * radius * scene.loading.normal_displacement))
+        return max(a, worn)
+
+    def worn_volume_at(self, scene: Scene, c: float) -> float:
+        """The worn volume (mm^3) at which the worn contact reaches a radius ``c`` (inverse of
+        :meth:`worn_contact_radius` past Hertz's radius)."""
+        return worn_sphere_volume(c, self._normal_force(scene), scene.geometry.radius, scene.contact_modulus)
+
+    def zone_half_width(self, scene: Scene) -> float:
+        """The uniform zone's half-width (mm) before its rounding to whole cubes: ``geometry.contact_half_width``
+        if the scene sets it, else ``ZONE_OVER_CONTACT`` times the larger of Hertz's contact radius and the
+        :meth:`worn_contact_radius`."""
         geometry = scene.geometry
-        a, h = self.contact_size(scene), self.element_size(scene)
+        if "contact_half_width" in geometry.model_fields_set:
+            return float(geometry.contact_half_width)
+        return ZONE_OVER_CONTACT * self.worn_contact_radius(scene)
+
+    def mesh_options(self, scene: Scene) -> dict[str, float]:
+        """The keyword arguments ``zone``, ``depth_zone``, ``extent``, ``growth`` of
+        :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat` (lengths over Hertz's a): the mesher's defaults, with the
+        uniform zone of :meth:`zone_half_width` and the bodies at least ``EXTENT_OVER_ZONE`` zones wide (the
+        defaults' 1.5 and 9 a while Hertz's radius is the largest expected). The size estimate and the build both
+        read them."""
         options = {name: mesher_default(meshes_3d.sphere_on_flat, name)
                    for name in ("zone", "depth_zone", "extent", "growth")}
+        a = self.contact_size(scene)
+        zone = self.zone_half_width(scene) / a
+        options.update(zone=zone, extent=max(options["extent"], EXTENT_OVER_ZONE * zone))
+        return options
+
+    def sizing(self, scene: Scene, zone: float) -> str:
+        """How the uniform zone of half-width ``zone`` (mm, rounded to whole cubes) was sized, in words (the
+        size estimate's ``sizing``: the run's log and ``summary.json``)."""
+        geometry, loading = scene.geometry, scene.loading
+        a, worn = self.contact_size(scene), self.worn_contact_radius(scene)
+        text = f"uniform contact zone {zone:.4g} mm"
+        if "contact_half_width" in geometry.model_fields_set:
+            text += " (geometry.contact_half_width)"
+        else:
+            text += f" = {ZONE_OVER_CONTACT:g} x the largest contact radius expected, {worn:.4g} mm"
+        volume = self.worn_volume_bound(scene)
+        if volume > 0:
+            cycles = loading.cycles * scene.wear.acceleration
+            text += (f"; Archard's worn radius for {cycles:g} cycles {worn:.4g} mm (worn volume <= {volume:.3g} mm^3), "
+                     f"Hertz's {a:.4g} mm")
+        else:
+            text += f"; Hertz's contact radius {a:.4g} mm (no wear)"
+        return text
+
+    def mesh_size(self, scene: Scene) -> MeshSize:
+        """Exact: the tensor grid of :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat` (its axes from
+        :meth:`mesh_options`, as the build's), once per body; the candidates: the grid's points within the window."""
+        geometry = scene.geometry
+        a, h = self.contact_size(scene), self.element_size(scene)
+        options = self.mesh_options(scene)
         x, y, depth = meshes_3d._grid_axes(a, h, **options, half=geometry.half_model)
         bodies = 2 if scene.contact.obstacle == "elastic_flat" else 1
         nodes = bodies * x.size * y.size * depth.size
@@ -140,7 +281,12 @@ class Sphere(Geometry):
         given = "contact_mesh_size" in geometry.model_fields_set
         drivers = {"geometry.contact_mesh_size": geometry.contact_mesh_size if given else "a/4 (default)",
                    "geometry.radius": geometry.radius, "geometry.half_model": geometry.half_model}
-        return MeshSize(int(nodes), contacts, True, "hexahedra", "hexahedron", drivers)
+        if "contact_half_width" in geometry.model_fields_set:
+            drivers["geometry.contact_half_width"] = geometry.contact_half_width
+        elif self.worn_contact_radius(scene) > a:  # the zone grown for the wear the cycles make drives the size too
+            drivers["loading.cycles"] = scene.loading.cycles
+        return MeshSize(int(nodes), contacts, True, "hexahedra", "hexahedron", drivers,
+                        sizing=self.sizing(scene, zone))
 
     def build(self, scene: Scene, comm: MPI.Comm) -> SceneModel:
         """A sphere's cap on an elastic flat of the same material (two bodies, one mesh) or on a rigid plane: a half
@@ -150,7 +296,8 @@ class Sphere(Geometry):
         two_body = contact.obstacle == "elastic_flat"
         a, h = self.contact_size(scene), self.element_size(scene)
         start = time.perf_counter()
-        body = meshes_3d.sphere_on_flat(comm, geometry.radius, a, h, half=geometry.half_model, flat=two_body)
+        body = meshes_3d.sphere_on_flat(comm, geometry.radius, a, h, **self.mesh_options(scene),
+                                        half=geometry.half_model, flat=two_body)
         mesh_s = time.perf_counter() - start
         V, form, von_mises, bcs, loads = elastic_model(scene, body, ["top", "flat_bottom"] if two_body else ["top"])
         if geometry.half_model:  # the symmetry plane y = 0
@@ -168,6 +315,7 @@ class Sphere(Geometry):
             obstacle, display_cells, elastic_cells = plane, None, None
             text = ", against a rigid plane"
         text += ", half model (roller on y = 0)" if geometry.half_model else ""
+        text += f"; {self.sizing(scene, zone)}"
         return SceneModel(body=body, V=V, form=form, bcs=bcs, surface=contact_surface(scene, body), obstacle=obstacle,
                           loads=loads, element_size=h, window=window, window_limit=zone, window_automatic=automatic,
                           window_edges_matter=True, elastic_cells=elastic_cells, display_cells=display_cells,
