@@ -1,15 +1,23 @@
 """Checkpoints: a state (and the caller's JSON-able metadata) written to one ``.npz`` file atomically by rank 0,
 and read back into the same problem, with the checks that it fits.
+
+A state's per-contact arrays are in the contact set's order, which is by position along the surface whatever the
+partition; the contact set is recognised by its nodes' coordinates, not by DOLFINx's global node numbers (those
+differ between launches under MPI and between rank counts), so an elastic state written on N ranks loads on any
+number. An elastic-plastic state holds each rank's quadrature points: it loads on the same partition only, checked
+by a fingerprint of each rank's dof coordinates.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
+from mpi4py import MPI
 
 from .contact import paired_contact_set
 from .increments import on_rank0
@@ -24,17 +32,26 @@ __all__ = ["save_state", "load_state"]
 ARRAYS = ("forces", "positions", "slip", "wear_gap", "obstacle", "load_factors")
 
 
+def _partition_fingerprint(operators: ContactOperators) -> str:
+    """This rank's owned and ghost dof coordinates, hashed (rounded to 1e-9: the same mesh read again gives the same
+    bits): what an elastic-plastic state's per-rank arrays are laid out on."""
+    coords = operators.V.tabulate_dof_coordinates()
+    return hashlib.sha1(np.round(coords, 9).tobytes()).hexdigest()
+
+
 def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState, path: str | Path,
                meta: Mapping[str, Any] | None = None) -> None:
     """Write ``state`` (and JSON-able ``meta``) to an ``.npz`` file atomically (rank 0 writes). Collective."""
-    plastic = None
+    plastic = partition = None
     if state.plastic is not None:
         p = state.plastic
         plastic = operators.comm.gather((p.u, p.sigma, p.eps_p, p.p), root=0)
+        partition = operators.comm.gather(_partition_fingerprint(operators), root=0)
 
     def write() -> None:  # rank 0; a failure (disk full, a folder gone) is raised on every rank
         target = Path(path)
         arrays = {k: getattr(state, k) for k in ARRAYS}
+        arrays["contact_coordinates"] = operators.contact_set_of(state).coords
         arrays["status"] = state.status if state.status is not None else np.zeros(0, np.int8)
         arrays["warm"] = state.warm if state.warm is not None else np.zeros(0)
         arrays["targets"] = state.targets if state.targets is not None else state.obstacle
@@ -52,7 +69,7 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
         info = {"increment": state.increment, "dissipated_energy": state.dissipated_energy,
                 "local_iterations": state.local_iterations, "record": state.record, "ranks": operators.comm.size,
                 "load_names": operators.load_names, "global_nodes": operators.contact.contact_set.global_nodes.tolist(),
-                "plastic": plastic is not None, "meta": dict(meta or {})}
+                "plastic": plastic is not None, "partition": partition, "meta": dict(meta or {})}
         tmp = target.with_name(target.name + ".tmp.npz")
         np.savez(tmp, state=json.dumps(info, default=_jsonable), **arrays)
         with open(tmp, "rb+") as f:
@@ -74,8 +91,18 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
 
     data = on_rank0(operators.comm, read)
     info = json.loads(str(data["state"]))
-    if info["global_nodes"] != operators.contact.contact_set.global_nodes.tolist():
-        raise ValueError(f"{path}: the saved contact set differs from this problem's")
+    contact_set = operators.contact.contact_set
+    if "contact_coordinates" in data:   # the same nodes in the same order, whatever their global numbers
+        saved = data["contact_coordinates"]
+        extent = max(float(np.ptp(contact_set.coords, axis=0).max(initial=0.0)), 1.0) if contact_set.nc else 1.0
+        # 1e-9 of the surface's extent: the coordinates are the mesh's input bits on every partition; far below
+        # any node spacing
+        same = saved.shape == contact_set.coords.shape and np.abs(saved - contact_set.coords).max(initial=0.0) \
+            <= 1e-9 * extent
+    else:   # a checkpoint of an earlier release: its global node numbers
+        same = info["global_nodes"] == contact_set.global_nodes.tolist()
+    if not same:
+        raise ValueError(f"{path}: the saved contact set differs from this problem's (its nodes' coordinates)")
     if info["load_names"] != operators.load_names:
         raise ValueError(f"{path}: saved loads {info['load_names']} differ from this problem's {operators.load_names}")
     plastic = None
@@ -84,6 +111,11 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
             raise ValueError(f"{path}: an elastic-plastic state saved on {info['ranks']} rank(s) loads on the same "
                              f"number (here {operators.comm.size})")
         i = operators.comm.rank
+        saved = info.get("partition")
+        moved = saved is not None and saved[i] != _partition_fingerprint(operators)
+        if operators.comm.allreduce(moved, op=MPI.LOR):   # every rank raises, or none
+            raise ValueError(f"{path}: an elastic-plastic state holds each rank's quadrature points, and this launch "
+                             "partitioned the mesh differently: resume it on the partition it was written on")
         plastic = PlasticHistory(*(data[f"plastic_{k}_{i}"].copy() for k in ("u", "sigma", "eps_p", "p")))
     warm = data["warm"] if data["warm"].size and operators.comm.rank == 0 else None
     pairing = master_wear = None
