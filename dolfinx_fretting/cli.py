@@ -249,6 +249,9 @@ def main(argv: list[str] | None = None) -> int:
         traceback.print_exc()
         print(f"dolfinx-fretting: unexpected error on rank {comm.rank}: stopping all {comm.size} ranks",
               file=sys.stderr, flush=True)
+        # As in _finish: the launcher may drop what is still in its pipe when the abort kills the job (the
+        # traceback's last lines were lost once on 3 ranks of 2 cores): give it time to forward them.
+        time.sleep(ABORT_GRACE_SECONDS)
         comm.Abort(1)
     return _finish(code, comm)
 
