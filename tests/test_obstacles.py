@@ -56,6 +56,8 @@ def test_a_shape_written_outside_the_package_plugs_in():
     answers = []
     for obstacle in (AnglePlane((0.0, -1e-3), 0.0), dfr.RigidPlane([0.0, -1e-3], [0.0, 1.0])):
         contact = dfr.Contact(V, (tags, 1), obstacle, mu=0.3, bcs=bcs)
+        # the shape's own search made the candidates: every bottom node 1e-3 above its plane (rounding: 1e-15)
+        assert np.allclose(contact.contact_set.gap0, 1e-3, rtol=0, atol=1e-15)
         problem = dfr.FrettingProblem(a, contact, bcs)
         state, _ = problem.advance(problem.initial_state(), normal=2e-3, tangential=1e-4)
         answers.append(state.forces)

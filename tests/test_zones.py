@@ -312,3 +312,25 @@ def test_a_rigid_plane_zone_and_an_elastic_body_zone():
     assert problem.total_force(state, rigid)[0] == pytest.approx(E_PLANE * d_rigid, rel=1e-8)
     assert problem.total_force(state, stacked)[0] == pytest.approx(E_PLANE * d_stack / 2, rel=1e-8)
     assert np.allclose(problem.contact_fields(state, stacked)["pressure"], E_PLANE * d_stack / 2, rtol=1e-8)
+
+
+def test_the_deepest_zone_names_the_window_to_widen():
+    """Both zones' windows too narrow, zone 1 pressed deeper: the WindowError is zone 1's, and the penetrating
+    positions it lists are all on zone 1's block (x > 1.2), none of zone 0's."""
+    V, tags, bcs = two_blocks()
+    a = dfr.Contact(V, (tags, 1), plane_above(), mu=0.3, bcs=bcs, window=0.2)
+    b = dfr.Contact(V, (tags, 2), plane_above(), mu=0.3, bcs=bcs, window=0.2)
+    problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, solver=TIGHT)
+    with pytest.raises(dfr.WindowError) as caught:
+        problem.solve(problem.initial_state(), normal={a: 1e-3, b: 3e-3})
+    assert caught.value.zone == 1 and (caught.value.positions[:, 0] > 1.2).all()
+
+
+def test_a_corner_s_two_contacts_are_carried_into_a_new_window_each_in_its_zone():
+    """set_window carries forces by (zone, node): the corner node's two contacts keep their own forces (a window
+    holding the whole surface gives back the same contact set, so the state carries over unchanged)."""
+    problem, top, side = corner_problem()
+    state = problem.commit(problem.initial_state(), problem.solve(problem.initial_state(),
+                                                                  normal={top: 1e-3, side: 4e-4}))
+    carried = problem.set_window(state, 10.0, zone=1)
+    assert np.array_equal(carried.forces, state.forces) and np.array_equal(carried.wear_gap, state.wear_gap)
