@@ -1309,9 +1309,7 @@ class Contact:
         """Each contact's local relative displacement (m,) when the obstacle moves by ``obstacle`` (its frame):
         ``G D``, G = :attr:`ContactSet.rigid_modes`, D = :meth:`translations` (the local problem's ``q`` has
         minus this)."""
-        frame = self.frame
-        D = sum(obstacle[k] * frame[k] for k in range(frame.shape[0]))
-        return self.contact_set.rigid_modes @ D
+        return self.contact_set.rigid_modes @ self.translations(obstacle)
 
     @property
     def rigid_modes(self) -> np.ndarray:
