@@ -70,7 +70,7 @@ _API = {
     "FrettingProblem": "problem", "ContactState": "state", "IncrementResult": "state",
     "CycleResult": "state", "ConvergenceError": "state", "WindowError": "state", "CyclePath": "loading",
     "Displacement": "loading",
-    "Force": "loading", "Archard": "laws", "LocalSolver": "settings", "Plasticity": "settings",
+    "Force": "loading", "Archard": "laws", "EnergyWear": "laws", "LocalSolver": "settings", "Plasticity": "settings",
     "J2Plasticity": "materials", "FrettingWriter": "output", "RunDescription": "output", "plot_run": "plots",
     "Units": "units",
 }

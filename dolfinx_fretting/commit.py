@@ -13,13 +13,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import sliding
-from .laws import WearLaw
 from .operators import ContactOperators
 from .readers import worn_measure
 from .state import ContactState, CycleResult, IncrementResult, solver_columns
 from .wear import ROW, ROW_FIELDS, commit_increment
 
-__all__ = ["SlidingMonitor", "commit", "relative_slip_ratio", "wear_coefficient", "wear_coefficients"]
+__all__ = ["SlidingMonitor", "commit", "relative_slip_ratio", "wear_coefficients"]
 
 
 @dataclass
@@ -39,17 +38,15 @@ class SlidingMonitor:
     reach_warned: bool = False
 
 
-def wear_coefficient(wear: WearLaw | None, in_cycle: bool) -> float:
-    """The wear gap's coefficient of an increment (0 without a wear law)."""
-    return 0.0 if wear is None else wear.coefficient(in_cycle)
-
-
 def wear_coefficients(operators: ContactOperators, laws: tuple, in_cycle: bool) -> np.ndarray:
-    """Each contact's wear coefficient of an increment: its zone's law's (``laws``, one per zone; 0 where None)."""
+    """Each contact's wear rate ``c`` of an increment (``dg = c p |dx_t|``): its zone's law's (``laws``, one per
+    zone; 0 where None), given the zone's friction coefficients."""
     contacts = operators.contact
-    coefficients = np.empty(contacts.nc)
+    coefficients = np.zeros(contacts.nc)
     for zone, law in enumerate(laws):
-        coefficients[contacts.zone_slice(zone)] = wear_coefficient(law, in_cycle)
+        if law is not None:
+            rows = contacts.zone_slice(zone)
+            coefficients[rows] = law.coefficients(in_cycle, contacts.mu[rows])
     return coefficients
 
 

@@ -6,15 +6,19 @@ one value or one per contact) is the one the package ships, and a plain number g
 :class:`~dolfinx_fretting.contact.Contact` means ``Coulomb(mu)``. The local solvers read the coefficient per
 contact (:meth:`FrictionLaw.coefficients`).
 
-A wear law is any object with the :class:`WearLaw` protocol; :class:`Archard` (the paper's equation 5) is the
-one the package ships. The kernels that commit an increment (:func:`dolfinx_fretting.wear.commit_increment`,
-the compiled cycle loop of :mod:`dolfinx_fretting.cycling`) apply the law in its rate form
-``dg = c p |dx_t|`` at sliding contacts, with ``c = law.coefficient(in_cycle)``; they also keep the columns of
-the increment (forces, energies, widths, state counts), which are not the law's business. Everything else
-(the scene runner's cycle jumps, the writers, the tests) reads the law through its public methods.
+A wear law is any object with the :class:`WearLaw` protocol. The package ships two:
 
-An energy law (Fouvry's, ``dg = alpha tau |dx_t|``) has this form at sliding contacts under constant friction
-(``tau = mu p``: ``c = alpha mu``), which is the room the protocol leaves for it.
+- :class:`Archard` (the paper's equation 5): the wear gap grows by ``k p |dx_t|``, the worn volume is
+  proportional to the normal force times the sliding distance;
+- :class:`EnergyWear` (Fouvry's energy law, Fouvry, Kapsa & Vincent, Wear 1996): the worn volume is ``alpha``
+  times the dissipated frictional energy, the wear gap grows by ``alpha tau |dx_t|``. At a sliding contact
+  ``tau = mu p`` (Coulomb), so it is the rate form below with ``c = alpha mu`` per contact.
+
+The kernels that commit an increment (:func:`dolfinx_fretting.wear.commit_increment`, the compiled cycle loop of
+:mod:`dolfinx_fretting.cycling`) apply a law in its rate form ``dg = c p |dx_t|`` at sliding contacts, with each
+contact's ``c`` from :meth:`WearLaw.coefficients` (given the contacts' friction coefficients); they also keep the
+columns of the increment (forces, energies, widths, state counts), which are not the law's business. Everything
+else (the scene runner's cycle jumps, the writers, the tests) reads the law through its public methods.
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ import numpy as np
 
 from .settings import finite
 
-__all__ = ["FrictionLaw", "Coulomb", "WearLaw", "Archard"]
+__all__ = ["FrictionLaw", "Coulomb", "WearLaw", "Archard", "EnergyWear"]
 
 
 @runtime_checkable
@@ -82,9 +86,9 @@ class WearLaw(Protocol):
 
     acceleration: float
 
-    def coefficient(self, in_cycle: bool) -> float:
-        """The rate ``c`` of ``dg = c p |dx_t|`` applied to an increment (length per pressure per slip), with
-        the acceleration in a load cycle."""
+    def coefficients(self, in_cycle: bool, mu: np.ndarray) -> np.ndarray:
+        """The rate ``c`` of ``dg = c p |dx_t|`` applied to an increment at each contact (length per pressure per
+        slip), with the acceleration in a load cycle, given the contacts' friction coefficients ``mu``."""
 
     @property
     def slave_share(self) -> float:
@@ -94,13 +98,34 @@ class WearLaw(Protocol):
     def body_coefficients(self) -> tuple[float, float]:
         """The physical coefficients of the slave and the master body (without acceleration)."""
 
-    def increment(self, pressure: np.ndarray, slip_increment: np.ndarray, in_cycle: bool = False) -> np.ndarray:
-        """The wear-gap increment of sliding contacts from their pressure (any shape, e.g. ``(nc,)`` or
-        ``(increments, nc)``) and slip increment (the same shape and one more axis: its tangential components,
-        1 in 2D, 2 in 3D)."""
-
     def describe(self) -> str:
         """One line for a run's description."""
+
+
+def _body_pair(law: str, name: str, total: float | None, slave: float | None, master: float | None,
+               acceleration: float) -> None:
+    """Check a law's coefficient: ``name`` alone, or one per body (``name_slave`` and ``name_master``)."""
+    per_body = (slave is not None, master is not None)
+    if any(per_body) and not all(per_body):
+        raise ValueError(f"{law}: give both {name}_slave and {name}_master, or {name} alone")
+    if any(per_body) and total is not None:
+        raise ValueError(f"{law}: give either {name} or ({name}_slave, {name}_master), not both")
+    if not any(per_body) and total is None:
+        raise ValueError(f"{law}: {name} (1/MPa, finite, >= 0) is required")
+    for key, value in ((name, total), (f"{name}_slave", slave), (f"{name}_master", master)):
+        if value is not None:
+            finite(f"{law}.{key}", value, 0.0)
+    finite(f"{law}.acceleration", acceleration, 1.0)
+
+
+def _share(total: float | None, slave: float | None, master: float | None) -> tuple[float, float]:
+    """(slave, master) coefficients: ``(total, 0)`` with one coefficient."""
+    return (float(total), 0.0) if total is not None else (float(slave), float(master))
+
+
+def _slave_share(slave: float, master: float) -> float:
+    """Fraction of the wear gap worn from the slave body: its coefficient's share (1 when nothing wears)."""
+    return 1.0 if slave + master == 0 else slave / (slave + master)
 
 
 @dataclass(frozen=True)
@@ -118,39 +143,31 @@ class Archard:
     acceleration: float = 1.0
 
     def __post_init__(self) -> None:
-        per_body = (self.k_slave is not None, self.k_master is not None)
-        if any(per_body) and not all(per_body):
-            raise ValueError("Archard: give both k_slave and k_master, or k alone")
-        if any(per_body) and self.k is not None:
-            raise ValueError("Archard: give either k or (k_slave, k_master), not both")
-        if not any(per_body) and self.k is None:
-            raise ValueError("Archard: k (1/MPa, finite, >= 0) is required")
-        for name in ("k", "k_slave", "k_master"):
-            if getattr(self, name) is not None:
-                finite(f"Archard.{name}", getattr(self, name), 0.0)
-        finite("Archard.acceleration", self.acceleration, 1.0)
+        _body_pair("Archard", "k", self.k, self.k_slave, self.k_master, self.acceleration)
 
     @property
     def k_total(self) -> float:
         """The wear gap's coefficient, ``k`` or ``k_slave + k_master``."""
-        return float(self.k) if self.k is not None else float(self.k_slave + self.k_master)
+        return sum(self.body_coefficients)
 
     @property
     def slave_share(self) -> float:
         """Fraction of the wear gap worn from the slave body (1 with a single ``k``)."""
-        if self.k is not None or self.k_total == 0:
-            return 1.0
-        return float(self.k_slave) / self.k_total
+        return _slave_share(*self.body_coefficients)
 
     @property
     def body_coefficients(self) -> tuple[float, float]:
         """(slave, master) coefficients: ``(k, 0)`` with a single ``k``."""
-        return (self.k_total, 0.0) if self.k is not None else (float(self.k_slave), float(self.k_master))
+        return _share(self.k, self.k_slave, self.k_master)
 
     def coefficient(self, in_cycle: bool) -> float:
         """The coefficient applied to an increment: :attr:`k_total`, times ``acceleration`` in a load cycle (each
         simulated cycle stands for that many physical ones)."""
         return self.k_total * (self.acceleration if in_cycle else 1.0)
+
+    def coefficients(self, in_cycle: bool, mu: np.ndarray) -> np.ndarray:
+        """:meth:`coefficient` at every contact (Archard's rate does not depend on friction)."""
+        return np.full(np.shape(mu), self.coefficient(in_cycle))
 
     def increment(self, pressure: np.ndarray, slip_increment: np.ndarray, in_cycle: bool = False) -> np.ndarray:
         """``c p |dx_t|`` (:meth:`coefficient`), ``|dx_t|`` the norm of the last axis of ``slip_increment`` (its
@@ -165,3 +182,49 @@ class Archard:
     def describe(self) -> str:
         """``"Archard, k = ... 1/MPa x acceleration ..."``."""
         return f"Archard, k = {self.k_total} 1/MPa x acceleration {self.acceleration}"
+
+
+@dataclass(frozen=True)
+class EnergyWear:
+    """Fouvry's energy wear law (Fouvry, Kapsa & Vincent 1996, Wear 200; Fouvry, Liskiewicz, Kapsa, Hannel &
+    Sauger 2003, Wear 255): the worn volume is ``alpha`` times the dissipated frictional energy. Locally the wear
+    gap grows by ``alpha tau |dx_t|`` where a contact slides, with ``tau = mu p`` there (Coulomb), so the rate
+    ``c`` of ``dg = c p |dx_t|`` is ``alpha mu`` at each contact: the worn area (volume in 3D) of an increment is
+    exactly ``alpha`` times its dissipated energy, whatever the friction coefficient.
+
+    Give ``alpha`` (mm^3 per N mm of dissipated energy, i.e. 1/MPa, like Archard's k; 1e-5 mm^3/J is
+    1e-8 1/MPa), or for two deformable bodies ``alpha_slave`` and ``alpha_master`` (each body wears its share
+    ``alpha_body / (alpha_slave + alpha_master)``). ``acceleration`` multiplies alpha in cycles.
+    """
+
+    alpha: float | None = None
+    alpha_slave: float | None = None
+    alpha_master: float | None = None
+    acceleration: float = 1.0
+
+    def __post_init__(self) -> None:
+        _body_pair("EnergyWear", "alpha", self.alpha, self.alpha_slave, self.alpha_master, self.acceleration)
+
+    @property
+    def alpha_total(self) -> float:
+        """The wear gap's energy coefficient, ``alpha`` or ``alpha_slave + alpha_master``."""
+        return sum(self.body_coefficients)
+
+    @property
+    def slave_share(self) -> float:
+        """Fraction of the wear gap worn from the slave body (1 with a single ``alpha``)."""
+        return _slave_share(*self.body_coefficients)
+
+    @property
+    def body_coefficients(self) -> tuple[float, float]:
+        """(slave, master) energy coefficients: ``(alpha, 0)`` with a single ``alpha``."""
+        return _share(self.alpha, self.alpha_slave, self.alpha_master)
+
+    def coefficients(self, in_cycle: bool, mu: np.ndarray) -> np.ndarray:
+        """``alpha mu`` at each contact, times ``acceleration`` in a load cycle: at a sliding contact
+        ``alpha tau |dx_t| = alpha mu p |dx_t|``."""
+        return self.alpha_total * (self.acceleration if in_cycle else 1.0) * np.asarray(mu, dtype=float)
+
+    def describe(self) -> str:
+        """``"Fouvry energy law, alpha = ... 1/MPa x acceleration ..."``."""
+        return f"Fouvry energy law, alpha = {self.alpha_total} 1/MPa x acceleration {self.acceleration}"

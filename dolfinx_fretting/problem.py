@@ -53,7 +53,7 @@ import numpy as np
 from mpi4py import MPI
 
 from . import checkpoint, readers
-from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficient, wear_coefficients
+from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficients
 from .compliance import METHODS
 from .contact import Contact, ContactSet
 from .cycles import compiled_cycle, cycle_targets, stepwise_cycle
@@ -198,17 +198,18 @@ class FrettingProblem:
         return self.operators.load_names
 
     def wear_coefficient(self, in_cycle: bool) -> float:
-        """The wear gap's coefficient applied to an increment (the wear law's, times its acceleration in cycles; 0
-        without wear); with a law per zone, the one they share.
+        """The wear gap's rate ``c`` of ``dg = c p |dx_t|`` applied to an increment (Archard's k, or Fouvry's
+        alpha times mu, times the acceleration in cycles; 0 without wear), when every contact shares it.
 
         Raises:
-            ValueError: the zones' laws give different coefficients (:meth:`wear_coefficients` has them).
+            ValueError: the contacts' coefficients differ (zones with different laws, or an energy law with
+                friction varying over the contacts): :meth:`wear_coefficients` has them.
         """
-        values = {wear_coefficient(law, in_cycle) for law in self.wear_laws}
-        if len(values) > 1:
-            raise ValueError(f"wear_coefficient: the zones' wear laws differ ({sorted(values)}): read "
-                             "wear_coefficients(in_cycle), one per contact")
-        return values.pop()
+        values = np.unique(self.wear_coefficients(in_cycle))
+        if values.size > 1:
+            raise ValueError(f"wear_coefficient: the contacts' wear coefficients differ ({values.min():g} to "
+                             f"{values.max():g}): read wear_coefficients(in_cycle), one per contact")
+        return float(values[0]) if values.size else 0.0
 
     def wear_coefficients(self, in_cycle: bool) -> np.ndarray:
         """Each contact's wear coefficient of an increment (its zone's law's; 0 where a zone does not wear)."""
