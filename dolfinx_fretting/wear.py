@@ -5,9 +5,10 @@ After an increment converges (paper eq. 5, backward Euler in the pressure)::
     g_w^a  <-  g_w^a + k p_n^a |dx_t^a|,      p_n^a = r_n^a / A^a,
 
 with ``dx_t`` the slip increment of the increment (the tangential rows of the local solution x), ``A^a`` the
-tributary length (2D) or area (3D) of contact ``a`` and ``k`` the wear law's coefficient of the increment
-(:meth:`dolfinx_fretting.laws.WearLaw.coefficient`: Archard's k, times the wear acceleration in cycles). The wear gap enters the next increment's initial normal gap
-(paper eqs. 3, 8). Wear is applied to sliding contacts only: at a sticking contact the exact ``dx_t`` is
+tributary length (2D) or area (3D) of contact ``a`` and ``k`` the wear law's coefficient of the increment at
+that contact (:meth:`dolfinx_fretting.laws.WearLaw.coefficients`: Archard's k or Fouvry's alpha mu, times the
+wear acceleration in cycles). The wear gap enters the next increment's initial normal gap (paper eqs. 3, 8).
+Wear is applied to sliding contacts only: at a sticking contact the exact ``dx_t`` is
 zero (what the solver returns there is its residual), at an open one ``p_n = 0``.
 
 Identities the outputs satisfy (and the tests check): the wear area added, ``sum_a A^a dg_w^a =
