@@ -1,6 +1,7 @@
 """Command line: ``dolfinx-fretting scenes``, ``dolfinx-fretting run SCENE --out DIR [--set k=v ...]``,
 ``dolfinx-fretting compare DIR [DIR ...] --out OUT [--labels a,b] [--cycles 1,10,100] [--node 0.0]`` and
-``dolfinx-fretting study SCENE --out DIR [--sweep k=v1,v2 ...] [--reference k=v ...] [--point "k=v k=v"]``.
+``dolfinx-fretting study SCENE --out DIR [--sweep k=v1,v2 ...] [--reference k=v ...] [--point "k=v k=v"]`` and
+``dolfinx-fretting map SCENE --normal P1,P2 --amplitude D1,D2 --out DIR [--cycles N] [--set k=v ...]``.
 
 Exit codes: 0 done; 2 bad input (scene, options, output folder, a checkpoint that cannot be resumed), with a
 message and before any expensive work; 1 a run that failed (an increment, PETSc or MUMPS, a non-finite
@@ -23,7 +24,7 @@ import warnings
 
 from mpi4py import MPI
 
-from . import study
+from . import fretting_map, study
 from .outdir import OutputFolderError, check_output_folder
 from .scenes import SceneError, builtin_scenes, load_scene
 from .sizes import check_size
@@ -86,6 +87,7 @@ def _parser() -> argparse.ArgumentParser:
     add("--overwrite", action="store_true", help="replace the study --out holds (its table, picture and runs)")
     add("--ignore-size", action="store_true",
         help="run even if a run's size estimate exceeds the memory available (refused by default)")
+    _add_map_parser(sub)
     return p
 
 
@@ -181,6 +183,57 @@ def _study(args: argparse.Namespace) -> int:
     return 0
 
 
+# dolfinx-fretting map --------------------------------------------------------------------------------------------
+def _add_map_parser(sub) -> None:
+    map_parser = sub.add_parser("map", help="fretting map: a grid of (normal load, displacement amplitude) runs "
+                                "classified into partial / mixed / gross slip (map.csv, .md, .png)")
+    add = map_parser.add_argument
+    add("scene", help="built-in scene name or path to a scene TOML file")
+    add("--normal", required=True, metavar="P1,P2,...", help="normal loads (loading.normal_force: N/mm in 2D, N in 3D)")
+    add("--amplitude", required=True, metavar="D1,D2,...",
+        help="displacement amplitudes (loading.tangential_displacement, mm)")
+    add("--cycles", type=int, default=None, metavar="N", help="cycles of every run (default: the scene's)")
+    add("--out", required=True, help="output folder (the runs go to DIR/runs/)")
+    add("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
+        help="override a scene value for every run (e.g. geometry.contact_mesh_size=0.02)")
+    add("--energy-threshold", type=float, default=fretting_map.GROSS_SLIP_ENERGY_RATIO, metavar="A_T",
+        help="energy ratio A = E_d / (4 delta* Q*) at and above which a cycle is gross slip (default 0.2: Fouvry's "
+             "sphere/plane transition)")
+    add("--quiet", action="store_true", help="print only the final table")
+    add("--verbose", action="store_true", help="also print the form compiler's build log (hidden by default)")
+    add("--overwrite", action="store_true", help="replace the map --out holds (its table, picture and runs)")
+    add("--ignore-size", action="store_true",
+        help="run even if a run's size estimate exceeds the memory available (refused by default)")
+
+
+def _map(args: argparse.Namespace) -> int:
+    """``dolfinx-fretting map``: the fretting map; 2 for bad input (a failed point stays in the table)."""
+    try:
+        if not 0.0 < args.energy_threshold < 1.0:
+            raise SceneError(f"--energy-threshold = {args.energy_threshold!r}: allowed a number > 0 and < 1")
+        plan = fretting_map.plan_map(args.scene, fretting_map.parse_values(args.normal, "--normal"),
+                                     fretting_map.parse_values(args.amplitude, "--amplitude"), args.cycles,
+                                     args.overrides)
+        for point in plan:  # every run's size before the first starts (SizeError is a SceneError)
+            check_size(point.scene, MPI.COMM_WORLD, ignore=args.ignore_size)
+        fretting_map.check_map_folder(args.out, overwrite=args.overwrite)
+    except (SceneError, OutputFolderError) as exc:
+        _say_error("dolfinx-fretting map", exc)
+        return 2
+    _quiet_form_compiler(args.verbose)
+    try:
+        rows = fretting_map.run_map(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet,
+                                    threshold=args.energy_threshold, overwrite=args.overwrite,
+                                    ignore_size=args.ignore_size)
+    except OutputFolderError as exc:
+        _say_error("dolfinx-fretting map", exc)
+        return 2
+    if MPI.COMM_WORLD.rank == 0:
+        print(fretting_map.format_markdown(rows))
+        print(f"wrote {args.out}/map.csv, map.md, map.png")
+    return 0
+
+
 def _csv_list(text: str) -> list[str]:
     items = [t.strip() for t in text.split(",")]
     if not all(items):
@@ -236,7 +289,7 @@ def main(argv: list[str] | None = None) -> int:
     global _exit_comm
     args = _parser().parse_args(argv)  # the same arguments on every rank: argparse's exit is collective
     _failure.clear()
-    if args.command not in ("run", "study"):
+    if args.command not in ("run", "study", "map"):
         return _finish(_command(args), None)
     comm = MPI.COMM_WORLD
     if _exit_comm is None and comm.size > 1:
@@ -265,6 +318,8 @@ def _command(args: argparse.Namespace) -> int:
         return _compare(args)
     if args.command == "study":
         return _study(args)
+    if args.command == "map":
+        return _map(args)
     try:
         scene = load_scene(args.scene, args.overrides)
     except SceneError as exc:
