@@ -135,9 +135,14 @@ class MeshFile(Geometry):
                           zones=further_zones(scene, body))
 
 
+def _file(scene: Scene) -> str:
+    """The mesh file's absolute path, for a message (a scene validated from a dict may hold a relative one)."""
+    return str(Path(scene.geometry.path).resolve())
+
+
 def _file_groups(scene: Scene, facet_names: dict[str, int]) -> str:
     """``"<file>; the file's boundary groups: a, b"`` for a refusal's message."""
-    return (f"{scene.geometry.path}; the file's boundary groups: {', '.join(sorted(facet_names)) or 'none'}"
+    return (f"{_file(scene)}; the file's boundary groups: {', '.join(sorted(facet_names)) or 'none'}"
             + (" (an XDMF file's markers are named by geometry.groups, else by their numbers)"
                if scene.geometry.path.endswith(".xdmf") else ""))
 
@@ -165,7 +170,7 @@ def check_names(scene: Scene, facet_names: dict[str, int]) -> None:
     for key, name in [*contact_keys(scene), *scene.boundary.names]:
         if name in role:
             raise MeshFileError(f"{key} = {name!r} is also {role[name]} = {name!r}: one role per group of "
-                                f"{scene.geometry.path} (a contact surface held by a condition cannot touch its plane, "
+                                f"{_file(scene)} (a contact surface held by a condition cannot touch its plane, "
                                 "two conditions on one group contradict or repeat each other)")
         role[name] = key
 
@@ -199,10 +204,10 @@ def check_surfaces(scene: Scene, body: BodyMesh) -> None:
         owned = _owned(msh, body.facets(name))
         total, inside = comm.allreduce(np.array([owned.size, np.setdiff1d(owned, exterior).size]))
         if total == 0:
-            raise MeshFileError(f"{key} = {name!r}: the group holds no facet in {scene.geometry.path} (a physical "
+            raise MeshFileError(f"{key} = {name!r}: the group holds no facet in {_file(scene)} (a physical "
                                 "group of no mesh element: no contact candidate or loaded face)")
         if inside:
-            raise MeshFileError(f"{key} = {name!r}: {inside} of its {total} facets in {scene.geometry.path} lie "
+            raise MeshFileError(f"{key} = {name!r}: {inside} of its {total} facets in {_file(scene)} lie "
                                 "inside the body, not on its boundary (a contact surface or a pressed face is a "
                                 "boundary curve)")
     held = [name for name in [*scene.boundary.fixed, *scene.boundary.displacement]]
@@ -219,7 +224,7 @@ def check_surfaces(scene: Scene, body: BodyMesh) -> None:
         free = np.setdiff1d(global_vertices([name]), held_vertices)
         if free.size == 0:
             raise MeshFileError(f"{key} = {name!r}: every node of the group is held by boundary.fixed or "
-                                f"boundary.displacement ({', '.join(held)}) in {scene.geometry.path}: none can move "
+                                f"boundary.displacement ({', '.join(held)}) in {_file(scene)}: none can move "
                                 "towards the plane")
 
 
@@ -256,7 +261,7 @@ def check_strain(scene: Scene, body: BodyMesh) -> float:
     surface_low, surface_high = box(x[nodes.ravel()])
     extent = float(np.linalg.norm(surface_high - surface_low))
     spans = " x ".join(f"{v:.4g}" for v in high - low)
-    path = scene.geometry.path
+    path = _file(scene)
 
     def refuse(key: str, value: float, bound: float, unit: str, estimate: str, strain: float) -> None:
         metres = strain / 1000.0 <= eps   # the mesh 1000 times larger (mm, not m) would pass
