@@ -210,7 +210,7 @@ def check_surfaces(scene: Scene, body: BodyMesh) -> None:
             raise MeshFileError(f"{key} = {name!r}: {inside} of its {total} facets in {_file(scene)} lie "
                                 "inside the body, not on its boundary (a contact surface or a pressed face is a "
                                 "boundary curve)")
-    held = [name for name in [*scene.boundary.fixed, *scene.boundary.displacement]]
+    held = [*scene.boundary.fixed, *scene.boundary.displacement]
     vertex_map = msh.topology.index_map(0)
     to_vertices = msh.topology.connectivity(fdim, 0)
 
