@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
@@ -26,8 +27,8 @@ from .meshes import BODY_CELL_TAG, BodyMesh
 
 __all__ = ["SceneModel", "FurtherZone", "further_zones", "elastic_model", "contact_surface", "rigid_plane",
            "elastic_flat", "two_body_cells", "roller", "displacement_conditions", "boundary_pressure", "facet_length",
-           "axis_normal", "read_msh", "read_xdmf", "PAIRING", "PRESSURE_LOAD", "BOUNDARY_DISPLACEMENT",
-           "BOUNDARY_PRESSURE"]
+           "axis_normal", "read_msh", "read_xdmf", "MeshFileError", "check_file_exists", "PAIRING", "PRESSURE_LOAD",
+           "BOUNDARY_DISPLACEMENT", "BOUNDARY_PRESSURE"]
 
 #: Name of the face-pressure load of a scene (``loading.tangential_pressure``), factor in MPa.
 PRESSURE_LOAD = "face_pressure"
@@ -278,12 +279,88 @@ def boundary_pressure(V, body: BodyMesh, pressures: dict[str, float]):
     return sum(-value * ufl.dot(n, v) * ds(body.tags[name]) for name, value in pressures.items())
 
 
+class MeshFileError(ValueError):
+    """A mesh file (``geometry.kind = "file"``) that cannot be the scene's body: missing, unreadable, of another
+    dimension or of mixed cells, without the groups the scene names, or under loads its size makes implausible. Bad
+    input: the message names the file (its absolute path) and the scene's key; the scene runner reports it as a
+    scene error (the command line's exit code 2)."""
+
+
+def check_file_exists(path: str, what: str = "geometry.path") -> Path:
+    """The absolute path of a mesh file that exists, is a file and is not empty.
+
+    Raises:
+        MeshFileError: naming ``what`` and the absolute path.
+    """
+    resolved = Path(path).resolve()
+    if not resolved.exists():
+        raise MeshFileError(f"{what} = {str(resolved)!r}: no such file (a relative path is taken from the scene "
+                            "file's folder, or given by --set, from the working directory)")
+    if not resolved.is_file():
+        raise MeshFileError(f"{what} = {str(resolved)!r}: a folder, not a mesh file")
+    if resolved.stat().st_size == 0:
+        raise MeshFileError(f"{what} = {str(resolved)!r}: the file is empty")
+    return resolved
+
+
+#: gmsh's names of the element types a 2D DOLFINx mesh may have (one of them per mesh), by gmsh type number.
+_GMSH_CELLS = {2: "triangles", 3: "quadrilaterals", 9: "6-node triangles", 10: "9-node quadrilaterals",
+               16: "8-node quadrilaterals", 21: "10-node triangles"}
+
+
+def _msh_failure(path: str, gdim: int) -> str | None:
+    """What makes the gmsh model just opened from ``path`` unfit for DOLFINx's reader (rank 0, gmsh open), or None:
+    no mesh, elements of a higher dimension or nodes off the plane z = 0, no physical group of cells or of
+    boundary curves, cells of several types in the physical groups (DOLFINx's mesh has one cell type, and its
+    reader crashes on a mix), two groups of one dimension with the same name."""
+    import gmsh  # lazy: see the module docstring
+
+    where = f"geometry.path = {path!r}"
+    _, xyz, _ = gmsh.model.mesh.getNodes()
+    if len(xyz) == 0:
+        return f"{where}: holds no mesh nodes (not a gmsh .msh file, or the model was saved before meshing)"
+    x = np.asarray(xyz).reshape(-1, 3)
+    solid = [gmsh.model.mesh.getElementProperties(t)[0] for t in gmsh.model.mesh.getElementTypes(dim=gdim + 1)]
+    extent = float(np.ptp(x, axis=0).max())
+    if solid or (gdim == 2 and np.ptp(x[:, 2]) > 1e-9 * max(extent, 1e-300)):
+        found = f"{', '.join(solid)} cells" if solid else f"nodes at z from {x[:, 2].min():g} to {x[:, 2].max():g}"
+        return (f"{where}: a 3D mesh ({found}); the scene runner takes 2D meshes in the plane z = 0 (3D models run "
+                "through the Python API, dolfinx_fretting.FrettingProblem)")
+    groups = gmsh.model.getPhysicalGroups()
+    for dim, kind in ((gdim, "surface (the body's cells)"), (gdim - 1, "curve (boundaries)")):
+        if not any(d == dim for d, _ in groups):
+            return (f"{where}: the file has no physical {kind} group; DOLFINx reads the cells and facets of "
+                    "physical groups only (gmsh: Physical Surface and Physical Curve, with names)")
+    types: dict[int, int] = {}
+    for _, tag in [g for g in groups if g[0] == gdim]:
+        for entity in gmsh.model.getEntitiesForPhysicalGroup(gdim, tag):
+            element_types, element_tags, _ = gmsh.model.mesh.getElements(gdim, entity)
+            for kind, tags in zip(element_types, element_tags):
+                types[int(kind)] = types.get(int(kind), 0) + len(tags)
+    if len(types) > 1:
+        mix = " and ".join(f"{n} {_GMSH_CELLS.get(t, gmsh.model.mesh.getElementProperties(t)[0])}"
+                           for t, n in sorted(types.items()))
+        return (f"{where}: the body mixes {mix}; a DOLFINx mesh has one cell type: mesh it with triangles only, or "
+                "with quadrilaterals only (gmsh: Mesh.RecombineAll = 1 and recombine every surface)")
+    for dim in (gdim - 1, gdim):
+        names = [gmsh.model.getPhysicalName(d, tag) or str(tag) for d, tag in groups if d == dim]
+        repeated = sorted({name for name in names if names.count(name) > 1})
+        if repeated:
+            tags = [tag for d, tag in groups if d == dim and (gmsh.model.getPhysicalName(d, tag) or str(tag))
+                    == repeated[0]]
+            return (f"{where}: the name {repeated[0]!r} is given to {len(tags)} physical groups of dimension {dim} "
+                    f"(tags {', '.join(map(str, tags))}); a scene names each group once: rename them or merge them")
+    return None
+
+
 def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[str, int]]:
     """A gmsh ``.msh`` file as a :class:`~dolfinx_fretting.meshes.BodyMesh` (facet tags = its physical curves in
     2D). Collective.
 
-    The file is read on rank 0; the physical names (not carried by DOLFINx's reader) are read there too and
-    broadcast. Returns the body (facet names in ``tags``) and the names of the cell groups.
+    The file is read on rank 0 and checked there before DOLFINx sees it (:class:`MeshFileError` on every rank: no
+    such file, a folder, empty, no mesh, 3D, no physical groups, mixed cell types, a name given to two groups); the
+    physical names (not carried by DOLFINx's reader) are read there too and broadcast. Returns the body (facet
+    names in ``tags``) and the names of the cell groups.
     """
     from . import _dolfinx as dfx  # lazy: see the module docstring
 
@@ -291,27 +368,31 @@ def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[s
 
     names = failure = None
     if comm.rank == 0:
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
         try:
-            gmsh.open(path)
-            groups = gmsh.model.getPhysicalGroups()
-            names = {dim: {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag for d, tag in groups if d == dim}
-                     for dim in (gdim - 1, gdim)}
-        except Exception as exc:  # noqa: BLE001 - gmsh raises plain Exceptions with its log
-            failure = f"geometry.path = {path!r}: gmsh cannot read it ({exc})"
-            gmsh.finalize()
+            path = str(check_file_exists(path))
+        except MeshFileError as exc:
+            failure = str(exc)
+        if failure is None:
+            gmsh.initialize()
+            gmsh.option.setNumber("General.Terminal", 0)
+            try:
+                gmsh.open(path)
+                failure = _msh_failure(path, gdim)
+                groups = gmsh.model.getPhysicalGroups()
+                names = {dim: {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag for d, tag in groups if d == dim}
+                         for dim in (gdim - 1, gdim)}
+            except Exception as exc:  # noqa: BLE001 - gmsh raises plain Exceptions with its log
+                failure = f"geometry.path = {path!r}: gmsh cannot read it ({exc})"
+            if failure is not None:
+                gmsh.finalize()
     names, failure = comm.bcast((names, failure), root=0)
     if failure is not None:
-        raise ValueError(failure)
+        raise MeshFileError(failure)
     try:
         msh, cell_tags, facet_tags = dfx.model_to_mesh(gmsh.model, comm, 0, gdim)
     finally:
         if comm.rank == 0:
             gmsh.finalize()
-    if msh.geometry.dim != gdim:
-        raise ValueError(f"geometry.path = {path!r}: a {msh.geometry.dim}D mesh; the scene runner takes 2D meshes "
-                         "(3D models run through the Python API, dolfinx_fretting.FrettingProblem)")
     body = BodyMesh(msh, facet_tags, cell_tags, dict(names[gdim - 1]), 0.0, None, {}, dict(names[gdim]))
     return body, names[gdim]
 
@@ -332,6 +413,18 @@ def _xdmf_grids(path: str) -> list[tuple[str, str, bool]]:
     return grids
 
 
+def _xdmf_missing_data(path: str) -> str | None:
+    """The first HDF5 data file an XDMF file names (``DataItem Format="HDF"``: ``file.h5:/dataset``, relative to the
+    XDMF file's folder) that does not exist, as an absolute path; None if all exist."""
+    folder = Path(path).parent
+    for item in ET.parse(path).getroot().iter("DataItem"):
+        if item.get("Format", "").upper() == "HDF" and item.text and ":" in item.text:
+            data = (folder / item.text.strip().split(":", 1)[0]).resolve()
+            if not data.is_file():
+                return str(data)
+    return None
+
+
 def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -> tuple[BodyMesh, dict[str, int]]:
     """A DOLFINx XDMF mesh with its facet meshtags as a :class:`~dolfinx_fretting.meshes.BodyMesh`. Collective.
 
@@ -347,6 +440,7 @@ def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -
     found = failure = None
     if comm.rank == 0:
         try:
+            path = str(check_file_exists(path))
             grids = _xdmf_grids(path)
             meshes = [g for g in grids if g[1] in _XDMF_CELLS_2D and not g[2]]
             facets = [g for g in grids if g[1] in _XDMF_FACETS_2D and g[2]]
@@ -357,17 +451,24 @@ def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -
                            f"(XDMFFile.write_mesh and write_meshtags); the file holds: {listing}")
             else:
                 found = (meshes[0][0], facets[0][0], cells[0][0] if len(cells) == 1 else None)
+                missing = _xdmf_missing_data(path)
+                if missing:
+                    failure = (f"geometry.path = {path!r}: its data file {missing!r} is missing (an XDMF file keeps "
+                               "its arrays in the .h5 file written beside it: copy both)")
+        except MeshFileError as exc:
+            failure = str(exc)
         except (OSError, ValueError) as exc:  # ValueError covers xml.etree's ParseError
             failure = f"geometry.path = {path!r}: not a readable XDMF file ({exc})"
     found, failure = comm.bcast((found, failure), root=0)
     if failure is not None:
-        raise ValueError(failure)
+        raise MeshFileError(failure)
+    path = str(Path(path).resolve())
     mesh_name, facet_name, cell_name = found
     with XDMFFile(comm, path, "r") as xdmf:
         msh = xdmf.read_mesh(name=mesh_name)
         tdim = msh.topology.dim
         if msh.geometry.dim != 2:  # a 2D mesh written with three coordinates: the plane-strain forms need two
-            raise ValueError(f"geometry.path = {path!r}: the mesh has {msh.geometry.dim} coordinates; the scene "
+            raise MeshFileError(f"geometry.path = {path!r}: the mesh has {msh.geometry.dim} coordinates; the scene "
                              "runner takes 2D meshes with 2 (3D models run through the Python API)")
         msh.topology.create_connectivity(tdim - 1, tdim)
         facet_tags = xdmf.read_meshtags(msh, facet_name)
@@ -383,7 +484,7 @@ def read_xdmf(path: str, comm: MPI.Comm, groups: dict[str, int] | None = None) -
     names = {str(int(v)): int(v) for v in values}
     for name, value in (groups or {}).items():
         if value not in values:
-            raise ValueError(f"geometry.groups.{name} = {value} is not a facet marker of {path}; its markers: "
+            raise MeshFileError(f"geometry.groups.{name} = {value} is not a facet marker of {path}; its markers: "
                              f"{', '.join(str(int(v)) for v in values) or 'none'}")
         names.pop(str(value), None)
         names[name] = int(value)

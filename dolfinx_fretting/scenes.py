@@ -81,7 +81,9 @@ class GeometrySettings(_Section):
     kind: Literal["half_cylinder", "rectangle", "file", "sphere"] = "half_cylinder"
     #: ``kind = "file"``: the user's mesh, 2D: a gmsh ``.msh`` file with physical groups (names), or a DOLFINx XDMF
     #: file with its facet meshtags (``XDMFFile.write_mesh`` + ``write_meshtags``); a relative path is taken from
-    #: the scene file's folder. Boundaries are named in the ``[boundary]`` section.
+    #: the scene file's folder (given by ``--set``: from the working directory). Boundaries are named in the
+    #: ``[boundary]`` section. The file and what the scene asks of it are checked once it is read
+    #: (:mod:`dolfinx_fretting.geometries.mesh_file`).
     path: str | None = None
     #: An XDMF file's facet markers by name (``{face = 1, top = 2}``): XDMF stores no names (unnamed markers are
     #: called by their number, ``"3"``). Not with a ``.msh`` file, whose physical groups carry their names.
@@ -1016,12 +1018,24 @@ def apply_overrides(data: dict[str, Any], overrides: list[str] | None) -> dict[s
     return data
 
 
+def _resolve_mesh_path(data: Any, folder: Path) -> Any:
+    """``data`` with a relative ``geometry.path`` made absolute from ``folder`` (every message then names the file
+    the run reads, wherever it was started)."""
+    geometry = data.get("geometry") if isinstance(data, dict) else None
+    if isinstance(geometry, dict) and isinstance(geometry.get("path"), str) and geometry["path"] \
+            and not Path(geometry["path"]).is_absolute():
+        return {**data, "geometry": {**geometry, "path": str((folder / geometry["path"]).resolve())}}
+    return data
+
+
 def load_scene(source: str | Path | dict[str, Any], overrides: list[str] | None = None) -> Scene:
     """Load and validate a scene.
 
     Args:
         source: A built-in scene name (see :func:`builtin_scenes`), a path to a TOML file or a dict.
-        overrides: ``section.key=value`` strings applied on top (the CLI's ``--set``).
+        overrides: ``section.key=value`` strings applied on top (the CLI's ``--set``). A relative
+            ``geometry.path`` is taken from the scene file's folder when the scene file gives it, from the working
+            directory when an override (or a dict) gives it.
 
     Returns:
         The validated :class:`Scene`.
@@ -1050,12 +1064,10 @@ def load_scene(source: str | Path | dict[str, Any], overrides: list[str] | None 
     if not isinstance(source, dict) and isinstance(data, dict) and "zones" in data:
         raise SceneError(f"invalid scene ({label}): unknown key 'zones'; further contact zones are [[contact]] "
                          "tables (docs/scenes.md)")
-    data = apply_overrides(data, overrides)
-    geometry = data.get("geometry") if isinstance(data, dict) else None
-    if (not isinstance(source, dict) and isinstance(geometry, dict) and isinstance(geometry.get("path"), str)
-            and not Path(geometry["path"]).is_absolute()):
-        # A mesh file named in a scene file is found from the scene file's folder.
-        data = {**data, "geometry": {**geometry, "path": str((path.parent / geometry["path"]).resolve())}}
+    if not isinstance(source, dict):
+        data = _resolve_mesh_path(data, path.parent)  # a mesh file named in a scene file: from the file's folder
+    # a mesh file given by --set (or in a dict): from the working directory, as a shell user expects
+    data = _resolve_mesh_path(apply_overrides(data, overrides), Path.cwd())
     try:
         return Scene.model_validate(data)
     except ValidationError as exc:

@@ -50,8 +50,8 @@ from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleR
                       Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity, WindowError)
 from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
 from .geometries import build_scene_model
-from .scene_models import PRESSURE_LOAD, SceneModel
-from .scenes import Scene, describe_differences
+from .scene_models import PRESSURE_LOAD, MeshFileError, SceneModel
+from .scenes import Scene, SceneError, describe_differences
 from .sizes import SizeEstimate, check_size
 
 __all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "run_scene", "read_checkpoint",
@@ -104,6 +104,8 @@ class ContactModel:
         self.comm = comm
         try:
             self.setup: SceneModel = build_scene_model(scene, comm, applies_model_fraction=True)
+        except MeshFileError as exc:  # bad input (the file or what the scene asks of it), before any assembly
+            raise SceneError(str(exc)) from None
         except (ValueError, KeyError) as exc:
             raise SimulationError(str(exc).strip("'\"")) from None
         s, sv, m = self.setup, scene.solver, scene.material
@@ -157,6 +159,13 @@ class ContactModel:
     @property
     def n_dofs(self) -> int:
         return self.problem.n_dofs
+
+    @property
+    def window_edges_matter(self) -> bool:
+        """Load on the first zone's outermost candidates means a truncated contact: the geometry says its window's
+        ends are not the body's edges, and some node of the surface lies outside the window (a window that holds the
+        whole surface ends at the surface's own ends)."""
+        return self.setup.window_edges_matter and self.problem.contacts[0].outside is not None
 
     @property
     def window_can_grow(self) -> bool:
@@ -387,7 +396,7 @@ class _Run:
     def _check_window_edge(self, forces: np.ndarray, where: str) -> None:
         """The window's ends carry load: a truncated contact. Grow the window, or stop with a message."""
         rn = forces[0::self.model.contact.dim][:self.problem.contacts[0].nc]   # the first zone's (it grows)
-        if self.model.setup.window_edges_matter and (rn[0] > 0 or rn[-1] > 0):
+        if self.model.window_edges_matter and (rn[0] > 0 or rn[-1] > 0):
             self._window_edge_reached(where)
 
     def _window_edge_reached(self, where: str, outside: WindowError | None = None) -> None:
@@ -408,7 +417,7 @@ class _Run:
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm; the mesh's uniform zone "
                       f"ends at {model.setup.window_limit:.4g} mm, beyond it the cells grow) or "
                       "geometry.contact_half_width (the uniform zone)")
-        elif model.setup.window_limit is None:  # a window the scene gives on a mesh with no refined zone
+        elif model.setup.window_limit is None or self.scene.geometry.kind == "file":  # no refined zone
             advice = (f"widen contact.candidate_half_width (now {model.half_width:.4g} mm) or leave it out (the "
                       "whole surface)")
         else:
@@ -523,7 +532,7 @@ class _Run:
                 # The compiled loop: the window's edge first (a truncated contact concentrates load and wear at
                 # the end node: grow the window rather than refuse the wear), then the wear step.
                 edge = result.records["edge_loaded"] > 0
-                if result.compiled and self.model.setup.window_edges_matter and edge.any():
+                if result.compiled and self.model.window_edges_matter and edge.any():
                     j = int(np.flatnonzero(edge)[0])
                     self._window_edge_reached(self._where(first + j, cycle, j + 1))
                 self._check_wear_step(cycle, start.wear_gap, result.final.wear_gap)

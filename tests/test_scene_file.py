@@ -20,8 +20,8 @@ from petsc4py import PETSc  # noqa: E402
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 from dolfinx_fretting.materials import LinearElastic  # noqa: E402
-from dolfinx_fretting.scenes import load_scene  # noqa: E402
-from dolfinx_fretting.simulation import SimulationError, run_scene  # noqa: E402
+from dolfinx_fretting.scenes import SceneError, load_scene  # noqa: E402
+from dolfinx_fretting.simulation import run_scene  # noqa: E402
 from support.mesh_files import shared_folder, write_msh  # noqa: E402
 
 COMM = MPI.COMM_WORLD
@@ -149,11 +149,11 @@ def test_xdmf_scene_file_gives_the_msh_answer(punch_file, tmp_path_factory):
     scene = scene_dict(xdmf, surface="1")
     scene["boundary"] = {"fixed": ["2"]}
     assert run_scene(load_scene(scene), folder / "numbers", COMM, quiet=True)["contacts"] == by_msh["contacts"]
-    with pytest.raises(SimulationError, match=r"contact.surface = 'face' is not a physical group .* 1, 2 \(an XDMF"):
+    with pytest.raises(SceneError, match=r"contact.surface = 'face' is not a physical group .* 1, 2 \(an XDMF"):
         run_scene(load_scene(scene_dict(xdmf)), folder / "bad", COMM, quiet=True)
     bad = scene_dict(xdmf)
     bad["geometry"]["groups"] = {"face": 7}
-    with pytest.raises(SimulationError, match=r"geometry.groups.face = 7 is not a facet marker .* 1, 2"):
+    with pytest.raises(SceneError, match=r"geometry.groups.face = 7 is not a facet marker .* 1, 2"):
         run_scene(load_scene(bad), folder / "bad7", COMM, quiet=True)
 
 
@@ -171,17 +171,15 @@ def test_scene_file_from_toml_with_relative_path(punch_file, tmp_path_factory):
 
 def test_unknown_names_list_the_file_groups(punch_file, tmp_path_factory):
     folder = Path(COMM.bcast(str(tmp_path_factory.mktemp("bad")) if COMM.rank == 0 else None, root=0))
-    with pytest.raises(SimulationError, match=r"contact.surface = 'bottom' is not a physical group .* face, top"):
+    with pytest.raises(SceneError, match=r"contact.surface = 'bottom' is not a physical group .* face, top"):
         run_scene(load_scene(scene_dict(punch_file, surface="bottom")), folder, COMM, quiet=True)
     bad = scene_dict(punch_file)
     bad["boundary"] = {"fixed": ["top", "lid"]}
-    with pytest.raises(SimulationError, match=r"boundary.fixed = 'lid' is not a physical group"):
+    with pytest.raises(SceneError, match=r"boundary.fixed = 'lid' is not a physical group"):
         run_scene(load_scene(bad), folder, COMM, quiet=True)
 
 
 def test_boundary_section_needs_a_mesh_file():
-    from dolfinx_fretting.scenes import SceneError
-
     with pytest.raises(SceneError, match="boundary.fixed"):
         load_scene("hertz", ["boundary.fixed=['top']"])
     with pytest.raises(SceneError, match="geometry.path"):

@@ -8,14 +8,14 @@ import gmsh
 from mpi4py import MPI
 
 
-def write_msh(path: Path, build: Callable[[], None], comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
-    """Run ``build()`` (the gmsh model: geometry, physical groups, size fields) on rank 0, mesh it in 2D and write
-    ``path``; every rank returns once the file is written."""
+def write_msh(path: Path, build: Callable[[], None], comm: MPI.Comm = MPI.COMM_WORLD, dim: int = 2) -> Path:
+    """Run ``build()`` (the gmsh model: geometry, physical groups, size fields) on rank 0, mesh it in ``dim``
+    dimensions (2 by default) and write ``path``; every rank returns once the file is written."""
     if comm.rank == 0:
         gmsh.initialize()
         gmsh.option.setNumber("General.Terminal", 0)
         build()
-        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.generate(dim)
         gmsh.write(str(path))
         gmsh.finalize()
     comm.barrier()
