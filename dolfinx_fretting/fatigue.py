@@ -393,28 +393,37 @@ def ruiz_parameter(sigma_xx, shear_traction, tangential_displacement) -> np.ndar
 
     ``(sigma_xx)_max`` is the largest surface stress along the surface over the cycle (tension positive; a
     compressive maximum gives a negative kappa, kept as such), ``delta`` the local slip amplitude (half the range
-    of the relative tangential displacement over the cycle) and ``(tau delta)_max`` the largest ``|tau| delta``
-    over the cycle (Ruiz, Boddington & Chen, Exp. Mech. 24, 1984). Units: MPa x MPa x length.
+    of the relative tangential displacement over the cycle; with two tangential components half the diameter of
+    its path) and ``(tau delta)_max`` the largest ``|tau| delta`` over the cycle (Ruiz, Boddington & Chen, Exp.
+    Mech. 24, 1984). Units: MPa x MPa x length.
 
     Args:
         sigma_xx: (n_times, n_points) the stress along the surface (MPa).
-        shear_traction: (n_times, n_points) the surface shear traction (MPa).
-        tangential_displacement: (n_times, n_points) the relative tangential displacement (length).
+        shear_traction: (n_times, n_points) the surface shear traction (MPa), or (n_times, n_points, k) its
+            components (its magnitude is used).
+        tangential_displacement: (n_times, n_points) the relative tangential displacement (length), or
+            (n_times, n_points, k) its components.
 
     Returns:
         (n_points,) kappa.
     """
-    arrays = [np.asarray(a, dtype=float) for a in (sigma_xx, shear_traction, tangential_displacement)]
-    names = ("sigma_xx", "shear_traction", "tangential_displacement")
-    for name, values in zip(names, arrays):
-        if values.ndim != 2 or values.shape != arrays[0].shape or values.shape[0] < 1:
-            raise ValueError(f"ruiz_parameter: {name} has shape {values.shape}; (n_times, n_points) expected, "
-                             f"the same for all three (sigma_xx: {arrays[0].shape})")
+    stress = np.asarray(sigma_xx, dtype=float)
+    shear = np.asarray(shear_traction, dtype=float)
+    slip = np.asarray(tangential_displacement, dtype=float)
+    shear = shear[..., None] if shear.ndim == 2 else shear
+    slip = slip[..., None] if slip.ndim == 2 else slip
+    for name, values, ndim in (("sigma_xx", stress, 2), ("shear_traction", shear, 3),
+                               ("tangential_displacement", slip, 3)):
+        if values.ndim != ndim or values.shape[:2] != stress.shape or stress.shape[0] < 1:
+            raise ValueError(f"ruiz_parameter: {name} has shape {values.shape}; (n_times, n_points[, k]) expected "
+                             f"with the times and points of sigma_xx {stress.shape}")
         if not np.all(np.isfinite(values)):
             raise ValueError(f"ruiz_parameter: {name} has non-finite values")
-    stress, shear, slip = arrays
-    amplitude = 0.5 * (slip.max(axis=0) - slip.min(axis=0))
-    return stress.max(axis=0) * (np.abs(shear).max(axis=0) * amplitude)
+    if slip.shape[2] not in (1, 2):
+        raise ValueError(f"ruiz_parameter: tangential_displacement has {slip.shape[2]} components; 1 or 2")
+    # (one component: the path's range, what _path_diameter gives when the second is zero)
+    amplitude = 0.5 * _path_diameter(slip[..., 0], slip[..., 1] if slip.shape[2] == 2 else np.zeros(stress.shape))
+    return stress.max(axis=0) * (np.linalg.norm(shear, axis=2).max(axis=0) * amplitude)
 
 
 def critical_distance(depths, values, distance: float, method: str = "point") -> np.ndarray:

@@ -9,10 +9,17 @@ import math
 
 import numpy as np
 import pytest
+from mpi4py import MPI  # before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs
 
-from dolfinx_fretting import fatigue
+from dolfinx import mesh as dmesh  # noqa: E402
 
-E, NU = 200000.0, 0.3
+import dolfinx_fretting as dfr  # noqa: E402
+from dolfinx_fretting import fatigue  # noqa: E402
+from dolfinx_fretting.fatigue_fields import fatigue_over_cycle  # noqa: E402
+from dolfinx_fretting.materials import J2Plasticity, LinearElastic  # noqa: E402
+from support.blocks import E, NU  # noqa: E402
+from support.fatigue_block import block_cycle, pulled_block  # noqa: E402
+
 G = E / (2 * (1 + NU))
 TIMES = np.linspace(0.0, 2 * np.pi, 73)   # every 5 degrees of phase: sin reaches +-1 exactly at 90 and 270
 
@@ -207,3 +214,80 @@ def test_ruiz_parameter_on_a_constructed_surface_history():
     shear = np.column_stack([30 * np.cos(TIMES)] * 3)
     slip = np.column_stack([0.002 * np.sin(TIMES), np.full(TIMES.size, 0.001), 0.002 * np.sin(TIMES)])
     assert fatigue.ruiz_parameter(sigma_xx, shear, slip) == pytest.approx([9.0, 0.0, -3.0], rel=1e-12, abs=1e-15)
+    # 3D: a slip path on a circle of radius 0.002 (amplitude: half its diameter) and a shear traction of
+    # magnitude 30 along it: kappa = 150 x 30 x 0.002 = 9 again (the path's samples hit opposite points: 1e-12)
+    circle = 0.002 * np.stack([np.cos(TIMES), np.sin(TIMES)], axis=1)[:, None, :]
+    traction = 30 * np.stack([-np.sin(TIMES), np.cos(TIMES)], axis=1)[:, None, :]
+    assert fatigue.ruiz_parameter(sigma_xx[:, :1], traction, circle) == pytest.approx([9.0], rel=1e-12)
+
+
+# DOLFINx glue ---------------------------------------------------------------------------------------------------
+def block_fatigue(comm):
+    """The glue on the pulled block's cycle (depth 0.5, FS with k = 0, the Ti-6Al-4V constants' life)."""
+    problem = pulled_block(comm)
+    result = fatigue_over_cycle(problem, block_cycle(problem), 0.5, LinearElastic(E, NU),
+                                fatemi_socie=fatigue.FatemiSocie(0.0, 800.0), strain_life=TI64)
+    problem.destroy()
+    return result
+
+
+def test_glue_gives_the_closed_form_under_a_uniform_cyclic_load():
+    """Uniform plane-strain uniaxial stress sigma_xx = t (sigma_yy = 0, sigma_zz = nu t), t = 50 + 200 sin: at every
+    point SWT = t_max (1 - nu^2) t_a / E on the plane normal to x and FS (k = 0) = (1 + nu) t_a / E on the +-45
+    degree planes (gamma = eps_xx - eps_yy = (1 + nu) t / E there). The displacement is exact for a uniform field on
+    quadrilaterals, so only the factorisation's rounding remains: 1e-10. Depth 1 - y; every summary field."""
+    result = block_fatigue(MPI.COMM_SELF)
+    t_max, t_a = 250.0, 200.0
+    swt = t_max * (1 - NU ** 2) * t_a / E
+    assert result.swt.size == 18   # three rows of six cells, one midpoint each, within depth 0.5
+    assert result.swt == pytest.approx(np.full(result.swt.size, swt), rel=1e-10)
+    assert np.all(result.swt_angle == 0.0)
+    assert result.fs == pytest.approx(np.full(result.swt.size, (1 + NU) * t_a / E), rel=1e-10)
+    assert np.all(np.abs(result.fs_angle) == 45.0)
+    assert result.depth == pytest.approx(1.0 - result.coordinates[:, 1], abs=1e-12)
+    assert result.sigma_xx == pytest.approx(np.full(result.swt.size, t_max), rel=1e-10)
+    assert result.life == pytest.approx(TI64.life_swt(np.full(result.swt.size, swt)), rel=1e-8)
+    assert tuple(result.summary) == fatigue.SUMMARY_FIELDS
+    assert result.summary["swt_max"] == pytest.approx(swt, rel=1e-10)
+    assert result.summary["life_min"] == pytest.approx(float(TI64.life_swt(swt)), rel=1e-8)
+    assert result.summary["ruiz_max"] == 0.0   # the contact never closes: no shear, no slip
+    assert set(result.columns()) == set(fatigue.POINT_COLUMNS)
+
+
+
+def test_glue_reads_an_elastic_plastic_states_stored_stress():
+    """The same cycle on an elastic-plastic body that never yields (sigma_y = 1e12): the points are the plastic
+    state's (2 x 2 Gauss per cell: 72 within depth 0.5), the stress its committed one; SWT and FS equal the closed
+    form (one Newton iteration of a linear problem is exact: rounding only, 1e-10)."""
+    problem = pulled_block(MPI.COMM_SELF, plasticity=dfr.Plasticity(J2Plasticity(E, NU, 1e12, 0.0)))
+    result = fatigue_over_cycle(problem, block_cycle(problem), 0.5, fatemi_socie=fatigue.FatemiSocie(0.0, 800.0))
+    problem.destroy()
+    assert result.swt.size == 72
+    assert result.swt == pytest.approx(np.full(72, 250.0 * (1 - NU ** 2) * 200.0 / E), rel=1e-10)
+    assert result.fs == pytest.approx(np.full(72, (1 + NU) * 200.0 / E), rel=1e-10)
+    assert result.summary["life_min"] is None   # no strain-life constants given
+
+
+def test_glue_region_by_cell_tag_and_its_input_checks():
+    """A cell tag holding the top three rows of cells gives the points of depth 0.5 (the same 18 midpoints, the
+    same SWT); bad input is refused before any work, naming the argument."""
+    problem = pulled_block(MPI.COMM_SELF)
+    states = block_cycle(problem, steps=4)
+    msh = problem.V.mesh
+    top = np.sort(dmesh.locate_entities(msh, msh.topology.dim, lambda x: x[1] >= 0.5 - 1e-12))  # all vertices
+    cell_tags = dmesh.meshtags(msh, msh.topology.dim, top.astype(np.int32), np.full(top.size, 7, dtype=np.int32))
+    by_tag = fatigue_over_cycle(problem, states, (cell_tags, 7), LinearElastic(E, NU))
+    by_depth = fatigue_over_cycle(problem, states, 0.5, LinearElastic(E, NU))
+    order_tag, order_depth = np.lexsort(by_tag.coordinates.T[:2]), np.lexsort(by_depth.coordinates.T[:2])
+    assert by_tag.coordinates[order_tag] == pytest.approx(by_depth.coordinates[order_depth], abs=1e-14)
+    assert by_tag.swt[order_tag] == pytest.approx(by_depth.swt[order_depth], rel=1e-14)
+    with pytest.raises(ValueError, match="material"):
+        fatigue_over_cycle(problem, states, 0.5)
+    with pytest.raises(ValueError, match="region = -0.1"):
+        fatigue_over_cycle(problem, states, -0.1, LinearElastic(E, NU))
+    with pytest.raises(ValueError, match="holds no point"):
+        fatigue_over_cycle(problem, states, (cell_tags, 8), LinearElastic(E, NU))
+    with pytest.raises(ValueError, match="states must be"):
+        fatigue_over_cycle(problem, [], 0.5, LinearElastic(E, NU))
+    problem.destroy()
+
