@@ -37,7 +37,7 @@ import numpy as np
 
 __all__ = ["POINT_COLUMNS", "SUMMARY_FIELDS", "DEFAULT_ANGLE_STEP", "BasquinCoffinManson", "ShearStrainLife",
            "FatemiSocie", "PlaneSet", "CriticalPlanes", "mandel_to_tensor", "plane_normals", "critical_planes",
-           "ruiz_parameter", "critical_distance"]
+           "ruiz_parameter", "critical_distance", "CriticalDistance", "depth_profile", "CRITICAL_DISTANCE_FIELDS"]
 
 #: Per-point columns of a fatigue evaluation (one declaration: the result object and any table writer read it).
 #: ``x`` the point's x coordinate, ``depth`` below the contact surface, ``sigma_xx`` its largest value over the
@@ -47,6 +47,9 @@ POINT_COLUMNS = ("x", "depth", "sigma_xx", "swt", "swt_angle", "fs", "fs_angle",
 #: Summary numbers of a fatigue evaluation (the largest SWT, where and on which plane; the largest FS; the
 #: largest Ruiz parameter and where; the shortest life).
 SUMMARY_FIELDS = ("swt_max", "swt_x", "swt_depth", "swt_angle", "fs_max", "ruiz_max", "ruiz_x", "life_min")
+#: Summary numbers added with a critical distance: SWT by the point or line method below the SWT hot spot, and
+#: the life it gives (None without strain-life constants).
+CRITICAL_DISTANCE_FIELDS = ("swt_critical", "life_critical")
 #: The default step (degrees) of the plane search: 1 in 2D (180 planes); 5 in 3D (about 800 planes).
 DEFAULT_ANGLE_STEP = {2: 1.0, 3: 5.0}
 
@@ -464,3 +467,70 @@ def critical_distance(depths, values, distance: float, method: str = "point") ->
         # the trapezoidal rule written out (numpy 1.24 has np.trapz only, numpy 2 renames it)
         result = (0.5 * (sampled[:, 1:] + sampled[:, :-1]) * np.diff(grid)).sum(axis=1) / reach
     return float(result[0]) if single else result
+
+
+@dataclass(frozen=True)
+class CriticalDistance:
+    """Taylor's critical distance applied below the hot spot (:func:`depth_profile`, :func:`critical_distance`).
+
+    Args:
+        distance: The critical distance L (length units), > 0 (e.g. the El Haddad length
+            (1/pi) (delta K_th / delta sigma_e)^2).
+        method: ``"point"`` (the parameter at depth L) or ``"line"`` (its mean over depths 0 to 2L).
+        band: Half-width of the band of points (along x) whose values make the profile below the hot spot; None:
+            the hot spot's own depth (about half an element for a hot spot in the first row of cells).
+
+    Raises:
+        ValueError: a value out of its range (the message names it).
+    """
+
+    distance: float
+    method: str = "point"
+    band: float | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "distance", _positive("CriticalDistance", "distance", self.distance))
+        if self.method not in ("point", "line"):
+            raise ValueError(f"CriticalDistance: method = {self.method!r}: allowed 'point', 'line'")
+        if self.band is not None:
+            object.__setattr__(self, "band", _positive("CriticalDistance", "band", self.band))
+
+
+def depth_profile(x, depth, values, x0: float, band: float) -> tuple[np.ndarray, np.ndarray]:
+    """A parameter's profile in depth below the surface point ``x0``, from scattered points.
+
+    The points with ``|x - x0| <= band`` are taken; those at one depth (to 1e-9 of the deepest) are averaged; the
+    profile is extended to depth 0 by the straight line through its two shallowest samples (exact for a
+    parameter linear in depth), as :func:`critical_distance` wants it.
+
+    Args:
+        x, depth, values: (P,) the points' positions along the surface, depths (>= 0) and parameter values.
+        x0: Where the line into the body starts (e.g. the hot spot's x).
+        band: Half-width of the band of points taken (> 0).
+
+    Returns:
+        (depths, values) of the profile, the depths increasing from 0.
+
+    Raises:
+        ValueError: fewer than two distinct depths in the band.
+    """
+    x, depth, values = (np.asarray(a, dtype=float).ravel() for a in (x, depth, values))
+    inside = np.abs(x - float(x0)) <= float(band)
+    depths, samples = depth[inside], values[inside]
+    if depths.size == 0:
+        raise ValueError(f"depth_profile: no point within band = {band!r} of x0 = {x0!r}")
+    tolerance = 1e-9 * np.abs(depths).max()
+    order = np.argsort(depths, kind="stable")
+    depths, samples = depths[order], samples[order]
+    starts = np.flatnonzero(np.concatenate([[True], np.diff(depths) > tolerance]))
+    levels = np.add.reduceat(depths, starts) / np.diff(np.append(starts, depths.size))
+    means = np.add.reduceat(samples, starts) / np.diff(np.append(starts, depths.size))
+    if levels.size < 2:
+        raise ValueError(f"depth_profile: the points within band = {band!r} of x0 = {x0!r} lie at one depth; a "
+                         "wider band (or a finer mesh) is needed")
+    if levels[0] > tolerance:
+        surface = means[0] - levels[0] * (means[1] - means[0]) / (levels[1] - levels[0])
+        levels, means = np.concatenate([[0.0], levels]), np.concatenate([[surface], means])
+    else:
+        levels[0] = 0.0
+    return levels, means

@@ -34,8 +34,8 @@ from scipy.spatial import cKDTree
 
 from . import _dolfinx as dfx
 from ._dolfinx import fem
-from .fatigue import (POINT_COLUMNS, BasquinCoffinManson, CriticalPlanes, FatemiSocie,
-                      critical_planes, mandel_to_tensor, ruiz_parameter)
+from .fatigue import (POINT_COLUMNS, BasquinCoffinManson, CriticalDistance, CriticalPlanes, FatemiSocie,
+                      critical_distance, critical_planes, depth_profile, mandel_to_tensor, ruiz_parameter)
 from .state import ContactState, CycleResult
 
 __all__ = ["FatigueResult", "fatigue_over_cycle", "cycle_states"]
@@ -128,6 +128,10 @@ def _check_inputs(problem, states, region, material, quadrature_degree) -> tuple
         if quadrature_degree not in (None, problem.plasticity.quadrature_degree):
             raise ValueError(f"fatigue_over_cycle: quadrature_degree = {quadrature_degree!r}: an elastic-plastic "
                              f"body's points are its plastic state's (degree {problem.plasticity.quadrature_degree})")
+        missing = [i for i, state in enumerate(states) if state.plastic is None]
+        if missing:
+            raise ValueError(f"fatigue_over_cycle: states{missing} have no plastic history (committed states of this "
+                             "elastic-plastic problem are needed)")
         return states, law
     if material is None or not (hasattr(material, "E") and hasattr(material, "nu")):
         raise ValueError("fatigue_over_cycle: material (with E and nu, e.g. materials.LinearElastic) is required "
@@ -175,7 +179,8 @@ def _best(comm: MPI.Comm, values: np.ndarray, extras: Sequence[np.ndarray], larg
 def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, region: float | tuple,
                        material=None, *, fatemi_socie: FatemiSocie | None = None,
                        strain_life: BasquinCoffinManson | None = None, angle_step: float | None = None,
-                       quadrature_degree: int | None = None) -> FatigueResult:
+                       quadrature_degree: int | None = None,
+                       critical: CriticalDistance | None = None) -> FatigueResult:
     """The fatigue parameters of one load cycle at the points of a near-surface region (module docstring).
     Collective.
 
@@ -193,10 +198,16 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
         strain_life: The strain-life constants for the life by SWT (None: life inf, ``life_min`` None).
         angle_step: The plane search's step in degrees (default 1 in 2D, 5 in 3D).
         quadrature_degree: Elastic bodies: the rule of the points (default 1: the cells' midpoints).
+        critical: A critical distance: the summary also holds
+            :data:`~dolfinx_fretting.fatigue.CRITICAL_DISTANCE_FIELDS`, SWT by its point or line method on the
+            profile in depth below the SWT hot spot (:func:`~dolfinx_fretting.fatigue.depth_profile` of every
+            rank's points within its band) and the life it gives.
 
     Returns:
         The per-point arrays of this rank and the summary of all (:class:`FatigueResult`).
     """
+    if critical is not None and not isinstance(critical, CriticalDistance):
+        raise ValueError(f"fatigue_over_cycle: critical = {critical!r}: a fatigue.CriticalDistance or None")
     states, elastic = _check_inputs(problem, states, region, material, quadrature_degree)
     comm = problem.comm
     V = problem.V
@@ -230,16 +241,13 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
         strain[:, :gdim, :gdim] = dfx.eval_expression(strain_expression, msh, cells).reshape(-1, gdim, gdim)
         strain_history[time] = strain[chosen]
         if plastic:
-            if state.plastic is None:
-                raise ValueError(f"fatigue_over_cycle: states[{time}] has no plastic history (a committed state of "
-                                 "this elastic-plastic problem is needed)")
             stress_history[time] = mandel_to_tensor(state.plastic.sigma)[chosen]
         else:
             stress_history[time] = _hooke(strain[chosen], elastic.E, elastic.nu)
     planes = critical_planes(stress_history, strain_history, gdim, angle_step, fatemi_socie)
     life = strain_life.life_swt(planes.swt) if strain_life is not None else np.full(planes.swt.shape, np.inf)
     points = coordinates[chosen]
-    sigma_xx = stress_history[:, :, 0, 0].max(axis=0) if len(states) else np.zeros(0)
+    sigma_xx = stress_history[:, :, 0, 0].max(axis=0)
     ruiz = _ruiz(comm, problem, states, contact_set, points, stress_history[:, :, 0, 0])
 
     swt_max, (swt_x, swt_depth, swt_angle) = _best(comm, planes.swt, (points[:, 0], depth[chosen],
@@ -253,8 +261,25 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
                "ruiz_max": float(ruiz[ruiz_index]) if ruiz_index is not None else np.nan,
                "ruiz_x": float(contact_set.coords[ruiz_index, 0]) if ruiz_index is not None else np.nan,
                "life_min": float(life_min) if strain_life is not None else None}
+    if critical is not None:
+        swt_critical = _swt_at_critical_distance(comm, critical, points[:, 0], depth[chosen], planes.swt, swt_x,
+                                                 swt_depth)
+        summary["swt_critical"] = swt_critical
+        summary["life_critical"] = float(strain_life.life_swt(swt_critical)) if strain_life is not None else None
     return FatigueResult(points, depth[chosen], sigma_xx, planes.swt, planes.swt_theta, planes.fs,
                          planes.fs_theta, life, planes, ruiz, contact_set.coords.copy(), summary, len(states))
+
+
+def _swt_at_critical_distance(comm: MPI.Comm, critical: CriticalDistance, x: np.ndarray, depth: np.ndarray,
+                              swt: np.ndarray, hot_x: float, hot_depth: float) -> float:
+    """SWT by the critical distance's method below the hot spot, from every rank's points in its band (the same
+    gathered data, so the same answer or error, on every rank). Collective."""
+    band = critical.band if critical.band is not None else hot_depth
+    inside = np.abs(x - hot_x) <= band
+    parts = comm.allgather((x[inside], depth[inside], swt[inside]))
+    gathered = [np.concatenate([part[i] for part in parts]) for i in range(3)]
+    levels, values = depth_profile(*gathered, hot_x, band)
+    return float(critical_distance(levels, values, critical.distance, critical.method))
 
 
 def _reduced(comm: MPI.Comm, values: np.ndarray, op) -> np.ndarray:

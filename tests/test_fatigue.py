@@ -206,6 +206,26 @@ def test_critical_distance_point_and_line_methods():
         fatigue.critical_distance(depths, lines, 0.15, "line")
 
 
+def test_depth_profile_from_scattered_points():
+    """Scattered points (random x in a band, depths on a few levels, several points a level) of a parameter
+    linear in depth, v = 3 + 40 d: the profile averages each level, is extended to depth 0 exactly, and the point
+    and line methods give 3 + 40 L (1e-12); points outside the band (another value) are ignored."""
+    generator = np.random.default_rng(1)
+    levels = np.repeat([0.01, 0.03, 0.05, 0.07, 0.09], 4)
+    x = 0.5 + generator.uniform(-0.02, 0.02, levels.size)
+    outside = np.array([0.6, 0.4])
+    depth = np.concatenate([levels, [0.01, 0.03]])
+    values = np.concatenate([3 + 40 * levels, [1e3, 1e3]])
+    profile_depths, profile_values = fatigue.depth_profile(np.concatenate([x, outside]), depth, values, 0.5, 0.025)
+    assert profile_depths == pytest.approx([0.0, 0.01, 0.03, 0.05, 0.07, 0.09], abs=1e-15)
+    assert profile_values == pytest.approx(3 + 40 * profile_depths, rel=1e-12)
+    for method in ("point", "line"):
+        assert fatigue.critical_distance(profile_depths, profile_values, 0.04, method) == pytest.approx(
+            3 + 40 * 0.04, rel=1e-12)
+    with pytest.raises(ValueError, match="method = "):
+        fatigue.CriticalDistance(0.05, "area")
+
+
 def test_ruiz_parameter_on_a_constructed_surface_history():
     """sigma_xx = 100 + 50 sin t, tau = 30 cos t, relative slip s = 0.002 sin t (amplitude 0.002) at one point,
     a stuck point (no slip) and a point in compression (sigma_xx = -100 + 50 sin t, its maximum -50):
@@ -226,7 +246,8 @@ def block_fatigue(comm):
     """The glue on the pulled block's cycle (depth 0.5, FS with k = 0, the Ti-6Al-4V constants' life)."""
     problem = pulled_block(comm)
     result = fatigue_over_cycle(problem, block_cycle(problem), 0.5, LinearElastic(E, NU),
-                                fatemi_socie=fatigue.FatemiSocie(0.0, 800.0), strain_life=TI64)
+                                fatemi_socie=fatigue.FatemiSocie(0.0, 800.0), strain_life=TI64,
+                                critical=fatigue.CriticalDistance(0.1, "line", band=0.1))
     problem.destroy()
     return result
 
@@ -247,7 +268,10 @@ def test_glue_gives_the_closed_form_under_a_uniform_cyclic_load():
     assert result.depth == pytest.approx(1.0 - result.coordinates[:, 1], abs=1e-12)
     assert result.sigma_xx == pytest.approx(np.full(result.swt.size, t_max), rel=1e-10)
     assert result.life == pytest.approx(TI64.life_swt(np.full(result.swt.size, swt)), rel=1e-8)
-    assert tuple(result.summary) == fatigue.SUMMARY_FIELDS
+    assert tuple(result.summary) == fatigue.SUMMARY_FIELDS + fatigue.CRITICAL_DISTANCE_FIELDS
+    # a uniform field: the same SWT at the critical distance (line method over 0 .. 0.2 below the hot spot)
+    assert result.summary["swt_critical"] == pytest.approx(swt, rel=1e-10)
+    assert result.summary["life_critical"] == pytest.approx(float(TI64.life_swt(swt)), rel=1e-8)
     assert result.summary["swt_max"] == pytest.approx(swt, rel=1e-10)
     assert result.summary["life_min"] == pytest.approx(float(TI64.life_swt(swt)), rel=1e-8)
     assert result.summary["ruiz_max"] == 0.0   # the contact never closes: no shear, no slip

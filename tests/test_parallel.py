@@ -371,7 +371,8 @@ def _rubbed_block_fatigue(comm: MPI.Comm):
     # depth 1: the whole block, so that every rank has points (a partition may give the top to one rank)
     result = fatigue_over_cycle(problem, rubbed_cycle(problem), 1.0, LinearElastic(E, NU),
                                 fatemi_socie=fatigue.FatemiSocie(0.5, 800.0),
-                                strain_life=fatigue.BasquinCoffinManson(2464.0, -0.1715, 0.0711, -0.6098, 116000.0))
+                                strain_life=fatigue.BasquinCoffinManson(2464.0, -0.1715, 0.0711, -0.6098, 116000.0),
+                                critical=fatigue.CriticalDistance(0.1, "line", band=0.1))
     problem.destroy()
     order = np.lexsort(result.ruiz_coordinates.T[::-1])   # the contact set's order may follow the partition
     return result.summary, result.gather(comm), result.ruiz[order]

@@ -28,7 +28,8 @@ def pulled_block(comm, n: int = 6, plasticity=None, gap: float = 0.1, graded: bo
            component(V, 0, lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0))]
     v = ufl.TestFunction(V)
     ds = ufl.Measure("ds", domain=msh, subdomain_data=tags)
-    traction = ufl.as_vector([ufl.SpatialCoordinate(msh)[1], 0.0]) if graded else fem.Constant(msh, np.array([1.0, 0.0]))
+    height = ufl.SpatialCoordinate(msh)[1]
+    traction = ufl.as_vector([height, 0.0]) if graded else fem.Constant(msh, np.array([1.0, 0.0]))
     pull = ufl.inner(traction, v) * ds(2) - ufl.inner(traction, v) * ds(3)
     contact = dfr.Contact(V, (tags, 1), dfr.RigidPlane([0.0, 1.0 + gap], [0.0, -1.0]), mu=0.5, bcs=bcs)
     return dfr.FrettingProblem(elasticity(V), contact, bcs, loads={"pull": pull}, plasticity=plasticity)
