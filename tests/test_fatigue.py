@@ -18,7 +18,7 @@ from dolfinx_fretting import fatigue  # noqa: E402
 from dolfinx_fretting.fatigue_fields import fatigue_over_cycle  # noqa: E402
 from dolfinx_fretting.materials import J2Plasticity, LinearElastic  # noqa: E402
 from support.blocks import E, NU  # noqa: E402
-from support.fatigue_block import block_cycle, pulled_block  # noqa: E402
+from support.fatigue_block import block_cycle, pulled_block, rubbed_cycle  # noqa: E402
 
 G = E / (2 * (1 + NU))
 TIMES = np.linspace(0.0, 2 * np.pi, 73)   # every 5 degrees of phase: sin reaches +-1 exactly at 90 and 270
@@ -315,3 +315,23 @@ def test_glue_region_by_cell_tag_and_its_input_checks():
         fatigue_over_cycle(problem, [], 0.5, LinearElastic(E, NU))
     problem.destroy()
 
+
+
+def test_a_cycles_records_give_the_states_answer():
+    """run_cycle(..., keep=True) (the compiled loop) handed over as a CycleResult gives what the same cycle's
+    committed states give increment by increment: the same local problems solved to the solver's 1e-10, so the
+    parameters agree to 1e-8 (measured 2e-15), Ruiz's parameter included; without keep=True it is refused."""
+    problem = pulled_block(MPI.COMM_SELF, n=8, gap=0.0, graded=True)
+    states = rubbed_cycle(problem)
+    pressed, _ = problem.advance(problem.initial_state(), normal=2e-4)
+    path = dfr.CyclePath.waveform(8, "sinusoidal", tangential=1e-3, loads={"pull": 100.0})
+    result = problem.run_cycle(pressed, path, keep=True)
+    assert result.compiled
+    by_states = fatigue_over_cycle(problem, states, 0.3, LinearElastic(E, NU))
+    by_records = fatigue_over_cycle(problem, result, 0.3, LinearElastic(E, NU))
+    assert by_records.swt == pytest.approx(by_states.swt, rel=1e-8)
+    assert by_records.ruiz == pytest.approx(by_states.ruiz, rel=1e-8, abs=1e-8 * by_states.ruiz.max())
+    assert by_states.summary["ruiz_max"] > 0
+    with pytest.raises(ValueError, match="keep=True"):
+        fatigue_over_cycle(problem, problem.run_cycle(pressed, path), 0.3, LinearElastic(E, NU))
+    problem.destroy()
