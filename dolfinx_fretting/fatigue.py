@@ -267,11 +267,15 @@ def plane_normals(dim: int, angle_step: float | None = None) -> PlaneSet:
             phi_parts.append(np.full(count, polar))
         theta, phi = np.concatenate(theta_parts), np.concatenate(phi_parts)
     t, p = np.radians(theta), np.radians(phi)
-    normals = np.column_stack([np.sin(p) * np.cos(t), np.sin(p) * np.sin(t), np.cos(p)])
-    # The plane's basis: e_theta (horizontal) and e_phi (the normal's derivative in phi, sign flipped); at the
-    # pole the same formulas give e_y and -e_x (theta = 0).
+    # (2D: sin and cos of 90 degrees written exactly, so that a plane-strain history has exactly no shear along
+    # e_z and the Fatemi-Socie shear path is a line: its range, not the T^2 diameter search)
+    sin_p, cos_p = (np.ones_like(p), np.zeros_like(p)) if dim == 2 else (np.sin(p), np.cos(p))
+    normals = np.column_stack([sin_p * np.cos(t), sin_p * np.sin(t), cos_p])
+    # The plane's basis: e_theta (horizontal), then n x e_theta (e_z in 2D); at the pole they are e_y and -e_x.
     first = np.column_stack([-np.sin(t), np.cos(t), np.zeros_like(t)])
     second = np.cross(normals, first)
+    if dim == 2:
+        second = np.tile([0.0, 0.0, 1.0], (t.size, 1))
     return PlaneSet(normals, np.stack([first, second], axis=1), theta, phi, step)
 
 
@@ -351,16 +355,20 @@ def critical_planes(stress, strain, dim: int, angle_step: float | None = None,
     n_times, n_points = stress.shape[:2]
     normals, bases = planes.normals, planes.shear_directions
     n_planes = normals.shape[0]
-    # tensor . n once per plane; then projections are dot products
+    # Each projection is a linear form of the tensor's nine components: n.T.n = T : (n n), 2 n.T.d = T : 2 (n d),
+    # so a chunk's projections on every plane are one matrix product (time x point, 9) @ (9, planes).
+    normal_forms = np.einsum("ki,kj->ijk", normals, normals).reshape(9, n_planes)
+    shear_forms = [2.0 * np.einsum("ki,kj->ijk", normals, bases[:, axis]).reshape(9, n_planes) for axis in (0, 1)]
     per_chunk = max(1, int(chunk_size) // (n_times * n_planes))
     out = {name: np.full(n_points, np.nan) for name in ("swt", "swt_index", "fs", "fs_index", "sigma_n_max",
                                                            "strain_amplitude", "shear_strain_range")}
     for start in range(0, n_points, per_chunk):
         points = slice(start, min(start + per_chunk, n_points))
-        traction = np.einsum("tpij,kj->tpki", stress[:, points], normals)          # sigma.n
-        stretch = np.einsum("tpij,kj->tpki", strain[:, points], normals)           # eps.n
-        sigma_n = np.einsum("tpki,ki->tpk", traction, normals)
-        eps_n = np.einsum("tpki,ki->tpk", stretch, normals)
+        stress_rows = stress[:, points].reshape(-1, 9)
+        strain_rows = strain[:, points].reshape(-1, 9)
+        shape = (n_times, -1, n_planes)
+        sigma_n = (stress_rows @ normal_forms).reshape(shape)                      # (t, p, k)
+        eps_n = (strain_rows @ normal_forms).reshape(shape)
         sigma_n_max = sigma_n.max(axis=0)
         amplitude = 0.5 * (eps_n.max(axis=0) - eps_n.min(axis=0))
         swt = sigma_n_max * amplitude                                              # (p, k)
@@ -371,8 +379,8 @@ def critical_planes(stress, strain, dim: int, angle_step: float | None = None,
         out["sigma_n_max"][points] = sigma_n_max[rows, best]
         out["strain_amplitude"][points] = amplitude[rows, best]
         if fatemi_socie is not None:
-            gamma_first = 2.0 * np.einsum("tpki,ki->tpk", stretch, bases[:, 0])
-            gamma_second = 2.0 * np.einsum("tpki,ki->tpk", stretch, bases[:, 1])
+            gamma_first = (strain_rows @ shear_forms[0]).reshape(shape)
+            gamma_second = (strain_rows @ shear_forms[1]).reshape(shape)
             shear_range = _path_diameter(gamma_first, gamma_second)
             fs = 0.5 * shear_range * (1.0 + fatemi_socie.k * sigma_n_max / fatemi_socie.sigma_y)
             best = np.argmax(fs, axis=1)
