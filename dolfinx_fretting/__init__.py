@@ -73,6 +73,9 @@ _API = {
     "Force": "loading", "Archard": "laws", "EnergyWear": "laws", "LocalSolver": "settings", "Plasticity": "settings",
     "J2Plasticity": "materials", "FrettingWriter": "output", "RunDescription": "output", "plot_run": "plots",
     "Units": "units",
+    "BasquinCoffinManson": "fatigue", "ShearStrainLife": "fatigue", "FatemiSocie": "fatigue",
+    "CriticalDistance": "fatigue",
+    "FatigueResult": "fatigue_fields", "fatigue_over_cycle": "fatigue_fields", "cycle_states": "fatigue_fields",
 }
 __all__ = sorted(_API)
 

@@ -356,3 +356,53 @@ def test_a_checkpoint_moves_between_rank_counts(shared_dir):
     scale = np.abs(after.forces).max()
     assert np.abs(serial - after.forces).max() <= 1e-8 * scale
     assert np.abs(back.forces - after.forces).max() <= 1e-8 * scale
+
+
+def _rubbed_block_fatigue(comm: MPI.Comm):
+    """Fatigue parameters of one rubbing cycle of the graded pulled block (tests/support/fatigue_block.py): the
+    summary and every rank's points gathered on rank 0."""
+    from dolfinx_fretting import fatigue
+    from dolfinx_fretting.fatigue_fields import fatigue_over_cycle
+    from dolfinx_fretting.materials import LinearElastic
+    from support.blocks import E, NU
+    from support.fatigue_block import pulled_block, rubbed_cycle
+
+    problem = pulled_block(comm, n=8, gap=0.0, graded=True)
+    # depth 1: the whole block, so that every rank has points (a partition may give the top to one rank)
+    result = fatigue_over_cycle(problem, rubbed_cycle(problem), 1.0, LinearElastic(E, NU),
+                                fatemi_socie=fatigue.FatemiSocie(0.5, 800.0),
+                                strain_life=fatigue.BasquinCoffinManson(2464.0, -0.1715, 0.0711, -0.6098, 116000.0),
+                                critical=fatigue.CriticalDistance(0.1, "line", band=0.1))
+    problem.destroy()
+    order = np.lexsort(result.ruiz_coordinates.T[::-1])   # the contact set's order may follow the partition
+    return result.summary, result.gather(comm), result.ruiz[order]
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_fatigue_over_cycle_matches_serial():
+    """The fatigue glue under MPI (issue 24): the maxima, their places and planes, Ruiz's parameter at the contact
+    nodes and every point's columns equal the serial run's (other factorisations' rounding only: 1e-8; the
+    plane angles, on a 1-degree grid, exactly)."""
+    summary, columns, ruiz = _rubbed_block_fatigue(COMM)
+    serial = failure = None
+    if COMM.rank == 0:   # (an error here is raised on every rank below: no rank waits for one that failed)
+        try:
+            serial = _rubbed_block_fatigue(MPI.COMM_SELF)
+        except Exception as exc:  # noqa: BLE001 - re-raised on every rank
+            failure = f"{type(exc).__name__}: {exc}"
+    failure = COMM.bcast(failure, root=0)
+    assert failure is None, failure
+    serial_summary, serial_ruiz = COMM.bcast((serial[0], serial[2]) if COMM.rank == 0 else None, root=0)
+    assert summary["swt_max"] > 0 and summary["ruiz_max"] > 0   # a case with something to compare
+    for key, value in serial_summary.items():
+        if value is None or key.endswith("angle"):
+            assert summary[key] == value, key
+        else:
+            assert summary[key] == pytest.approx(value, rel=1e-8, abs=1e-12), key
+    assert ruiz == pytest.approx(serial_ruiz, rel=1e-8, abs=1e-12 * np.abs(serial_ruiz).max())
+    if COMM.rank == 0:
+        serial_columns = serial[1]
+        order = np.lexsort((columns["depth"], columns["x"]))
+        serial_order = np.lexsort((serial_columns["depth"], serial_columns["x"]))
+        for name, values in columns.items():
+            assert values[order] == pytest.approx(serial_columns[name][serial_order], rel=1e-8, abs=1e-12), name
