@@ -261,14 +261,19 @@ def _punch_file(path):
     return write_msh(path, build)
 
 
-def test_a_degenerate_load_on_a_mesh_file_ends_in_one_line(tmp_path):
-    """A mesh file's normal force of 1e-300 N/mm: refused in one line naming the key (exit 2), or the run stops in one
-    line (exit 1) with a summary.json that says why; before issue 27, a traceback and no summary."""
+@pytest.mark.parametrize("boundary, load, named", [
+    ('fixed = ["top"]', "normal_force = 1e-300", "normal force"),
+    # a bulk load of 1e-300 mm: zero values once interpolated (the API refuses it while the model is built)
+    ("displacement = {top = [1e-300, 0.0]}", "normal_force = 10.0", "boundary_displacement"),
+])
+def test_a_degenerate_load_on_a_mesh_file_ends_in_one_line(tmp_path, boundary, load, named):
+    """A mesh file's degenerate loads: refused in one line naming the key (exit 2), or the run stops in one line (exit
+    1), with a summary.json that says why if the run had started; before issue 27, a traceback (and no summary)."""
     mesh = _punch_file(tmp_path / "punch.msh")
     scene = tmp_path / "punch.toml"
-    scene.write_text(f'name = "punch"\n[geometry]\nkind = "file"\npath = "{mesh}"\n[boundary]\nfixed = ["top"]\n'
+    scene.write_text(f'name = "punch"\n[geometry]\nkind = "file"\npath = "{mesh}"\n[boundary]\n{boundary}\n'
                      '[material]\nE = 210000.0\nnu = 0.3\n[contact]\nsurface = "face"\nmu = 0.3\n'
-                     '[loading]\nnormal_force = 1e-300\nnormal_increments = 1\n'
+                     f'[loading]\n{load}\nnormal_increments = 1\n'
                      '[output]\nxdmf = false\nplots = false\nprogress = false\n')
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
     res = subprocess.run([sys.executable, "-m", "dolfinx_fretting", "run", str(scene), "--out", str(tmp_path / "out"),
@@ -277,8 +282,11 @@ def test_a_degenerate_load_on_a_mesh_file_ends_in_one_line(tmp_path):
     assert "Traceback" not in res.stderr and len(errors) == 1, res.stderr
     assert res.returncode in (1, 2), res.stderr
     if res.returncode == 2:  # refused at validation (once mesh files get the scenes' strain estimate)
-        assert "loading.normal_force" in errors[0]
-    else:
+        assert "loading.normal_force" in errors[0] or "boundary.displacement" in errors[0]
+        return
+    assert named in errors[0]
+    if (tmp_path / "out" / "summary.json").exists():  # the run had started: its summary says why it stopped
         summary = json.loads((tmp_path / "out" / "summary.json").read_text())
-        assert summary["converged"] is False and "normal force" in summary["error"]
-        assert summary["error"] in errors[0]
+        assert summary["converged"] is False and summary["error"] in errors[0]
+    else:
+        assert named == "boundary_displacement"  # refused while the model is built, before the run starts
