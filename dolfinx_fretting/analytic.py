@@ -33,7 +33,8 @@ def hertz_line_contact(P: float, R: float, E_star: float) -> tuple[float, float]
     a = sqrt(4 P R / (pi E*)),  p0 = 2 P / (pi a).
     """
     a = np.sqrt(4.0 * P * R / (np.pi * E_star))
-    return float(a), float(2.0 * P / (np.pi * a))
+    # p0 = sqrt(P E* / (pi R)), the same as 2 P / (pi a) for P > 0 and 0 (not 0/0) for an open contact (P = 0)
+    return float(a), float(np.sqrt(P * E_star / (np.pi * R)))
 
 
 def hertz_pressure(x: np.ndarray, P: float, R: float, E_star: float, x0: float = 0.0) -> np.ndarray:

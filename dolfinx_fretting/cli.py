@@ -156,7 +156,8 @@ _exit_comm = None
 
 
 def _study(args: argparse.Namespace) -> int:
-    """``dolfinx-fretting study``: the trade study; 2 for bad input, 1 if the reference run fails."""
+    """``dolfinx-fretting study``: the trade study; 2 for bad input, 1 if the reference run or any point fails (the
+    failed points are in the table)."""
     try:
         sweep = study.parse_sweep(args.sweep) if args.sweep is not None else None
         points = [study.parse_point(p) for p in args.point]
@@ -177,10 +178,14 @@ def _study(args: argparse.Namespace) -> int:
     except RuntimeError as exc:
         _say_error("dolfinx-fretting study", exc)
         return 1
+    failed = [row["label"] for row in rows if not row["converged"]]
     if MPI.COMM_WORLD.rank == 0:
         print(study.format_markdown(rows))
         print(f"wrote {args.out}/study.csv, study.md, study.png")
-    return 0
+        if failed:  # kept in the table with their messages; the exit code says the study is not whole
+            print(f"dolfinx-fretting study: {len(failed)} of {len(rows)} runs failed ({', '.join(failed)}); their "
+                  "messages are in study.csv and study.md", file=sys.stderr)
+    return 1 if failed else 0
 
 
 # dolfinx-fretting map --------------------------------------------------------------------------------------------

@@ -18,6 +18,10 @@ Files written into the output folder:
 Every picture names the obstacle of the runs (``summary.json``'s ``obstacle``: in the built-in scenes the
 flat is a rigid plane, not the paper's second elastic body). A picture whose data are missing in every
 run is skipped with a :class:`RuntimeWarning`; a run missing from one picture is named in a warning.
+
+A run that did not end converged (:data:`RUN_STATUSES`: ``failed``, ``interrupted``, or ``incomplete``: no
+``summary.json``, a crashed or killed run) is marked as such in the table (its ``status``), in the pictures' legends
+(``label [status]``) and in a :class:`RuntimeWarning` with the reason; its values are its last written ones.
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ import json
 import math
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -41,14 +45,19 @@ from .plots import _figure, _length_unit, _mm, _save
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["compare_runs", "load_run", "RunData", "default_label", "summary_rows", "read_summary_csv",
-           "format_table",
+__all__ = ["compare_runs", "load_run", "RunData", "default_label", "run_status", "summary_rows", "read_summary_csv",
+           "format_table", "RUN_STATUSES",
            "SUMMARY_FIELDS", "COMPARE_PICTURES"]
 
-#: Columns of ``compare_summary.csv``.
-SUMMARY_FIELDS = ["label", "material_model", "max_pressure", "max_wear_depth", "wear_area",
+#: Columns of ``compare_summary.csv`` (``status``: :data:`RUN_STATUSES`).
+SUMMARY_FIELDS = ["label", "material_model", "status", "max_pressure", "max_wear_depth", "wear_area",
                   "dissipated_energy", "max_equivalent_plastic_strain", "contact_width", "wall_time_s",
                   "cycles", "equivalent_cycles"]
+#: What a run's folder says of its end (:attr:`RunData.status`): ``converged``; ``failed`` (its summary says
+#: ``converged: false``, with the error); ``interrupted`` (SIGINT or SIGTERM: a checkpoint to resume from);
+#: ``incomplete`` (no readable ``summary.json``: the run crashed, was killed or is still running, or a summary without
+#: ``converged``). The values of a run that is not ``converged`` are those of its last written increment or cycle.
+RUN_STATUSES = ("converged", "failed", "interrupted", "incomplete")
 #: PNG files :func:`compare_runs` writes when every run has the data.
 COMPARE_PICTURES = ("compare_first_cycle.png", "compare_cycles.png", "compare_node_history.png")
 #: Names of the material models in the default labels.
@@ -88,6 +97,16 @@ class RunData:
     description: RunDescription | None = None
 
     @property
+    def status(self) -> str:
+        """How the run ended, one of :data:`RUN_STATUSES`, read from ``summary.json``."""
+        return run_status(self.summary)[0]
+
+    @property
+    def status_reason(self) -> str:
+        """Why a run is not ``converged`` (its summary's error, or what is missing); empty if it is."""
+        return run_status(self.summary)[1]
+
+    @property
     def increments_per_cycle(self) -> int:
         """Steps of a cycle: the largest step of a cyclic row in ``history.csv`` or the profiles (0: none)."""
         n = 0
@@ -120,6 +139,20 @@ class RunData:
             return None
         rows = self.profiles.rows_of_cycle(cycle)
         return int(rows[-1]) if rows.size else None
+
+
+def run_status(summary: dict[str, Any]) -> tuple[str, str]:
+    """(status, reason) of a run from its ``summary.json`` (empty: none or unreadable), see :data:`RUN_STATUSES`."""
+    if not summary:
+        return "incomplete", "no summary.json: the run crashed, was killed or is still running"
+    error = str(summary.get("error") or "")
+    if summary.get("interrupted"):
+        return "interrupted", error or f"interrupted by {summary['interrupted']}"
+    if summary.get("converged") is True:
+        return "converged", ""
+    if summary.get("converged") is False:
+        return "failed", error or "summary.json says converged: false"
+    return "incomplete", "summary.json does not say whether the run converged"
 
 
 def default_label(summary: dict[str, Any], folder: Path) -> str:
@@ -220,6 +253,7 @@ def summary_rows(runs: Sequence[RunData]) -> list[dict[str, Any]]:
         out.append({
             "label": run.label,
             "material_model": model if model is not None else "",
+            "status": run.status,
             "max_pressure": pick(lambda: _number(s.get("max_pressure")),
                                  lambda: _last(cyc, "max_pressure_end"),
                                  lambda: _last(hist, "max_pressure")),
@@ -267,7 +301,7 @@ def read_summary_csv(path: str | Path) -> list[dict[str, Any]]:
             row: dict[str, Any] = {}
             for k in SUMMARY_FIELDS:
                 v = raw.get(k, "")
-                if k in ("label", "material_model"):
+                if k in ("label", "material_model", "status"):
                     row[k] = v or ""
                 elif v in ("", None):
                     row[k] = None
@@ -281,14 +315,14 @@ def read_summary_csv(path: str | Path) -> list[dict[str, Any]]:
 
 def format_table(rows: list[dict[str, Any]]) -> str:
     """The summary rows as an aligned text table (4 significant digits)."""
-    heads = {"label": "label", "material_model": "material", "max_pressure": "p_max MPa",
+    heads = {"label": "label", "material_model": "material", "status": "status", "max_pressure": "p_max MPa",
              "max_wear_depth": "wear depth mm", "wear_area": "wear area mm2", "dissipated_energy": "energy",
              "max_equivalent_plastic_strain": "max eps_p", "contact_width": "width mm",
              "wall_time_s": "wall s",
              "cycles": "cycles", "equivalent_cycles": "equiv."}
 
     def fmt(v: Any) -> str:
-        if v is None:
+        if v is None or v == "":
             return "-"
         if isinstance(v, float):
             return f"{v:.4g}"
@@ -298,7 +332,7 @@ def format_table(rows: list[dict[str, Any]]) -> str:
     widths = [max(len(row[i]) for row in table) for i in range(len(SUMMARY_FIELDS))]
     lines = []
     for k, row in enumerate(table):
-        cells = [c.ljust(w) if i < 2 else c.rjust(w) for i, (c, w) in enumerate(zip(row, widths))]
+        cells = [c.ljust(w) if i < 3 else c.rjust(w) for i, (c, w) in enumerate(zip(row, widths))]
         lines.append("  ".join(cells).rstrip())
         if k == 0:
             lines.append("  ".join("-" * w for w in widths))
@@ -738,6 +772,12 @@ def compare_runs(folders: Sequence[str | Path], labels: Sequence[str] | None, ou
         out = ensure_writable_folder(out)
     except OutputFolderError as exc:
         raise ValueError(str(exc)) from None
+    for run in runs:  # never a crashed or stopped run that reads like a finished one
+        if run.status != "converged":
+            warnings.warn(f"{run.label} ({run.folder}): {run.status}: {run.status_reason}; its values are those of its "
+                          "last written increment or cycle", RuntimeWarning, stacklevel=2)
+    # the pictures name a run that is not converged by its status too
+    drawn = [run if run.status == "converged" else replace(run, label=f"{run.label} [{run.status}]") for run in runs]
     written: list[Path] = []
 
     def attempt(name: str, draw: Callable[[], Path | None]) -> None:
@@ -752,9 +792,9 @@ def compare_runs(folders: Sequence[str | Path], labels: Sequence[str] | None, ou
             written.append(path)
 
     attempt("compare_first_cycle.png",
-            lambda: plot_compare_first_cycle(out / "compare_first_cycle.png", runs))
-    attempt("compare_cycles.png", lambda: plot_compare_cycles(out / "compare_cycles.png", runs, cycles))
+            lambda: plot_compare_first_cycle(out / "compare_first_cycle.png", drawn))
+    attempt("compare_cycles.png", lambda: plot_compare_cycles(out / "compare_cycles.png", drawn, cycles))
     attempt("compare_node_history.png",
-            lambda: plot_compare_node_history(out / "compare_node_history.png", runs, node_position))
+            lambda: plot_compare_node_history(out / "compare_node_history.png", drawn, node_position))
     written.append(_write_summary_csv(out / "compare_summary.csv", summary_rows(runs)))
     return written

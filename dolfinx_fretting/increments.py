@@ -147,6 +147,14 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
     last: dict[str, Any] = {}
 
     def local(trial: np.ndarray) -> np.ndarray:
+        if not np.all(np.isfinite(trial)):
+            # The load control's bracketing doubles its step while the force stays put: a prescribed force that
+            # no finite obstacle displacement gives (e.g. one so small that no contact closes) ends here, not in
+            # the local solver's "q: contains non-finite values".
+            k = int(np.flatnonzero(~np.isfinite(trial))[0])
+            raise ConvergenceError(f"{names[k]}: prescribed value {targets[k]:.6g} not reached: the load control's "
+                                   "trial obstacle displacement is not finite (the force did not change between its "
+                                   "trials): a load this far below the model's scale is degenerate")
         q, q_abs = operators.q(trial, factors, state.positions, state.wear_gap, q_body)
         solved = local_solvers.solve(Wm, q, operators.contact.mu, dim, method=solver.method, tol=solver.tol,
                                   max_iter=solver.max_iter, r0=warm[0])
@@ -177,7 +185,13 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
                     trial[k] = v
                     return local(trial)[k]
                 d_old, F_old = d[k], F[k]
-                d[k], _, _ = find_displacement(force_k, targets[k], d[k], operators.stiffness[k], ftol, name=names[k])
+                try:  # a flat force makes the root finder's secant 0/0: caught as a non-finite trial in local()
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        d[k], _, _ = find_displacement(force_k, targets[k], d[k], operators.stiffness[k], ftol,
+                                                       name=names[k])
+                except LoadControlError as exc:
+                    raise ConvergenceError(_beyond_friction(operators, k, targets, controlled, last["F"])
+                                           or str(exc)) from None
                 F = last["F"]  # the root finder's last evaluation is at the returned d[k]
                 if d[k] != d_old and F[k] != F_old:
                     operators.stiffness[k] = abs((F[k] - F_old) / (d[k] - d_old))
@@ -190,6 +204,33 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
     y = Wm @ solved.r + last["q_abs"]
     return IncrementResult(solved.r.copy(), solved.x.copy(), y, last["d"].copy(), factors.copy(), False,
                            count["iterations"], targets.copy(), controlled.copy(), solved.error, count["solves"])
+
+
+def _beyond_friction(operators: ContactOperators, k: int, targets: np.ndarray, controlled: np.ndarray,
+                     forces: np.ndarray) -> str | None:
+    """The physical reason a prescribed tangential force (component ``k``) cannot be reached, with its numbers:
+    ``|Q| >= mu P``, the most friction the zone's normal force can carry (None if ``k`` is a normal component or
+    ``|Q|`` is below that bound: then the load control's own message stands)."""
+    dim = operators.dim
+    zone, component = divmod(k, dim)
+    if component == 0:
+        return None
+    tangential = np.arange(dim * zone + 1, dim * (zone + 1))
+    tangential = tangential[controlled[tangential]]
+    magnitude = float(np.linalg.norm(targets[tangential]))
+    normal = float(forces[dim * zone])
+    mu = np.asarray(operators.contact.zones[zone].mu, dtype=float)
+    mu_max = float(mu.max(initial=0.0))
+    if magnitude < mu_max * max(normal, 0.0):
+        return None
+    unit = "N/mm" if dim == 2 else "N"
+    uniform = mu.size == 0 or float(mu.min()) == mu_max
+    name = "mu" if uniform else "max(mu)"
+    friction = f"{name} x P = {mu_max:g} x {normal:.6g} = {mu_max * max(normal, 0.0):.6g} {unit}"
+    zone_text = f"contact[{zone}] " if len(operators.contact.zones) > 1 else ""
+    return (f"{zone_text}tangential force |Q| = {magnitude:.6g} {unit} cannot be reached: it must stay below "
+            f"{friction}, the friction the normal force P of this increment can carry (at or beyond mu P the "
+            "contact slides and no displacement gives Q)")
 
 
 def solve_plastic(operators: ContactOperators, solver: LocalSolver, body: ElastoplasticBody, state: ContactState,

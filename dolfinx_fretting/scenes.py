@@ -327,6 +327,15 @@ class WearSettings(_Section):
                               "step, the k-scaling does not)")
         if self.jump_forced is not None and not self.cycle_jump:
             raise range_error("wear.jump_forced", self.jump_forced, "unset unless wear.cycle_jump = true")
+        if self.law == "none":
+            # a coefficient without a law would be silently ignored: the scene may have meant wear
+            given = [key for key in ("k", "k_slave", "k_master") if getattr(self, key)]
+            if given:
+                keys = ["k"] if given[0] == "k" else ["k_slave", "k_master"]
+                raise ValueError(f"wear.{given[0]} = {getattr(self, given[0])!r} is given but wear.law = 'none' (no "
+                                 "wear: it would be ignored); set wear.law = 'archard', or remove "
+                                 + " and ".join(f"wear.{key}" for key in keys) + " ("
+                                 + " ".join(f"--set wear.{key}=none" for key in keys) + ")")
         return self
 
     def archard(self) -> Archard:

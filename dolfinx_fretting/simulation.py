@@ -51,7 +51,7 @@ from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleR
 from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
 from .geometries import build_scene_model
 from .scene_models import PRESSURE_LOAD, MeshFileError, SceneModel
-from .scenes import Scene, SceneError, describe_differences
+from .scenes import Scene, SceneError, describe_differences, scene_differences
 from .sizes import SizeEstimate, check_size
 
 __all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "run_scene", "read_checkpoint",
@@ -61,6 +61,10 @@ __all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "run
 CHECKPOINT = "checkpoint.npz"
 # Scene sections that may change between a checkpoint and its resume (they do not change the physics).
 _RESUMABLE_SECTIONS = ("solver", "output")
+# Scene keys that may change too: labels of the run, not physics.
+_RENAMEABLE_KEYS = ("name", "description")
+# The differences a refused resume spells out with both values (the others by key).
+_SHOWN_DIFFERENCES = 6
 
 
 class SimulationError(RuntimeError):
@@ -130,11 +134,14 @@ class ContactModel:
         solver = LocalSolver(method=sv.local_method, tol=sv.local_tol, max_iter=sv.local_max_iter,
                              force_tol=sv.force_tol, compiled_cycles=sv.cycle_kernel, warm_start=sv.warm_start,
                              pattern_reuse=sv.pattern_reuse)
-        self.problem = FrettingProblem(s.form, list(self.contacts) if zones else contact, s.bcs, wear=wear,
-                                       loads=s.loads, prescribed=s.prescribed,
-                                       petsc_options=sv.petsc_options, delassus_method=sv.delassus_method,
-                                       solver=solver, plasticity=plasticity,
-                                       options_prefix="dolfinx_fretting_delassus_")
+        try:  # the API's refusals of the model the scene made (e.g. a boundary.displacement of 1e-300: zero values)
+            self.problem = FrettingProblem(s.form, list(self.contacts) if zones else contact, s.bcs, wear=wear,
+                                           loads=s.loads, prescribed=s.prescribed,
+                                           petsc_options=sv.petsc_options, delassus_method=sv.delassus_method,
+                                           solver=solver, plasticity=plasticity,
+                                           options_prefix="dolfinx_fretting_delassus_")
+        except ValueError as exc:
+            raise SimulationError(str(exc)) from None
         self.timings = {**s.timings, **self.problem.operators.timings}
 
     # What tests and benchmarks read -----------------------------------------------------------------
@@ -350,17 +357,29 @@ class _Run:
     # Checkpoints ------------------------------------------------------------------------------------
     def _read_checkpoint_meta(self) -> dict[str, Any]:
         path = self.out / CHECKPOINT
-        try:  # a damaged file, tables shorter than it records, loading.cycles below the cycles done
-            ck = load_checkpoint(path, self.scene.loading.cycles)
+        try:  # a damaged file, tables shorter than it records
+            ck = load_checkpoint(path)
         except OutputFolderError as exc:
             raise SimulationError(f"--resume: {exc}") from None
-        changed = describe_differences(json.loads(ck["meta"]["identity"]), json.loads(_scene_identity(self.scene)),
-                                       names=("checkpoint", "this scene"))
+        # The scene before the cycle count: another scene is told so, not only that its loading.cycles is short.
+        # name and description are labels, not physics: a run may be renamed when it is resumed.
+        saved, now = json.loads(ck["meta"]["identity"]), json.loads(_scene_identity(self.scene))
+        changed = scene_differences(saved, now, ignore=_RENAMEABLE_KEYS)
         meta = ck["meta"]
         if changed:
-            raise SimulationError(f"--resume: the scene differs from the one checkpointed in {path} beyond "
-                                  f"the sections {', '.join(_RESUMABLE_SECTIONS)} and loading.cycles: {changed}; "
+            shown = describe_differences(saved, now, ignore=list(_RENAMEABLE_KEYS) + changed[_SHOWN_DIFFERENCES:],
+                                         names=("checkpoint", "this scene"))
+            more = (f"; and {len(changed) - _SHOWN_DIFFERENCES} more: {', '.join(changed[_SHOWN_DIFFERENCES:])}"
+                    if len(changed) > _SHOWN_DIFFERENCES else "")
+            names = (f" (checkpointed: {saved.get('name')!r}, this scene: {now.get('name')!r})"
+                     if saved.get("name") != now.get("name") else "")
+            raise SimulationError(f"--resume: the scene{names} differs from the one checkpointed in {path} beyond "
+                                  f"the sections {', '.join(_RESUMABLE_SECTIONS)} and loading.cycles: {shown}{more}; "
                                   "resume with the same scene, or start afresh in a new folder")
+        done = int(meta["cycle"])
+        if self.scene.loading.cycles < done:
+            raise SimulationError(f"--resume: loading.cycles = {self.scene.loading.cycles} is below the {done} cycles "
+                                  f"the checkpoint {path} has done; allowed: loading.cycles >= {done}")
         return meta
 
     def _restore(self, meta: dict[str, Any]) -> tuple[ContactState, dict[str, int], bool]:
@@ -904,7 +923,7 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
         comm: Communicator.
         quiet: Print nothing.
         resume: Continue from ``out_dir/checkpoint.npz`` (the scene may differ only in its ``solver`` and
-            ``output`` sections and in ``loading.cycles``).
+            ``output`` sections, ``loading.cycles``, ``name`` and ``description``).
         overwrite: Delete the run ``out_dir`` holds first (its files only; :mod:`dolfinx_fretting.outdir`).
         ignore_size: Run even if the size estimate (:func:`dolfinx_fretting.sizes.check_size`) exceeds the
             memory available.

@@ -32,6 +32,7 @@ from __future__ import annotations
 import csv
 import math
 import re
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -471,8 +472,11 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
     """Run every point of ``plan`` (reference first), compute the errors and write the table and plot.
 
     Collective: every rank runs every scene; files are written and errors computed on rank 0 and the rows
-    broadcast. A point whose run fails, or whose results are not finite, is kept in the table with
-    ``converged = False``, its error message and NaN errors; a failed reference stops the study.
+    broadcast. A point whose run fails (whatever the exception: a solver's, a check that needs the mesh, PETSc's,
+    a bug), or whose results are not finite, is kept in the table and the picture with ``converged = False``, its
+    error message and NaN errors, and the study goes on; a failed reference stops the study (no errors can be
+    computed without it). SIGINT or SIGTERM during a run (:class:`~dolfinx_fretting.simulation.RunInterrupted`)
+    stops the study.
 
     Args:
         plan: From :func:`plan_study`.
@@ -491,11 +495,11 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         OutputFolderError: before any run: ``out`` is a file, not writable, or holds a study and not
             ``overwrite``.
         RuntimeError: The reference run failed (its message included).
+        RunInterrupted: A signal stopped a run.
     """
-    # Lazy: these import petsc4py and DOLFINx (PETSc initialised); planning a study, and the CLI's checks
+    # Lazy: this imports petsc4py and DOLFINx (PETSc initialised); planning a study, and the CLI's checks
     # before it, need neither
-    from .compliance import DelassusError
-    from .simulation import SimulationError, run_scene
+    from .simulation import RunInterrupted, SimulationError, run_scene
 
     comm = comm or MPI.COMM_WORLD
     rank0 = comm.rank == 0
@@ -524,9 +528,10 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         failure = ""
         try:  # the study owns runs/: a point's folder from an earlier study is replaced
             run_scene(point.scene, folder, comm, quiet=True, overwrite=True, ignore_size=ignore_size)
-        except OutputFolderError:
-            raise  # locked by another run: not a result of this point
-        except (SimulationError, ValueError, DelassusError) as exc:  # ValueError: checks that need the mesh
+        except (OutputFolderError, RunInterrupted):
+            raise  # locked by another run, or the user stopped the study: not a result of this point
+        except Exception as exc:  # noqa: BLE001 - any failure of one point (a solver's, a check that needs the
+            # mesh, PETSc's or MUMPS's, a bug) is that point's result: the finished points must not be lost
             failure = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
         wall = time.perf_counter() - t0
         wall = comm.bcast(wall, root=0)  # rank 0's clock decides
@@ -537,20 +542,28 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         row: dict[str, Any] = {}
         if rank0:
             row = {"label": point.label, "key": point.key, "value": point.value, "wall_time_s": wall,
-                   "speedup": ref_time / wall if wall > 0 else math.nan, "overrides": " ".join(point.overrides),
-                   **point_errors(folder, ref_folder)}
+                   "speedup": ref_time / wall if wall > 0 else math.nan, "overrides": " ".join(point.overrides)}
+            try:
+                row.update(point_errors(folder, ref_folder))
+            except ValueError as exc:  # the run stopped before writing anything to read back: only its message
+                failure = failure or f"its outputs cannot be read back: {exc}"
+                row.update({k: math.nan for k in ERROR_FIELDS}, converged=False)
             if failure:
                 row.update(converged=False, error=failure)
             if not row["converged"]:  # a failed or non-finite point has no error to plot or rank
                 row.update({k: math.nan for k in ERROR_FIELDS})
-            say(f"    {wall:.2f} s (x{row['speedup']:.3g}), errors: "
-                + ", ".join(f"{ERROR_NAMES[k]} {row[k]:.3g}" for k in ERROR_FIELDS))
+            say(f"    {wall:.2f} s (x{row['speedup']:.3g}), " + (f"FAILED: {row['error']}" if not row["converged"] else
+                "errors: " + ", ".join(f"{ERROR_NAMES[k]} {row[k]:.3g}" for k in ERROR_FIELDS)))
         rows.append(row)
     rows = comm.bcast(rows, root=0)
     if rank0:
         write_study_table(rows, out)
-        plot_study(rows, out / "study.png", title=f"{plan[0].scene.name}: wall time against error "
-                                                  f"(reference: {rows[0]['wall_time_s']:.1f} s)")
+        try:
+            plot_study(rows, out / "study.png", title=f"{plan[0].scene.name}: wall time against error "
+                                                      f"(reference: {rows[0]['wall_time_s']:.1f} s)")
+        except Exception as exc:  # noqa: BLE001 - a failed picture must not lose the table (written above)
+            print(f"dolfinx-fretting study: warning: study.png not drawn: {type(exc).__name__}: {exc}",
+                  file=sys.stderr, flush=True)
     comm.barrier()
     return rows
 
@@ -682,7 +695,9 @@ def plot_study(rows: Sequence[dict[str, Any]], path: str | Path, title: str = ""
         ax.set_ylabel("wall time (s)")
         ax.grid(alpha=0.3, which="both")
         if not np.any(np.isfinite(e_plot)):
-            ax.text(0.5, 0.5, "undefined (reference value 0)", transform=ax.transAxes, ha="center",
+            # nothing on a log axis: its limits are set, or matplotlib refuses to scale it (every point failed)
+            ax.set_xlim(floor, 1.0)
+            ax.text(0.5, 0.5, "no point drawn (failed, or reference value 0)", transform=ax.transAxes, ha="center",
                     color="0.4")
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=9, frameon=False)

@@ -157,6 +157,29 @@ def test_force_control_reaches_the_prescribed_forces():
     problem.destroy()
 
 
+def test_an_unreachable_tangential_force_names_mu_p_with_its_numbers():
+    """A tangential force the friction cannot carry is refused with the physical bound |Q| < mu P and its numbers:
+    at zero normal force (the contact open, 1 um of clearance) and beyond mu P of a closed contact (P = 300 N/mm).
+    Before issue 27 the first said "not bracketed in 200 local solves" and the second "saturates at"."""
+    import re
+
+    problem, *_ = pressed_block(mu=0.5)
+    state = problem.initial_state()
+    with pytest.raises(dfr.ConvergenceError) as info:
+        problem.solve(state, normal=dfr.Displacement(-1e-3), tangential=dfr.Force(1.0))
+    assert "|Q| = 1 N/mm" in str(info.value) and "mu x P = 0.5 x 0 = 0 N/mm" in str(info.value)
+    state = problem.commit(state, problem.solve(state, normal=dfr.Force(300.0), tangential=dfr.Force(0.0)))
+    with pytest.raises(dfr.ConvergenceError) as info:
+        problem.solve(state, tangential=dfr.Force(200.0))
+    match = re.search(r"\|Q\| = 200 N/mm .* mu x P = 0.5 x (\S+) = (\S+) N/mm", str(info.value))
+    assert match, str(info.value)
+    # the P of the tangential search's last trial: the approach is held at the one giving 300 N/mm while the plane
+    # slides, and the sliding changes P a little through W's normal-tangential coupling (301.6 measured: 0.5 %)
+    P = float(match.group(1))
+    assert P == pytest.approx(300.0, rel=0.02) and float(match.group(2)) == pytest.approx(0.5 * P, rel=1e-5)
+    problem.destroy()
+
+
 def test_named_load_matches_plain_dolfinx_when_the_contact_is_open():
     """With the gap open the contact force is zero and the API's displacement under a load factor s must be
     plain DOLFINx's solution of K u = s f (same forms and conditions), to solver precision."""

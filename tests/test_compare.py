@@ -179,14 +179,52 @@ def test_missing_data_skips_pictures(tmp_path, two_runs):
     assert float(row["max_pressure"]) == se["max_pressure"]
     # no summary.json (an interrupted run): values from cycles.csv / history.csv, label from the folder
     write_run(tmp_path / "interrupted", "elastic", with_summary=False)
-    compare_runs([fe, tmp_path / "interrupted"], None, tmp_path / "cmp3")
+    with pytest.warns(RuntimeWarning, match="interrupted .*: incomplete: no summary.json"):
+        compare_runs([fe, tmp_path / "interrupted"], None, tmp_path / "cmp3")
     row = _csv(tmp_path / "cmp3" / "compare_summary.csv")[1]
+    assert row["status"] == "incomplete"
     cyc = load_run(tmp_path / "interrupted").cycles
     assert row["label"] == "interrupted" and row["material_model"] == ""
     assert float(row["max_pressure"]) == cyc["max_pressure_end"][-1]
     assert float(row["max_wear_depth"]) == cyc["max_wear_depth"][-1]
     assert float(row["dissipated_energy"]) == pytest.approx(cyc["dissipated_energy"].sum())
     assert int(row["cycles"]) == 3
+
+
+def test_runs_that_did_not_converge_are_marked(tmp_path, two_runs):
+    """A crashed run (no summary.json; its history holds only a first increment of zeros, as the traceback of
+    loading.normal_force = 1e-300 left it before issue 27), a failed one and an interrupted one are each marked with
+    their status in the table, the CLI's table and a warning with the reason; before, the crashed run read as a row of
+    zeros like a finished run's."""
+    fe, _, se, _ = two_runs
+    crashed = tmp_path / "crashed"
+    crashed.mkdir()
+    row = {f: 0.0 for f in HISTORY_FIELDS}
+    row.update(increment=1, cycle=0, step=0, stage="normal", n_open=15)
+    _write_csv(crashed / "history.csv", HISTORY_FIELDS, [row])
+    _write_csv(crashed / "contact_profiles.csv", PROFILE_FIELDS,
+               [{"increment": 1, "cycle": 0, "step": 0, "node": n, **{f: 0.0 for f in PROFILE_FIELDS[4:]}}
+                for n in range(N_NODES)])
+    write_run(tmp_path / "failed", summary={"converged": False, "error": "increment 9 (cycle 1, step 7): local "
+                                             "solver did not converge"})
+    write_run(tmp_path / "stopped", summary={"converged": False, "interrupted": "SIGTERM",
+                                             "error": "interrupted by SIGTERM after increment 10 (cycle 1)"})
+    folders = [fe, crashed, tmp_path / "failed", tmp_path / "stopped"]
+    with pytest.warns(RuntimeWarning) as caught:
+        compare_runs(folders, ["done", "crashed", "failed", "stopped"], tmp_path / "cmp")
+    rows = read_summary_csv(tmp_path / "cmp" / "compare_summary.csv")
+    assert [r["status"] for r in rows] == ["converged", "incomplete", "failed", "interrupted"]
+    messages = [str(w.message) for w in caught]
+    assert any(m.startswith(f"crashed ({crashed}): incomplete: no summary.json") for m in messages), messages
+    assert any("failed: increment 9 (cycle 1, step 7): local solver did not converge" in m for m in messages)
+    assert any("interrupted: interrupted by SIGTERM" in m for m in messages)
+    assert not any(m.startswith("done") for m in messages)
+    res = _cli(*map(str, folders), "--out", str(tmp_path / "cli"), "--labels", "done,crashed,failed,stopped")
+    assert res.returncode == 0, res.stderr
+    table = {line.split()[0]: line.split() for line in res.stdout.splitlines() if line.split()}
+    assert table["crashed"][1:3] == ["-", "incomplete"] and table["done"][2] == "converged"
+    assert table["failed"][2] == "failed" and table["stopped"][2] == "interrupted"
+    assert "crashed" in res.stderr and "incomplete" in res.stderr
 
 
 def test_bad_folder_error_names_it(tmp_path, two_runs):

@@ -128,6 +128,28 @@ def test_resume_refuses_another_scene(tmp_path):
         run_scene(load_scene("stromberg-block", SMALL_BLOCK), tmp_path / "empty", quiet=True, resume=True)
 
 
+def test_resume_with_another_scene_says_the_scene_differs(tmp_path):
+    """Another built-in scene resumed from a stromberg-block checkpoint: the message says the scene differs (by name
+    and keys, the first six with both values); before issue 27 it said only "loading.cycles = 0 is below the 1
+    cycles the checkpoint has done"."""
+    run_scene(load_scene("stromberg-block", SMALL_BLOCK + ["loading.cycles=1"]), tmp_path, quiet=True)
+    with pytest.raises(SimulationError) as info:
+        run_scene(load_scene("hertz", ["output.xdmf=false", "output.plots=false"]), tmp_path, quiet=True, resume=True)
+    message = str(info.value)
+    assert message.startswith("--resume: the scene (checkpointed: 'stromberg-block', this scene: 'hertz') differs")
+    assert "geometry.kind = 'rectangle' (checkpoint), 'half_cylinder' (this scene)" in message
+    assert "more: " in message and "is below the" not in message
+
+
+def test_resume_under_another_name(tmp_path):
+    """name and description label a run, they are not physics: a renamed scene resumes (refused before issue 27)."""
+    run_scene(load_scene("stromberg-block", SMALL_BLOCK + ["loading.cycles=1"]), tmp_path, quiet=True)
+    summary = run_scene(load_scene("stromberg-block", SMALL_BLOCK + ["loading.cycles=2", "name='block-renamed'",
+                                                                      "description='the same physics'"]),
+                        tmp_path, quiet=True, resume=True)
+    assert summary["scene"] == "block-renamed" and summary["resumed_from_cycle"] == 1 and summary["cycles"] == 2
+
+
 @pytest.mark.parametrize("tangential", ["tangential_force=60.0", "tangential_displacement=0.01"])
 def test_force_controlled_normal_load_during_cycles(tmp_path, tangential):
     """Cylinder under a constant normal force, cycled by a tangential force (partial slip, Q < mu P) or a

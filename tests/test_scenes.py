@@ -48,7 +48,10 @@ from dolfinx_fretting.scenes import SceneError, apply_overrides, builtin_scenes,
         ("contact.mu=0.0", ["loading.tangential_force = 89.658", "0 with contact.mu = 0"]),
         ("material.E=100", ["loading.normal_force = 199.24", "Hertz strain", "material.E = 100"]),
         ("loading.normal_force=1e7", ["loading.normal_force = 10000000.0", "small-strain"]),
-        ("wear.k=1e-3", []),  # accepted: a large but finite coefficient
+        ("wear.law='archard' wear.k=1e-3", []),  # accepted: a large but finite coefficient
+        # a coefficient without a wear law was silently ignored before issue 27
+        ("wear.k=1e-3", ["wear.k = 0.001 is given but wear.law = 'none'", "set wear.law = 'archard', or remove wear.k"]),
+        ("wear.k=0.0", []),  # zero wears nothing: nothing ignored
         ("contact.mu=0.0 loading.tangential_force=0.0", []),  # frictionless, no tangential force: accepted
         ("geometry.contact_mesh_size=1e-6", ["geometry.contact_mesh_size = 1e-06",
                                              "elements along the refined contact zone"]),
@@ -84,6 +87,15 @@ def test_bad_values_name_the_key_and_range(override, expected):
         load_scene("hertz", [override])
     for fragment in expected:
         assert fragment in str(info.value), str(info.value)
+
+
+def test_per_body_wear_coefficients_without_a_wear_law_are_refused():
+    """mccoll's k_slave and k_master with wear.law = 'none' (silently no wear before issue 27): refused, naming both."""
+    with pytest.raises(SceneError) as info:
+        load_scene("mccoll", ["wear.law='none'"])
+    assert "wear.k_slave = 1.9e-08 is given but wear.law = 'none'" in str(info.value)
+    assert "--set wear.k_slave=none --set wear.k_master=none" in str(info.value)
+    assert load_scene("mccoll", ["wear.law='none'", "wear.k_slave=none", "wear.k_master=none"]).wear.k_total == 0
 
 
 def test_builtin_hertz_is_valid_and_overrides_apply():

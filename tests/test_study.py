@@ -98,6 +98,47 @@ def test_study_keeps_a_failed_point(tiny_study):
     assert "failed" in (out / "study.md").read_text()
 
 
+def test_study_survives_a_point_that_crashes(tmp_path, monkeypatch):
+    """A point whose run ends in an exception the runner does not turn into a SimulationError (before issue 27:
+    "RuntimeError: ValueError on rank 0: q: contains non-finite values" of loading.normal_force = 1e-300) is a failed
+    row with its message; the finished reference and the later point are kept, table and picture written. Before,
+    the exception left the study with no table at all."""
+    import dolfinx_fretting.simulation as simulation
+
+    real_run = simulation.run_scene
+
+    def crashing(scene, folder, *args, **kwargs):
+        if folder.name == "increments_per_cycle=8":
+            raise RuntimeError("ValueError on rank 0: q: contains non-finite values")
+        return real_run(scene, folder, *args, **kwargs)
+
+    monkeypatch.setattr(simulation, "run_scene", crashing)
+    plan = plan_study("cylinder-flat", TINY, TINY_REFERENCE,
+                      [("loading.increments_per_cycle", ["8"]), ("wear.acceleration", ["2"])])
+    rows = run_study(plan, tmp_path, quiet=True, warm_up=False)
+    assert [r["label"] for r in rows] == ["reference", "increments_per_cycle=8", "acceleration=2"]
+    assert [r["converged"] for r in rows] == [True, False, True]
+    assert rows[1]["error"] == "RuntimeError: ValueError on rank 0: q: contains non-finite values"
+    assert all(math.isnan(rows[1][k]) for k in ERROR_FIELDS) and rows[2]["err_max_wear"] > 0
+    back = read_study_csv(tmp_path / "study.csv")
+    assert [r["converged"] for r in back] == [True, False, True] and "q: contains" in back[1]["error"]
+    assert "failed: RuntimeError" in (tmp_path / "study.md").read_text()
+    assert (tmp_path / "study.png").stat().st_size > 10_000
+
+
+def test_study_cli_exit_code_says_a_point_failed(tmp_path, capsys):
+    """The table of a study with a failed point is written and printed, and the exit code is 1 with one line naming
+    the failed point (before issue 27: 0, as if the study were whole)."""
+    args = ["study", "cylinder-flat", "--out", str(tmp_path), "--no-warm-up", "--quiet",
+            *[f"--set={o}" for o in TINY], *[f"--reference={o}" for o in TINY_REFERENCE],
+            "--sweep", "solver.local_max_iter=1"]
+    assert main(args) == 1
+    captured = capsys.readouterr()
+    assert "failed" in captured.out and "local_max_iter" in captured.out  # the table, with the failed row
+    assert "1 of 2 runs failed (local_max_iter=1)" in captured.err
+    assert [r["converged"] for r in read_study_csv(tmp_path / "study.csv")] == [True, False]
+
+
 def test_profile_l2_error_closed_forms():
     # w = 2x against w_ref = x on [0, 1], different nodes: piecewise linear on the union grid, so the
     # relative L2 error is |2x - x| / |x| = 1 exactly

@@ -144,7 +144,8 @@ def test_gross_slip_loop_grows_by_4_mu_P(tmp_path):
     energies = []
     for delta in (0.03, 0.04):
         run_scene(load_scene("cylinder-flat", TWO_BODY + [
-            "geometry.contact_mesh_size=0.02", "wear.law='none'", "loading.cycles=2", "loading.increments_per_cycle=40",
+            "geometry.contact_mesh_size=0.02", "wear.law='none'", "wear.k=none", "loading.cycles=2",
+            "loading.increments_per_cycle=40",
             f"loading.tangential_displacement={delta}"]), tmp_path / f"d{delta}", quiet=True)
         with open(tmp_path / f"d{delta}" / "cycles.csv") as f:
             row = list(csv.DictReader(f))[-1]

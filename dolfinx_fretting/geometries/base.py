@@ -19,7 +19,8 @@ from mpi4py import MPI
 from ..scene_models import SceneModel
 
 __all__ = ["Geometry", "MeshSize", "Refinement", "range_error", "check_no_boundary", "check_plane_strain",
-           "mesher_default", "finer_contact_mesh", "coarser_contact_mesh", "MAX_ELASTIC_STRAIN",
+           "mesher_default", "finer_contact_mesh", "coarser_contact_mesh", "MAX_ELASTIC_STRAIN", "MIN_ELASTIC_STRAIN",
+           "load_range_error",
            "MAX_CONTACT_ELEMENTS", "MAX_CELLS"]
 
 #: Largest elastic strain a load may produce (estimated before any work, each kind's
@@ -29,6 +30,14 @@ __all__ = ["Geometry", "MeshSize", "Refinement", "range_error", "check_no_bounda
 #: half-width sqrt(2Rd), an overestimate); a sphere, (6 P / (pi^3 R^2 E*))^(1/3) or sqrt(d / R); a rectangle,
 #: P / (width E') or d / height; a face pressure s, ``|s| / E``.
 MAX_ELASTIC_STRAIN = 0.1
+#: Smallest elastic strain a load may produce (the same estimates; for an approach d, d over the body's size, the
+#: strain of a displacement d across it). A strain of 1e-8 is below any measured elastic strain (strain gauges resolve
+#: ~1e-7) and a contact pressure of 1e-8 E (2 kPa on steel); far below it the problem degenerates in double precision
+#: (measured on the half-cylinder, R = 6 mm: under a force the load control finds no approach at a Hertz strain of
+#: 6e-19, P = 1e-30 N/mm, and the local solver gets non-finite data at P = 1e-200; an approach of 1.7e-17 R gives a
+#: force 1 % off and 1.7e-19 R no contact at all: it is lost in the rounding of the node coordinates). 1e-8 leaves six
+#: decades between the smallest accepted load and the first measured degeneracy.
+MIN_ELASTIC_STRAIN = 1e-8
 #: Largest half-cylinder: elements along its refined contact zone (and along its arc at the coarse size). Beyond,
 #: the mesh generator and the factorisation run for hours or exhaust memory (a hang, not a run): 206k dofs
 #: factorise in ~2 s here, and the cost grows faster than linearly.
@@ -40,6 +49,16 @@ MAX_CELLS = 4_000_000
 def range_error(key: str, value: Any, allowed: str) -> ValueError:
     """The schema's message of a value out of range: ``"<key> = <value> is out of range; allowed: <allowed>"``."""
     return ValueError(f"{key} = {value!r} is out of range; allowed: {allowed}")
+
+
+def load_range_error(key: str, value: float, low: float, high: float, unit: str, estimate: str) -> ValueError:
+    """A load whose estimated elastic strain is outside [MIN_ELASTIC_STRAIN, MAX_ELASTIC_STRAIN]: its range
+    ``low``..``high`` (``unit``) and the estimate that gives it (``estimate``: the formula with the scene's values)."""
+    low_strain, high_strain = MIN_ELASTIC_STRAIN, MAX_ELASTIC_STRAIN
+    return range_error(key, value, f"{low:.4g} to {high:.4g} {unit}: {estimate} must stay within "
+                                   f"[{low_strain:g}, {high_strain:g}] (below {low_strain:g} the load is degenerate: no "
+                                   "measurable strain, its displacements lost in the rounding of the coordinates; "
+                                   f"above {high_strain:g} small-strain elasticity fails)")
 
 
 def check_no_boundary(scene: Scene) -> None:

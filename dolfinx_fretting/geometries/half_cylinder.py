@@ -21,8 +21,9 @@ from .. import meshes
 from ..analytic import hertz_line_contact
 from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane,
                             two_body_cells)
-from .base import (MAX_CONTACT_ELEMENTS, MAX_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary,
-                   check_plane_strain, coarser_contact_mesh, finer_contact_mesh, mesher_default, range_error)
+from .base import (MAX_CONTACT_ELEMENTS, MAX_ELASTIC_STRAIN, MIN_ELASTIC_STRAIN, Geometry, MeshSize, Refinement,
+                   check_no_boundary, check_plane_strain, coarser_contact_mesh, finer_contact_mesh, load_range_error,
+                   mesher_default, range_error)
 from .gmsh_nodes import ON_BOUNDARY, nodes_along, segment_distance, unstructured_nodes
 
 __all__ = ["HalfCylinder"]
@@ -88,21 +89,20 @@ class HalfCylinder(Geometry):
                 raise range_error("geometry.flat_height", geometry.flat_height, f"> the refined depth {depth:g} mm")
 
     def check_loads(self, scene: Scene) -> None:
-        """The Hertz strain ``sqrt(P / (pi R E*))`` of a normal force, ``sqrt(d / (2R))`` of an approach."""
+        """The Hertz strain ``sqrt(P / (pi R E*))`` of a normal force, ``sqrt(d / (2R))`` of an approach d (at most
+        MAX_ELASTIC_STRAIN) and ``d / (2R)`` (at least MIN_ELASTIC_STRAIN)."""
         radius, loading, material = scene.geometry.radius, scene.loading, scene.material
-        E_star, eps = scene.contact_modulus, MAX_ELASTIC_STRAIN
+        E_star, low, high = scene.contact_modulus, MIN_ELASTIC_STRAIN, MAX_ELASTIC_STRAIN
         force, approach = loading.normal_force, loading.normal_displacement
-        if force is not None and math.sqrt(force / (math.pi * radius * E_star)) > eps:
-            force_max = eps**2 * math.pi * radius * E_star
-            raise range_error("loading.normal_force", force,
-                              f"<= {force_max:.4g} N/mm: the Hertz strain sqrt(P / (pi R E*)) with geometry.radius "
-                              f"= {radius:g} mm and material.E = {material.E:g} MPa (E* = {E_star:.4g} MPa) must stay "
-                              f"<= {eps:g} (small-strain elasticity)")
-        if approach is not None and approach > 2 * eps**2 * radius:
-            raise range_error("loading.normal_displacement", approach,
-                              f"<= {2 * eps**2 * radius:.4g} mm: the strain sqrt(d / (2R)) of an approach d "
-                              f"on geometry.radius = {radius:g} mm must stay <= {eps:g} (small-strain "
-                              "elasticity)")
+        if force is not None and not low <= math.sqrt(force / (math.pi * radius * E_star)) <= high:
+            raise load_range_error("loading.normal_force", force, low**2 * math.pi * radius * E_star,
+                                   high**2 * math.pi * radius * E_star, "N/mm",
+                                   f"the Hertz strain sqrt(P / (pi R E*)) with geometry.radius = {radius:g} mm and "
+                                   f"material.E = {material.E:g} MPa (E* = {E_star:.4g} MPa)")
+        if approach is not None and not (low <= approach / (2 * radius) and math.sqrt(approach / (2 * radius)) <= high):
+            raise load_range_error("loading.normal_displacement", approach, 2 * low * radius, 2 * high**2 * radius,
+                                   "mm", f"the strain of an approach d on geometry.radius = {radius:g} mm (d / (2R) at "
+                                   "least, sqrt(d / (2R)) at most)")
 
     def preset_values(self, scene: Scene, preset: dict[str, float]) -> dict[str, Any]:
         """Under a normal force, ``contact_mesh_size``: the Hertz half-width (against the rigid plane or the

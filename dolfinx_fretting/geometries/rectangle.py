@@ -14,8 +14,8 @@ from mpi4py import MPI
 
 from .. import meshes
 from ..scene_models import SceneModel, contact_surface, elastic_model, rigid_plane
-from .base import (MAX_CELLS, MAX_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary,
-                   check_plane_strain, range_error)
+from .base import (MAX_CELLS, MAX_ELASTIC_STRAIN, MIN_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary,
+                   check_plane_strain, load_range_error, range_error)
 
 __all__ = ["Rectangle"]
 
@@ -55,18 +55,17 @@ class Rectangle(Geometry):
         geometry, contact, loading, material = scene.geometry, scene.contact, scene.loading, scene.material
         if contact.surface not in FACES:
             return
-        E_plane, eps = material.E / (1 - material.nu**2), MAX_ELASTIC_STRAIN
+        E_plane, low, high = material.E / (1 - material.nu**2), MIN_ELASTIC_STRAIN, MAX_ELASTIC_STRAIN
         face, depth = ((geometry.width, geometry.height) if contact.surface in ("bottom", "top")
                        else (geometry.height, geometry.width))
         force, approach = loading.normal_force, loading.normal_displacement
-        if force is not None and force / (face * E_plane) > eps:
-            raise range_error("loading.normal_force", force,
-                              f"<= {eps * face * E_plane:.4g} N/mm: the mean strain P / (face length {face:g} mm "
-                              f"x E/(1-nu^2) = {E_plane:.4g} MPa) must stay <= {eps:g} (small-strain elasticity)")
-        if approach is not None and approach / depth > eps:
-            raise range_error("loading.normal_displacement", approach,
-                              f"<= {eps * depth:.4g} mm: the strain d / ({depth:g} mm, the body's depth under "
-                              f"contact.surface = {contact.surface!r}) must stay <= {eps:g} (small-strain elasticity)")
+        if force is not None and not low <= force / (face * E_plane) <= high:
+            raise load_range_error("loading.normal_force", force, low * face * E_plane, high * face * E_plane, "N/mm",
+                                   f"the mean strain P / (face length {face:g} mm x E/(1-nu^2) = {E_plane:.4g} MPa)")
+        if approach is not None and not low <= approach / depth <= high:
+            raise load_range_error("loading.normal_displacement", approach, low * depth, high * depth, "mm",
+                                   f"the strain d / ({depth:g} mm, the body's depth under contact.surface = "
+                                   f"{contact.surface!r})")
 
     def preset_values(self, scene: Scene, preset: dict[str, float]) -> dict[str, Any]:
         """``nx``: the preset's ``rectangle_cells``; ``ny`` in proportion to the height."""

@@ -27,8 +27,8 @@ from ..analytic import (hertz_sphere, mindlin_deresiewicz_energy, mindlin_shear_
                         worn_sphere_volume)
 from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane, roller,
                             two_body_cells)
-from .base import (MAX_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary, coarser_contact_mesh,
-                   finer_contact_mesh, mesher_default, range_error)
+from .base import (MAX_ELASTIC_STRAIN, MIN_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary,
+                   coarser_contact_mesh, finer_contact_mesh, load_range_error, mesher_default, range_error)
 
 __all__ = ["Sphere"]
 
@@ -89,18 +89,17 @@ class Sphere(Geometry):
         """Hertz (Johnson §4.2): the strain ``p0 / E* = (6 P / (pi^3 R^2 E*))^(1/3)`` of a normal force; an
         approach d: ``a = sqrt(R d)``, the strain ``a / R``."""
         radius, loading, material = scene.geometry.radius, scene.loading, scene.material
-        E_star, eps = scene.contact_modulus, MAX_ELASTIC_STRAIN
+        E_star, low, high = scene.contact_modulus, MIN_ELASTIC_STRAIN, MAX_ELASTIC_STRAIN
         force, approach = loading.normal_force, loading.normal_displacement
-        if force is not None and (6 * force / (math.pi**3 * radius**2 * E_star)) ** (1 / 3) > eps:
-            force_max = eps**3 * math.pi**3 * radius**2 * E_star / 6
-            raise range_error("loading.normal_force", force,
-                              f"<= {force_max:.4g} N: the Hertz strain p0/E* = (6 P / (pi^3 R^2 E*))^(1/3) with "
-                              f"geometry.radius = {radius:g} mm and material.E = {material.E:g} MPa (E* = "
-                              f"{E_star:.4g} MPa) must stay <= {eps:g} (small-strain elasticity)")
-        if approach is not None and math.sqrt(approach / radius) > eps:
-            raise range_error("loading.normal_displacement", approach,
-                              f"<= {eps**2 * radius:.4g} mm: the strain sqrt(d / R) of an approach d on "
-                              f"geometry.radius = {radius:g} mm must stay <= {eps:g} (small-strain elasticity)")
+        if force is not None and not low <= (6 * force / (math.pi**3 * radius**2 * E_star)) ** (1 / 3) <= high:
+            scale = math.pi**3 * radius**2 * E_star / 6
+            raise load_range_error("loading.normal_force", force, low**3 * scale, high**3 * scale, "N",
+                                   f"the Hertz strain p0/E* = (6 P / (pi^3 R^2 E*))^(1/3) with geometry.radius = "
+                                   f"{radius:g} mm and material.E = {material.E:g} MPa (E* = {E_star:.4g} MPa)")
+        if approach is not None and not (low <= approach / radius and math.sqrt(approach / radius) <= high):
+            raise load_range_error("loading.normal_displacement", approach, low * radius, high**2 * radius, "mm",
+                                   f"the strain of an approach d on geometry.radius = {radius:g} mm (d / R at least, "
+                                   "sqrt(d / R) at most)")
         self._check_zone(scene)
 
     def _check_zone(self, scene: Scene) -> None:
