@@ -6,6 +6,11 @@ partition; the contact set is recognised by its nodes' coordinates, not by DOLFI
 differ between launches under MPI and between rank counts), so an elastic state written on N ranks loads on any
 number. An elastic-plastic state holds each rank's quadrature points: it loads on the same partition only, checked
 by a fingerprint of each rank's dof coordinates.
+
+A checkpoint also holds the contact parameters of the problem that wrote it (:func:`contact_parameters`: each
+zone's friction coefficients, wear law and obstacle), and a problem with other values refuses it, naming them.
+What it does not check: the bilinear form (material), the Dirichlet conditions, the load vectors' values (their
+names are checked), the local solver's settings and the plastic law.
 """
 
 from __future__ import annotations
@@ -14,7 +19,7 @@ import hashlib
 import json
 import os
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 from mpi4py import MPI
@@ -22,11 +27,12 @@ from mpi4py import MPI
 from .contact import paired_contact_set
 from .increments import on_rank0
 from .io import _jsonable
+from .laws import WearLaw
 from .operators import ContactOperators
 from .commit import SlidingMonitor
 from .state import ContactState, PlasticHistory
 
-__all__ = ["save_state", "load_state"]
+__all__ = ["save_state", "load_state", "contact_parameters", "parameter_differences"]
 
 #: The per-contact and per-component arrays of a :class:`~dolfinx_fretting.state.ContactState`, stored as they are.
 ARRAYS = ("forces", "positions", "slip", "wear_gap", "obstacle", "load_factors")
@@ -39,9 +45,79 @@ def _partition_fingerprint(operators: ContactOperators) -> str:
     return hashlib.sha1(np.round(coords, 9).tobytes()).hexdigest()
 
 
+def contact_parameters(operators: ContactOperators, wear_laws: Sequence[WearLaw | None]) -> list[dict[str, Any]]:
+    """Each zone's contact parameters as plain data (what a checkpoint saves and checks): its friction coefficient
+    per contact (``mu``), its wear law (class name, each body's coefficient, acceleration; None without wear) and
+    its obstacle (class name, normal, and a rigid plane's point)."""
+    contacts = operators.contact
+    zones = []
+    for zone, (obstacle, law) in enumerate(zip((c.obstacle for c in contacts.zones), wear_laws)):
+        point = getattr(obstacle, "point", None)
+        wear = None if law is None else {"law": type(law).__name__, "body_coefficients": list(law.body_coefficients),
+                                         "acceleration": float(law.acceleration), "describe": law.describe()}
+        zones.append({"mu": contacts.mu[contacts.zone_slice(zone)].tolist(), "wear": wear,
+                      "obstacle": {"kind": type(obstacle).__name__, "normal": np.asarray(obstacle.normal).tolist(),
+                                   "point": None if point is None else np.asarray(point).tolist()}})
+    return zones
+
+
+def _values(values: list[float]) -> str:
+    """A zone's friction coefficients in a message: one value, or their range."""
+    array = np.asarray(values, dtype=float)
+    if array.size and np.all(array == array[0]):
+        return f"{array[0]:g}"
+    return f"{array.min(initial=np.inf):g} to {array.max(initial=-np.inf):g} per contact"
+
+
+def _obstacle(obstacle: Mapping[str, Any]) -> str:
+    point = "" if obstacle["point"] is None else f" point {np.asarray(obstacle['point']).tolist()}"
+    return f"{obstacle['kind']}{point} normal {np.round(obstacle['normal'], 12).tolist()}"
+
+
+def parameter_differences(saved: list[dict[str, Any]], current: list[dict[str, Any]], extent: float) -> list[str]:
+    """The contact parameters that differ between a checkpoint's (``saved``) and this problem's (``current``), one
+    phrase each naming both values (empty: the same). ``extent``: the contact surface's size, the scale of a plane's
+    position."""
+    if len(saved) != len(current):
+        return [f"{len(saved)} contact zone(s) saved, {len(current)} here"]
+    out = []
+    for zone, (old, new) in enumerate(zip(saved, current)):
+        who = f"contact[{zone}] " if len(saved) > 1 else ""
+        mu_old, mu_new = np.asarray(old["mu"], dtype=float), np.asarray(new["mu"], dtype=float)
+        # The user's values through JSON's exact float repr: equal bits when unchanged; 1e-12 only absorbs a
+        # coefficient recomputed by another NumPy.
+        if mu_old.shape != mu_new.shape or not np.allclose(mu_old, mu_new, rtol=1e-12, atol=1e-15):
+            out.append(f"{who}mu: saved {_values(old['mu'])}, this problem's {_values(new['mu'])}")
+        wear_old, wear_new = old["wear"], new["wear"]
+        same_wear = (wear_old is None) == (wear_new is None) and (wear_old is None or (
+            wear_old["law"] == wear_new["law"]
+            and np.allclose(wear_old["body_coefficients"], wear_new["body_coefficients"], rtol=1e-12, atol=0.0)
+            and np.isclose(wear_old["acceleration"], wear_new["acceleration"], rtol=1e-12, atol=0.0)))
+        if not same_wear:
+            describe = lambda wear: "no wear" if wear is None else wear["describe"]  # noqa: E731
+            out.append(f"{who}wear law: saved {describe(wear_old)}, this problem's {describe(wear_new)}")
+        obstacle_old, obstacle_new = old["obstacle"], new["obstacle"]
+        normal_new = np.asarray(obstacle_new["normal"], dtype=float)
+        # Unit normals: 1e-12 absorbs a normalisation by another NumPy. A rigid plane is the same plane when the
+        # saved point lies on this one (within 1e-9 of the surface's extent, as the contact nodes' coordinates):
+        # a point moved along the plane changes no gap.
+        same = (obstacle_old["kind"] == obstacle_new["kind"]
+                and np.shape(obstacle_old["normal"]) == normal_new.shape
+                and np.allclose(obstacle_old["normal"], normal_new, rtol=0.0, atol=1e-12)
+                and (obstacle_old["point"] is None) == (obstacle_new["point"] is None))
+        if same and obstacle_new["point"] is not None:
+            offset = (np.asarray(obstacle_old["point"], dtype=float) - np.asarray(obstacle_new["point"])) @ normal_new
+            same = abs(float(offset)) <= 1e-9 * extent
+        if not same:
+            out.append(f"{who}obstacle: saved {_obstacle(obstacle_old)}, this problem's {_obstacle(obstacle_new)}")
+    return out
+
+
 def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState, path: str | Path,
-               meta: Mapping[str, Any] | None = None) -> None:
-    """Write ``state`` (and JSON-able ``meta``) to an ``.npz`` file atomically (rank 0 writes). Collective."""
+               meta: Mapping[str, Any] | None = None, wear_laws: Sequence[WearLaw | None] | None = None) -> None:
+    """Write ``state`` (and JSON-able ``meta``) to an ``.npz`` file atomically (rank 0 writes), with the problem's
+    contact parameters (:func:`contact_parameters`; ``wear_laws``: each zone's, None: no zone wears). Collective."""
+    parameters = contact_parameters(operators, wear_laws or (None,) * len(operators.contact.zones))
     plastic = partition = None
     if state.plastic is not None:
         p = state.plastic
@@ -69,7 +145,8 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
         info = {"increment": state.increment, "dissipated_energy": state.dissipated_energy,
                 "local_iterations": state.local_iterations, "record": state.record, "ranks": operators.comm.size,
                 "load_names": operators.load_names, "global_nodes": operators.contact.contact_set.global_nodes.tolist(),
-                "plastic": plastic is not None, "partition": partition, "meta": dict(meta or {})}
+                "plastic": plastic is not None, "partition": partition, "contact_parameters": parameters,
+                "meta": dict(meta or {})}
         tmp = target.with_name(target.name + ".tmp.npz")
         np.savez(tmp, state=json.dumps(info, default=_jsonable), **arrays)
         with open(tmp, "rb+") as f:
@@ -78,12 +155,19 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
     on_rank0(operators.comm, write)
 
 
-def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str | Path
-               ) -> tuple[ContactState, dict[str, Any]]:
+def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str | Path,
+               wear_laws: Sequence[WearLaw | None] | None = None) -> tuple[ContactState, dict[str, Any]]:
     """Read a state written by :func:`save_state` (same problem, same contact set). Collective.
 
+    Checked against this problem: the contact nodes (by their coordinates), the load names, a plastic state's
+    partition, finite sliding's pairing, and the contact parameters (:func:`contact_parameters`: each zone's
+    ``mu``, wear law with its coefficients and acceleration (``wear_laws``, one per zone), obstacle kind, normal and
+    a plane's position). Not checked: the material (bilinear form), the Dirichlet conditions, the load vectors'
+    values, the solver settings and the plastic law; nor, in a checkpoint written before the contact parameters
+    were saved (it still loads), the contact parameters.
+
     Raises:
-        ValueError: the file does not match this problem (contact nodes, loads, ranks of a plastic state).
+        ValueError: the file does not match this problem; the message names what differs, with both values.
     """
     def read() -> dict[str, np.ndarray]:
         with np.load(path, allow_pickle=False) as npz:
@@ -105,6 +189,14 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
         raise ValueError(f"{path}: the saved contact set differs from this problem's (its nodes' coordinates)")
     if info["load_names"] != operators.load_names:
         raise ValueError(f"{path}: saved loads {info['load_names']} differ from this problem's {operators.load_names}")
+    if "contact_parameters" in info:   # (a checkpoint of an earlier release has none: unchecked)
+        extent = max(float(np.ptp(contact_set.coords, axis=0).max(initial=0.0)), 1.0) if contact_set.nc else 1.0
+        differences = parameter_differences(
+            info["contact_parameters"],
+            contact_parameters(operators, wear_laws or (None,) * len(operators.contact.zones)), extent)
+        if differences:
+            raise ValueError(f"{path}: the checkpoint was written with other contact parameters than this "
+                             f"problem's: {'; '.join(differences)}; load it into a problem with the saved values")
     plastic = None
     if info["plastic"]:
         if info["ranks"] != operators.comm.size:

@@ -18,7 +18,7 @@ from .readers import worn_measure
 from .state import ContactState, CycleResult, IncrementResult, solver_columns
 from .wear import ROW, ROW_FIELDS, commit_increment
 
-__all__ = ["SlidingMonitor", "commit", "relative_slip_ratio", "wear_coefficients"]
+__all__ = ["SlidingMonitor", "commit", "check_solved_from", "relative_slip_ratio", "wear_coefficients"]
 
 
 @dataclass
@@ -50,11 +50,33 @@ def wear_coefficients(operators: ContactOperators, laws: tuple, in_cycle: bool) 
     return coefficients
 
 
+def check_solved_from(state: ContactState, result: IncrementResult | CycleResult) -> None:
+    """Refuse ``result`` unless it was solved from ``state`` (its
+    :attr:`~dolfinx_fretting.state.IncrementResult.solved_from` is ``state``'s token): committed twice, or to another
+    state, its wear and increments would be added again. Not collective: the token is of data every rank holds
+    alike, so every rank decides the same."""
+    what = "cycle" if isinstance(result, CycleResult) else "increment"
+    if result.solved_from is None:
+        raise ValueError(f"commit: this {what} result carries no token of the state it was solved from "
+                         "(solved_from = None): commit only results of FrettingProblem.solve or run_cycle")
+    if result.solved_from != state.token:
+        raise ValueError(
+            f"commit: this {what} result was solved from another state than the one given (the given state has "
+            f"{state.increment} increment(s)): a result is committed once, to the state it was solved from; "
+            "committed again, or to another state, its wear and increments would count twice. Solve again from "
+            "this state instead")
+
+
 def commit(operators: ContactOperators, laws: tuple, monitor: SlidingMonitor, state: ContactState,
            result: IncrementResult | CycleResult) -> ContactState:
     """The new state after a converged increment or cycle: each zone's wear law (``laws``, one per zone;
     increments), the plastic history, the totals of :attr:`~dolfinx_fretting.state.ContactState.record`. ``state``
-    itself is not changed. Collective only in name (no communication: every rank holds the same contact data)."""
+    itself is not changed. Collective only in name (no communication: every rank holds the same contact data).
+
+    Raises:
+        ValueError: ``result`` was not solved from ``state`` (:func:`check_solved_from`).
+    """
+    check_solved_from(state, result)
     if isinstance(result, CycleResult):
         check_sliding(operators, monitor, result.final)
         return result.final

@@ -24,18 +24,39 @@ class LoadControlError(RuntimeError):
     """A prescribed force could not be reached (e.g. a tangential force above mu times the normal force)."""
 
 
+def _finite_values(name: str, value: Any) -> None:
+    """Refuse a target (a number or an array of them) unless every value is a finite number; the message names
+    ``name``, the value and the first non-finite entry."""
+    try:
+        values = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):   # a string, None, a ragged list
+        raise ValueError(f"{name} = {value!r}: expected a finite number (or an array of them)") from None
+    if not np.all(np.isfinite(values)):
+        first = np.unravel_index(int(np.flatnonzero(~np.isfinite(values))[0]), values.shape)
+        where = f" (entry {tuple(int(i) for i in first)}: {values[first]})" if values.ndim else ""
+        raise ValueError(f"{name} = {value!r}: expected finite values{where}")
+
+
 @dataclass(frozen=True)
 class Displacement:
-    """A prescribed obstacle displacement component (or per-increment array of them, in a :class:`CyclePath`)."""
+    """A prescribed obstacle displacement component (or per-increment array of them, in a :class:`CyclePath`);
+    refused unless finite."""
 
     value: Any
+
+    def __post_init__(self) -> None:
+        _finite_values("Displacement.value", self.value)
 
 
 @dataclass(frozen=True)
 class Force:
-    """A prescribed total contact force component on the body (the obstacle position becomes unknown)."""
+    """A prescribed total contact force component on the body (the obstacle position becomes unknown); refused
+    unless finite."""
 
     value: Any
+
+    def __post_init__(self) -> None:
+        _finite_values("Force.value", self.value)
 
 
 
@@ -55,6 +76,11 @@ class CyclePath:
     tangential: Displacement | Force | tuple | Mapping | None = None
     loads: Mapping[str, Any] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # Targets are checked by Displacement and Force themselves; plain numbers here are a load's factors.
+        for name, values in self.loads.items():
+            _finite_values(f"CyclePath.loads[{name!r}]", values)
+
     @property
     def increments(self) -> int:
         """The number of increments (the length of the first target given)."""
@@ -73,8 +99,16 @@ class CyclePath:
                  tangential: Displacement | Force | float | None = None,
                  loads: Mapping[str, float] | None = None) -> CyclePath:
         """A periodic path: ``normal`` held, ``tangential`` and ``loads`` amplitudes times the waveform
-        (:func:`waveform`: ``"triangular"`` 0 → A → 0 → −A → 0, or ``"sinusoidal"``)."""
+        (:func:`waveform`: ``"triangular"`` 0 → A → 0 → −A → 0, or ``"sinusoidal"``; ``increments`` a multiple of
+        4, so that the path reaches ±A). Non-finite amplitudes are refused, named."""
         wave = waveform(shape, increments)
+        for name, given in (("normal", normal), ("tangential", tangential)):
+            for item in (given.values() if isinstance(given, Mapping) else [given]):
+                for part in (item if isinstance(item, tuple) else [item]):
+                    if part is not None and not isinstance(part, (Displacement, Force)):
+                        _finite_values(f"CyclePath.waveform: {name}", part)
+        for name, amplitude in (loads or {}).items():
+            _finite_values(f"CyclePath.waveform: loads[{name!r}]", amplitude)
 
         def held(item):
             if isinstance(item, Mapping):
@@ -115,9 +149,18 @@ def waveform(kind: str, n: int) -> np.ndarray:
 
     ``"triangular"``: 0 -> 1 at t = 1/4 -> 0 at 1/2 -> -1 at 3/4 -> 0 at t = 1 (the paper's Example 1
     path); ``"sinusoidal"``: sin(2 pi t).
+
+    ``n`` must be a multiple of 4 (as a scene's ``loading.increments_per_cycle``): both shapes peak at t = 1/4 and
+    3/4, which are increment ends only then; with n = 3 the path would turn at 0.67 of its amplitude, with n = 6
+    too, with n = 10 at 0.8, and the cycle's slip and wear would be those of a smaller amplitude.
+
+    Raises:
+        ValueError: ``n`` is not a multiple of 4 (at least 4), or ``kind`` is not one of the two shapes.
     """
-    if n < 1:
-        raise ValueError(f"n = {n}: expected >= 1 increments per cycle")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 4 or n % 4:
+        raise ValueError(f"increments per cycle = {n!r}: expected a multiple of 4, at least 4 (the waveform peaks at "
+                         "1/4 and 3/4 of the cycle, increment ends only then; otherwise the path never reaches its "
+                         "amplitude)")
     t = np.arange(1, n + 1) / n
     if kind == "triangular":
         return np.interp(t, [0.0, 0.25, 0.75, 1.0], [0.0, 1.0, -1.0, 0.0])

@@ -98,23 +98,24 @@ class ContactOperators:
             raise ValueError("FrettingProblem: non-zero Dirichlet values in bcs are not supported with plasticity "
                              "(the Newton loop holds the Dirichlet dofs at zero); give the motion to the obstacle "
                              "(normal=, tangential=) or apply a load instead")
+        # The loads before the factorisation: a non-finite one is refused before the expensive work.
+        self.vectors: list = []   # PETSc vectors of the loads (owned here)
+        self.load_names: list[str] = []
+        if base is not None:
+            self._add_vector("dirichlet values", base, "bcs (their Dirichlet values)")
+        for name, form in loads.items():
+            self._add_vector(name, self._load_vector(form), f"loads[{name!r}]")
+        for name, conditions in self.prescribed.items():
+            vec = self._dirichlet_vector(conditions)
+            if vec is None:
+                raise ValueError(f"FrettingProblem: prescribed[{name!r}] has zero values everywhere")
+            self._add_vector(name, vec, f"prescribed[{name!r}]")
         self.timings["assemble_s"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         self.delassus = DelassusOperator(self.K, self.comm, method=delassus_method,
                                          petsc_options=dict(petsc_options or {}), options_prefix=options_prefix)
         self.delassus.factorize()
         self.timings["factorize_s"] = time.perf_counter() - t0
-        self.vectors: list = []   # PETSc vectors of the loads (owned here)
-        self.load_names: list[str] = []
-        if base is not None:
-            self._add_vector("dirichlet values", base)
-        for name, form in loads.items():
-            self._add_vector(name, self._load_vector(form))
-        for name, conditions in self.prescribed.items():
-            vec = self._dirichlet_vector(conditions)
-            if vec is None:
-                raise ValueError(f"FrettingProblem: prescribed[{name!r}] has zero values everywhere")
-            self._add_vector(name, vec)
         #: Loads always applied at factor 1 (the values of ``bcs``), by index in :attr:`load_names`.
         self.fixed_factor = [i for i, n in enumerate(self.load_names) if n == "dirichlet values"]
         t0 = time.perf_counter()
@@ -132,7 +133,14 @@ class ContactOperators:
         #: The Contact of each zone as given (a zone rebuilt for a new window stays known by it).
         self.zone_keys = self.contact.zones
 
-    def _add_vector(self, name: str, vec) -> None:
+    def _add_vector(self, name: str, vec, given_as: str) -> None:
+        """Hold the load vector ``vec`` as ``name``, refused unless finite (``given_as``: the argument it came from,
+        for the message). Collective (a norm)."""
+        norm = vec.norm()
+        if not np.isfinite(norm):
+            vec.destroy()
+            raise ValueError(f"FrettingProblem: {given_as} is not finite (its assembled vector's norm is {norm}): a "
+                             "NaN or infinite value in the form's coefficients, the vector or the Dirichlet data")
         self.load_names.append(name)
         self.vectors.append(vec)
 

@@ -270,11 +270,13 @@ class FrettingProblem:
         operators.activate(state)
         targets, controlled = increment_targets(operators, state, normal, tangential)
         factors = operators.factors(state, loads)
+        source = state.token   # the one state the result may be committed to (commit checks it)
         if self.body is not None:
             result = solve_plastic(operators, self.solver, self.body, state, targets, controlled, factors, in_cycle)
+            result = replace(result, solved_from=source)
         else:
             result = replace(solve_contact(operators, self.solver, state, targets, controlled, factors),
-                             in_cycle=in_cycle)
+                             in_cycle=in_cycle, solved_from=source)
         self._check_window(result)
         return result
 
@@ -296,7 +298,13 @@ class FrettingProblem:
         """The new state after a converged increment or cycle (:func:`dolfinx_fretting.commit.commit`: the wear
         law, the plastic history, the totals of :attr:`~dolfinx_fretting.state.ContactState.record`, finite sliding's
         re-pairing).
-        ``state`` itself is not changed; rollback is not committing."""
+        ``state`` itself is not changed; rollback is not committing.
+
+        Raises:
+            ValueError: ``result`` was not solved from ``state`` (a result already committed, or one of another
+                state: its :attr:`~dolfinx_fretting.state.IncrementResult.solved_from` is not ``state``'s
+                :attr:`~dolfinx_fretting.state.ContactState.token`); its wear would count twice.
+        """
         return commit(self.operators, self.wear_laws, self.sliding, state, result)
 
     def advance(self, state: ContactState, normal=None, tangential=None, loads=None, *, in_cycle: bool = False,
@@ -378,8 +386,9 @@ class FrettingProblem:
                                       keep)
             return stepwise_cycle(operators, self._advance_once, start, obstacle, forced, factors, keep, check)
         # A growth solves the whole cycle again from ``state`` in the wider window (its increments then all refer
-        # to one contact set).
-        return self._growing(state, attempt)
+        # to one contact set); the result is still ``state``'s to commit (its final state is in the wider window).
+        source = state.token
+        return replace(self._growing(state, attempt), solved_from=source)
 
     def _advance_once(self, state, normal=None, tangential=None, loads=None, *, in_cycle=False, check=None):
         """:meth:`advance` without growing the window (a cycle grows it once for all its increments)."""
@@ -446,15 +455,21 @@ class FrettingProblem:
     # Checkpoints ------------------------------------------------------------------------------------------
     def save_state(self, state: ContactState, path: str | Path, meta: Mapping[str, Any] | None = None) -> None:
         """Write ``state`` (and JSON-able ``meta``) to an ``.npz`` file atomically (rank 0 writes). Collective."""
-        checkpoint.save_state(self.operators, self.sliding, state, path, meta)
+        checkpoint.save_state(self.operators, self.sliding, state, path, meta, self.wear_laws)
 
     def load_state(self, path: str | Path) -> tuple[ContactState, dict[str, Any]]:
         """Read a state written by :meth:`save_state` (same problem, same contact set). Collective.
 
+        Checked: the contact nodes, the load names, a plastic state's partition, finite sliding's pairing, and each
+        zone's contact parameters: ``mu``, the wear law (its class, coefficients and acceleration) and the obstacle
+        (its class, normal and a plane's position). Not checked: the material (bilinear form), the Dirichlet
+        conditions, the load vectors' values, the solver settings, the plastic law; nor the contact parameters of
+        a checkpoint written before they were saved (it loads as before).
+
         Raises:
-            ValueError: the file does not match this problem (contact nodes, loads, ranks of a plastic state).
+            ValueError: the file does not match this problem (the message names what differs, with both values).
         """
-        return checkpoint.load_state(self.operators, self.sliding, path)
+        return checkpoint.load_state(self.operators, self.sliding, path, self.wear_laws)
 
     def destroy(self) -> None:
         """Free the PETSc objects (factorisation, K if assembled here, load vectors, the plastic body's)."""

@@ -8,6 +8,7 @@ columns are declared once here (:data:`INCREMENT_COLUMNS`).
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -17,7 +18,7 @@ from .contact import ContactSet
 from .wear import ROW_FIELDS
 
 __all__ = ["ConvergenceError", "WindowError", "STATUS_NAMES", "SOLVER_COLUMNS", "INCREMENT_COLUMNS", "PlasticHistory",
-           "ContactState", "IncrementResult", "CycleResult", "solver_columns"]
+           "ContactState", "IncrementResult", "CycleResult", "solver_columns", "STATE_TOKEN_FIELDS"]
 
 #: Contact status codes of :attr:`ContactState.status` (the wear module's classification).
 STATUS_NAMES = {0: "open", 1: "stick", 2: "slip"}
@@ -29,6 +30,11 @@ SOLVER_COLUMNS = ("local_iterations", "local_error", "load_solves", "newton_iter
                   "newton_delta_2", "cutbacks", "yielded_points")
 #: Per-increment columns: the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then the :data:`SOLVER_COLUMNS`.
 INCREMENT_COLUMNS = ROW_FIELDS + SOLVER_COLUMNS
+#: The fields of a :class:`ContactState` its :attr:`~ContactState.token` is a digest of: the contact data every rank
+#: holds alike (not ``warm``, rank 0's only, nor ``plastic``, each rank's own) and the counters, so a commit
+#: (which adds at least one increment) always changes it.
+STATE_TOKEN_FIELDS = ("forces", "positions", "slip", "wear_gap", "obstacle", "load_factors", "targets",
+                      "force_controlled", "master_wear", "increment", "dissipated_energy", "local_iterations")
 
 
 class ConvergenceError(RuntimeError):
@@ -151,10 +157,37 @@ class ContactState:
     pairing: ContactSet | None = None
     master_wear: np.ndarray | None = None
 
+    @property
+    def token(self) -> str:
+        """A digest of this state's contents (:data:`STATE_TOKEN_FIELDS` and the pairing): what a result records
+        of the state it was solved from (:attr:`IncrementResult.solved_from`), so that
+        :meth:`~dolfinx_fretting.problem.FrettingProblem.commit` refuses it on any other state. Two states hold the
+        same token when they hold the same contact data (a state and its checkpoint read back); every commit
+        changes it (the increment counter). Recomputed on each call (a state's arrays could be changed in place);
+        the same on every rank."""
+        digest = hashlib.blake2b(digest_size=16)
+        for name in STATE_TOKEN_FIELDS:
+            value = getattr(self, name)
+            if value is None:
+                digest.update(f"{name}:None;".encode())
+                continue
+            array = np.ascontiguousarray(value)
+            digest.update(f"{name}:{array.dtype.str}{array.shape};".encode())
+            digest.update(array.tobytes())
+        if self.pairing is not None:   # finite sliding: the pairing the per-contact arrays refer to
+            for array in (self.pairing.master_faces, self.pairing.master_weights):
+                digest.update(np.ascontiguousarray(array).tobytes())
+        return digest.hexdigest()
+
 
 @dataclass(frozen=True)
 class IncrementResult:
-    """A converged increment, not yet committed (see :meth:`~dolfinx_fretting.problem.FrettingProblem.commit`)."""
+    """A converged increment, not yet committed (see :meth:`~dolfinx_fretting.problem.FrettingProblem.commit`).
+
+    Attributes:
+        solved_from: The :attr:`~ContactState.token` of the state it was solved from (set by
+            :meth:`~dolfinx_fretting.problem.FrettingProblem.solve`): the one state it may be committed to, once.
+    """
 
     forces: np.ndarray
     slip: np.ndarray
@@ -169,6 +202,7 @@ class IncrementResult:
     local_solves: int
     newton: dict[str, Any] | None = None
     plastic: PlasticHistory | None = None
+    solved_from: str | None = None
 
 
 @dataclass(frozen=True)
@@ -185,6 +219,9 @@ class CycleResult:
         compiled: True when the compiled loop ran it.
         kept_pairings: Finite sliding with ``keep=True``: the pairing each kept increment's arrays refer to
             (:attr:`ContactState.pairing`), else None.
+        solved_from: The :attr:`~ContactState.token` of the state given to
+            :meth:`~dolfinx_fretting.problem.FrettingProblem.run_cycle` (also when the window grew during the cycle):
+            the one state it may be committed to, once.
     """
 
     records: dict[str, np.ndarray]
@@ -194,6 +231,7 @@ class CycleResult:
     kept: tuple[np.ndarray, ...] | None
     compiled: bool
     kept_pairings: tuple[ContactSet, ...] | None = None
+    solved_from: str | None = None
 
 
 def solver_columns(result: IncrementResult, newton_iterations: int | None = None,
