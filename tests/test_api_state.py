@@ -199,3 +199,34 @@ def test_cut_back_increments_keep_their_wear_in_the_record():
     finally:
         problem.solve = solve
         problem.destroy()
+
+
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="serial model")
+def test_a_named_load_is_its_own_response_beside_prescribed_data():
+    """A block held only by its top, which prescribed data lower by delta, with the plane far below (no contact),
+    under a named side traction: superposition of the two responses. With the data at factor 0 the displacement
+    is plain DOLFINx's solution of K u = f_side with the top held at zero; with both at factor 1 it is that plus
+    the rigid translation (0, -delta) (one solve each: 1e-10 of the largest). A load's vector must not carry the
+    data's lifting (that would add the translation times the load's factor)."""
+    msh, tags, V = block()
+    delta = 3e-4
+    top_dofs = fem.locate_dofs_topological(V, 1, tags.find(2))
+    lowered = fem.Function(V)
+    lowered.x.array.reshape(-1, 2)[:, 1] = -delta
+    moving_top = fem.dirichletbc(lowered, top_dofs)
+    contact = dfr.Contact(V, (tags, 1), dfr.RigidPlane([0.0, -1.0], [0.0, 1.0]), mu=0.3, bcs=[moving_top])
+    side = traction(V, tags, 4, (-20.0, -30.0))
+    problem = dfr.FrettingProblem(elasticity(V), contact, [], prescribed={"lower": [moving_top]},
+                                  loads={"side": side})
+    try:
+        u_side = dfx.solve_linear(elasticity(V), side, [clamped_top(V, tags)], {"ksp_type": "preonly", "pc_type": "lu"})
+        reference = u_side.x.array.reshape(-1, 2)
+        scale = np.abs(reference).max() + delta
+        for lower in (0.0, 1.0):
+            start = problem.initial_state()
+            state = problem.commit(start, problem.solve(start, loads={"lower": lower, "side": 1.0}))
+            assert not np.any(state.forces)
+            u = problem.displacement(state).x.array.reshape(-1, 2)
+            assert np.abs(u - (reference + np.array([0.0, -lower * delta]))).max() <= 1e-10 * scale, lower
+    finally:
+        problem.destroy()
