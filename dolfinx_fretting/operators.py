@@ -150,8 +150,8 @@ class ContactOperators:
         else:
             L = dfx.compiled_form(form)
             f = fem.petsc.assemble_vector(L)
-            if self.form is not None:
-                fem.petsc.apply_lifting(f, [self.form], bcs=[self.all_bcs])
+            # No lifting: a load alone holds every fixed dof at zero. Lifting by the conditions' values would add
+            # the Dirichlet data's response (the "dirichlet values" or prescribed loads' own) times this load's factor.
             f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dfx.set_bc(f, self.all_bcs, scale=0.0)  # a load alone: zero displacement at every fixed dof
         return _plain_vector(f, self.K)

@@ -474,3 +474,24 @@ def test_plastic_jumps_resume_as_the_uninterrupted_run(tmp_path, monkeypatch):
     # by the cycles' maxima: the per-point changes are not checkpointed).
     carried = meta["jump"]["plastic_error"] + meta["jump"]["plastic_error_pending"]
     assert 0 < carried < resumed["cycle_jump"]["plastic_error_estimate"]
+
+
+def test_the_hardening_bound_binds_when_the_flow_is_large():
+    """A cycle of large accumulated flow and small net strain (plastic shakedown with much reversed flow): the
+    hardening bound dN H flow <= f sigma_y binds, by hand f sigma_y / (H flow) = 84 / (7230 x 3e-4) = 38.7
+    (the net strain's bound, f sigma_y / (E net) = 243, is six times looser); without hardening (H = 0) only the
+    net strain's bound is left, and choose_jump takes the hardening bound as 'plastic' (38 cycles)."""
+    n = 3
+    eps0, p0 = np.zeros((n, 6)), np.zeros(n)
+    eps1 = eps0.copy()
+    eps1[0, :3] = [3e-6, -1.5e-6, -1.5e-6]                     # net 3e-6
+    p1 = p0 + np.array([3e-4, 1e-4, 0.0])                       # flow 3e-4
+    cycle = analyse_plastic_cycle(eps0, p0, eps1, p1, 1e-6)
+    f, sy, E, H = 0.1, 840.0, 115e3, 7230.0
+    harden, strain = f * sy / (H * 3e-4), f * sy / (E * 3e-6)
+    assert harden < strain / 6
+    limit = plastic_jump_limit(cycle, f, sy, E, H)
+    assert limit == pytest.approx(harden, rel=1e-12)
+    assert plastic_jump_limit(cycle, f, sy, E, 0.0) == pytest.approx(strain, rel=1e-12)
+    wear = CycleAnalysis(rate=np.array([1e-9]), rho=0.0, pressure_rate=0.0, peak_pressure=100.0)
+    assert choose_jump(wear, 1e-5, 1e-2, 0.1, 1.0, 1000, 1000, 10**6, plastic_limit=limit) == (38, "plastic", 38)

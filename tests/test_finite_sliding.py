@@ -325,3 +325,114 @@ def test_a_sphere_sliding_over_the_flat_in_3d():
         deepest[model] = x[near][np.argmin(values[near, 2])][:2]
     assert np.linalg.norm(deepest["finite"] - [-slide, 0.0]) <= h
     assert np.linalg.norm(deepest["small"]) <= h
+
+
+# Tests aimed at planted bugs (docs/validation-audit.md, issue 27) --------------------------------------------
+def _quad_surface(n=10, h=0.1):
+    """A flat 3D master z = 0 of n x n unit quadrilaterals of side h centred on the origin (global nodes 1000 + ...),
+    body below, frame (n, t1, t2) = (z, x, y)."""
+    coords = (np.arange(n + 1) - n / 2) * h
+    index = lambda i, j: 1000 + i + (n + 1) * j  # noqa: E731
+    nodes, x, inside = [], [], []
+    for j in range(n):
+        for i in range(n):
+            corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]   # cyclic
+            nodes.append([index(a, b) for a, b in corners])
+            x.append([[coords[a], coords[b], 0.0] for a, b in corners])
+            inside.append([coords[i] + h / 2, coords[j] + h / 2, -1.0])
+    return MasterSurface(np.array(nodes), np.array(x), np.full(n * n, 4), np.array(inside),
+                         tangent_frame([0.0, 0.0, 1.0]))
+
+
+def test_a_stroke_along_t2_moves_the_paired_points_in_3d():
+    """A rigid slide of the master along t2 (across the obstacle's t1) by D: every paired point has moved |D| from
+    its slave node, |D| / h master elements (the quadrilaterals' size is h), as a slide along t1 does; after
+    re-pairing each node faces the master's material point at X_s - D (exact on a flat master) and the offsets
+    are zero. A measure along t1 only would see no motion at all, and never re-pair."""
+    h = 0.1
+    surface = _quad_surface(h=h)
+    assert np.allclose(surface.reference_frame[2], [0.0, 1.0, 0.0])          # t2 = y
+    xs, ys = np.meshgrid(np.linspace(-0.12, 0.12, 4) + 0.013, np.linspace(-0.12, 0.12, 4) + 0.007)
+    coords = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, 0.001)])
+    pairs = surface.pair(coords)
+    cs = paired_contact_set(surface, np.arange(xs.size), coords, np.full(xs.size, 0.01), coords[:, 0].copy(),
+                            pairs["face"], pairs["weights"], 3 * 2000)
+    nodes = np.union1d(cs.global_nodes, surface.nodes.ravel())
+    m = 3 * nodes.size
+    comp = sliding.SurfaceCompliance(nodes, 3, np.eye(m), np.zeros((0, m)), np.arange(surface.nodes.shape[0]),
+                                     sliding.master_node_areas(surface, nodes))
+    u = np.zeros((nodes.size, 3))
+    for D in (np.array([0.0, 0.037, 0.0]), np.array([0.021, -0.028, 0.0])):   # along t2; oblique, |D| = 0.035
+        assert sliding.offsets(cs, comp, u, D) == pytest.approx(np.full(cs.nc, np.linalg.norm(D) / h), rel=1e-12)
+        new = sliding.repair(cs, comp, u, D)
+        assert np.abs(new.master_points[:, :2] - (coords[:, :2] - D[:2])).max() < 1e-14
+        assert sliding.offsets(new, comp, u, D).max() < 1e-12
+
+
+def test_a_finite_reach_keeps_every_facet_within_it():
+    """ElasticBody.reach: every master facet with a point within ``reach`` of a slave node enters the surface
+    compliance (else a node sliding that far finds no facet), and none farther than reach plus the facet's own
+    length. Distances here are exact (slave nodes on the line of a flat master of segments h = 0.02). reach =
+    0.065 lies between the near ends (0.06 from the outermost slave node) and the centres (0.07) of the next
+    facets out, so a facet whose centre is beyond reach while its near end is within must be kept."""
+    h, reach = 0.02, 0.065
+    x_nodes = np.linspace(-0.5, 0.5, 51)
+    surface = _segment_surface(x_nodes)
+    cs = _slaves_on(surface, np.linspace(-0.1, 0.1, 11))
+    faces, nodes = sliding.surface_nodes(cs, reach)
+    left, right = x_nodes[:-1], x_nodes[1:]
+    # distance from each segment [left, right] to the nearest slave node (all on y = 0)
+    distance = np.array([np.maximum(np.maximum(a - cs.coords[:, 0], cs.coords[:, 0] - b), 0.0).min()
+                         for a, b in zip(left, right)])
+    within = np.flatnonzero(distance <= reach)
+    assert np.isin(within, faces).all(), f"facets within reach left out: {np.setdiff1d(within, faces)}"
+    assert (distance[faces] <= reach + h * (1 + 1e-12)).all()
+    assert np.isin(surface.nodes[within].ravel(), nodes).all() and np.isin(cs.global_nodes, nodes).all()
+    assert np.array_equal(sliding.surface_nodes(cs, None)[0], np.arange(50))     # no reach: the whole master
+
+
+def test_the_state_carried_into_a_new_pairing():
+    """A committed state carried into the pairing of a rigid slide D of the master (no deformation): forces and
+    slip are the same vectors (same frames on a flat master), the wear gap is the slave's own wear plus the
+    master's wear read at the new points (the master's wear linear in x: a + b (X_s - D) exactly), and the
+    relative positions are the new pairing's x = L u - G D + g0 + w: normal g0 + w, tangential -D (t1 = x)."""
+    surface = _segment_surface(np.linspace(-0.5, 0.5, 51))
+    xs = np.linspace(-0.1, 0.1, 9) + 0.003
+    cs = _slaves_on(surface, xs, gap=0.001)
+    comp = _compliance(cs, surface)
+    u = np.zeros((comp.nodes.size, 2))
+    D = np.array([0.067, 0.0])
+    new = sliding.repair(cs, comp, u, D)
+    rng = np.random.default_rng(7)
+    forces, slip = rng.uniform(0.1, 1.0, 2 * cs.nc), rng.uniform(-1e-3, 1e-3, 2 * cs.nc)
+    a, b = 2e-4, 1e-3
+    x_master = np.r_[np.zeros(cs.nc), np.linspace(-0.5, 0.5, 51)]   # the compliance's nodes: slaves 0.., master 100..
+    assert np.array_equal(comp.nodes, np.r_[np.arange(cs.nc), 100 + np.arange(51)])
+    master_wear = np.where(comp.nodes >= 100, a + b * x_master, 0.0)
+    own = rng.uniform(0.0, 1e-4, cs.nc)
+    wear_gap = own + (a + b * xs)                                     # the master's share read at the old points
+    assert sliding.interpolate_master(cs, comp, master_wear) == pytest.approx(a + b * xs, rel=1e-12)
+    carried = sliding.carry_state(cs, new, comp, u, D, forces, slip, wear_gap, master_wear)
+    assert carried["forces"] == pytest.approx(forces, rel=1e-14) and carried["slip"] == pytest.approx(slip, rel=1e-14)
+    assert carried["wear_gap"] == pytest.approx(own + a + b * (xs - D[0]), rel=1e-12, abs=1e-18)
+    assert carried["positions"][0::2] == pytest.approx(new.gap0 + carried["wear_gap"], rel=1e-12)
+    assert carried["positions"][1::2] == pytest.approx(np.full(cs.nc, -D[0]), rel=1e-12)
+
+
+def test_re_pairing_happens_once_a_point_has_moved_repair_slip_elements(cylinder_on_flat):
+    """When re-pairing happens: gross slip in steps of 0.1 element (h = 20 um). After every commit no paired point
+    is more than ElasticBody.repair_slip (0.25) elements from its slave node (the pairing is renewed as soon as one
+    is), and it is renewed no more often than once per repair_slip of relative slide: about one re-pairing per
+    2.5 steps, between slide / (repair_slip h) - 2 and slide / (0.1 h) (the steps; the stick phase slides less)."""
+    h, step, repair_slip = 0.02, 0.002, 0.25
+    problem = _problem(cylinder_on_flat, "finite")
+    assert problem.contact.obstacle.repair_slip == repair_slip
+    state = _pressed(problem)
+    worst = 0.0
+    steps = 30
+    for d in step * np.arange(1, steps + 1):
+        state = problem.commit(state, problem.solve(state, tangential=d))
+        worst = max(worst, problem.relative_slip_ratio(state))
+    assert worst <= repair_slip
+    slide = steps * step                                 # the rigid stroke; the relative slide is a little less
+    assert slide / (repair_slip * h) - 4 <= problem.sliding.repairs <= steps

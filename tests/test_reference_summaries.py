@@ -28,6 +28,17 @@ Newton iteration must keep (issue 14), 13 times the 7.8e-10 measured. (Looser Ne
 today's answer: delta_1 = 1e-6 or delta_2 = 1e-4 give the same 2.9e-12 from full Newton, measured; the
 quadratic last step lands far inside them.)
 
+Three cases were added later (issue 27), each frozen at its own commit (``commit`` of the case): a finite-sliding
+run (``mccoll-finite-sliding``: re-pairing, the flat's wear on its nodes, stored as ``master_wear``), a 3D run
+(``sphere-flat-3d``: node-to-face pairing on hexahedra, the half model's whole-contact sums and radii) and a run
+of a script on the Python API (``api-block``, ``API_CASES`` in the generator: prescribed data, a named load, force
+control, wear; no scene). They are held to the same 1e-10, measured to hold with room on another build of the
+whole stack: their answers on the DOLFINx 0.11 / numpy 2 stack (other BLAS, compilers and vector code) lie within
+1.7e-15 (finite sliding), 1.0e-15 (3D) and 7.0e-14 (API: the wear profile) of the Debian answers frozen here, and
+a rerun on Debian gives them bit for bit. Finite sliding has a discrete decision, re-pairing once a paired point
+has moved 0.25 master elements: the largest offset at each of the run's 36 checks lies at least 0.016 elements
+from that threshold (measured), so no rounding-level change of the arithmetic can move a re-pairing.
+
 Numbers near zero (a stick width in gross slip, the flat's wear with a single k, the tangential force at the
 end of a force-controlled cycle) are compared relative to the natural scale of their quantity, the stored
 value of the key ``SCALE_OF`` names: ``|actual - expected| <= 1e-10 * max(|expected|, scale)``.
@@ -87,6 +98,8 @@ SCALE_OF = {
     "wear_area": "wear_area", "dissipated_energy": "dissipated_energy",
     "equivalent_cycles": "equivalent_cycles",
     "max_equivalent_plastic_strain": "max_equivalent_plastic_strain",
+    "contact_radius": "contact_radius", "stick_radius": "contact_radius", "contact_extent_along": "contact_radius",
+    "contact_extent_across": "contact_radius", "wear_volume": "wear_volume", "master_scar_width": "contact_width",
 }
 
 
@@ -123,14 +136,17 @@ def deviations(reference: dict[str, Any], answer: dict[str, Any], rel: float = R
         states = sum(values[k] for k in COUNT_SLACK)  # every contact is open, stuck or slipping: exactly
         rows.append(("n_open + n_stick + n_slip", states, values["contacts"],
                      0.0 if states == values["contacts"] else float("inf"), 0.0))
-    ref_gap, gap = reference["wear_gap"], answer["wear_gap"]
-    if ref_gap is None or gap is None or len(ref_gap) != len(gap):
-        rows.append(("wear_gap (length)", None if gap is None else len(gap),
-                     None if ref_gap is None else len(ref_gap), 0.0 if ref_gap == gap else float("inf"), 0.0))
-    else:
-        scale = max((abs(v) for v in ref_gap), default=0.0)
-        rows += [(f"wear_gap[{i}]", a, b, _deviation(a, b, scale), rel)
-                 for i, (a, b) in enumerate(zip(gap, ref_gap))]
+    for profile in ("wear_gap", "master_wear"):
+        if profile == "master_wear" and profile not in reference:  # frozen for the finite-sliding case only
+            continue
+        ref_gap, gap = reference.get(profile), answer.get(profile)
+        if ref_gap is None or gap is None or len(ref_gap) != len(gap):
+            rows.append((f"{profile} (length)", None if gap is None else len(gap),
+                         None if ref_gap is None else len(ref_gap), 0.0 if ref_gap == gap else float("inf"), 0.0))
+        else:
+            scale = max((abs(v) for v in ref_gap), default=0.0)
+            rows += [(f"{profile}[{i}]", a, b, _deviation(a, b, scale), rel)
+                     for i, (a, b) in enumerate(zip(gap, ref_gap))]
     expected_energy = reference["last_cycle_dissipated_energy"]
     energy = answer["last_cycle_dissipated_energy"]
     rows.append(("last_cycle_dissipated_energy", energy, expected_energy,
@@ -160,6 +176,8 @@ def _answer(name: str, reference: dict, out: Path) -> dict:
 
     from dolfinx_fretting.scenes import load_scene
 
+    if reference["scene"] is None:  # a script on the API (generator.API_CASES): its own structured mesh, no gmsh
+        return generator.run_case(name, out)
     meshed_by_gmsh = load_scene(reference["scene"], reference["overrides"]).geometry.kind != "rectangle"
     if not meshed_by_gmsh or gmsh.__version__.startswith(REFERENCE_GMSH):
         return generator.run_case(name, out, overrides=reference["overrides"], scene=reference["scene"])
