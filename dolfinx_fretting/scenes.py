@@ -35,7 +35,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from .analytic import plane_strain_modulus
 from .geometries import GEOMETRIES
 from .geometries.base import MAX_CELLS, MAX_ELASTIC_STRAIN, range_error
-from .laws import Archard
+from .laws import Archard, EnergyWear
 
 __all__ = ["Scene", "SceneError", "builtin_scenes", "load_scene", "apply_overrides", "PRESETS", "preset_values",
            "scene_differences", "describe_differences", "MAX_ELASTIC_STRAIN", "SHAKEDOWN_TOLERANCE"]
@@ -256,7 +256,9 @@ class ZoneSettings(_Section):
 
 
 class WearSettings(_Section):
-    """Wear law (Archard, paper eq. 4-5: wear gap rate = ``k p_n |slip rate|``).
+    """Wear law: Archard's (paper eq. 4-5: wear gap rate = ``k p_n |slip rate|``) or Fouvry's energy law (worn
+    volume = ``alpha`` x dissipated energy: wear gap rate = ``alpha mu p_n |slip rate|`` where the contact slides;
+    :class:`~dolfinx_fretting.laws.EnergyWear`).
 
     ``acceleration`` is the paper's "hypothetical" wear coefficient made explicit: each simulated cycle
     stands for ``acceleration`` physical cycles, the wear coefficient used is ``k * acceleration``, and
@@ -272,7 +274,7 @@ class WearSettings(_Section):
     and a fixed k-scaling inside the jump would multiply its step without the control.
     """
 
-    law: Literal["none", "archard"] = "none"
+    law: Literal["none", "archard", "energy"] = "none"
     #: Archard wear coefficient of the wear gap (1/MPa): the paper's single coefficient. At most
     #: :data:`MAX_WEAR_COEFFICIENT` (also for k times the acceleration).
     k: float = Field(0.0, ge=0, le=1.0)
@@ -281,6 +283,12 @@ class WearSettings(_Section):
     #: body's worn depth is its share ``k_body / (k_slave + k_master)`` of it.
     k_slave: float | None = Field(None, ge=0, le=1.0)
     k_master: float | None = Field(None, ge=0, le=1.0)
+    #: Fouvry's energy wear coefficient (``law = "energy"``): worn volume per dissipated energy, mm^3 per N mm
+    #: (1/MPa; 1e-5 mm^3/J is 1e-8). At most :data:`MAX_WEAR_COEFFICIENT` (also times the acceleration).
+    alpha: float = Field(0.0, ge=0, le=1.0)
+    #: Two deformable bodies: each body's energy coefficient, given instead of ``alpha`` (shares as for k).
+    alpha_slave: float | None = Field(None, ge=0, le=1.0)
+    alpha_master: float | None = Field(None, ge=0, le=1.0)
     #: Physical cycles per simulated cycle (the wear coefficient used is k * acceleration).
     acceleration: float = Field(1.0, ge=1.0, le=100_000_000)
     #: Cycle jumping (``dolfinx_fretting.cycle_jump``): simulate a cycle with the real k, extrapolate the
@@ -302,22 +310,27 @@ class WearSettings(_Section):
 
     @model_validator(mode="after")
     def _k_given(self) -> WearSettings:
-        per_body = [self.k_slave is not None, self.k_master is not None]
-        if any(per_body):
-            if not all(per_body):
-                raise ValueError("wear: give both wear.k_slave and wear.k_master (1/MPa, >= 0), or wear.k alone")
-            if "k" in self.model_fields_set:
-                raise ValueError("wear: give either wear.k (one coefficient for the wear gap) or wear.k_slave "
-                                 "and wear.k_master (one per body), not both")
-        if self.law == "archard" and self.k_total <= 0:
-            key = "wear.k_slave + wear.k_master" if any(per_body) else "wear.k"
-            raise range_error(key, self.k_total, f"{key.removeprefix('wear.')} > 0 (1/MPa) with wear.law = 'archard'")
-        if self.k_total * self.acceleration > MAX_WEAR_COEFFICIENT:
-            key = "wear.k_slave + wear.k_master" if any(per_body) else "wear.k"
-            raise range_error("wear.acceleration", self.acceleration,
-                              f"{key} x wear.acceleration <= {MAX_WEAR_COEFFICIENT:g} 1/MPa (here {key} = "
-                              f"{self.k_total:g}): a wear gap growing faster than the slip at 1 MPa is no wear law")
-        if self.cycle_jump and self.law != "archard":
+        for name in ("k", "alpha"):
+            per_body = [getattr(self, f"{name}_slave") is not None, getattr(self, f"{name}_master") is not None]
+            if any(per_body) and not all(per_body):
+                raise ValueError(f"wear: give both wear.{name}_slave and wear.{name}_master (1/MPa, >= 0), or "
+                                 f"wear.{name} alone")
+            if any(per_body) and name in self.model_fields_set:
+                raise ValueError(f"wear: give either wear.{name} (one coefficient for the wear gap) or "
+                                 f"wear.{name}_slave and wear.{name}_master (one per body), not both")
+        used = {"archard": "k", "energy": "alpha"}.get(self.law)
+        if used is not None:
+            per_body = getattr(self, f"{used}_slave") is not None
+            key = f"wear.{used}_slave + wear.{used}_master" if per_body else f"wear.{used}"
+            if self.coefficient_total <= 0:
+                raise range_error(key, self.coefficient_total,
+                                  f"{key.removeprefix('wear.')} > 0 (1/MPa) with wear.law = '{self.law}'")
+            if self.coefficient_total * self.acceleration > MAX_WEAR_COEFFICIENT:
+                raise range_error("wear.acceleration", self.acceleration,
+                                  f"{key} x wear.acceleration <= {MAX_WEAR_COEFFICIENT:g} 1/MPa (here {key} = "
+                                  f"{self.coefficient_total:g}): a wear gap growing faster than the slip at 1 MPa "
+                                  "is no wear law")
+        if self.cycle_jump and self.law == "none":
             raise range_error("wear.cycle_jump", self.cycle_jump, "false without a wear law (nothing to extrapolate)")
         if self.cycle_jump and self.acceleration != 1.0:
             # Both stretch a simulated cycle over several physical ones; the jump does it under error and
@@ -327,34 +340,50 @@ class WearSettings(_Section):
                               "step, the k-scaling does not)")
         if self.jump_forced is not None and not self.cycle_jump:
             raise range_error("wear.jump_forced", self.jump_forced, "unset unless wear.cycle_jump = true")
-        if self.law == "none":
-            # a coefficient without a law would be silently ignored: the scene may have meant wear
-            given = [key for key in ("k", "k_slave", "k_master") if getattr(self, key)]
-            if given:
-                keys = ["k"] if given[0] == "k" else ["k_slave", "k_master"]
-                raise ValueError(f"wear.{given[0]} = {getattr(self, given[0])!r} is given but wear.law = 'none' (no "
-                                 "wear: it would be ignored); set wear.law = 'archard', or remove "
+        # the coefficients of the law not chosen would be silently ignored: the scene may have meant that law
+        for name, law in (("k", "archard"), ("alpha", "energy")):
+            given = [key for key in (name, f"{name}_slave", f"{name}_master") if getattr(self, key)]
+            if given and name != used:
+                keys = [name] if given[0] == name else [f"{name}_slave", f"{name}_master"]
+                raise ValueError(f"wear.{given[0]} = {getattr(self, given[0])!r} is given but wear.law = "
+                                 f"'{self.law}' (it would be ignored); set wear.law = '{law}', or remove "
                                  + " and ".join(f"wear.{key}" for key in keys) + " ("
                                  + " ".join(f"--set wear.{key}=none" for key in keys) + ")")
         return self
 
-    def archard(self) -> Archard:
-        """The public API's law of this section: :class:`~dolfinx_fretting.laws.Archard` with ``k``, or per body
-        with ``k_slave`` and ``k_master``."""
-        if self.k_slave is not None and self.k_master is not None:
-            return Archard(k_slave=self.k_slave, k_master=self.k_master, acceleration=self.acceleration)
-        return Archard(self.k, acceleration=self.acceleration)
+    def wear_law(self) -> Archard | EnergyWear | None:
+        """The public API's law of this section (None with ``law = "none"``):
+        :class:`~dolfinx_fretting.laws.Archard` with ``k`` (or per body ``k_slave`` and ``k_master``), or
+        :class:`~dolfinx_fretting.laws.EnergyWear` with ``alpha`` (or per body)."""
+        if self.law == "energy":
+            if self.alpha_slave is not None and self.alpha_master is not None:
+                return EnergyWear(alpha_slave=self.alpha_slave, alpha_master=self.alpha_master,
+                                  acceleration=self.acceleration)
+            return EnergyWear(self.alpha, acceleration=self.acceleration)
+        if self.law == "archard":
+            if self.k_slave is not None and self.k_master is not None:
+                return Archard(k_slave=self.k_slave, k_master=self.k_master, acceleration=self.acceleration)
+            return Archard(self.k, acceleration=self.acceleration)
+        return None
 
     @property
-    def k_total(self) -> float:
-        """The wear gap's coefficient (1/MPa): ``k``, or ``k_slave + k_master`` (:attr:`Archard.k_total
-        <dolfinx_fretting.laws.Archard.k_total>`)."""
-        return self.archard().k_total
+    def coefficient_total(self) -> float:
+        """The wear gap's coefficient of the law (1/MPa): Archard's ``k`` (or ``k_slave + k_master``), Fouvry's
+        ``alpha`` (or ``alpha_slave + alpha_master``); 0 without wear."""
+        law = self.wear_law()
+        return 0.0 if law is None else sum(law.body_coefficients)
+
+    def rate_coefficient(self, mu: float) -> float:
+        """The rate ``c`` of ``dg = c p |dx_t|`` at a sliding contact with friction ``mu``, without the
+        acceleration: ``k`` (Archard) or ``alpha mu`` (energy); 0 without wear."""
+        law = self.wear_law()
+        return 0.0 if law is None else float(law.coefficients(False, [mu])[0])
 
     @property
     def slave_share(self) -> float:
-        """Fraction of the wear gap worn from the slave body (the cylinder): 1 with a single ``k``."""
-        return self.archard().slave_share
+        """Fraction of the wear gap worn from the slave body (the cylinder): 1 with a single coefficient."""
+        law = self.wear_law()
+        return 1.0 if law is None else law.slave_share
 
 
 class LoadingSettings(_Section):

@@ -123,7 +123,7 @@ class ContactModel:
             raise SimulationError(str(exc)) from None
         #: The zones as given to the problem (the API's keys of their targets), the scene's first table first.
         self.contacts = (contact, *zones)
-        wear = scene.wear.archard() if scene.wear.law == "archard" else None
+        wear = scene.wear.wear_law()
         plasticity = None
         if m.model == "elastoplastic":
             plasticity = Plasticity(J2Plasticity(m.E, m.nu, m.yield_stress, m.plastic_modulus),
@@ -708,7 +708,7 @@ class _Run:
         scene, contact, jumps = self.scene, self.model.contact, self.progress.jump
         w = scene.wear
         h_e = self.model.setup.element_size
-        k = self.problem.wear_coefficient(True)
+        k = self._wear_rate()
         out_r, out_x, _, _, out_status = result.kept
         plastic_limit, settling = self._plastic_bounds(plastic)  # collective: before rank 0 decides
         if regrown:  # (the window grows only for elastic bodies: plastic is None here)
@@ -718,7 +718,9 @@ class _Run:
             dim = contact.dim
             n = out_r.shape[0]
             slip = out_x.reshape(n, contact.nc, dim)[:, :, 1:]  # both tangential components in 3D
-            wear = self.problem.wear.increment(out_r[:, 0::dim] / contact.tributary, slip, in_cycle=True)
+            # each contact's rate c of dg = c p |dx_t| (Archard's k, or the energy law's alpha mu)
+            wear = (self.problem.wear_coefficients(True) * out_r[:, 0::dim] / contact.tributary
+                    * np.linalg.norm(slip, axis=-1))
             wear = wear * (out_status == 2)
             this = float(wear.sum(axis=0).max(initial=0.0))
             old = float(jumps["rate"].max(initial=0.0)) if jumps["rate"] is not None else 0.0
@@ -783,8 +785,8 @@ class _Run:
             "resumed_from_cycle": self.resumed_from_cycle,
             "cycles_this_run": progress.cycle - (self.resumed_from_cycle or 0),
             "local_iterations": state.local_iterations, "wall_time_s": round(time.perf_counter() - self.t_start, 6),
-            "wear_law": scene.wear.law, "wear_k": scene.wear.k_total, "wear_acceleration": scene.wear.acceleration,
-            "wear_k_effective": problem.wear_coefficient(True),
+            "wear_law": scene.wear.law, "wear_k": scene.wear.coefficient_total, "wear_acceleration": scene.wear.acceleration,
+            "wear_k_effective": self._wear_rate(),
             "equivalent_cycles": progress.cycle * scene.wear.acceleration,
             "dissipated_energy": state.dissipated_energy / model.setup.model_fraction,
             "material_model": scene.material.model,
@@ -794,8 +796,8 @@ class _Run:
         if model.contact.two_body:
             share = problem.wear.slave_share if problem.wear is not None else 1.0
             worn = problem.body_wear(state)
-            summary.update({"wear_k_slave": scene.wear.k_total * share,
-                            "wear_k_master": scene.wear.k_total * (1 - share),
+            summary.update({"wear_k_slave": scene.wear.coefficient_total * share,
+                            "wear_k_master": scene.wear.coefficient_total * (1 - share),
                             "max_wear_depth_slave": float(worn["slave"].max(initial=0.0)),
                             "max_wear_depth_master": float(worn["master"].max(initial=0.0)),
                             "max_relative_tangential": progress.max_relative_tangential,
@@ -870,12 +872,18 @@ class _Run:
             out["plastic_error_estimate"] = jumps["plastic_error"] + jumps["plastic_error_pending"]
             out["bounds"]["plastic_fraction"] = scene.wear.jump_plastic_fraction
             out["shakedown_strain"] = scene.material.shakedown_strain
-        k = self.problem.wear_coefficient(True)
+        k = self._wear_rate()
         if self.model.setup.hertz is not None and scene.loading.tangential_kind == "displacement" and k > 0:
             _, E_star, _ = self.model.setup.hertz
             out["hertz_estimate_0.37h/(k delta E*)"] = hertz_jump_limit(
                 self.model.setup.element_size, k, abs(scene.loading.tangential_amplitude), E_star)
         return out
+
+    def _wear_rate(self) -> float:
+        """The cycles' wear rate c of ``dg = c p |dx_t|`` (Archard's k or the energy law's alpha mu, times the
+        acceleration): the largest over the contacts, which bounds a jump's stability (the fastest-wearing
+        contact) where zones' friction differs under the energy law."""
+        return float(self.problem.wear_coefficients(True).max(initial=0.0))
 
     def _modelled(self) -> dict[str, str]:
         """What this run assembled and iterated, and what it skipped (the scene decides)."""
@@ -900,7 +908,7 @@ class _Run:
                      + ((", cycle jumps (wear gap and plastic state extrapolated between simulated cycles)"
                          if body is not None else ", cycle jumps (wear gap extrapolated between simulated cycles)")
                         if scene.wear.cycle_jump else "")
-                     if scene.wear.law == "archard" else "none (wear gap stays zero)"),
+                     if scene.wear.law != "none" else "none (wear gap stays zero)"),
             "contact": f"{contact.nc} candidate nodes" + (f" within {window:.4g} mm of the first contact point"
                                                      + (" (automatic: Hertz estimate plus margin"
                                                         + (f", grown {len(growths)} time(s)" if growths else "") + ")"
@@ -984,7 +992,7 @@ def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: boo
     if run.signal_received:
         summary["interrupted"] = signal.Signals(run.signal_received).name
     run.writer.write_summary(summary)
-    if run.rank0 and scene.wear.law == "archard":
+    if run.rank0 and scene.wear.law != "none":
         run.writer.write_worn_profiles(run.state)
     run.writer.close()
     if run.rank0 and scene.output.xdmf and scene.output.contact_profiles:

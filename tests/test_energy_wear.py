@@ -89,3 +89,44 @@ def test_shares_and_refusals():
         dfr.EnergyWear(float("nan"))
     with pytest.raises(ValueError, match="EnergyWear.acceleration"):
         dfr.EnergyWear(1e-6, acceleration=0.5)
+
+
+# Through the scene runner -------------------------------------------------------------------------------------
+SMALL_BLOCK = ["geometry.nx=20", "geometry.ny=20", "output.xdmf=false", "output.plots=false", "loading.cycles=3",
+               "solver.local_tol=1e-13"]
+
+
+def test_a_scene_wears_by_the_energy_law(tmp_path):
+    """Example 1 (stromberg-block, coarse, 3 cycles) with ``wear.law = "energy"``: the worn area is alpha times the
+    dissipated energy (1e-10: an identity of the committed increments up to the local tolerance 1e-13 at sticking
+    contacts, as tests/test_wear.py's Archard identity), and the run equals the one with Archard's k = alpha mu
+    (1e-10 of the wear: the same rate at every contact, solved to 1e-13)."""
+    from dolfinx_fretting.scenes import load_scene
+    from dolfinx_fretting.simulation import run_scene
+
+    archard_scene = load_scene("stromberg-block", SMALL_BLOCK)
+    mu, k = archard_scene.contact.mu, archard_scene.wear.k
+    alpha = k / mu
+    energy_scene = load_scene("stromberg-block", SMALL_BLOCK + ["wear.law='energy'", "wear.k=none",
+                                                                f"wear.alpha={alpha!r}"])
+    energy = run_scene(energy_scene, tmp_path / "energy", quiet=True)
+    archard = run_scene(archard_scene, tmp_path / "archard", quiet=True)
+    assert energy["converged"] and energy["wear_area"] > 0
+    assert energy["wear_law"] == "energy" and energy["wear_k"] == pytest.approx(alpha, rel=1e-15)
+    assert energy["wear_area"] == pytest.approx(alpha * energy["dissipated_energy"], rel=1e-10)
+    assert energy["max_wear_depth"] == pytest.approx(archard["max_wear_depth"], rel=1e-10)
+    assert energy["wear_k_effective"] == pytest.approx(archard["wear_k_effective"], rel=1e-14)
+
+
+@pytest.mark.parametrize("overrides, message", [
+    (["wear.law='energy'", "wear.k=none"], "wear.alpha = 0.0 is out of range; allowed: alpha > 0 (1/MPa) with wear.law = 'energy'"),
+    (["wear.law='energy'", "wear.alpha=1e-6"], "wear.k = 1e-05 is given but wear.law = 'energy'"),
+    (["wear.alpha=1e-6"], "wear.alpha = 1e-06 is given but wear.law = 'archard'"),
+    (["wear.law='energy'", "wear.k=none", "wear.alpha_slave=1e-6"], "give both wear.alpha_slave and"),
+])
+def test_energy_law_keys_are_checked(overrides, message):
+    from dolfinx_fretting.scenes import SceneError, load_scene
+
+    with pytest.raises(SceneError) as info:
+        load_scene("stromberg-block", overrides)
+    assert message in str(info.value)

@@ -95,7 +95,7 @@ def test_per_body_wear_coefficients_without_a_wear_law_are_refused():
         load_scene("mccoll", ["wear.law='none'"])
     assert "wear.k_slave = 1.9e-08 is given but wear.law = 'none'" in str(info.value)
     assert "--set wear.k_slave=none --set wear.k_master=none" in str(info.value)
-    assert load_scene("mccoll", ["wear.law='none'", "wear.k_slave=none", "wear.k_master=none"]).wear.k_total == 0
+    assert load_scene("mccoll", ["wear.law='none'", "wear.k_slave=none", "wear.k_master=none"]).wear.coefficient_total == 0
 
 
 def test_builtin_hertz_is_valid_and_overrides_apply():

@@ -223,7 +223,7 @@ def _check_worn_sphere(summary, scene, cycles, h):
     """A gross-slip run that finished its cycles, against Archard's identity and the worn sphere's model."""
     assert summary["converged"] and summary.get("error") is None
     assert summary["cycles"] == cycles and summary["equivalent_cycles"] == cycles
-    k, mu, P = scene.wear.k_total, scene.contact.mu, scene.loading.normal_force
+    k, mu, P = scene.wear.coefficient_total, scene.contact.mu, scene.loading.normal_force
     # Archard: the wear gap grows by k p |slip| and the traction does mu p |slip| of work where it slides, so the
     # worn volume is k/mu times the dissipated energy; a jump extrapolates both by the same cycles (measured
     # 1e-13 after 10^4 cycles with 85 simulated; tests/test_sphere.py holds it per increment to 1e-10).

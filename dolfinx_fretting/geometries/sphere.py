@@ -183,10 +183,10 @@ class Sphere(Geometry):
         without wear or cycles.
         """
         wear, loading, contact = scene.wear, scene.loading, scene.contact
-        if (wear.law != "archard" or loading.cycles == 0 or loading.tangential_kind == "none"
+        if (wear.law == "none" or loading.cycles == 0 or loading.tangential_kind == "none"
                 or loading.tangential_amplitude == 0):
             return 0.0
-        k = wear.k_total * wear.acceleration
+        k = wear.rate_coefficient(contact.mu) * wear.acceleration  # energy law: alpha mu
         P, a = self._normal_force(scene), self.contact_size(scene)
         if loading.tangential_kind == "displacement":
             return 4.0 * k * P * abs(loading.tangential_amplitude) * loading.cycles
