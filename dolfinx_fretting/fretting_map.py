@@ -37,7 +37,6 @@ stays in the table with ``converged = False`` and its message; the map goes on.
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import time
@@ -54,6 +53,7 @@ from .contact_output import read_table
 from .outdir import OutputFolderError, ensure_writable_folder
 from .scenes import Scene, SceneError, load_scene
 from .study import QUIET_OUTPUT
+from .tables import cell_text, read_rows, write_rows
 from .units import Units
 
 __all__ = ["GROSS_SLIP_ENERGY_RATIO", "MAP_FIELDS", "MAP_FILES", "REGIMES", "MapPoint", "parse_values",
@@ -399,50 +399,20 @@ def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = 
 
 
 # Tables and picture ----------------------------------------------------------------------------------------------
-def _cell(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, (bool, np.bool_)):
-        return str(bool(v))
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    if isinstance(v, (float, np.floating)):
-        return "" if not math.isfinite(v) else f"{float(v):.6g}"
-    return str(v)
-
-
 def write_map_table(rows: Sequence[dict[str, Any]], out: str | Path) -> tuple[Path, Path]:
     """Write ``map.csv`` (:data:`MAP_FIELDS`) and ``map.md`` into ``out``; returns their paths."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    csv_path, md_path = out / "map.csv", out / "map.md"
-    with open(csv_path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=MAP_FIELDS, extrasaction="ignore")
-        writer.writeheader()
-        for r in rows:
-            writer.writerow({k: _cell(r.get(k)) for k in MAP_FIELDS})
+    md_path = out / "map.md"
+    csv_path = write_rows(out / "map.csv", rows, MAP_FIELDS)
     md_path.write_text(format_markdown(rows) + "\n")
     return csv_path, md_path
 
 
 def read_map_csv(path: str | Path) -> list[dict[str, Any]]:
     """``map.csv`` back as rows: numbers as floats (blank: NaN), ``cycles`` an int, the flags as bools."""
-    text_columns = {"regime", "regime_by_stick", "error", "folder"}
-    rows = []
-    with open(path, newline="") as f:
-        for record in csv.DictReader(f):
-            row: dict[str, Any] = {}
-            for key, value in record.items():
-                if key in text_columns:
-                    row[key] = value
-                elif key in ("converged", "regimes_agree"):
-                    row[key] = value == "True"
-                elif key == "cycles":
-                    row[key] = int(value)
-                else:
-                    row[key] = float(value) if value not in ("", None) else math.nan
-            rows.append(row)
-    return rows
+    return read_rows(path, text={"regime", "regime_by_stick", "error", "folder"},
+                     flags={"converged", "regimes_agree"}, integers={"cycles"})
 
 
 def format_markdown(rows: Sequence[dict[str, Any]]) -> str:
@@ -456,10 +426,10 @@ def format_markdown(rows: Sequence[dict[str, Any]]) -> str:
             regime = "**failed**: " + str(r.get("error", "")).replace("|", "/")[:120]
         elif not r.get("regimes_agree", True):
             regime += " (disagree)"
-        lines.append("| " + " | ".join([_cell(r.get("normal")), _cell(r.get("amplitude")),
-                                        _cell(r.get("energy_ratio_first")), _cell(r.get("energy_ratio_last")), regime,
-                                        _cell(r.get("regime_by_stick")) if r.get("converged") else "",
-                                        _cell(r.get("force_ratio_last")), _cell(r.get("cycles")),
+        lines.append("| " + " | ".join([cell_text(r.get("normal")), cell_text(r.get("amplitude")),
+                                        cell_text(r.get("energy_ratio_first")), cell_text(r.get("energy_ratio_last")), regime,
+                                        cell_text(r.get("regime_by_stick")) if r.get("converged") else "",
+                                        cell_text(r.get("force_ratio_last")), cell_text(r.get("cycles")),
                                         f"{r.get('wall_time_s', math.nan):.2f}"]) + " |")
     for column, name in (("regime", "energy ratio"), ("regime_by_stick", "stick zone")):
         brackets = transition_brackets(rows, column)

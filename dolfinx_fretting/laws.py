@@ -102,34 +102,49 @@ class WearLaw(Protocol):
         """One line for a run's description."""
 
 
-def _body_pair(law: str, name: str, total: float | None, slave: float | None, master: float | None,
-               acceleration: float) -> None:
-    """Check a law's coefficient: ``name`` alone, or one per body (``name_slave`` and ``name_master``)."""
-    per_body = (slave is not None, master is not None)
-    if any(per_body) and not all(per_body):
-        raise ValueError(f"{law}: give both {name}_slave and {name}_master, or {name} alone")
-    if any(per_body) and total is not None:
-        raise ValueError(f"{law}: give either {name} or ({name}_slave, {name}_master), not both")
-    if not any(per_body) and total is None:
-        raise ValueError(f"{law}: {name} (1/MPa, finite, >= 0) is required")
-    for key, value in ((name, total), (f"{name}_slave", slave), (f"{name}_master", master)):
-        if value is not None:
-            finite(f"{law}.{key}", value, 0.0)
-    finite(f"{law}.acceleration", acceleration, 1.0)
+class _PerBodyCoefficient:
+    """What the laws with one coefficient, or one per body (``<name>``, or ``<name>_slave`` and
+    ``<name>_master``), share: the check of the coefficients and each body's share of the wear gap."""
 
+    #: The coefficient's field name (``"k"``, ``"alpha"``).
+    _coefficient: str = ""
+    acceleration: float
 
-def _share(total: float | None, slave: float | None, master: float | None) -> tuple[float, float]:
-    """(slave, master) coefficients: ``(total, 0)`` with one coefficient."""
-    return (float(total), 0.0) if total is not None else (float(slave), float(master))
+    def _given(self) -> tuple[float | None, float | None, float | None]:
+        name = self._coefficient
+        return getattr(self, name), getattr(self, f"{name}_slave"), getattr(self, f"{name}_master")
 
+    def __post_init__(self) -> None:
+        law, name = type(self).__name__, self._coefficient
+        total, slave, master = self._given()
+        per_body = (slave is not None, master is not None)
+        if any(per_body) and not all(per_body):
+            raise ValueError(f"{law}: give both {name}_slave and {name}_master, or {name} alone")
+        if any(per_body) and total is not None:
+            raise ValueError(f"{law}: give either {name} or ({name}_slave, {name}_master), not both")
+        if not any(per_body) and total is None:
+            raise ValueError(f"{law}: {name} (1/MPa, finite, >= 0) is required")
+        for key, value in zip((name, f"{name}_slave", f"{name}_master"), (total, slave, master)):
+            if value is not None:
+                finite(f"{law}.{key}", value, 0.0)
+        finite(f"{law}.acceleration", self.acceleration, 1.0)
 
-def _slave_share(slave: float, master: float) -> float:
-    """Fraction of the wear gap worn from the slave body: its coefficient's share (1 when nothing wears)."""
-    return 1.0 if slave + master == 0 else slave / (slave + master)
+    @property
+    def body_coefficients(self) -> tuple[float, float]:
+        """(slave, master) coefficients: ``(coefficient, 0)`` with a single one."""
+        total, slave, master = self._given()
+        return (float(total), 0.0) if total is not None else (float(slave), float(master))
+
+    @property
+    def slave_share(self) -> float:
+        """Fraction of the wear gap worn from the slave body: its coefficient's share (1 with a single coefficient
+        or when nothing wears)."""
+        slave, master = self.body_coefficients
+        return 1.0 if slave + master == 0 else slave / (slave + master)
 
 
 @dataclass(frozen=True)
-class Archard:
+class Archard(_PerBodyCoefficient):
     """Archard's wear law, the paper's equation 5: the wear gap grows by ``k p |dx_t|`` where contacts slide.
 
     Give ``k`` (1/MPa with N, mm), or for two deformable bodies ``k_slave`` and ``k_master``: both see the
@@ -141,24 +156,12 @@ class Archard:
     k_slave: float | None = None
     k_master: float | None = None
     acceleration: float = 1.0
-
-    def __post_init__(self) -> None:
-        _body_pair("Archard", "k", self.k, self.k_slave, self.k_master, self.acceleration)
+    _coefficient = "k"
 
     @property
     def k_total(self) -> float:
         """The wear gap's coefficient, ``k`` or ``k_slave + k_master``."""
         return sum(self.body_coefficients)
-
-    @property
-    def slave_share(self) -> float:
-        """Fraction of the wear gap worn from the slave body (1 with a single ``k``)."""
-        return _slave_share(*self.body_coefficients)
-
-    @property
-    def body_coefficients(self) -> tuple[float, float]:
-        """(slave, master) coefficients: ``(k, 0)`` with a single ``k``."""
-        return _share(self.k, self.k_slave, self.k_master)
 
     def coefficient(self, in_cycle: bool) -> float:
         """The coefficient applied to an increment: :attr:`k_total`, times ``acceleration`` in a load cycle (each
@@ -185,7 +188,7 @@ class Archard:
 
 
 @dataclass(frozen=True)
-class EnergyWear:
+class EnergyWear(_PerBodyCoefficient):
     """Fouvry's energy wear law (Fouvry, Kapsa & Vincent 1996, Wear 200; Fouvry, Liskiewicz, Kapsa, Hannel &
     Sauger 2003, Wear 255): the worn volume is ``alpha`` times the dissipated frictional energy. Locally the wear
     gap grows by ``alpha tau |dx_t|`` where a contact slides, with ``tau = mu p`` there (Coulomb), so the rate
@@ -201,24 +204,12 @@ class EnergyWear:
     alpha_slave: float | None = None
     alpha_master: float | None = None
     acceleration: float = 1.0
-
-    def __post_init__(self) -> None:
-        _body_pair("EnergyWear", "alpha", self.alpha, self.alpha_slave, self.alpha_master, self.acceleration)
+    _coefficient = "alpha"
 
     @property
     def alpha_total(self) -> float:
         """The wear gap's energy coefficient, ``alpha`` or ``alpha_slave + alpha_master``."""
         return sum(self.body_coefficients)
-
-    @property
-    def slave_share(self) -> float:
-        """Fraction of the wear gap worn from the slave body (1 with a single ``alpha``)."""
-        return _slave_share(*self.body_coefficients)
-
-    @property
-    def body_coefficients(self) -> tuple[float, float]:
-        """(slave, master) energy coefficients: ``(alpha, 0)`` with a single ``alpha``."""
-        return _share(self.alpha, self.alpha_slave, self.alpha_master)
 
     def coefficients(self, in_cycle: bool, mu: np.ndarray) -> np.ndarray:
         """``alpha mu`` at each contact, times ``acceleration`` in a load cycle: at a sliding contact

@@ -29,7 +29,6 @@ frontier over all points) and ``runs/<label>/`` (every run's own output folder).
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 import sys
@@ -45,6 +44,7 @@ from mpi4py import MPI
 from .geometries import GEOMETRIES
 from .outdir import OutputFolderError, ensure_writable_folder
 from .scenes import Scene, SceneError, load_scene
+from .tables import cell_text, read_rows, write_rows
 
 __all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
            "default_sweep", "sweep_entries", "plan_study", "run_study", "point_errors", "profile_l2_error", "write_study_table",
@@ -569,46 +569,19 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
 
 
 # Tables and picture --------------------------------------------------------------------------------------
-def _cell(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, bool):
-        return str(v)
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    if isinstance(v, (float, np.floating)):
-        return "" if not math.isfinite(v) else f"{float(v):.6g}"
-    return str(v)
-
-
 def write_study_table(rows: Sequence[dict[str, Any]], out: str | Path) -> tuple[Path, Path]:
     """Write ``study.csv`` and ``study.md`` into ``out``; returns their paths."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    csv_path, md_path = out / "study.csv", out / "study.md"
-    with open(csv_path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=STUDY_FIELDS, extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: _cell(r.get(k)) for k in STUDY_FIELDS})
+    md_path = out / "study.md"
+    csv_path = write_rows(out / "study.csv", rows, STUDY_FIELDS)
     md_path.write_text(format_markdown(rows) + "\n")
     return csv_path, md_path
 
 
 def read_study_csv(path: str | Path) -> list[dict[str, Any]]:
     """``study.csv`` back as rows (numbers as floats, blank cells as NaN)."""
-    text_cols = {"label", "key", "value", "error", "overrides", "converged"}
-    rows = []
-    with open(path, newline="") as f:
-        for r in csv.DictReader(f):
-            row: dict[str, Any] = {}
-            for k, v in r.items():
-                if k in text_cols:
-                    row[k] = (v == "True") if k == "converged" else v
-                else:
-                    row[k] = float(v) if v not in ("", None) else math.nan
-            rows.append(row)
-    return rows
+    return read_rows(path, text={"label", "key", "value", "error", "overrides"}, flags={"converged"})
 
 
 def _pct(v: Any) -> str:
@@ -630,10 +603,10 @@ def format_markdown(rows: Sequence[dict[str, Any]]) -> str:
             name = f"`{r.get('value')}`"
         if not r.get("converged", True):
             name += " (failed: " + str(r.get("error", ""))[:80] + ")"
-        cyc = f"{_cell(r.get('cycles'))} ({_cell(r.get('equivalent_cycles'))})"
+        cyc = f"{cell_text(r.get('cycles'))} ({cell_text(r.get('equivalent_cycles'))})"
         lines.append("| " + " | ".join([name, cyc, f"{r.get('wall_time_s', math.nan):.2f}",
                                         f"{r.get('speedup', math.nan):.2f}",
-                                        *(_pct(r.get(k)) for k in ERROR_FIELDS), _cell(r.get("contacts"))]) + " |")
+                                        *(_pct(r.get(k)) for k in ERROR_FIELDS), cell_text(r.get("contacts"))]) + " |")
     return "\n".join(lines)
 
 
