@@ -3,9 +3,11 @@ and read back into the same problem, with the checks that it fits.
 
 A state's per-contact arrays are in the contact set's order, which is by position along the surface whatever the
 partition; the contact set is recognised by its nodes' coordinates, not by DOLFINx's global node numbers (those
-differ between launches under MPI and between rank counts), so an elastic state written on N ranks loads on any
-number. An elastic-plastic state holds each rank's quadrature points: it loads on the same partition only, checked
-by a fingerprint of each rank's dof coordinates.
+differ between launches under MPI and between rank counts), so a state written on N ranks loads on any number. An
+elastic-plastic state's displacement and quadrature-point history are saved with their coordinates (the dofs' nodes,
+the points' positions) and matched by them on loading, whatever the partition (checkpoints of earlier releases hold
+each rank's arrays: they load on the partition they were written on, checked by a fingerprint of its dof
+coordinates).
 
 A checkpoint also holds the contact parameters of the problem that wrote it (:func:`contact_parameters`: each
 zone's friction coefficients, wear law and obstacle), and a problem with other values refuses it, naming them.
@@ -23,6 +25,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 from mpi4py import MPI
+from scipy.spatial import cKDTree
 
 from .contact import paired_contact_set
 from .increments import on_rank0
@@ -113,16 +116,73 @@ def parameter_differences(saved: list[dict[str, Any]], current: list[dict[str, A
     return out
 
 
+#: The arrays of an elastic-plastic state's history (:class:`~dolfinx_fretting.state.PlasticHistory`): the
+#: displacement (saved by owned dof block with its node's coordinates) and the quadrature points' history (saved
+#: with the points' coordinates).
+PLASTIC_ARRAYS = ("u", "sigma", "eps_p", "p")
+
+
+def _owned_dof_coordinates(operators: ContactOperators) -> tuple[np.ndarray, int]:
+    """(owned blocks, 3) coordinates of this rank's owned dof blocks (nodes) and the block size."""
+    index_map = operators.V.dofmap.index_map
+    return operators.V.tabulate_dof_coordinates()[: index_map.size_local], operators.V.dofmap.index_map_bs
+
+
+def _gather_plastic(operators: ContactOperators, history: PlasticHistory, points: np.ndarray) -> dict | None:
+    """Every rank's owned part of ``history`` with its coordinates, stacked on rank 0 (None elsewhere).
+    Collective."""
+    nodes, bs = _owned_dof_coordinates(operators)
+    mine = (nodes, history.u[: nodes.shape[0] * bs].reshape(-1, bs), points, history.sigma, history.eps_p,
+            history.p)
+    parts = operators.comm.gather(mine, root=0)
+    if parts is None:
+        return None
+    stacked = [np.concatenate([part[i] for part in parts]) for i in range(len(mine))]
+    return dict(zip(("u_nodes", "u", "points", "sigma", "eps_p", "p"), stacked))
+
+
+def _match(saved: np.ndarray, mine: np.ndarray, extent: float) -> np.ndarray | None:
+    """For each of ``mine`` (n, 3) the index of the saved point at the same place (within 1e-9 of the mesh's
+    extent: the mesh's input bits on every partition, far below any element), None if one has none."""
+    if mine.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    if saved.shape[0] == 0:
+        return None
+    distance, index = cKDTree(saved).query(mine)
+    return index if distance.max() <= 1e-9 * extent else None
+
+
+def _plastic_from(operators: ContactOperators, data: dict[str, np.ndarray], points: np.ndarray,
+                  path: str | Path) -> PlasticHistory:
+    """This rank's part of a saved plastic history, matched by coordinates (any partition). Collective."""
+    nodes, bs = _owned_dof_coordinates(operators)
+    all_nodes = operators.V.tabulate_dof_coordinates()
+    extent = max(float(np.ptp(data["plastic_u_nodes"], axis=0).max(initial=0.0)), 1e-300)
+    node_index = _match(data["plastic_u_nodes"], all_nodes, extent)  # owned and ghost blocks alike
+    point_index = _match(data["plastic_points"], points, extent)
+    missing = node_index is None or point_index is None
+    if operators.comm.allreduce(missing, op=MPI.LOR):   # every rank raises, or none
+        raise ValueError(f"{path}: the saved elastic-plastic state does not fit this mesh (a dof or quadrature "
+                         "point of this problem has no saved one at its place): load it into the mesh it was "
+                         "written with, and the same quadrature degree")
+    u = data["plastic_u"][node_index].reshape(-1)
+    return PlasticHistory(u.copy(), data["plastic_sigma"][point_index].copy(),
+                          data["plastic_eps_p"][point_index].copy(), data["plastic_p"][point_index].copy())
+
+
 def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState, path: str | Path,
-               meta: Mapping[str, Any] | None = None, wear_laws: Sequence[WearLaw | None] | None = None) -> None:
+               meta: Mapping[str, Any] | None = None, wear_laws: Sequence[WearLaw | None] | None = None,
+               plastic_points: np.ndarray | None = None) -> None:
     """Write ``state`` (and JSON-able ``meta``) to an ``.npz`` file atomically (rank 0 writes), with the problem's
-    contact parameters (:func:`contact_parameters`; ``wear_laws``: each zone's, None: no zone wears). Collective."""
+    contact parameters (:func:`contact_parameters`; ``wear_laws``: each zone's, None: no zone wears). An
+    elastic-plastic state needs ``plastic_points``, the coordinates of this rank's quadrature points
+    (:meth:`~dolfinx_fretting.plasticity.PlasticState.point_coordinates`). Collective."""
     parameters = contact_parameters(operators, wear_laws or (None,) * len(operators.contact.zones))
-    plastic = partition = None
+    plastic = None
     if state.plastic is not None:
-        p = state.plastic
-        plastic = operators.comm.gather((p.u, p.sigma, p.eps_p, p.p), root=0)
-        partition = operators.comm.gather(_partition_fingerprint(operators), root=0)
+        if plastic_points is None:
+            raise ValueError("save_state: an elastic-plastic state needs its quadrature points' coordinates")
+        plastic = _gather_plastic(operators, state.plastic, plastic_points)
 
     def write() -> None:  # rank 0; a failure (disk full, a folder gone) is raised on every rank
         target = Path(path)
@@ -139,13 +199,12 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
             arrays["pairing_weights"] = state.pairing.master_weights
             arrays["master_wear"] = state.master_wear
             arrays["repairs"] = np.array(monitor.repairs)
-        for i, parts in enumerate(plastic or []):
-            for name, a in zip(("u", "sigma", "eps_p", "p"), parts):
-                arrays[f"plastic_{name}_{i}"] = a
+        for name, values in (plastic or {}).items():
+            arrays[f"plastic_{name}"] = values
         info = {"increment": state.increment, "dissipated_energy": state.dissipated_energy,
                 "local_iterations": state.local_iterations, "record": state.record, "ranks": operators.comm.size,
                 "load_names": operators.load_names, "global_nodes": operators.contact.contact_set.global_nodes.tolist(),
-                "plastic": plastic is not None, "partition": partition, "contact_parameters": parameters,
+                "plastic": state.plastic is not None, "contact_parameters": parameters,
                 "meta": dict(meta or {})}
         tmp = target.with_name(target.name + ".tmp.npz")
         np.savez(tmp, state=json.dumps(info, default=_jsonable), **arrays)
@@ -156,11 +215,13 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
 
 
 def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str | Path,
-               wear_laws: Sequence[WearLaw | None] | None = None) -> tuple[ContactState, dict[str, Any]]:
+               wear_laws: Sequence[WearLaw | None] | None = None,
+               plastic_points: np.ndarray | None = None) -> tuple[ContactState, dict[str, Any]]:
     """Read a state written by :func:`save_state` (same problem, same contact set). Collective.
 
     Checked against this problem: the contact nodes (by their coordinates), the load names, a plastic state's
-    partition, finite sliding's pairing, and the contact parameters (:func:`contact_parameters`: each zone's
+    dofs and quadrature points (by their coordinates; ``plastic_points``: this rank's, as for :func:`save_state`),
+    finite sliding's pairing, and the contact parameters (:func:`contact_parameters`: each zone's
     ``mu``, wear law with its coefficients and acceleration (``wear_laws``, one per zone), obstacle kind, normal and
     a plane's position). Not checked: the material (bilinear form), the Dirichlet conditions, the load vectors'
     values, the solver settings and the plastic law; nor, in a checkpoint written before the contact parameters
@@ -198,7 +259,11 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
             raise ValueError(f"{path}: the checkpoint was written with other contact parameters than this "
                              f"problem's: {'; '.join(differences)}; load it into a problem with the saved values")
     plastic = None
-    if info["plastic"]:
+    if info["plastic"] and "plastic_points" in data:   # keyed by coordinates: any partition
+        if plastic_points is None:
+            raise ValueError(f"{path}: an elastic-plastic state loads into an elastic-plastic problem")
+        plastic = _plastic_from(operators, data, plastic_points, path)
+    elif info["plastic"]:   # a checkpoint of an earlier release: each rank's arrays, on the same partition only
         if info["ranks"] != operators.comm.size:
             raise ValueError(f"{path}: an elastic-plastic state saved on {info['ranks']} rank(s) loads on the same "
                              f"number (here {operators.comm.size})")
@@ -208,7 +273,7 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
         if operators.comm.allreduce(moved, op=MPI.LOR):   # every rank raises, or none
             raise ValueError(f"{path}: an elastic-plastic state holds each rank's quadrature points, and this launch "
                              "partitioned the mesh differently: resume it on the partition it was written on")
-        plastic = PlasticHistory(*(data[f"plastic_{k}_{i}"].copy() for k in ("u", "sigma", "eps_p", "p")))
+        plastic = PlasticHistory(*(data[f"plastic_{k}_{i}"].copy() for k in PLASTIC_ARRAYS))
     warm = data["warm"] if data["warm"].size and operators.comm.rank == 0 else None
     pairing = master_wear = None
     if ("pairing_faces" in data) != (operators.surface_compliance is not None):

@@ -156,6 +156,14 @@ class PlasticState:
         self.update_count = 0
 
     # ------------------------------------------------------------------------------------------------
+    def point_coordinates(self) -> np.ndarray:
+        """(n, 3) coordinates of the quadrature points of the owned cells, in the order of :attr:`sigma` (what a
+        checkpoint keys the plastic state by: they do not depend on the partition). Collective (a JIT compile)."""
+        points, _ = basix.make_quadrature(dfx.basix_cell(self.mesh), self._degree)
+        expression = dfx.expression(ufl.SpatialCoordinate(self.mesh), points)
+        coordinates = dfx.eval_expression(expression, self.mesh, self.cells).reshape(-1, self.gdim)
+        return np.column_stack([coordinates, np.zeros((coordinates.shape[0], 3 - self.gdim))])
+
     def strain(self, u: fem.Function) -> np.ndarray:
         """Total strain (n, 6) Mandel at the quadrature points of the owned cells."""
         self._u.x.array[:] = u.x.array

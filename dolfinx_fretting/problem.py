@@ -455,12 +455,14 @@ class FrettingProblem:
     # Checkpoints ------------------------------------------------------------------------------------------
     def save_state(self, state: ContactState, path: str | Path, meta: Mapping[str, Any] | None = None) -> None:
         """Write ``state`` (and JSON-able ``meta``) to an ``.npz`` file atomically (rank 0 writes). Collective."""
-        checkpoint.save_state(self.operators, self.sliding, state, path, meta, self.wear_laws)
+        checkpoint.save_state(self.operators, self.sliding, state, path, meta, self.wear_laws,
+                              self._plastic_points())
 
     def load_state(self, path: str | Path) -> tuple[ContactState, dict[str, Any]]:
         """Read a state written by :meth:`save_state` (same problem, same contact set). Collective.
 
-        Checked: the contact nodes, the load names, a plastic state's partition, finite sliding's pairing, and each
+        Checked: the contact nodes, the load names, a plastic state's dofs and quadrature points (by their
+        coordinates: a state moves between rank counts), finite sliding's pairing, and each
         zone's contact parameters: ``mu``, the wear law (its class, coefficients and acceleration) and the obstacle
         (its class, normal and a plane's position). Not checked: the material (bilinear form), the Dirichlet
         conditions, the load vectors' values, the solver settings, the plastic law; nor the contact parameters of
@@ -469,7 +471,12 @@ class FrettingProblem:
         Raises:
             ValueError: the file does not match this problem (the message names what differs, with both values).
         """
-        return checkpoint.load_state(self.operators, self.sliding, path, self.wear_laws)
+        return checkpoint.load_state(self.operators, self.sliding, path, self.wear_laws, self._plastic_points())
+
+    def _plastic_points(self) -> np.ndarray | None:
+        """This rank's quadrature points' coordinates (an elastic-plastic body; what a checkpoint keys its history
+        by). Collective."""
+        return self.body.state.point_coordinates() if self.body is not None else None
 
     def destroy(self) -> None:
         """Free the PETSc objects (factorisation, K if assembled here, load vectors, the plastic body's)."""

@@ -316,46 +316,58 @@ def test_two_contact_zones_match_serial():
     assert parallel["obstacle"] == pytest.approx(serial["obstacle"], rel=1e-8, abs=1e-14)
 
 
-def _two_block_problem(comm: MPI.Comm):
+def _two_block_problem(comm: MPI.Comm, plastic: bool = False):
     import dolfinx_fretting as dfr
-    from support.blocks import TIGHT, elasticity, plane_above, two_blocks
+    from support.blocks import E, NU, TIGHT, elasticity, plane_above, two_blocks
 
     V, tags, bcs = two_blocks(comm=comm)
     a = dfr.Contact(V, (tags, 1), plane_above(), mu=0.5, bcs=bcs)
     b = dfr.Contact(V, (tags, 2), plane_above(), mu=0.5, bcs=bcs)
-    problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, solver=TIGHT, wear=dfr.Archard(1e-6))
+    # yield 400 MPa: block A's friction shear makes it yield (tests/test_zones.py)
+    plasticity = dfr.Plasticity(dfr.J2Plasticity(E, NU, 400.0, 1000.0)) if plastic else None
+    problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, solver=TIGHT, wear=dfr.Archard(1e-6),
+                                  plasticity=plasticity)
     return problem, a, b
 
 
 @pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
-def test_a_checkpoint_moves_between_rank_counts(shared_dir):
+@pytest.mark.parametrize("plastic", [False, True], ids=["elastic", "elastic-plastic"])
+def test_a_checkpoint_moves_between_rank_counts(shared_dir, plastic):
     """A state saved on N ranks loads on one and back (issue 27): the contact set is recognised by its nodes'
-    coordinates, not by DOLFINx's global node numbers, which differ between rank counts; the next increment from
-    the loaded state is the one from the saved state (the same local problem: 1e-8, other factorisations'
-    rounding only)."""
-    problem, a, b = _two_block_problem(COMM)
+    coordinates, not by DOLFINx's global node numbers, which differ between rank counts, and an elastic-plastic
+    state's displacement and quadrature-point history by their coordinates, not by each rank's layout; the next
+    increment from the loaded state is the one from the saved state (the same local problem and Newton iteration:
+    1e-8, other factorisations' rounding only)."""
+    problem, a, b = _two_block_problem(COMM, plastic)
     state, _ = problem.advance(problem.initial_state(), normal={a: 1e-3, b: 5e-4})
     state, _ = problem.advance(state, tangential={a: 2e-3})
     path = shared_dir / "state.npz"
     problem.save_state(state, path)
     after, _ = problem.advance(state, tangential={a: -1e-3})
-    serial = failure = None
+    yielded = COMM.allreduce(float(state.plastic.p.max(initial=0.0)), op=MPI.MAX) if plastic else 0.0
+    serial = history = failure = None
     if COMM.rank == 0:   # (an error here is raised on every rank below: no rank waits for one that failed)
         try:
-            alone, a1, _ = _two_block_problem(MPI.COMM_SELF)
+            alone, a1, _ = _two_block_problem(MPI.COMM_SELF, plastic)
             loaded, _ = alone.load_state(path)
             assert np.array_equal(loaded.forces, state.forces) and np.array_equal(loaded.wear_gap, state.wear_gap)
+            if plastic:   # the whole history, matched by coordinates: its largest plastic strain is the saved one
+                assert yielded > 1e-4 and loaded.plastic.p.max() == yielded
             serial, _ = alone.advance(loaded, tangential={a1: -1e-3})
             alone.save_state(serial, shared_dir / "serial.npz")
+            history = (serial.plastic.p.max(), serial.plastic.p.sum()) if plastic else None
             serial = serial.forces
         except Exception as exc:  # noqa: BLE001 - re-raised on every rank
             failure = f"{type(exc).__name__}: {exc}"
-    serial, failure = COMM.bcast((serial, failure), root=0)
+    serial, history, failure = COMM.bcast((serial, history, failure), root=0)
     assert failure is None, failure
     back, _ = problem.load_state(shared_dir / "serial.npz")   # and from one rank to N
     scale = np.abs(after.forces).max()
     assert np.abs(serial - after.forces).max() <= 1e-8 * scale
     assert np.abs(back.forces - after.forces).max() <= 1e-8 * scale
+    if plastic:   # the serial history spread back over N ranks: each point's value once (the sum to rounding)
+        assert COMM.allreduce(float(back.plastic.p.max()), op=MPI.MAX) == history[0]
+        assert COMM.allreduce(float(back.plastic.p.sum()), op=MPI.SUM) == pytest.approx(history[1], rel=1e-12)
 
 
 def _rubbed_block_fatigue(comm: MPI.Comm):
