@@ -279,8 +279,7 @@ def test_a_deleted_lock_file_stops_the_run(tmp_path):
     assert not (tmp_path / "run" / "summary.json").exists()
 
 
-@pytest.mark.mpi
-@pytest.mark.slow  # ~25-40 s here: 2 ranks meshing and running on 2 shared cores
+@pytest.mark.mpi  # 3-10 s here (26 s on a machine loaded by other jobs), as test_mpi_failures.py's cases
 def test_a_deleted_output_folder_stops_every_rank(tmp_path):
     """Under ``mpirun -n 2``: rank 0 finds the folder gone and says so to every rank (one message, not one
     traceback per rank), exit 1, nothing recreated."""
