@@ -5,7 +5,8 @@
 
 Exit codes: 0 done; 2 bad input (scene, options, output folder, a checkpoint that cannot be resumed), with a
 message and before any expensive work; 1 a run that failed (an increment, PETSc or MUMPS, a non-finite
-result), with a message. Never a traceback for either.
+result, a full disk, its output folder deleted or replaced), with a message; 130 / 143 a run stopped by SIGINT /
+SIGTERM at any stage (:mod:`dolfinx_fretting.interrupts`), with a message. Never a traceback for any.
 
 Under MPI (``mpirun -n N dolfinx-fretting ...``) an error on any rank stops every rank: the ranks meet at the
 end (:func:`_finish`); a rank that failed alone (e.g. rank 0 could not write a table while the others went on
@@ -25,6 +26,7 @@ import warnings
 from mpi4py import MPI
 
 from . import fretting_map, study
+from .interrupts import Interrupted, RunSignals
 from .outdir import OutputFolderError, check_output_folder
 from .scenes import SceneError, builtin_scenes, load_scene
 from .sizes import check_size
@@ -337,31 +339,51 @@ def _command(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, scene) -> int:
-    """``dolfinx-fretting run``: the output folder checked before DOLFINx is imported, then the run."""
-    try:  # each rank checks (the same answer: a file, not writable, holds a run); run_scene locks it
-        check_output_folder(args.out, resume=args.resume, overwrite=args.overwrite)
-    except OutputFolderError as exc:
-        _say_error("dolfinx-fretting", exc)
-        return 2
+    """``dolfinx-fretting run``: the output folder checked before DOLFINx is imported, then the run. A signal
+    before the run takes its own handlers (while DOLFINx is imported) or after it gives them back ends in the
+    same kind of message and exit code as one during the run (:mod:`dolfinx_fretting.interrupts`)."""
+    signals = RunSignals()
+    signals.install()
+    try:
+        with signals.raising():
+            try:  # each rank checks (the same answer: a file, not writable, holds a run); run_scene locks it
+                check_output_folder(args.out, resume=args.resume, overwrite=args.overwrite)
+            except OutputFolderError as exc:
+                _say_error("dolfinx-fretting", exc)
+                return 2
+        code = _run_checked(args, scene, signals)
+    except Interrupted as exc:
+        _say_error("dolfinx-fretting", f"interrupted by {exc} before the run started; nothing was computed")
+        return 128 + exc.signum
+    finally:
+        signals.restore()
+    if code == 0 and signals.received:  # after the run gave its handlers back: its outputs are complete
+        _say_error("dolfinx-fretting", f"interrupted by {signals.name} as the run ended; its outputs are complete")
+        code = 128 + signals.received
+    return code
 
-    # Lazy: petsc4py and DOLFINx (PETSc initialised; io: numba), which the other commands and a refused output
-    # folder never need
-    from petsc4py import PETSc
 
-    from .compliance import DelassusError
-    from .io import TableError
-    from .simulation import RunInterrupted, SimulationError, run_scene
+def _run_checked(args: argparse.Namespace, scene, signals: RunSignals) -> int:
+    with signals.raising():
+        # Lazy: petsc4py and DOLFINx (PETSc initialised; io: numba), which the other commands and a refused
+        # output folder never need
+        from petsc4py import PETSc
 
-    _quiet_form_compiler(args.verbose)
+        from .compliance import DelassusError
+        from .io import TableError
+        from .simulation import RunInterrupted, SimulationError, run_scene
+
+        _quiet_form_compiler(args.verbose)
     try:
         run_scene(scene, args.out, MPI.COMM_WORLD, quiet=args.quiet, resume=args.resume, overwrite=args.overwrite,
                   ignore_size=args.ignore_size)
-    except RunInterrupted as exc:  # the run said where it stopped; a checkpoint and the summary are on disk
+    except RunInterrupted as exc:  # the run stopped cleanly; its message says what is on disk and what is not
+        _say_error("dolfinx-fretting", exc)
         return exc.exit_code
     except (OutputFolderError, TableError, SceneError) as exc:  # SceneError: the size check (sizes.SizeError)
         _say_error("dolfinx-fretting", exc)
         return 2
-    except SimulationError as exc:
+    except SimulationError as exc:  # an OutputFolderLost too: the folder deleted or replaced during the run
         _say_error("dolfinx-fretting: run failed", exc)
         return 1
     except (DelassusError, PETSc.Error) as exc:  # options PETSc or MUMPS refuse only when they factorise

@@ -10,9 +10,12 @@ is collective (every rank calls it). ``summary.json`` is always valid JSON (:fun
 
 from __future__ import annotations
 
+import ctypes
+import errno
 import json
 import math
 import os
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -158,12 +161,46 @@ def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
     if bad:
         clean = {**clean, "non_finite_keys": bad}
     tmp = path.with_suffix(path.suffix + ".tmp")
-    with open(tmp, "w") as f:
-        json.dump(clean, f, indent=2, default=_jsonable, allow_nan=False)
-        f.write("\n")
-        f.flush()
-        os.fsync(f.fileno())
+    try:
+        with open(tmp, "w") as f:
+            json.dump(clean, f, indent=2, default=_jsonable, allow_nan=False)
+            f.write("\n")
+            f.flush()
+            os.fsync(f.fileno())
+    except OSError as exc:  # a full disk: the old file stays, the message names the file (not the buffer)
+        tmp.unlink(missing_ok=True)
+        raise OSError(exc.errno, f"{path} not written: {exc.strerror or exc}{_free_space(path.parent)}") from None
     os.replace(tmp, path)
+
+
+def _free_space(folder: Path) -> str:
+    """``" (N bytes free ...)"`` for a message about a failed write, or an empty string."""
+    try:
+        free = shutil.disk_usage(folder).free
+    except OSError:
+        return ""
+    return f" ({free} bytes free on its file system)" if free < 1 << 20 else ""
+
+
+_HDF5_QUIET = []
+
+
+def _quiet_hdf5() -> None:
+    """Turn off the HDF5 library's own print of its error stack (a full disk: ~60 lines of ``HDF5-DIAG`` on
+    stderr before DOLFINx raises); the failure is reported once, as a one-line :class:`OSError`. Done once per
+    process, on every ``libhdf5`` it has loaded (DOLFINx's; found in ``/proc/self/maps``: Linux only)."""
+    if _HDF5_QUIET:
+        return
+    _HDF5_QUIET.append(True)
+    try:
+        with open("/proc/self/maps") as maps:
+            paths = {line.split()[-1] for line in maps if "/libhdf5" in line}
+        for path in paths:
+            if Path(path).name.startswith("libhdf5") and "_hl" not in Path(path).name:
+                # H5Eset_auto2(H5E_DEFAULT = 0, no function, no data): no automatic print of the default stack
+                ctypes.CDLL(path).H5Eset_auto2(ctypes.c_int64(0), None, None)
+    except (OSError, AttributeError):  # not Linux, or another HDF5: its print stays
+        pass
 
 
 def _jsonable(value: Any) -> Any:
@@ -285,8 +322,12 @@ class ResultWriter:
         self._write("flat_profiles", ["%d,%d,%d,%.10g,%.10g,%.10g" % tuple(r) for r in data.tolist()])
 
     def flush(self) -> None:
-        for f in self._files.values():
-            f.flush()
+        for name, f in self._files.items():
+            try:
+                f.flush()
+            except OSError as exc:  # a full disk: name the table (the buffer's error does not)
+                raise OSError(exc.errno, f"{self.out / name}.csv not written: {exc.strerror or exc}"
+                              f"{_free_space(self.out)}") from None
 
     def sizes(self) -> dict[str, int]:
         """Byte size of each table after a flush (rank 0; empty elsewhere)."""
@@ -302,12 +343,39 @@ class ResultWriter:
 
         msh = functions[0].function_space.mesh
         mode = "a" if self._xdmf_started else "w"
-        with XDMFFile(self.comm, str(self._xdmf_path), mode) as f:
-            if not self._xdmf_started:
-                f.write_mesh(msh)
-            for fn in functions:
-                f.write_function(fn, t)
+        self._check_room(functions, msh)
+        _quiet_hdf5()
+        try:
+            with XDMFFile(self.comm, str(self._xdmf_path), mode) as f:
+                if not self._xdmf_started:
+                    f.write_mesh(msh)
+                for fn in functions:
+                    f.write_function(fn, t)
+        except RuntimeError as exc:  # HDF5 (a full disk: "Failed to close HDF5 dataset."), as an output error
+            raise OSError(f"{self._xdmf_path} (and its .h5) not written: {exc}{_free_space(self.out)}") from None
         self._xdmf_started = True
+
+    def _check_room(self, functions: list, msh) -> None:
+        """Refuse (:class:`OSError`, on every rank) an XDMF write the disk has no room for, before HDF5 starts it:
+        HDF5 out of space leaves a file it cannot close, and the current DOLFINx wheel's HDF5 (built with its
+        assertions) then aborts the process at exit. Collective. The need is over-estimated: every array as
+        stored (a 2D vector padded to 3 components: 1.5 times its values), twice, plus 64 KiB of metadata."""
+        from ._dolfinx import geometry_dofmap  # lazy: DOLFINx, as above
+
+        values = sum(fn.x.array.size * 1.5 for fn in functions)
+        if not self._xdmf_started:
+            values += msh.geometry.x.size + geometry_dofmap(msh).size
+        needed = 2 * 8 * self.comm.allreduce(values) + (64 << 10)
+        free = None
+        if self.rank0:
+            try:
+                free = shutil.disk_usage(self.out).free
+            except OSError:  # a folder gone: the write's own error says so
+                pass
+        free = self.comm.bcast(free, root=0) if self.comm.size > 1 else free
+        if free is not None and free < needed:
+            raise OSError(errno.ENOSPC, f"{self._xdmf_path} (and its .h5) not written: it needs about "
+                          f"{int(needed)} bytes and {free} are free on its file system")
 
     @property
     def xdmf_started(self) -> bool:

@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 from mpi4py import MPI
 
+from .interrupts import keep_handlers
+
 # DOLFINx (and _dolfinx, which imports it) and gmsh are imported inside the functions that mesh: the geometries
 # registry and the size estimate import this module (the meshers' defaults, BodyMesh) without DOLFINx or gmsh.
 if TYPE_CHECKING:
@@ -497,7 +499,8 @@ def _gmsh_to_dolfinx(comm: MPI.Comm, build: Callable, verbose: bool):
     gmsh is initialised and finalised here (so do not call this inside an open gmsh session of your
     own). A failure on rank 0 is broadcast before ``model_to_mesh`` so that no rank is left waiting.
     """
-    import gmsh  # lazy: heavy, only to mesh (see the note at the imports)
+    with keep_handlers():  # gmsh 4.8 sets SIGINT to its default action (no clean-up) when imported
+        import gmsh  # lazy: heavy, only to mesh (see the note at the imports)
 
     from ._dolfinx import model_to_mesh  # lazy: DOLFINx
 
@@ -506,7 +509,8 @@ def _gmsh_to_dolfinx(comm: MPI.Comm, build: Callable, verbose: bool):
     if comm.rank == root:
         initialized = False
         try:
-            gmsh.initialize(readConfigFiles=False)  # no user gmshrc: the same mesh on every machine
+            with keep_handlers():  # ... and gmsh 4.11+ when initialised: a run's handlers stay
+                gmsh.initialize(readConfigFiles=False)  # no user gmshrc: the same mesh on every machine
             initialized = True
             gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
             gmsh.option.setNumber("General.NumThreads", 1)  # single-threaded meshing is reproducible
@@ -515,7 +519,8 @@ def _gmsh_to_dolfinx(comm: MPI.Comm, build: Callable, verbose: bool):
         except Exception as exc:  # reported on every rank below
             error = f"{type(exc).__name__}: {exc}"
             if initialized:
-                gmsh.finalize()
+                with keep_handlers():  # finalize restores the handler gmsh found (not necessarily the run's)
+                    gmsh.finalize()
     error = comm.bcast(error, root=root)
     if error is not None:
         raise RuntimeError(f"mesh generation failed: {error}")
@@ -523,7 +528,8 @@ def _gmsh_to_dolfinx(comm: MPI.Comm, build: Callable, verbose: bool):
         msh, cell_tags, facet_tags = model_to_mesh(gmsh.model, comm, root, gdim=2)
     finally:
         if comm.rank == root:
-            gmsh.finalize()
+            with keep_handlers():
+                gmsh.finalize()
     msh.name = "body"
     return msh, cell_tags, facet_tags
 

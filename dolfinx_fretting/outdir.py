@@ -33,6 +33,7 @@ import numpy as np
 from mpi4py import MPI
 
 __all__ = ["OutputFolderError", "OutputLock", "check_output_folder", "ensure_writable_folder", "claim_output_folder",
+           "folder_lost",
            "held_run_files", "clear_run_files", "check_resume_tables", "load_checkpoint", "lock_holder", "LOCK_NAME", "RUN_FILES",
            "RUN_MARKERS", "CHECKPOINT_NAME", "TABLE_NAMES"]
 
@@ -111,6 +112,10 @@ def ensure_writable_folder(path: str | Path) -> Path:
 def _refuse_held_run(folder: Path, resume: bool, overwrite: bool) -> None:
     held = held_run_files(folder)
     if held and not (resume or overwrite):
+        if CHECKPOINT_NAME not in held:  # nothing to resume from (e.g. a run stopped while its model was built)
+            raise OutputFolderError(
+                f"--out {folder} already holds a run ({', '.join(held)}) with no checkpoint to resume from; "
+                "replace it with --overwrite (deletes that run's files), or choose another folder")
         raise OutputFolderError(
             f"--out {folder} already holds a run ({', '.join(held)}); continue it with --resume, replace it with "
             "--overwrite (deletes that run's files, its checkpoint included), or choose another folder")
@@ -168,6 +173,38 @@ class OutputLock:
         self._fd = fd
         self.previous_holder = previous_holder
         self.removed = removed or []
+        # The folder itself, open: its (device, inode) tells a folder deleted or replaced by another of the same
+        # name (or moved away), and the lock file is deleted from it wherever it is now.
+        self._dir_fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY) if fd is not None else None
+        self._identity = _identity(self._dir_fd) if fd is not None else None
+
+    def replaced(self) -> bool:
+        """The folder's path now names another folder (not collective; False where the lock is not held)."""
+        if self._fd is None:
+            return False
+        try:
+            return _identity(self.folder) != self._identity
+        except OSError:
+            return False
+
+    def lost(self) -> str | None:
+        """Why the folder locked is no longer the one at its path, or ``None`` if it is (not collective; on
+        the rank that holds the lock; ``None`` elsewhere). Checked by the run before it writes."""
+        if self._fd is None:
+            return None
+        try:
+            now = _identity(self.folder)
+        except OSError:
+            return f"--out {self.folder} was deleted (or moved away) during the run"
+        if now != self._identity:
+            return f"--out {self.folder} was replaced during the run (another folder now has its name)"
+        try:
+            mine = os.stat(LOCK_NAME, dir_fd=self._dir_fd).st_ino == os.fstat(self._fd).st_ino
+        except OSError:
+            mine = False
+        if not mine:
+            return f"--out {self.folder}: the run's lock file {LOCK_NAME} was deleted or replaced during the run"
+        return None
 
     @property
     def held(self) -> bool:
@@ -178,12 +215,19 @@ class OutputLock:
         if self._fd is None:
             return
         fd, self._fd = self._fd, None
+        dir_fd, self._dir_fd = self._dir_fd, None
         try:
-            # unlink while still holding it: a run that opened the old file finds it gone and retries
-            (self.folder / LOCK_NAME).unlink(missing_ok=True)
+            # unlink while still holding it: a run that opened the old file finds it gone and retries. Through
+            # the folder's descriptor (the folder moved away: its lock goes too; replaced: the new one's stays),
+            # and only the file this lock holds.
+            if os.stat(LOCK_NAME, dir_fd=dir_fd).st_ino == os.fstat(fd).st_ino:
+                os.unlink(LOCK_NAME, dir_fd=dir_fd)
+        except OSError:  # gone with its folder
+            pass
         finally:
             fcntl.flock(fd, fcntl.LOCK_UN)
             os.close(fd)
+            os.close(dir_fd)
 
     def __enter__(self) -> OutputLock:
         return self
@@ -224,10 +268,27 @@ def _acquire(folder: Path) -> OutputLock:
         raise OutputFolderError(f"--out {folder}: could not take the lock file {path}")
     previous = lock_holder(folder)  # a lock file nobody holds: its run died (the kernel dropped its lock)
     record = json.dumps(_process_record()).encode()
-    os.ftruncate(fd, 0)
-    os.pwrite(fd, record, 0)
-    os.fsync(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, record, 0)
+        os.fsync(fd)
+    except OSError:  # a full disk: no empty lock file left behind
+        path.unlink(missing_ok=True)
+        fcntl.flock(fd, fcntl.LOCK_UN)
+        os.close(fd)
+        raise
     return OutputLock(folder, fd, previous)
+
+
+def _identity(folder: Path | int) -> tuple[int, int]:
+    info = os.stat(folder)  # a path or an open descriptor
+    return info.st_dev, info.st_ino
+
+
+def folder_lost(lock: OutputLock, comm: Any) -> str | None:
+    """Collective: :meth:`OutputLock.lost` of the rank holding the lock (rank 0), on every rank."""
+    message = lock.lost() if comm.rank == 0 else None
+    return comm.bcast(message, root=0) if comm.size > 1 else message
 
 
 def claim_output_folder(path: str | Path, comm: Any = None, resume: bool = False,

@@ -37,13 +37,17 @@ import math
 import os
 import subprocess
 import sys
+import tempfile
+import time
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .contact_output import read_contact_xdmf, read_profiles
+from .interrupts import stage_hook
 from .io import read_run_description
 from .units import Units
 
@@ -661,11 +665,20 @@ def write_pictures(folder: str | Path, plane_point=None, plane_normal=None) -> l
     return notes
 
 
-def draw_in_subprocess(folder: str | Path, plane_point, plane_normal, timeout: float = 300.0) -> str:
+def draw_in_subprocess(folder: str | Path, plane_point, plane_normal, timeout: float = 300.0,
+                       stop: Callable[[], bool] | None = None) -> str:
     """Draw the pictures by ``python -m dolfinx_fretting.pictures`` in a child process; never raises.
 
     A run calls this on rank 0 once its outputs are on disk: whatever happens in VTK (no pyvista, no
     OpenGL, a crash) costs the pictures only.
+
+    Args:
+        folder: The run's output folder.
+        plane_point: The rigid plane's point (2 or 3 numbers).
+        plane_normal: Its normal.
+        timeout: Seconds after which the drawing is stopped.
+        stop: Asked every :data:`POLL_SECONDS` while the child draws; when it says yes (a signal reached the
+            run), the child is stopped and the pictures skipped.
 
     Returns:
         A one-line report: what was written, or that the pictures were skipped and why.
@@ -673,15 +686,40 @@ def draw_in_subprocess(folder: str | Path, plane_point, plane_normal, timeout: f
     p = ",".join(f"{v:.17g}" for v in (*list(plane_point), *list(plane_normal)))  # 4 numbers in 2D, 6 in 3D
     env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "PMI_"))}
     env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).resolve().parents[1]), env.get("PYTHONPATH", "")])
-    try:
-        proc = subprocess.run([sys.executable, "-m", "dolfinx_fretting.pictures", str(folder), "--plane", p],
-                              env=env, capture_output=True, text=True, timeout=timeout)
-    except subprocess.TimeoutExpired:
-        return f"pictures skipped: drawing took more than {timeout:g} s"
+    # the child's output goes to temporary files, not pipes: VTK's warnings cannot fill a pipe while it is polled
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen([sys.executable, "-m", "dolfinx_fretting.pictures", str(folder), "--plane", p],
+                                env=env, stdout=out, stderr=err, text=True)
+        deadline = time.monotonic() + timeout
+        while proc.poll() is None:
+            if stop is not None and stop():
+                _end(proc)
+                return "pictures skipped: the run was interrupted"
+            if time.monotonic() > deadline:
+                _end(proc)
+                return f"pictures skipped: drawing took more than {timeout:g} s"
+            time.sleep(POLL_SECONDS)
+        out.seek(0)
+        err.seek(0)
+        stdout, stderr = out.read(), err.read()
     if proc.returncode != 0:
-        lines = (proc.stderr or proc.stdout).strip().splitlines()
+        lines = (stderr or stdout).strip().splitlines()
         return f"pictures skipped: {lines[-1] if lines else f'exit code {proc.returncode}'}"
-    return "pictures: " + "; ".join(proc.stdout.strip().splitlines())
+    return "pictures: " + "; ".join(stdout.strip().splitlines())
+
+
+#: Seconds between two looks at a drawing child (a signal stops it within this).
+POLL_SECONDS = 0.05
+
+
+def _end(proc: subprocess.Popen) -> None:
+    """Stop a drawing child: SIGTERM, then SIGKILL if it has not ended within 5 s."""
+    proc.terminate()
+    try:
+        proc.wait(timeout=5)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -706,6 +744,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"{args.plane!r}", file=sys.stderr)
             return 2
         point, normal = v[:half], v[half:]
+    stage_hook("pictures")  # a test hook: wait here (interrupts.TEST_HOOK) for the run to stop this process
     try:
         import pyvista  # noqa: F401 - lazy: optional (the pictures extra); tried here to fail with a message
     except Exception as exc:  # noqa: BLE001 - ImportError, or a VTK that cannot load

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import signal
 import sys
-import threading
 import time
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -39,23 +39,24 @@ from .contact import Contact
 from .contact_output import write_contact_xdmf
 from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, extrapolate_plastic_history,
                          hertz_jump_limit, jump_error, plastic_jump_error, plastic_jump_limit)
-from .io import non_finite_keys
+from .interrupts import Interrupted, RunSignals, stage_hook
+from .io import non_finite_keys, write_json_atomic
 from .materials import J2Plasticity, elastic_stiffness
 from .output import FrettingWriter, RunDescription, contact_measures
-from .pictures import draw_in_subprocess
+from .pictures import PICTURES, draw_in_subprocess
 from .plots import plot_run
 from .units import Units
 from .scene_paths import LoadStep, cycle_path, monotonic_path, preload_path
 from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleResult,
                       Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity, WindowError)
-from .outdir import OutputFolderError, claim_output_folder, load_checkpoint
+from .outdir import RUN_FILES, OutputFolderError, OutputLock, claim_output_folder, folder_lost, load_checkpoint
 from .geometries import build_scene_model
 from .scene_models import PRESSURE_LOAD, MeshFileError, SceneModel
 from .scenes import Scene, SceneError, describe_differences, scene_differences
 from .sizes import SizeEstimate, check_size
 
-__all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "run_scene", "read_checkpoint",
-           "CHECKPOINT"]
+__all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "OutputFolderLost", "run_scene",
+           "read_checkpoint", "CHECKPOINT"]
 
 #: Checkpoint file name in the output folder.
 CHECKPOINT = "checkpoint.npz"
@@ -76,9 +77,16 @@ _HINT = ("; raise solver.local_max_iter or loosen solver.local_tol (local solver
          "solver.max_cutbacks or use more increments (Newton), then resume")
 
 
+class OutputFolderLost(SimulationError):
+    """The output folder was deleted or replaced during the run (found before a write): the run stopped and wrote
+    nothing more (nothing into a folder of the same name either); the message says which and when."""
+
+
 class RunInterrupted(RuntimeError):
-    """SIGINT or SIGTERM stopped a run cleanly: a final checkpoint and a summary marked interrupted are on disk,
-    and ``run --resume`` continues it. ``exit_code`` is 130 (SIGINT) or 143 (SIGTERM)."""
+    """SIGINT or SIGTERM stopped a run cleanly, whatever it was doing (building the model, the increments and
+    cycles, the outputs): the lock released, a checkpoint (in the cycles) and a summary marked interrupted that
+    lists what is missing are on disk, and the message says what to do. ``exit_code`` is 130 (SIGINT) or 143
+    (SIGTERM)."""
 
     def __init__(self, message: str, signum: int):
         super().__init__(message)
@@ -131,6 +139,7 @@ class ContactModel:
                                     max_iter=sv.newton_max_iter, residual_tol=sv.newton_residual_tol,
                                     displacement_tol=sv.newton_displacement_tol, max_cutbacks=sv.max_cutbacks,
                                     elastic_cells=s.elastic_cells)
+        stage_hook("delassus")  # a test's signal while K is factorised and W built (interrupts.TEST_HOOK)
         solver = LocalSolver(method=sv.local_method, tol=sv.local_tol, max_iter=sv.local_max_iter,
                              force_tol=sv.force_tol, compiled_cycles=sv.cycle_kernel, warm_start=sv.warm_start,
                              pattern_reuse=sv.pattern_reuse)
@@ -313,11 +322,16 @@ class _Run:
     """One run of a scene: the load path, the checks, the outputs and the checkpoints. Collective."""
 
     def __init__(self, scene: Scene, out_dir: Path, comm: MPI.Comm, quiet: bool, resume: bool,
-                 size_estimate: SizeEstimate | None = None):
+                 size_estimate: SizeEstimate | None = None, lock: OutputLock | None = None,
+                 signals: RunSignals | None = None):
         self.scene = scene
         self.size_estimate = size_estimate
         self.out = out_dir
         self.comm = comm
+        #: The output folder's lock (its folder checked before every write: :meth:`check_folder`).
+        self.lock = lock
+        self._fresh: set[int] = set()
+        self.signals = signals if signals is not None else RunSignals()
         self.rank0 = comm.rank == 0
         self.say = (lambda msg: print(msg, flush=True)) if (self.rank0 and not quiet) else (lambda msg: None)
         self.t_start = time.perf_counter()
@@ -326,11 +340,10 @@ class _Run:
         sized = meta.get("mesh_cycles", scene.loading.cycles) if meta else scene.loading.cycles
         built = scene.model_copy(update={"loading": scene.loading.model_copy(update={"cycles": sized})})
         self.model = ContactModel(built, comm, window=meta["window"] if meta else None)
+        self.signals.reinstall()  # gmsh may have reset SIGINT's handler while it meshed
         self.problem = self.model.problem
         self.snapshots = _snapshot_cycles(scene)
         self.progress = Progress()
-        #: Signal received (SIGINT, SIGTERM), acted on at the end of the current increment or cycle.
-        self.signal_received = 0
         #: The last simulated cycle's plastic changes (elastic-plastic jumps: the next jump's error needs them).
         self._plastic_previous: PlasticCycle | None = None
         #: After a settling cycle: (the cycle the jump was taken from, the jump, the settling cycle).
@@ -341,11 +354,13 @@ class _Run:
         else:
             self.state, sizes, xdmf_started = self._restore(meta)
         self.path = _cycle_path(scene, self.model) if scene.loading.cycles > 0 else None
+        self.check_folder("before its first write")  # the writer would create a folder deleted while it meshed
         self.writer = FrettingWriter(
             self.problem, out_dir, _description(scene, self.model, self.path), profiles=scene.output.contact_profiles,
             fields=scene.output.xdmf, von_mises=self.model.setup.von_mises, pressure_load=PRESSURE_LOAD,
             shifted_cells=self.model.setup.display_cells,
             resume={"sizes": sizes, "xdmf_started": xdmf_started} if meta is not None else None)
+        self.note_written()
         # proof of a resume in the summary: where it started, and the cycles this process simulated
         self.resumed_from_cycle = self.progress.cycle if meta is not None else None
         self.last_checkpoint = time.perf_counter()
@@ -397,15 +412,64 @@ class _Run:
         self.progress = Progress(**progress)
         return state, {k: int(v) for k, v in meta["sizes"].items()}, bool(meta["xdmf_started"])
 
+    def check_folder(self, when: str) -> None:
+        """Collective: stop (:class:`OutputFolderLost`) if the output folder was deleted or replaced since the run
+        took its lock. Called before every write and after it: nothing is left in whatever now has its name (a
+        file written by path in the instant between a check and the folder's replacement is taken back)."""
+        message = folder_lost(self.lock, self.comm) if self.lock is not None else None
+        fresh, self._fresh = self._fresh, set()
+        if message is not None:
+            if self.rank0 and self.lock.replaced():
+                self._take_back(fresh)
+            raise OutputFolderLost(f"{message}; the run stopped {when} and writes nothing more (what it wrote there "
+                                   "is gone with the folder): start it again")
+
+    def note_written(self) -> None:
+        """Rank 0, after a write: the files of the run now in the folder (by inode), until the next check."""
+        if self.rank0 and self.lock is not None:
+            for name in RUN_FILES:
+                try:
+                    self._fresh.add(os.stat(self.out / name).st_ino)
+                except OSError:
+                    pass
+
+    def _take_back(self, fresh: set[int]) -> None:
+        """The folder was replaced: delete from the new one the files this run wrote there since its last check
+        (the inodes :meth:`note_written` saw; none of the new folder's own)."""
+        for name in RUN_FILES:
+            path = self.out / name
+            try:
+                if os.stat(path).st_ino in fresh:
+                    path.unlink()
+            except OSError:
+                pass
+
+    def _done_so_far(self) -> str:
+        return f"after increment {self.state.increment} (cycle {self.progress.cycle})"
+
     def checkpoint(self) -> None:
+        self.check_folder(f"{self._done_so_far()}, before its checkpoint")
         progress = asdict(self.progress)
         rate = self.progress.jump["rate"]
         progress["jump"]["rate"] = rate.tolist() if rate is not None else None
         meta = {"identity": _scene_identity(self.scene), **self.writer.checkpoint_info(),
                 "window": self.model.half_width, "mesh_cycles": self.model.scene.loading.cycles, "progress": progress,
                 "written": time.strftime("%Y-%m-%dT%H:%M:%S")}
-        self.problem.save_state(self.state, self.out / CHECKPOINT, meta=meta)
+        try:
+            self.problem.save_state(self.state, self.out / CHECKPOINT, meta=meta)
+        except RuntimeError as exc:  # rank 0's write failed, raised on every rank (checkpoint.save_state)
+            self.check_folder(f"{self._done_so_far()}, while it wrote its checkpoint")  # gone since the check?
+            raise OSError(f"{self.out / CHECKPOINT} not written: {exc}") from None  # e.g. a full disk
+        self.note_written()
         self.last_checkpoint = time.perf_counter()
+
+    def _raise_if_lost(self, when: str) -> None:
+        """After a write failed on this rank: :class:`OutputFolderLost` if the folder went while it wrote (not
+        collective: the rank holding the lock decides alone, as for any failed write)."""
+        message = self.lock.lost() if self.lock is not None else None
+        if message is not None:
+            raise OutputFolderLost(f"{message}; the run stopped {self._done_so_far()}, {when}, and writes nothing "
+                                   "more (what it wrote there is gone with the folder): start it again") from None
 
     # Checks before a state is accepted ---------------------------------------------------------------
     def _where(self, increment: int, cycle: int = 0, step: int = 0, stage: str = "") -> str:
@@ -527,7 +591,9 @@ class _Run:
             if step.increment <= self.state.increment:
                 continue  # done before the checkpoint
             self._increment(step)
+            self.check_folder(f"after increment {self.state.increment}, before writing it")
             hist = self.writer.write_increment(self.state, stage=step.stage)
+            self.note_written()
             self.progress.last_row = hist
             self._check_small_sliding(np.array([hist["mean_relative_tangential"]]))
             self._say_increment(hist)
@@ -603,8 +669,10 @@ class _Run:
             self.state = new_state
             self.progress.newton_fallbacks += int(result.records.get("full_newton_fallbacks", np.zeros(1)).sum())
             self._check_small_sliding(result.records["mean_relative_tangential"])
+            self.check_folder(f"after cycle {cycle}, before writing it")
             crow = self.writer.write_cycle(cycle, start, result, history=write_history, profiles=keep,
                                            wall=time.perf_counter() - t0, jump=jump)
+            self.note_written()
             self.progress.cycle = cycle + jump.get("jump", 1) - 1
             self.progress.last_cycle_row = crow
             self.progress.last_row = self.writer.cycle_end_row(cycle, start, result)
@@ -631,11 +699,11 @@ class _Run:
     def _stop_if_signalled(self) -> None:
         """Collective: stop after this increment or cycle if a signal reached any rank (mpirun forwards it to
         all; the allreduce makes every rank stop at the same point)."""
-        signum = self.signal_received
+        signum = self.signals.received
         if self.comm.size > 1:
             signum = self.comm.allreduce(signum, op=MPI.MAX)
         if signum:
-            self.signal_received = signum
+            self.signals.received = signum
             raise _Stop()
 
     # Cycle jumps -----------------------------------------------------------------------------------
@@ -947,68 +1015,133 @@ def run_scene(scene: Scene, out_dir: str | Path, comm: MPI.Comm = MPI.COMM_WORLD
         SimulationError: when an increment fails or a result is not finite; the outputs of the converged
             increments (of the last complete cycle in a cyclic run), a checkpoint to resume from and a summary
             with ``converged = false`` and the diagnostic are on disk.
+        OutputFolderLost: ``out_dir`` was deleted or replaced during the run (a
+            :class:`SimulationError`): found before a write, the run stopped and wrote nothing more.
+        RunInterrupted: SIGINT or SIGTERM (main thread only), at any stage: see :mod:`dolfinx_fretting.interrupts`.
     """
-    size = check_size(scene, comm, ignore=ignore_size)  # before any mesh: a typo in a size must not eat the machine
-    if comm.rank == 0 and not quiet:
-        print(f"[{scene.name}] {size.describe()}", flush=True)
-    with claim_output_folder(out_dir, comm, resume=resume, overwrite=overwrite):  # before the mesh; held to the end
-        return _run_scene(scene, Path(out_dir), comm, quiet, resume, size)
+    signals = RunSignals()
+    signals.install()
+    try:
+        try:
+            with signals.raising():  # nothing to save yet: a signal stops the run at once
+                size = check_size(scene, comm, ignore=ignore_size)  # before any mesh: a typo must not eat the machine
+        except Interrupted as exc:
+            raise RunInterrupted(f"interrupted by {exc} before the run started; nothing was written",
+                                 exc.signum) from None
+        if comm.rank == 0 and not quiet:
+            print(f"[{scene.name}] {size.describe()}", flush=True)
+        with claim_output_folder(out_dir, comm, resume=resume, overwrite=overwrite) as lock:  # held to the end
+            return _run_scene(scene, Path(out_dir), comm, quiet, resume, size, lock, signals)
+    finally:
+        signals.restore()
+
+
+#: The optional outputs drawn after the summary, skipped after a signal (``summary.missing`` lists them):
+#: matplotlib's plots (:func:`~dolfinx_fretting.plots.plot_run`) and pyvista's pictures.
+PLOTS = "plots"
+
+
+def _scene_outputs(scene: Scene) -> list[str]:
+    """The outputs a run of ``scene`` writes (file names, and :data:`PLOTS` for the plots)."""
+    out, cyclic = scene.output, scene.loading.cycles > 0
+    names = ["history.csv", *(["cycles.csv", CHECKPOINT] if cyclic else []),
+             *(["contact_profiles.csv"] if out.contact_profiles else []), *(["fields.xdmf"] if out.xdmf else []),
+             *(["worn_profiles.csv"] if scene.wear.law != "none" else []),
+             *(["contact.xdmf"] if out.xdmf and out.contact_profiles else []), *([PLOTS] if out.plots else []),
+             *(PICTURES if out.plots and out.xdmf else ())]
+    return names
+
+
+def _interrupted_while_building(scene: Scene, out: Path, comm: MPI.Comm, lock: OutputLock, resume: bool,
+                                signum: int) -> RunInterrupted:
+    """A signal while the model was built: nothing computed. A fresh run's summary says so and lists every output
+    as missing; a resumed run's folder is left as it was (its summary still describes its checkpoint)."""
+    name = signal.Signals(signum).name
+    error = f"interrupted by {name} while the model was built (mesh, K, W): nothing was computed"
+    if resume:
+        error += f"; the checkpoint {out / CHECKPOINT} is untouched: continue with --resume"
+    else:
+        error += f"; start again with --overwrite (summary.json in {out} lists what is missing)"
+        if comm.rank == 0 and lock.lost() is None:
+            write_json_atomic(out / "summary.json", {
+                "scene": scene.name, "increments": 0, "cycles": 0, "converged": False, "error": error,
+                "interrupted": name, "interrupted_during": "model", "missing": _scene_outputs(scene)})
+    return RunInterrupted(error, signum)
 
 
 def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: bool,
-               size: SizeEstimate | None = None) -> dict[str, Any]:
-    run = _Run(scene, out, comm, quiet, resume, size)
+               size: SizeEstimate | None, lock: OutputLock, signals: RunSignals) -> dict[str, Any]:
+    try:
+        with signals.raising():  # meshing, K's factorisation, W: nothing to save, a signal stops at once
+            stage_hook("model", signals)  # a test's signal here (interrupts.TEST_HOOK)
+            run = _Run(scene, out, comm, quiet, resume, size, lock, signals)
+    except Interrupted as exc:
+        raise _interrupted_while_building(scene, out, comm, lock, resume, exc.signum) from None
+    try:
+        return _finish_run(run, scene, out, comm, signals)
+    except OutputFolderLost:
+        run.writer.close()  # the tables' files went with the folder (or are the replaced folder's: not touched)
+        run.problem.destroy()
+        raise
+
+
+def _finish_run(run: _Run, scene: Scene, out: Path, comm: MPI.Comm, signals: RunSignals) -> dict[str, Any]:
+    """The load path, then the outputs, with the run's answer to a failed increment, a signal (SIGINT/SIGTERM:
+    noted from here on, acted on at the end of an increment or cycle; a signal during the outputs skips the
+    plots and pictures) or an output folder that is gone."""
     error = None
-    # SIGINT / SIGTERM: finish the current increment or cycle, checkpoint, write the summary, then raise
-    # RunInterrupted (handlers only in the main thread, where Python delivers signals; restored after).
-    previous = {}
-    if threading.current_thread() is threading.main_thread():
-        def note(signum, frame):  # noqa: ARG001
-            run.signal_received = signum
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            previous[sig] = signal.signal(sig, note)
+    interrupted_during = None
     try:
         run.run_stepwise(preload_path(scene.loading) if scene.loading.cycles > 0 else monotonic_path(scene.loading))
         if scene.loading.cycles > 0:
             run.run_cycles()
+    except OutputFolderLost:
+        raise
     except SimulationError as exc:
         error = str(exc)
         run.say(f"[{scene.name}] STOPPED: {error}")
         if scene.loading.cycles > 0 and run.state.increment >= scene.loading.normal_increments:
             run.checkpoint()  # the last complete cycle: resume from it with other solver settings
     except _Stop:
-        name = signal.Signals(run.signal_received).name
-        error = (f"interrupted by {name} after increment {run.state.increment} (cycle {run.progress.cycle}); "
+        interrupted_during = "increments"
+        error = (f"interrupted by {signals.name} after increment {run.state.increment} (cycle {run.progress.cycle}); "
                  "continue with --resume")
         run.checkpoint()
-        run.say(f"[{scene.name}] {error}")
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+    run.check_folder(f"{run._done_so_far()}, before its summary")
     summary = run.summary(error)
     if error is None and non_finite_keys(summary):  # never a success with an inf or a NaN in it
         error = f"non-finite results: {', '.join(non_finite_keys(summary))}"
         summary = run.summary(error)
-    if run.signal_received:
-        summary["interrupted"] = signal.Signals(run.signal_received).name
-    run.writer.write_summary(summary)
-    if run.rank0 and scene.wear.law != "none":
-        run.writer.write_worn_profiles(run.state)
+    if signals.received:
+        summary["interrupted"] = signals.name
+        summary["interrupted_during"] = interrupted_during
+    try:
+        run.writer.write_summary(summary)
+    except OSError:
+        run._raise_if_lost("while it wrote its summary")
+        raise
+    run.note_written()
+    if signals.received:
+        stage_hook("stopping", signals)  # a test's second signal while the run stops (interrupts.TEST_HOOK)
+    missing = _write_further_outputs(run, scene, out, signals) if run.rank0 else []
+    run.note_written()
     run.writer.close()
-    if run.rank0 and scene.output.xdmf and scene.output.contact_profiles:
-        try:
-            for zone in range(len(run.model.contacts)):  # contact.xdmf, then contact_zone<i>.xdmf of other zones
-                write_contact_xdmf(out, zone)
-        except Exception as exc:  # noqa: BLE001 - the CSV it comes from is on disk whatever happens here
-            run.say(f"[{scene.name}] WARNING: contact.xdmf not written: {type(exc).__name__}: {exc}")
-    if run.rank0 and scene.output.plots and run.progress.last_row:
-        try:
-            plot_run(out, run.writer.description)
-        except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
-            run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
-        if scene.output.xdmf:  # pyvista pictures, in a child process: a VTK failure costs only them
-            pictures = draw_in_subprocess(out, scene.contact.plane_point, scene.contact.plane_normal)
-            run.say(f"[{scene.name}] {pictures}")
+    # Every rank ends alike: a signal on any rank, the folder as rank 0 finds it at the end (rank 0 wrote last).
+    signum = comm.allreduce(signals.received, op=MPI.MAX) if comm.size > 1 else signals.received
+    run.check_folder(f"{run._done_so_far()}, while it finished its outputs")
+    missing = comm.bcast(missing, root=0) if comm.size > 1 else missing
+    if signum and not interrupted_during:  # a signal once the results were complete: only outputs are missing
+        interrupted_during = "outputs"
+        name = signal.Signals(signum).name
+        error = error or (f"interrupted by {name} while the outputs were written: the results are complete "
+                          f"(summary.json); not written: {', '.join(missing) or 'none'}"
+                          + (f"; draw the pictures with python -m dolfinx_fretting.pictures {out}"
+                             if any(m in PICTURES for m in missing) else ""))
+    if signum or missing:  # what a signal left out, said in the summary (the results' own keys unchanged)
+        summary.update(interrupted=signal.Signals(signum).name if signum else None,
+                       interrupted_during=interrupted_during, missing=missing)
+        if run.rank0:
+            run.writer.write_summary(summary)
     force = "N/mm" if run.problem.contact.dim == 2 else "N"
     sizes = (f"contact width = {summary.get('contact_width', 0):.4g} mm, stick width = "
              f"{summary.get('stick_width', 0):.4g} mm" if run.problem.contact.dim == 2 else
@@ -1020,8 +1153,48 @@ def _run_scene(scene: Scene, out: Path, comm: MPI.Comm, quiet: bool, resume: boo
             f"{sizes}, max wear depth = {summary.get('max_wear_depth', 0):.4g} mm, "
             f"{summary['wall_time_s']:.2f} s -> {out}")
     run.problem.destroy()
-    if run.signal_received:
-        raise RunInterrupted(error, run.signal_received)
+    if signum:
+        raise RunInterrupted(error, signum)
     if error is not None:
         raise SimulationError(error)
     return summary
+
+
+def _write_further_outputs(run: _Run, scene: Scene, out: Path, signals: RunSignals) -> list[str]:
+    """Rank 0, after the summary: the worn profiles and ``contact.xdmf`` (quick, from the tables), then the plots
+    and pictures unless a signal came (or comes while they are drawn: the pictures' process is stopped).
+    Nothing is written once the folder is gone (the caller's collective check then stops every rank).
+
+    Returns:
+        The outputs the scene asks for that were skipped (:func:`_scene_outputs`' names).
+    """
+    lost = run.lock.lost if run.lock is not None else (lambda: None)
+    if lost() is not None:
+        return []
+    if scene.wear.law != "none":
+        run.writer.write_worn_profiles(run.state)
+    if scene.output.xdmf and scene.output.contact_profiles:
+        try:
+            for zone in range(len(run.model.contacts)):  # contact.xdmf, then contact_zone<i>.xdmf of other zones
+                write_contact_xdmf(out, zone)
+        except Exception as exc:  # noqa: BLE001 - the CSV it comes from is on disk whatever happens here
+            run.say(f"[{scene.name}] WARNING: contact.xdmf not written: {type(exc).__name__}: {exc}")
+    if not (scene.output.plots and run.progress.last_row):
+        return []
+    drawn = scene.output.xdmf
+    if signals.received or lost() is not None:
+        return [PLOTS, *(PICTURES if drawn else ())]
+    try:
+        plot_run(out, run.writer.description)
+    except Exception as exc:  # noqa: BLE001 - a failed picture must not lose a finished run
+        run.say(f"[{scene.name}] WARNING: plots failed: {type(exc).__name__}: {exc}")
+    if not drawn:
+        return []
+    if signals.received or lost() is not None:
+        return list(PICTURES)
+    stage_hook("pictures", signals, wait=False)  # a test's signal while they are drawn (interrupts.TEST_HOOK)
+    # pyvista pictures, in a child process: a VTK failure costs only them; a signal stops it
+    pictures = draw_in_subprocess(out, scene.contact.plane_point, scene.contact.plane_normal,
+                                  stop=lambda: bool(signals.received) or lost() is not None)
+    run.say(f"[{scene.name}] {pictures}")
+    return list(PICTURES) if signals.received else []

@@ -3,6 +3,9 @@ JSON, and the command line answers bad input and failed runs with a message and 
 
 import json
 import math
+import os
+import re
+import shutil
 import subprocess
 import sys
 
@@ -10,6 +13,7 @@ import numpy as np
 import pytest
 
 from dolfinx_fretting.io import finite_json, write_json_atomic
+from dolfinx_fretting.outdir import LOCK_NAME, RUN_FILES
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import SimulationError, run_scene
 
@@ -131,3 +135,65 @@ def test_study_never_records_a_non_finite_point_as_converged(tmp_path):
     (bad / "contact_profiles.csv").write_text("\n".join(lines[:-1] + [",".join(last)]) + "\n")
     row = point_errors(bad, ref)
     assert row["converged"] is False and "contact_profiles.csv wear" in row["error"]
+
+
+# A full disk -------------------------------------------------------------------------------------------------
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 1 MB tmpfs (a real file system that fills: ENOSPC from the kernel, as on a full disk). Needs root and
+    ``mount``; skipped elsewhere (tests/test_mpi_failures.py's disk_full case injects the error instead)."""
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        pytest.skip("a tmpfs needs root and mount")
+    made = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(mount)], capture_output=True)
+    if made.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {made.stderr.decode().strip()}")
+    try:
+        yield mount
+    finally:
+        subprocess.run(["umount", str(mount)], check=True)
+
+
+def _fill(disk, leave: int) -> None:
+    """Fill ``disk`` up, then free ``leave`` bytes (tmpfs counts 4 KiB pages)."""
+    with open(disk / "filler", "wb", buffering=0) as f:
+        try:
+            while True:
+                f.write(b"\0" * 4096)
+        except OSError:
+            pass
+    size = (disk / "filler").stat().st_size
+    os.truncate(disk / "filler", max(0, size - leave))
+
+
+SMALL_DRAWN = ["stromberg-block", "--quiet", "--set", "geometry.nx=16", "--set", "geometry.ny=16",
+               "--set", "loading.cycles=3", "--set", "output.progress=false"]
+
+
+def test_a_full_disk_at_the_first_write_is_one_line(small_disk):
+    """Nothing free: the lock file cannot be written; one line (exit 2), and no empty lock file left behind
+    (before: a 0-byte lock file stayed)."""
+    _fill(small_disk, 0)
+    proc = _cli("run", *SMALL_DRAWN, "--out", str(small_disk / "out"))
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip() == f"dolfinx-fretting: --out {small_disk / 'out'}: No space left on device"
+    assert os.listdir(small_disk / "out") == []
+
+
+@pytest.mark.parametrize("leave_kib", [16, 40])
+def test_a_full_disk_at_the_first_writes_is_one_line(small_disk, leave_kib):
+    """Room for the lock, not for the first fields (~30 kB here) or the tables' first flush: before, the first
+    XDMF write dumped HDF5's error stack (~60 lines) and a RuntimeError traceback (DOLFINx 0.5), or aborted the
+    process in HDF5 (the current wheel: exit 134). Now: one line naming the file (exit 1), no lock left."""
+    _fill(small_disk, leave_kib * 1024)
+    out = small_disk / "out"
+    proc = _cli("run", *SMALL_DRAWN, "--out", str(out))
+    assert proc.returncode == 1, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "HDF5" not in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    written = re.fullmatch(rf"dolfinx-fretting: run failed: writing the outputs: \[Errno 28\] {out}/(\S+) "
+                           r"(\(and its .h5\) )?not written: (.*)", lines[0])
+    assert written and written[1] in RUN_FILES, lines
+    assert "free on its file system" in written[3], lines
+    assert LOCK_NAME not in os.listdir(out)

@@ -3,18 +3,22 @@ only with --overwrite and then only of the package's files; --resume refuses a f
 
 import json
 import os
+import re
+import shutil
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
+from dolfinx_fretting._dolfinx import mpiexec
 from dolfinx_fretting.io import ResultWriter, TableError
 from dolfinx_fretting.outdir import (LOCK_NAME, RUN_FILES, OutputFolderError, check_output_folder,
                                      claim_output_folder, clear_run_files, load_checkpoint, lock_holder)
 from dolfinx_fretting.scenes import load_scene
-from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, run_scene
+from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, read_checkpoint, run_scene
 
 SMALL_BLOCK = ["geometry.nx=20", "geometry.ny=20", "output.xdmf=false", "output.plots=false",
                "output.contact_profiles=false", "output.progress=false"]
@@ -195,3 +199,94 @@ def test_cli_compare_and_study_out_that_is_a_file(tmp_path):
         assert proc.returncode == 2, proc.stderr
         assert "Traceback" not in proc.stderr and "is a file" in proc.stderr, proc.stderr
     assert json.loads((run / "summary.json").read_text())["converged"] is True
+
+
+# A folder that goes during the run ---------------------------------------------------------------------------
+#: A run of 3000 cycles (minutes): long enough to lose its folder after its second checkpoint.
+LONG = ["stromberg-block", "--quiet", "--set", "loading.cycles=3000", "--set", "output.checkpoint_interval=0.01",
+        *(a for o in SMALL_BLOCK for a in ("--set", o))]
+
+
+def _checkpointed_cycle(out) -> int:
+    try:
+        return read_checkpoint(out / CHECKPOINT)[0]["cycle"]
+    except Exception:  # noqa: BLE001 - not there yet, or being replaced
+        return 0
+
+
+def _lose_folder_mid_run(out, lose, launcher=()) -> subprocess.CompletedProcess:
+    """Start a run into ``out``, call ``lose(out)`` after its second checkpoint, return the finished process."""
+    proc = subprocess.Popen([*launcher, sys.executable, "-m", "dolfinx_fretting", "run", *LONG, "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, OPENBLAS_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+                                     OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1"))
+    deadline = time.time() + 300
+    while time.time() < deadline and proc.poll() is None and _checkpointed_cycle(out) < 2:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the run ended before its folder could be taken away"
+    lose(out)
+    stdout, stderr = proc.communicate(timeout=300)
+    return subprocess.CompletedProcess(proc.args, proc.returncode, stdout, stderr)
+
+
+def _delete(out):
+    while out.exists():  # the run may add a file (a checkpoint's temporary) while the tree is deleted
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def test_a_deleted_output_folder_stops_the_run(tmp_path):
+    """Before: ``rm -rf`` of --out during the cycles went unnoticed; the run recreated the folder and exited 0
+    with ``converged: true`` (history, cycles, run.json gone). Now it stops at its next write with exit 1 and
+    one line, and writes nothing more: no folder is recreated, no summary says anything."""
+    out = tmp_path / "run"
+    done = _lose_folder_mid_run(out, _delete)
+    assert done.returncode == 1, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    # rm -rf deletes the files first: the run may find its lock file gone before the folder
+    assert re.match(rf"dolfinx-fretting: run failed: --out {out}( was deleted|: the run's lock file "
+                    rf"{LOCK_NAME} was deleted)", lines[0]), lines
+    assert "writes nothing more" in lines[0]
+    assert not out.exists()
+
+
+def test_a_replaced_output_folder_stops_the_run_and_is_left_alone(tmp_path):
+    """--out moved away and a new empty folder made in its place: the run stops (exit 1, one line), writes
+    nothing into the new folder and takes its lock file out of the old one; the old one keeps what was written
+    (its tables) and no summary."""
+    out, old = tmp_path / "run", tmp_path / "moved"
+
+    def replace(folder):
+        folder.rename(old)
+        folder.mkdir()
+
+    done = _lose_folder_mid_run(out, replace)
+    assert done.returncode == 1, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    # the rename and the mkdir are two steps: the run may look in between (then the folder is gone)
+    assert re.search(rf"--out {out} was (replaced|deleted \(or moved away\)) during the run", lines[0]), lines
+    assert os.listdir(out) == []
+    assert LOCK_NAME not in os.listdir(old) and "summary.json" not in os.listdir(old)
+    assert (old / "cycles.csv").read_text().count("\n") >= 3  # header and the cycles before the move
+
+
+def test_a_deleted_lock_file_stops_the_run(tmp_path):
+    """The lock file deleted (the folder kept): another run could take the folder; this one stops (exit 1)."""
+    done = _lose_folder_mid_run(tmp_path / "run", lambda out: (out / LOCK_NAME).unlink())
+    assert done.returncode == 1 and f"lock file {LOCK_NAME} was deleted or replaced" in done.stderr, done.stderr
+    assert json.loads((tmp_path / "run" / "run.json").read_text())  # the folder's files are left as they were
+    assert not (tmp_path / "run" / "summary.json").exists()
+
+
+@pytest.mark.mpi  # 3-10 s here (26 s on a machine loaded by other jobs), as test_mpi_failures.py's cases
+def test_a_deleted_output_folder_stops_every_rank(tmp_path):
+    """Under ``mpirun -n 2``: rank 0 finds the folder gone and says so to every rank (one message, not one
+    traceback per rank), exit 1, nothing recreated."""
+    out = tmp_path / "run"
+    done = _lose_folder_mid_run(out, _delete, launcher=mpiexec(2))
+    output = done.stdout + done.stderr
+    assert done.returncode == 1, output
+    assert output.count(f"--out {out}") == 1 and output.count("was deleted") == 1, output
+    assert "Traceback" not in output and "stopping all" not in output, output
+    assert not out.exists()
