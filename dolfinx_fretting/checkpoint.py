@@ -4,8 +4,8 @@ and read back into the same problem, with the checks that it fits.
 A state's per-contact arrays are in the contact set's order, which is by position along the surface whatever the
 partition; the contact set is recognised by its nodes' coordinates, not by DOLFINx's global node numbers (those
 differ between launches under MPI and between rank counts), so a state written on N ranks loads on any number. An
-elastic-plastic state's displacement and quadrature-point history are saved with their coordinates (the dofs' nodes,
-the points' positions) and matched by them on loading, whatever the partition (checkpoints of earlier releases hold
+elastic-plastic state's displacement and quadrature-point history are saved with keys that do not depend on the
+partition (each dof block's node in the input mesh, each point's coordinates) and matched by them on loading (checkpoints of earlier releases hold
 each rank's arrays: they load on the partition they were written on, checked by a fingerprint of its dof
 coordinates).
 
@@ -27,6 +27,7 @@ import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
+from . import _dolfinx as dfx
 from .contact import paired_contact_set
 from .increments import on_rank0
 from .io import _jsonable
@@ -122,18 +123,27 @@ def parameter_differences(saved: list[dict[str, Any]], current: list[dict[str, A
 PLASTIC_ARRAYS = ("u", "sigma", "eps_p", "p")
 
 
-def _owned_dof_coordinates(operators: ContactOperators) -> tuple[np.ndarray, int]:
-    """(owned blocks, 3) coordinates of this rank's owned dof blocks (nodes) and the block size."""
-    index_map = operators.V.dofmap.index_map
-    return operators.V.tabulate_dof_coordinates()[: index_map.size_local], operators.V.dofmap.index_map_bs
+def _dof_block_keys(operators: ContactOperators) -> np.ndarray:
+    """The input mesh's node index of each of this rank's dof blocks (owned, then ghosts): what an elastic-plastic
+    state's displacement is saved by. Unlike DOLFINx's numbering it does not depend on the partition, and unlike
+    the coordinates it tells apart two bodies' nodes at one place (where they touch). P1 on the mesh's own
+    (affine) geometry: a cell's dofs are its geometry nodes in the same order."""
+    V = operators.V
+    msh = V.mesh
+    index_map = V.dofmap.index_map
+    keys = np.full(index_map.size_local + index_map.num_ghosts, -1, dtype=np.int64)
+    keys[dfx.cell_dofmap(V).ravel()] = np.asarray(msh.geometry.input_global_indices,
+                                                  dtype=np.int64)[dfx.geometry_dofmap(msh).ravel()]
+    return keys
 
 
 def _gather_plastic(operators: ContactOperators, history: PlasticHistory, points: np.ndarray) -> dict | None:
-    """Every rank's owned part of ``history`` with its coordinates, stacked on rank 0 (None elsewhere).
-    Collective."""
-    nodes, bs = _owned_dof_coordinates(operators)
-    mine = (nodes, history.u[: nodes.shape[0] * bs].reshape(-1, bs), points, history.sigma, history.eps_p,
-            history.p)
+    """Every rank's owned part of ``history`` with its keys (dof blocks: the input node index; quadrature points:
+    their coordinates), stacked on rank 0 (None elsewhere). Collective."""
+    bs = operators.V.dofmap.index_map_bs
+    owned = operators.V.dofmap.index_map.size_local
+    mine = (_dof_block_keys(operators)[:owned], history.u[: owned * bs].reshape(-1, bs), points, history.sigma,
+            history.eps_p, history.p)
     parts = operators.comm.gather(mine, root=0)
     if parts is None:
         return None
@@ -141,30 +151,40 @@ def _gather_plastic(operators: ContactOperators, history: PlasticHistory, points
     return dict(zip(("u_nodes", "u", "points", "sigma", "eps_p", "p"), stacked))
 
 
-def _match(saved: np.ndarray, mine: np.ndarray, extent: float) -> np.ndarray | None:
-    """For each of ``mine`` (n, 3) the index of the saved point at the same place (within 1e-9 of the mesh's
-    extent: the mesh's input bits on every partition, far below any element), None if one has none."""
+def _match_points(saved: np.ndarray, mine: np.ndarray) -> np.ndarray | None:
+    """For each of ``mine`` (n, 3) the index of the saved quadrature point at the same place (within 1e-9 of the
+    points' extent: the mesh's input bits on every partition, far below any element; quadrature points are inside
+    cells, so no two bodies share one), None if one has none."""
     if mine.shape[0] == 0:
         return np.zeros(0, dtype=np.int64)
     if saved.shape[0] == 0:
         return None
+    extent = max(float(np.ptp(saved, axis=0).max(initial=0.0)), 1e-300)
     distance, index = cKDTree(saved).query(mine)
     return index if distance.max() <= 1e-9 * extent else None
 
 
+def _match_keys(saved: np.ndarray, mine: np.ndarray) -> np.ndarray | None:
+    """For each of ``mine`` the index of the same key in ``saved``, None if one is not there."""
+    if mine.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if saved.size == 0:
+        return None
+    order = np.argsort(saved)
+    found = np.minimum(np.searchsorted(saved[order], mine), saved.size - 1)
+    return order[found] if np.array_equal(saved[order][found], mine) else None
+
+
 def _plastic_from(operators: ContactOperators, data: dict[str, np.ndarray], points: np.ndarray,
                   path: str | Path) -> PlasticHistory:
-    """This rank's part of a saved plastic history, matched by coordinates (any partition). Collective."""
-    nodes, bs = _owned_dof_coordinates(operators)
-    all_nodes = operators.V.tabulate_dof_coordinates()
-    extent = max(float(np.ptp(data["plastic_u_nodes"], axis=0).max(initial=0.0)), 1e-300)
-    node_index = _match(data["plastic_u_nodes"], all_nodes, extent)  # owned and ghost blocks alike
-    point_index = _match(data["plastic_points"], points, extent)
+    """This rank's part of a saved plastic history, matched by its keys (any partition). Collective."""
+    node_index = _match_keys(data["plastic_u_nodes"], _dof_block_keys(operators))  # owned and ghost blocks alike
+    point_index = _match_points(data["plastic_points"], points)
     missing = node_index is None or point_index is None
     if operators.comm.allreduce(missing, op=MPI.LOR):   # every rank raises, or none
-        raise ValueError(f"{path}: the saved elastic-plastic state does not fit this mesh (a dof or quadrature "
-                         "point of this problem has no saved one at its place): load it into the mesh it was "
-                         "written with, and the same quadrature degree")
+        raise ValueError(f"{path}: the saved elastic-plastic state does not fit this mesh (a node or quadrature "
+                         "point of this problem has no saved one): load it into the mesh it was written with, and "
+                         "the same quadrature degree")
     u = data["plastic_u"][node_index].reshape(-1)
     return PlasticHistory(u.copy(), data["plastic_sigma"][point_index].copy(),
                           data["plastic_eps_p"][point_index].copy(), data["plastic_p"][point_index].copy())

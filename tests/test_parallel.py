@@ -335,7 +335,8 @@ def _two_block_problem(comm: MPI.Comm, plastic: bool = False):
 def test_a_checkpoint_moves_between_rank_counts(shared_dir, plastic):
     """A state saved on N ranks loads on one and back (issue 27): the contact set is recognised by its nodes'
     coordinates, not by DOLFINx's global node numbers, which differ between rank counts, and an elastic-plastic
-    state's displacement and quadrature-point history by their coordinates, not by each rank's layout; the next
+    state's displacement and quadrature-point history by the input mesh's node index and the points' coordinates,
+    not by each rank's layout; the next
     increment from the loaded state is the one from the saved state (the same local problem and Newton iteration:
     1e-8, other factorisations' rounding only)."""
     problem, a, b = _two_block_problem(COMM, plastic)

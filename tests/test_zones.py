@@ -245,8 +245,8 @@ def test_an_elastic_plastic_body_with_two_zones():
 
 def test_an_elastic_plastic_checkpoint_is_matched_by_coordinates(tmp_path):
     """An elastic-plastic state saved and loaded into a new problem on the same mesh: the displacement and every
-    quadrature point's history come back equal to the bit (matched by coordinates, issue 27: a state moves between
-    rank counts, tests/test_parallel.py); a problem with another quadrature rule (other points) refuses it, naming
+    quadrature point's history come back equal to the bit (matched by the input mesh's node index and the points'
+    coordinates, issue 27: a state moves between rank counts, tests/test_parallel.py, tests/test_mpi.py); a problem with another quadrature rule (other points) refuses it, naming
     why, instead of loading stresses into the wrong points."""
     V, tags, bcs = two_blocks()
 
