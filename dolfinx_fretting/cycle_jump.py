@@ -82,8 +82,8 @@ import numpy as np
 from mpi4py import MPI
 
 __all__ = ["CycleAnalysis", "PlasticCycle", "analyse_cycle", "analyse_plastic_cycle", "choose_jump",
-           "cycle_wear", "extrapolate", "extrapolate_plastic_history", "jump_error", "hertz_jump_limit", "local_jump_error",
-           "plastic_jump_error", "plastic_jump_limit", "propagate_error"]
+           "cycle_wear", "extrapolate", "extrapolate_plastic_history", "jump_error", "hertz_jump_limit",
+           "local_jump_error", "plastic_jump_error", "plastic_jump_limit", "propagate_error"]
 
 _OPEN = 0
 _SLIP = 2

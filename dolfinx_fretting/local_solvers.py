@@ -919,7 +919,8 @@ def _block_steps(W: np.ndarray | sp.spmatrix, dim: int, given: np.ndarray | None
     steps = np.asarray(given, dtype=float)
     nc = W.shape[0] // dim
     if steps.shape != (nc,):
-        raise ValueError(f"block_steps: expected block_rho(W, dim) of shape ({nc},) for this W, got shape {steps.shape}")
+        raise ValueError(f"block_steps: expected block_rho(W, dim) of shape ({nc},) for this W, got shape "
+                         f"{steps.shape}")
     bad = np.flatnonzero(~(np.isfinite(steps) & (steps > 0.0)))
     if bad.size:
         raise ValueError(f"block_steps: expected block_rho(W, dim), finite values > 0, got {steps[bad[0]]!r} at "

@@ -38,8 +38,8 @@ from .analytic import hertz_line_contact
 from .contact import Contact
 from .contact_output import write_contact_xdmf
 from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, cycle_wear,
-                         extrapolate_plastic_history, hertz_jump_limit, jump_error, local_jump_error, plastic_jump_error,
-                         plastic_jump_limit, propagate_error)
+                         extrapolate_plastic_history, hertz_jump_limit, jump_error, local_jump_error,
+                         plastic_jump_error, plastic_jump_limit, propagate_error)
 from .io import non_finite_keys
 from .materials import J2Plasticity, elastic_stiffness
 from .output import FrettingWriter, RunDescription, contact_measures
