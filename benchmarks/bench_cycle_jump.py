@@ -24,7 +24,7 @@ maximum wear depth and wear profile (L2).
 Usage::
 
     .venv/bin/python benchmarks/bench_cycle_jump.py [--block-cycles 9000] [--cylinder-cycles 100]
-        [--sphere-cycles 300] [--mccoll-cycles 300] [--out FILE]
+        [--sphere-cycles 300] [--mccoll-cycles 200] [--out FILE]
 """
 
 from __future__ import annotations
@@ -122,7 +122,7 @@ def main(argv=None) -> int:
     ap.add_argument("--block-cycles", type=int, default=9000)
     ap.add_argument("--cylinder-cycles", type=int, default=100)
     ap.add_argument("--sphere-cycles", type=int, default=300)
-    ap.add_argument("--mccoll-cycles", type=int, default=300)
+    ap.add_argument("--mccoll-cycles", type=int, default=200)
     ap.add_argument("--limit-cycles", type=int, default=1200)
     ap.add_argument("--out", default=str(HERE / "results" / "cycle_jump.md"))
     args = ap.parse_args(argv)
