@@ -126,9 +126,9 @@ def run_section(repeat):
             spent["t"] += time.process_time() - t0
             spent["calls"] += 1
 
-    def as_full(W, q, dim, method, tol, max_iter, r, rho_factor, counts):
+    def as_full(W, q, dim, method, tol, max_iter, r, rho_factor, counts, rho_err=None):
         mu = np.zeros(q.size // dim)
-        return ls._solve_full(W, q, mu, dim, method, tol, max_iter, r, True, rho_factor, counts)
+        return ls._solve_full(W, q, mu, dim, method, tol, max_iter, r, True, rho_factor, counts, rho_err)
 
     rows = []
     for method in ("uzawa", "auto"):

@@ -141,6 +141,7 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
     contact_set = operators.contact.contact_set
     dim = contact_set.dim
     Wm = operators.W if W is None else W
+    steps = operators.block_steps if Wm is operators.W else None  # held with the operators' W (else computed)
     d = state.obstacle.astype(float).copy()
     warm = [state.forces.copy() if r_warm is None else r_warm.copy()]
     count = {"solves": 0, "iterations": 0}
@@ -157,7 +158,7 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
                                    "trials): a load this far below the model's scale is degenerate")
         q, q_abs = operators.q(trial, factors, state.positions, state.wear_gap, q_body)
         solved = local_solvers.solve(Wm, q, operators.contact.mu, dim, method=solver.method, tol=solver.tol,
-                                  max_iter=solver.max_iter, r0=warm[0])
+                                  max_iter=solver.max_iter, r0=warm[0], block_steps=steps)
         count["solves"] += 1
         count["iterations"] += solved.iterations
         if not solved.converged:

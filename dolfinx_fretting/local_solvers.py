@@ -911,8 +911,25 @@ def block_rho(W: np.ndarray | sp.spmatrix, dim: int) -> np.ndarray:
     return 1.0 / norms
 
 
+def _block_steps(W: np.ndarray | sp.spmatrix, dim: int, given: np.ndarray | None) -> np.ndarray:
+    """``given`` (the caller's :func:`block_rho` of this ``W``, checked for its shape and sign only: the caller
+    vouches that ``W`` has not changed since) or :func:`block_rho` computed now."""
+    if given is None:
+        return block_rho(W, dim)
+    steps = np.asarray(given, dtype=float)
+    nc = W.shape[0] // dim
+    if steps.shape != (nc,):
+        raise ValueError(f"block_steps: expected block_rho(W, dim) of shape ({nc},) for this W, got shape "
+                         f"{steps.shape}")
+    bad = np.flatnonzero(~(np.isfinite(steps) & (steps > 0.0)))
+    if bad.size:
+        raise ValueError(f"block_steps: expected block_rho(W, dim), finite values > 0, got {steps[bad[0]]!r} at "
+                         f"contact {int(bad[0])}")
+    return steps
+
+
 def natural_map_error(W: np.ndarray | sp.spmatrix, q: np.ndarray, r: np.ndarray, mu: float | np.ndarray,
-                      dim: int) -> float:
+                      dim: int, block_steps: np.ndarray | None = None) -> float:
     """Unit-free natural-map residual of a candidate solution ``r``.
 
     With ``x = W r + q``, ``rho_a = 1/||W_aa||_2`` (:func:`block_rho`) and ``P`` the projection on ``K_mu``::
@@ -947,13 +964,14 @@ def natural_map_error(W: np.ndarray | sp.spmatrix, q: np.ndarray, r: np.ndarray,
         r: Candidate contact forces.
         mu: Friction coefficient(s), scalar or one per contact.
         dim: 2 or 3.
+        block_steps: ``block_rho(W, dim)`` when the caller holds it for this ``W`` (computed here otherwise).
 
     Returns:
         The residual.
     """
     W, q, mu_arr, dim = _check_problem(W, q, mu, dim)
     r = _check_vector(r, q.size, "r")
-    rho = block_rho(W, dim)
+    rho = _block_steps(W, dim, block_steps)
     x = W @ r + q
     return float(_error(r, np.ascontiguousarray(x), mu_arr, rho, dim, _force_scale(q, mu_arr, rho, dim)))
 
@@ -1190,7 +1208,8 @@ def _newton_driver(P: _Problem, r: np.ndarray, x: np.ndarray, tol: float, max_it
 
 def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, dim: int,
           method: str = "uzawa", tol: float = 1e-10, max_iter: int = 10000, r0: np.ndarray | None = None,
-          rho: float | None = None, raise_on_failure: bool = False) -> LocalResult:
+          rho: float | None = None, raise_on_failure: bool = False,
+          block_steps: np.ndarray | None = None) -> LocalResult:
     """Solve the local frictional contact problem ``x = W r + q``, ``r`` and ``x`` satisfying Coulomb's law.
 
     Every method stops when :func:`natural_map_error` ``< tol`` (checked on ``x = W r + q`` recomputed
@@ -1256,6 +1275,9 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         r0: Initial guess (warm start), projected on the cones; zero by default.
         rho: Optional factor: Uzawa step, NSGS relaxation, Alart-Curnier parameter (see the methods).
         raise_on_failure: Raise :class:`LocalSolverError` instead of returning ``converged=False``.
+        block_steps: ``block_rho(W, dim)`` (the per-contact steps ``1/||W_aa||_2``) when the caller holds it for
+            this very ``W`` (e.g. ``ContactOperators.block_steps``): the same numbers, not computed again at
+            every solve (its batched SVD was ~26 % of a 3D cycle). None: computed here.
 
     Returns:
         A :class:`LocalResult`. ``converged`` is False (with a message) when ``max_iter`` is reached or a
@@ -1270,6 +1292,8 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     W, q, mu_arr, dim = _check_problem(W, q, mu, dim)
     m = q.size
     nc = m // dim
+    if block_steps is not None:  # bad input refused before any work
+        block_steps = _block_steps(W, dim, block_steps)
     if not (isinstance(tol, (int, float, np.floating)) and math.isfinite(tol) and tol > 0):
         raise ValueError(f"tol: expected a finite number > 0, got {tol!r}")
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
@@ -1291,13 +1315,14 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
 
     counts = _Counts()
     rho_factor = 1.0 if rho is None else float(rho)
+    rho_err = block_rho(W, dim) if block_steps is None else block_steps
     normal_only = not np.any(mu_arr)
     if normal_only:
         r, x, err, change, status = _solve_normal(W, q, dim, method, float(tol), int(max_iter), r, rho_factor,
-                                                  counts)
+                                                  counts, rho_err)
     else:
         r, x, err, change, status = _solve_full(W, q, mu_arr, dim, method, float(tol), int(max_iter), r,
-                                                r0 is not None, rho_factor, counts)
+                                                r0 is not None, rho_factor, counts, rho_err)
     its = counts.total
     converged = status == 1 and bool(np.all(np.isfinite(r)))
     unit = {"uzawa": "sweeps", "nsgs": "sweeps"}.get(method, "iterations")
@@ -1328,10 +1353,11 @@ def _storage(W: np.ndarray | sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.
 
 
 def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray, dim: int, method: str, tol: float,
-                max_iter: int, r: np.ndarray, warm: bool, rho_factor: float, counts: _Counts
-                ) -> tuple[np.ndarray, np.ndarray, float, float, int]:
-    """The frictional problem in full dimension: (r, x, error, change, status), see :func:`solve`."""
-    rho_err = block_rho(W, dim)
+                max_iter: int, r: np.ndarray, warm: bool, rho_factor: float, counts: _Counts,
+                rho_err: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, float, int]:
+    """The frictional problem in full dimension: (r, x, error, change, status), see :func:`solve` (``rho_err``:
+    :func:`block_rho` of ``W``, computed here if None)."""
+    rho_err = block_rho(W, dim) if rho_err is None else rho_err
     if warm:
         # A warm start from another problem may lie outside the cones.
         _project_all(r, mu_arr, dim)
@@ -1366,7 +1392,7 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
 
 
 def _solve_normal(W: np.ndarray | sp.csc_matrix, q: np.ndarray, dim: int, method: str, tol: float, max_iter: int,
-                  r: np.ndarray, rho_factor: float, counts: _Counts
+                  r: np.ndarray, rho_factor: float, counts: _Counts, rho_err: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray, float, float, int]:
     """The frictionless problem on its normal rows alone: (r, x, error, change, status), see :func:`solve`.
 
@@ -1378,7 +1404,7 @@ def _solve_normal(W: np.ndarray | sp.csc_matrix, q: np.ndarray, dim: int, method
     """
     nc = q.size // dim
     rows = np.arange(nc) * dim
-    rho_err = block_rho(W, dim)
+    rho_err = block_rho(W, dim) if rho_err is None else rho_err
     Wn = sp.csc_matrix(W[rows][:, rows]) if sp.issparse(W) else np.ascontiguousarray(W[np.ix_(rows, rows)])
     N = _NormalProblem(Wn, np.ascontiguousarray(q[rows]), rho_err)
     rn = np.ascontiguousarray(r[rows])

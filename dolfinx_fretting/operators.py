@@ -189,6 +189,9 @@ class ContactOperators:
             for i, f in enumerate(self.vectors):
                 self.responses[i], out_responses[i] = self._responses(f, contact_set.H, H_out)
         self._hold_directions()
+        #: The per-contact Uzawa steps ``local_solvers.block_rho(W, dim)`` of the W just built, once per W (every
+        #: local solve on this W and the outside rows read them; W changes only here and in set_window).
+        self.block_steps = local_solvers.block_rho(self.W, contact_set.dim)
         self._watch_outside(out_responses)
         if not (keep_slope and self.stiffness is not None):
             # Point stiffness of the closest node: a safe first guess of the load-displacement slope (kept when
@@ -391,7 +394,7 @@ class ContactOperators:
         """W transposed, the Uzawa steps and the contact-pattern cache of cycles of ``n`` increments (rank 0)."""
         if self._kernel is None or self._kernel[2].pattern.shape[0] not in (n, 1):
             contact_set = self.contact.contact_set
-            self._kernel = (np.ascontiguousarray(self.W.T), local_solvers.block_rho(self.W, contact_set.dim),
+            self._kernel = (np.ascontiguousarray(self.W.T), self.block_steps,
                             ActivePatternCache(n, contact_set.nc, contact_set.dim))
         return self._kernel
 
@@ -410,12 +413,12 @@ class ContactOperators:
         if self.surface_compliance is not None:
             raise ValueError("the candidate window of a finite-sliding problem cannot change (its surface compliance "
                              "is built for the contact's window): give Contact a window wide enough for the run")
-        old_contact, old_W, old_resp = self.contact, self.W, self.responses
+        old_contact, old_W, old_resp, old_steps = self.contact, self.W, self.responses, self.block_steps
         try:
             self.contact = old_contact.with_window(window, zone)
             self.build()
         except Exception:
-            self.contact, self.W, self.responses = old_contact, old_W, old_resp
+            self.contact, self.W, self.responses, self.block_steps = old_contact, old_W, old_resp, old_steps
             self._kernel = None
             raise
         carried = carry_state(old_contact, self.contact, state)

@@ -37,8 +37,9 @@ from tqdm import tqdm
 from .analytic import hertz_line_contact
 from .contact import Contact
 from .contact_output import write_contact_xdmf
-from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, extrapolate_plastic_history,
-                         hertz_jump_limit, jump_error, plastic_jump_error, plastic_jump_limit)
+from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, cycle_wear,
+                         extrapolate_plastic_history, hertz_jump_limit, jump_error, local_jump_error,
+                         plastic_jump_error, plastic_jump_limit, propagate_error)
 from .interrupts import Interrupted, RunSignals, stage_hook
 from .io import non_finite_keys, write_json_atomic
 from .materials import J2Plasticity, elastic_stiffness
@@ -212,7 +213,11 @@ class Progress:
     newton_fallbacks: int = 0
     plastic_regime: str = "none"                      #: The last simulated cycle's (elastic-plastic bodies).
     jump: dict[str, Any] = field(default_factory=lambda: {
+        # error: the run's wear-gap error estimate (max |propagated| + carried); error_sum: the jumps' bounds summed
+        # (not propagated); error_vector: the propagated error per contact after the last jump (rank 0's decision);
+        # error_carried: what a contact-set change folded out of it (no longer propagated)
         "rate": None, "last": 1, "free": 1, "simulated": 0, "jumps": 0, "largest": 1, "error": 0.0,
+        "error_sum": 0.0, "error_vector": None, "error_carried": 0.0,
         "bound": "none", "stability_limit": math.inf, "monotone_limit": math.inf, "exceeded": 0,
         "min_stability_limit": math.inf, "plastic_error": 0.0, "plastic_error_pending": 0.0, "plastic_net": 0.0,
         "plastic_flow": 0.0})
@@ -407,8 +412,9 @@ class _Run:
         # a settling cycle's estimate awaited its successor's rate, whose per-point changes are not checkpointed
         progress["jump"]["plastic_error"] += progress["jump"]["plastic_error_pending"]
         progress["jump"]["plastic_error_pending"] = 0.0
-        rate = progress["jump"].get("rate")
-        progress["jump"]["rate"] = np.array(rate) if rate is not None else None
+        for key in ("rate", "error_vector"):
+            value = progress["jump"].get(key)
+            progress["jump"][key] = np.array(value) if value is not None else None
         self.progress = Progress(**progress)
         return state, {k: int(v) for k, v in meta["sizes"].items()}, bool(meta["xdmf_started"])
 
@@ -450,8 +456,9 @@ class _Run:
     def checkpoint(self) -> None:
         self.check_folder(f"{self._done_so_far()}, before its checkpoint")
         progress = asdict(self.progress)
-        rate = self.progress.jump["rate"]
-        progress["jump"]["rate"] = rate.tolist() if rate is not None else None
+        for key in ("rate", "error_vector"):
+            value = self.progress.jump[key]
+            progress["jump"][key] = value.tolist() if value is not None else None
         meta = {"identity": _scene_identity(self.scene), **self.writer.checkpoint_info(),
                 "window": self.model.half_width, "mesh_cycles": self.model.scene.loading.cycles, "progress": progress,
                 "written": time.strftime("%Y-%m-%dT%H:%M:%S")}
@@ -782,18 +789,17 @@ class _Run:
         if regrown:  # (the window grows only for elastic bodies: plastic is None here)
             # The contact set changed: no per-contact rate to compare with or to extrapolate from. The previous
             # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
-            # stands for itself; jumps restart from one.
-            dim = contact.dim
-            n = out_r.shape[0]
-            slip = out_x.reshape(n, contact.nc, dim)[:, :, 1:]  # both tangential components in 3D
-            # each contact's rate c of dg = c p |dx_t| (Archard's k, or the energy law's alpha mu)
-            wear = (self.problem.wear_coefficients(True) * out_r[:, 0::dim] / contact.tributary
-                    * np.linalg.norm(slip, axis=-1))
-            wear = wear * (out_status == 2)
-            this = float(wear.sum(axis=0).max(initial=0.0))
+            # stands for itself; jumps restart from one. The propagated error cannot follow the contacts: its
+            # maximum is carried, no longer propagated.
+            this = float(cycle_wear(self.problem.wear_coefficients(True), contact.tributary, out_r, out_x, out_status,
+                                    contact.dim).max(initial=0.0))
             old = float(jumps["rate"].max(initial=0.0)) if jumps["rate"] is not None else 0.0
             err = (jumps["last"] - 1) * max(old, this)
-            jumps.update(rate=None, last=1, free=1, simulated=jumps["simulated"] + 1, error=jumps["error"] + err,
+            vector = jumps["error_vector"]
+            carried = jumps["error_carried"] + err + (float(np.abs(vector).max(initial=0.0)) if vector is not None
+                                                      else 0.0)
+            jumps.update(rate=None, last=1, free=1, simulated=jumps["simulated"] + 1, error=carried,
+                         error_sum=jumps["error_sum"] + err, error_vector=None, error_carried=carried,
                          bound="window_grown")
             return new, {"jump": 1, "bound": "window_grown", "stability_limit": jumps["stability_limit"],
                          "error": err, "error_total": jumps["error"]}
@@ -802,6 +808,9 @@ class _Run:
             a = analyse_cycle(self.problem.operators.W, contact.dim, contact.tributary, out_status, out_x, out_r,
                               start.wear_gap, new.wear_gap, scene.loading.normal_force_controlled)
             err = jump_error(jumps["rate"], a.rate, jumps["last"]) if jumps["rate"] is not None else 0.0
+            local = (local_jump_error(jumps["rate"], a.rate, jumps["last"]) if jumps["rate"] is not None
+                     else np.zeros(a.rate.size))
+            before = jumps["error_vector"] if jumps["error_vector"] is not None else np.zeros(a.rate.size)
             dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction, w.jump_pressure_change, w.jump_max,
                                           jumps["free"], room, plastic_limit)
             if w.jump_forced is not None:
@@ -810,10 +819,13 @@ class _Run:
                 dN, bound = 1, "first_cycle"
             elif settling:
                 dN, bound, free = 1, "plastic_settling", jumps["free"]
-            decided = (a.rate, err, dN, bound, free, a.stability_limit(k), a.monotone_limit(k))
+            # The error at this cycle's start (the last jump's local error added), carried over this cycle and its
+            # jump (decided above; error_vector: the error after it, the next cycle's start but for that jump's own)
+            vector = propagate_error(before + local, a, k, dN)
+            decided = (a.rate, err, dN, bound, free, a.stability_limit(k), a.monotone_limit(k), vector)
         if self.comm.size > 1:
             decided = self.comm.bcast(decided, root=0)
-        rate, err, dN, bound, free, stab, mono = decided
+        rate, err, dN, bound, free, stab, mono, vector = decided
         added = dN * float(rate.max(initial=0.0))
         if added > h_e:
             raise SimulationError(
@@ -832,7 +844,9 @@ class _Run:
                                                               after.p, dN, elastic_stiffness(m.E, m.nu))
                 new = replace(new, plastic=PlasticHistory(after.u, sigma, eps_p, p))
         jumps.update(rate=rate, last=dN, free=free, simulated=jumps["simulated"] + 1,
-                     jumps=jumps["jumps"] + (dN > 1), largest=max(jumps["largest"], dN), error=jumps["error"] + err,
+                     jumps=jumps["jumps"] + (dN > 1), largest=max(jumps["largest"], dN),
+                     error=jumps["error_carried"] + float(np.abs(vector).max(initial=0.0)),
+                     error_sum=jumps["error_sum"] + err, error_vector=vector,
                      bound=bound, stability_limit=stab, monotone_limit=mono, exceeded=jumps["exceeded"] + (dN > stab),
                      min_stability_limit=min(jumps["min_stability_limit"], stab))
         if dN > stab and jumps["exceeded"] == 1:
@@ -929,7 +943,8 @@ class _Run:
         finite = lambda v: v if math.isfinite(v) else None  # noqa: E731 - JSON has no infinity
         out = {"simulated_cycles": jumps["simulated"], "jumps": jumps["jumps"],
                "largest_jump": jumps["largest"],
-               "wear_error_estimate": jumps["error"], "last_bound": jumps["bound"],
+               "wear_error_estimate": jumps["error"], "wear_error_sum_of_bounds": jumps["error_sum"],
+               "last_bound": jumps["bound"],
                "stability_limit_last": finite(jumps["stability_limit"]),
                "monotone_limit_last": finite(jumps["monotone_limit"]),
                "stability_limit_min": finite(jumps["min_stability_limit"]),

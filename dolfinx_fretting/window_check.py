@@ -16,7 +16,6 @@ import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 
-from . import local_solvers
 from .contact import ContactSet
 from .state import ContactState, WindowError
 
@@ -191,7 +190,7 @@ def watch_outside(operators, responses: np.ndarray | None) -> OutsideRows | None
         coupling = np.asarray((L @ on_surfaces.T).T)
     else:
         coupling = operators.delassus.coupling(_normal_rows(outside, contact.fixed_global)[1], contact.H_free)
-    rho = local_solvers.block_rho(operators.W, outside.dim) if contact.contact_set.nc else np.ones(1)
+    rho = operators.block_steps if contact.contact_set.nc else np.ones(1)
     centres = tuple(zone.window_centre for zone in contact.zones)
     return OutsideRows(outside, coupling, responses, contact.outside_motion(), contact.outside_distance(),
                        float(1.0 / rho.min()), contact.outside_zone, contact.windows, centres)

@@ -252,9 +252,9 @@ def test_frictionless_hertz_run_same_as_full_dimension(tmp_path, monkeypatch):
           "geometry.contact_mesh_size=0.02"]
     normal = run_scene(load_scene("hertz", ov), tmp_path / "normal", quiet=True)
 
-    def as_full(W, q, dim, method, tol, max_iter, r, rho_factor, counts):
+    def as_full(W, q, dim, method, tol, max_iter, r, rho_factor, counts, rho_err=None):
         return ls._solve_full(W, q, np.zeros(q.size // dim), dim, method, tol, max_iter, r, True, rho_factor,
-                              counts)
+                              counts, rho_err)
 
     monkeypatch.setattr(ls, "_solve_normal", as_full)
     full = run_scene(load_scene("hertz", ov), tmp_path / "full", quiet=True)

@@ -214,6 +214,9 @@ def test_zero_contacts():
         (dict(max_iter=0), "max_iter"),
         (dict(r0=np.zeros(3)), "r0"),
         (dict(rho=-1.0), "rho"),
+        (dict(block_steps=np.ones(3)), "block_steps"),
+        (dict(block_steps=np.array([1.0, -1.0])), "block_steps"),
+        (dict(block_steps=np.array([1.0, np.nan])), "block_steps"),
     ],
 )
 def test_validation(kwargs, name):
@@ -221,6 +224,29 @@ def test_validation(kwargs, name):
     args.update(kwargs)
     with pytest.raises(ValueError, match=name):
         solve(**args)
+
+
+@pytest.mark.parametrize("method", ["uzawa", "nsgs", "newton", "auto"])
+@pytest.mark.parametrize("mu", [0.0, 0.4])
+@pytest.mark.parametrize("sparse", [False, True])
+def test_block_steps_given_are_the_steps_computed(method, mu, sparse):
+    """The caller's block_rho(W) (ContactOperators.block_steps, computed once per W) gives the answer of the solve
+    that computes it itself, bit for bit (same numbers, same operations: one process, so exact equality holds), and
+    is really what the solve reads: other steps change the error measure and the Uzawa iterates."""
+    W, q, _ = random_problem(5, nc=12, dim=3)
+    W = sp.csr_matrix(W) if sparse else W
+    steps = ls.block_rho(W, 3)
+    own = solve(W, q, mu, 3, method=method, tol=TOL)
+    given = solve(W, q, mu, 3, method=method, tol=TOL, block_steps=steps)
+    assert own.converged and given.converged
+    assert np.array_equal(own.r, given.r) and np.array_equal(own.x, given.x)
+    assert own.iterations == given.iterations and own.error == given.error
+    r = np.abs(np.random.default_rng(2).normal(size=q.size))
+    assert natural_map_error(W, q, r, mu, 3, block_steps=steps) == natural_map_error(W, q, r, mu, 3)
+    assert natural_map_error(W, q, r, mu, 3, block_steps=0.5 * steps) != natural_map_error(W, q, r, mu, 3)
+    if method == "uzawa":
+        halved = solve(W, q, mu, 3, method=method, tol=TOL, block_steps=0.5 * steps)
+        assert halved.iterations != own.iterations
 
 
 def test_contact_states_codes():

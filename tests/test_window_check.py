@@ -162,6 +162,15 @@ def test_no_window_and_an_unviolated_window_leave_the_answer_untouched():
         plain = local_solvers.solve(ops.W, q, ops.contact.mu, 2, method="uzawa", tol=prob.solver.tol,
                                     max_iter=prob.solver.max_iter, r0=state.forces)
         assert np.array_equal(result.forces, plain.r) and np.array_equal(result.slip, plain.x)
+        # The steps the operators hold are block_rho of the W they hold (same numbers, computed once per W).
+        assert np.array_equal(ops.block_steps, local_solvers.block_rho(ops.W, 2))
+    # ... and follow W when the window changes (another contact set: other blocks, another count).
+    before = windowed.operators.block_steps
+    windowed.set_window(windowed.initial_state(), 0.6)
+    ops = windowed.operators
+    assert ops.block_steps.size == ops.contact.contact_set.nc != before.size
+    assert np.array_equal(ops.block_steps, local_solvers.block_rho(ops.W, 2))
+    assert ops.kernel_data(4)[1] is ops.block_steps
 
 
 def test_every_increment_of_a_cycle_is_checked():
