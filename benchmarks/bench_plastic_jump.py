@@ -71,10 +71,10 @@ def _differences(every_dir: Path, jump_dir: Path) -> dict[str, float]:
     p_every, p_jump = _last_pressure(every_dir), _last_pressure(jump_dir)
     return {"wear_gap": float(np.abs(every["wear_gap"] - jump["wear_gap"]).max()),
             "wear_gap_max": float(every["wear_gap"].max()),
-            "eps_p": float(eq(every["plastic_eps_p_0"] - jump["plastic_eps_p_0"]).max()),
-            "eps_p_max": float(eq(every["plastic_eps_p_0"]).max()),
-            "p": float(np.abs(every["plastic_p_0"] - jump["plastic_p_0"]).max()),
-            "p_max": float(every["plastic_p_0"].max()),
+            "eps_p": float(eq(every["plastic_eps_p"] - jump["plastic_eps_p"]).max()),
+            "eps_p_max": float(eq(every["plastic_eps_p"]).max()),
+            "p": float(np.abs(every["plastic_p"] - jump["plastic_p"]).max()),
+            "p_max": float(every["plastic_p"].max()),
             "pressure": float(np.abs(p_every - p_jump).max()), "pressure_max": float(p_every.max())}
 
 

@@ -157,7 +157,7 @@ class PlasticState:
 
     # ------------------------------------------------------------------------------------------------
     def point_coordinates(self) -> np.ndarray:
-        """(n, 3) coordinates of the quadrature points of the owned cells, in the order of :attr:`sigma` (what a
+        """(n, 3) coordinates of the quadrature points of the owned cells, in the order of ``sigma``'s rows (what a
         checkpoint keys the plastic state by: they do not depend on the partition). Collective (a JIT compile)."""
         points, _ = basix.make_quadrature(dfx.basix_cell(self.mesh), self._degree)
         expression = dfx.expression(ufl.SpatialCoordinate(self.mesh), points)

@@ -461,10 +461,10 @@ def _plastic_run(tmp_path, name, scene, cycles, extra=()):
 
 def _plastic_differences(a, b):
     """Largest differences of two final states: wear gap, equivalent plastic strain of eps_p, accumulated p."""
-    d_eps = a["plastic_eps_p_0"] - b["plastic_eps_p_0"]
+    d_eps = a["plastic_eps_p"] - b["plastic_eps_p"]
     return (float(np.abs(a["wear_gap"] - b["wear_gap"]).max()),
             float(np.sqrt(2 / 3) * np.linalg.norm(d_eps, axis=1).max()),
-            float(np.abs(a["plastic_p_0"] - b["plastic_p_0"]).max()))
+            float(np.abs(a["plastic_p"] - b["plastic_p"]).max()))
 
 
 def test_plastic_jumps_in_plastic_shakedown_stay_within_their_error_estimates(tmp_path):
@@ -531,7 +531,7 @@ def test_plastic_jumps_resume_as_the_uninterrupted_run(tmp_path, monkeypatch):
     # The plastic history is checkpointed in full: the resumed run repeats the straight one to Newton's
     # tolerance (1e-8 relative on the increments' displacements).
     wear, eps_p, p = _plastic_differences(end_s, end_r)
-    assert wear <= 1e-8 * end_s["wear_gap"].max() and max(eps_p, p) <= 1e-8 * end_s["plastic_p_0"].max()
+    assert wear <= 1e-8 * end_s["wear_gap"].max() and max(eps_p, p) <= 1e-8 * end_s["plastic_p"].max()
     # The estimate accumulated before the kill is carried over (the first jump after the resume is then bounded
     # by the cycles' maxima: the per-point changes are not checkpointed).
     carried = meta["jump"]["plastic_error"] + meta["jump"]["plastic_error_pending"]

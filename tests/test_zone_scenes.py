@@ -64,8 +64,6 @@ plane_point = [{width}, 0.0]
 plane_normal = [-1.0, 0.0]
 mu = 0.0
 approach = {interference}
-[wear]
-k = 1e-6
 [loading]
 normal_force = {force}
 normal_increments = 2
