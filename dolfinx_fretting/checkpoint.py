@@ -267,7 +267,9 @@ def _pairing_from(operators: ContactOperators, data: dict[str, np.ndarray],
                                  ref.H.shape[1])
     if "pairing_nodes" in data and (not np.array_equal(pairing.master_nodes, data["pairing_nodes"])
                                     or master_wear.shape != (compliance.nodes.size,)):
-        raise ValueError(f"{path}: the saved pairing or master wear does not fit this problem's master surface")
+        raise ValueError(f"{path}: the saved pairing or master wear does not fit this problem's master surface (a "
+                         "finite-sliding checkpoint of an earlier release holds DOLFINx's node numbers: resume it "
+                         "on the number of ranks it was written on)")
     return pairing, master_wear
 
 
