@@ -5,9 +5,13 @@ A state's per-contact arrays are in the contact set's order, which is by positio
 partition; the contact set is recognised by its nodes' coordinates, not by DOLFINx's global node numbers (those
 differ between launches under MPI and between rank counts), so a state written on N ranks loads on any number. An
 elastic-plastic state's displacement and quadrature-point history are saved with keys that do not depend on the
-partition (each dof block's node in the input mesh, each point's coordinates) and matched by them on loading (checkpoints of earlier releases hold
-each rank's arrays: they load on the partition they were written on, checked by a fingerprint of its dof
-coordinates).
+partition (each dof block's node in the input mesh, each point's coordinates) and matched by them on loading
+(checkpoints of earlier releases hold each rank's arrays: they load on the partition they were written on, checked
+by a fingerprint of its dof coordinates). A finite-sliding state's pairing is saved as each contact's master facet
+by its nodes' input mesh indices, with the weights in that order, and the master's wear by the same indices; on
+loading each facet is found in this problem's master surface by its node set (the weights permuted to its node
+order) and the wear reordered to its surface compliance (checkpoints of earlier releases hold facet indices and
+DOLFINx's node numbers: they load where those are the same, and are refused elsewhere).
 
 A checkpoint also holds the contact parameters of the problem that wrote it (:func:`contact_parameters`: each
 zone's friction coefficients, wear law and obstacle), and a problem with other values refuses it, naming them.
@@ -28,7 +32,7 @@ from mpi4py import MPI
 from scipy.spatial import cKDTree
 
 from . import _dolfinx as dfx
-from .contact import paired_contact_set
+from .contact import ContactSet, paired_contact_set
 from .increments import on_rank0
 from .io import _jsonable
 from .laws import WearLaw
@@ -137,6 +141,50 @@ def _dof_block_keys(operators: ContactOperators) -> np.ndarray:
     return keys
 
 
+def _input_indices(operators: ContactOperators, global_nodes: np.ndarray) -> np.ndarray:
+    """The input mesh's node index (:func:`_dof_block_keys`) of each of ``global_nodes`` (DOLFINx global block
+    numbers, any shape, the same on every rank; -1 padding stays -1), on every rank: what a finite-sliding state's
+    master facets and master wear are saved by. Collective."""
+    global_nodes = np.asarray(global_nodes, dtype=np.int64)
+    index_map = operators.V.dofmap.index_map
+    start = int(index_map.local_range[0])
+    owned = _dof_block_keys(operators)[: index_map.size_local]
+    local = global_nodes - start
+    mine = (global_nodes >= 0) & (local >= 0) & (local < owned.size)
+    keys = np.full(global_nodes.shape, -1, dtype=np.int64)
+    keys[mine] = owned[local[mine]]
+    # Each node has one owner, which writes its index; every other rank holds -1 there.
+    operators.comm.Allreduce(MPI.IN_PLACE, keys, op=MPI.MAX)
+    return keys
+
+
+def _find_facets(saved: np.ndarray, weights: np.ndarray, here: np.ndarray,
+                 path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Each saved facet (its nodes' input indices, in its saved node order) found among this problem's master
+    facets ``here`` (the same, in this problem's order): (the facet's index here, ``weights`` permuted into its
+    node order here). A facet is its node set (in a conforming mesh no two facets share one); its node order may
+    differ between partitions (a 2D segment's ends follow the local vertex numbers).
+
+    Raises:
+        ValueError: a saved facet is not a facet of this problem's master surface.
+    """
+    canonical = lambda rows: np.sort(rows, axis=1)  # noqa: E731 - a facet's node set (-1 padding sorts first)
+    lookup = {tuple(row): index for index, row in enumerate(canonical(here))}
+    faces = np.empty(saved.shape[0], dtype=np.int64)
+    permuted = np.zeros_like(weights)
+    for contact, (row, key) in enumerate(zip(saved, canonical(saved))):
+        face = lookup.get(tuple(key))
+        if face is None:
+            raise ValueError(f"{path}: the saved pairing of contact {contact} is on a master facet (input mesh "
+                             f"nodes {row[row >= 0].tolist()}) that is not on this problem's master surface: load "
+                             "it into the mesh it was written with")
+        faces[contact] = face
+        for j, node in enumerate(here[face]):
+            if node >= 0:
+                permuted[contact, j] = weights[contact, int(np.flatnonzero(row == node)[0])]
+    return faces, permuted
+
+
 def _gather_plastic(operators: ContactOperators, history: PlasticHistory, points: np.ndarray) -> dict | None:
     """Every rank's owned part of ``history`` with its keys (dof blocks: the input node index; quadrature points:
     their coordinates), stacked on rank 0 (None elsewhere). Collective."""
@@ -190,6 +238,41 @@ def _plastic_from(operators: ContactOperators, data: dict[str, np.ndarray], poin
                           data["plastic_eps_p"][point_index].copy(), data["plastic_p"][point_index].copy())
 
 
+def _pairing_from(operators: ContactOperators, data: dict[str, np.ndarray],
+                  path: str | Path) -> tuple[ContactSet, np.ndarray]:
+    """A saved finite-sliding pairing and master wear in this problem's master surface and surface compliance
+    (any partition: facets and nodes found by their input mesh node indices). Collective.
+
+    Raises:
+        ValueError: a saved facet or master wear node is not this problem's (the same on every rank: every rank
+            holds the same saved and replicated arrays).
+    """
+    ref = operators.reference_pairing
+    surface, compliance = ref.master_surface, operators.surface_compliance
+    weights = data["pairing_weights"]
+    if "pairing_facet_nodes" in data:
+        here = _input_indices(operators, surface.nodes)
+        wear_nodes = _input_indices(operators, compliance.nodes)
+        faces, weights = _find_facets(data["pairing_facet_nodes"], weights, here, path)
+        order = _match_keys(data["master_wear_nodes"], wear_nodes)
+        if order is None or data["master_wear_nodes"].size != wear_nodes.size:
+            raise ValueError(f"{path}: the saved master wear is on {data['master_wear_nodes'].size} surface nodes, "
+                             f"this problem's surface compliance has {wear_nodes.size} and they are not the same "
+                             "input mesh nodes: load it into the mesh it was written with and the same "
+                             "ElasticBody.reach")
+        master_wear = data["master_wear"][order].copy()
+    else:   # a checkpoint of an earlier release: facet indices and DOLFINx's node numbers, as they were saved
+        faces, master_wear = data["pairing_faces"], data["master_wear"].copy()
+    pairing = paired_contact_set(surface, ref.global_nodes, ref.coords, ref.tributary, ref.abscissa, faces, weights,
+                                 ref.H.shape[1])
+    if "pairing_nodes" in data and (not np.array_equal(pairing.master_nodes, data["pairing_nodes"])
+                                    or master_wear.shape != (compliance.nodes.size,)):
+        raise ValueError(f"{path}: the saved pairing or master wear does not fit this problem's master surface (a "
+                         "finite-sliding checkpoint of an earlier release holds DOLFINx's node numbers: resume it "
+                         "on the number of ranks it was written on)")
+    return pairing, master_wear
+
+
 def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState, path: str | Path,
                meta: Mapping[str, Any] | None = None, wear_laws: Sequence[WearLaw | None] | None = None,
                plastic_points: np.ndarray | None = None) -> None:
@@ -199,6 +282,10 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
     (:meth:`~dolfinx_fretting.plasticity.PlasticState.point_coordinates`). Collective."""
     parameters = contact_parameters(operators, wear_laws or (None,) * len(operators.contact.zones))
     plastic = None
+    pairing_keys = wear_keys = None
+    if state.pairing is not None:   # (collective: every rank holds the same pairing)
+        pairing_keys = _input_indices(operators, state.pairing.master_surface.nodes[state.pairing.master_faces])
+        wear_keys = _input_indices(operators, operators.surface_compliance.nodes)
     if state.plastic is not None:
         if plastic_points is None:
             raise ValueError("save_state: an elastic-plastic state needs its quadrature points' coordinates")
@@ -213,11 +300,11 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
         arrays["targets"] = state.targets if state.targets is not None else state.obstacle
         arrays["force_controlled"] = (state.force_controlled if state.force_controlled is not None
                                       else np.zeros(state.obstacle.size, dtype=bool))
-        if state.pairing is not None:  # finite sliding: the pairing and the master's wear
-            arrays["pairing_faces"] = state.pairing.master_faces
-            arrays["pairing_nodes"] = state.pairing.master_nodes
+        if state.pairing is not None:  # finite sliding: the pairing and the master's wear, by input node indices
+            arrays["pairing_facet_nodes"] = pairing_keys
             arrays["pairing_weights"] = state.pairing.master_weights
             arrays["master_wear"] = state.master_wear
+            arrays["master_wear_nodes"] = wear_keys
             arrays["repairs"] = np.array(monitor.repairs)
         for name, values in (plastic or {}).items():
             arrays[f"plastic_{name}"] = values
@@ -241,7 +328,8 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
 
     Checked against this problem: the contact nodes (by their coordinates), the load names, a plastic state's
     dofs and quadrature points (by their coordinates; ``plastic_points``: this rank's, as for :func:`save_state`),
-    finite sliding's pairing, and the contact parameters (:func:`contact_parameters`: each zone's
+    finite sliding's pairing and master wear (their master facets and nodes by the input mesh's node indices),
+    and the contact parameters (:func:`contact_parameters`: each zone's
     ``mu``, wear law with its coefficients and acceleration (``wear_laws``, one per zone), obstacle kind, normal and
     a plane's position). Not checked: the material (bilinear form), the Dirichlet conditions, the load vectors'
     values, the solver settings and the plastic law; nor, in a checkpoint written before the contact parameters
@@ -296,17 +384,12 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
         plastic = PlasticHistory(*(data[f"plastic_{k}_{i}"].copy() for k in PLASTIC_ARRAYS))
     warm = data["warm"] if data["warm"].size and operators.comm.rank == 0 else None
     pairing = master_wear = None
-    if ("pairing_faces" in data) != (operators.surface_compliance is not None):
-        raise ValueError(f"{path}: a state saved with{'' if 'pairing_faces' in data else 'out'} finite sliding "
+    sliding = "pairing_facet_nodes" in data or "pairing_faces" in data
+    if sliding != (operators.surface_compliance is not None):
+        raise ValueError(f"{path}: a state saved with{'' if sliding else 'out'} finite sliding "
                          f"loads into a problem with{'' if operators.surface_compliance is not None else 'out'} it")
     if operators.surface_compliance is not None:
-        ref = operators.reference_pairing
-        pairing = paired_contact_set(ref.master_surface, ref.global_nodes, ref.coords, ref.tributary,
-                                     ref.abscissa, data["pairing_faces"], data["pairing_weights"], ref.H.shape[1])
-        master_wear = data["master_wear"].copy()
-        if (not np.array_equal(pairing.master_nodes, data["pairing_nodes"])
-                or master_wear.shape != (operators.surface_compliance.nodes.size,)):
-            raise ValueError(f"{path}: the saved pairing or master wear does not fit this problem's master surface")
+        pairing, master_wear = _pairing_from(operators, data, path)
         operators.surface_compliance.rows(pairing.master_nodes)   # within reach, or a message
         monitor.repairs = int(data["repairs"])
     state = ContactState(*(data[k].copy() for k in ARRAYS), increment=int(info["increment"]),

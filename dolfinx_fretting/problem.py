@@ -462,7 +462,8 @@ class FrettingProblem:
         """Read a state written by :meth:`save_state` (same problem, same contact set). Collective.
 
         Checked: the contact nodes, the load names, a plastic state's dofs and quadrature points (by their
-        coordinates: a state moves between rank counts), finite sliding's pairing, and each
+        coordinates: a state moves between rank counts), finite sliding's pairing and master wear (by the input
+        mesh's node indices: they move between rank counts too), and each
         zone's contact parameters: ``mu``, the wear law (its class, coefficients and acceleration) and the obstacle
         (its class, normal and a plane's position). Not checked: the material (bilinear form), the Dirichlet
         conditions, the load vectors' values, the solver settings, the plastic law; nor the contact parameters of

@@ -11,8 +11,6 @@ References:
 - The flat's scar in reciprocating gross slip spans the contact width plus the slip stroke.
 """
 
-import dataclasses
-
 import numpy as np
 import pytest
 from mpi4py import MPI  # noqa: F401  (before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs)
@@ -20,12 +18,12 @@ from mpi4py import MPI  # noqa: F401  (before dolfinx: on the DOLFINx wheel it l
 import dolfinx_fretting as dfr
 from dolfinx_fretting import sliding
 from dolfinx_fretting.analytic import hertz_line_contact
-from dolfinx_fretting.contact import Contact, MasterSurface, paired_contact_set, tangent_frame
-from dolfinx_fretting.geometries import build_scene_model
+from dolfinx_fretting.checkpoint import _find_facets
+from dolfinx_fretting.contact import MasterSurface, paired_contact_set, tangent_frame
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import run_scene
-
-P, MU = 199.24, 0.3
+from support import finite_sliding as support_sliding
+from support.finite_sliding import MU, P, pressed, sliding_problem
 
 
 # Pure parts (no mesh) -------------------------------------------------------------------------------------
@@ -103,34 +101,20 @@ def test_spread_master_wear_keeps_the_worn_volume():
 @pytest.fixture(scope="module")
 def cylinder_on_flat():
     """The cylinder-flat scene's model at h = 20 um (the cylinder R = 6 mm on a 20 x 10 mm flat)."""
-    scene = load_scene("cylinder-flat", ["geometry.contact_mesh_size=0.02"])
-    return build_scene_model(scene)
-
-
-def _problem(model, sliding_model, wear=None, reach=0.3):
-    obstacle = dataclasses.replace(model.obstacle, sliding=sliding_model, reach=reach)
-    contact = Contact(model.V, model.surface, obstacle, MU, model.bcs, 0.35)
-    return dfr.FrettingProblem(model.form, contact, model.bcs, wear=wear)
-
-
-def _pressed(problem):
-    state = problem.initial_state()
-    for load in (0.5 * P, P):
-        state = problem.commit(state, problem.solve(state, normal=dfr.Force(load)))
-    return state
+    return support_sliding.cylinder_on_flat()
 
 
 def test_repaired_delassus_is_the_factorised_one(cylinder_on_flat):
     """After sliding 3.5 elements the pairing has changed; its W = L C L^T and load responses equal W built by
     the factorisation for that pairing (a problem made with the pairing's contact set), to 1e-9 of max W."""
-    problem = _problem(cylinder_on_flat, "finite")
-    state = _pressed(problem)
+    problem = sliding_problem(cylinder_on_flat, "finite")
+    state = pressed(problem)
     for d in np.linspace(0.0, 0.07, 8)[1:]:
         state = problem.commit(state, problem.solve(state, tangential=d))
     assert problem.sliding.repairs > 0
     assert not np.array_equal(state.pairing.master_faces, problem.operators.reference_pairing.master_faces)
     problem.operators.activate(state)
-    direct = _problem(cylinder_on_flat, "small")
+    direct = sliding_problem(cylinder_on_flat, "small")
     direct.operators.contact = direct.contact.with_pairing(state.pairing)
     direct.operators.build()
     assert np.abs(problem.operators.W - direct.operators.W).max() <= 1e-9 * np.abs(direct.operators.W).max()
@@ -153,8 +137,8 @@ def test_a_cylinder_sliding_over_the_flat_keeps_its_hertz_pressure(cylinder_on_f
     a, p0 = hertz_line_contact(P, 6.0, 115000.0 / (2 * (1 - 0.342**2)))
     deepest = {}
     for model in ("finite", "small"):
-        problem = _problem(cylinder_on_flat, model)
-        state = _pressed(problem)
+        problem = sliding_problem(cylinder_on_flat, model)
+        state = pressed(problem)
         for d in np.linspace(0.0, slide, 21)[1:]:
             state = problem.commit(state, problem.solve(state, tangential=d))
         fields = problem.contact_fields(state)
@@ -201,8 +185,8 @@ def test_both_bodies_wear_the_dissipated_energy_and_the_flat_scar_spans_the_stro
     k_slave, k_master = 2e-6, 3e-6
     widths = {}
     for model in ("finite", "small"):
-        problem = _problem(cylinder_on_flat, model, wear=dfr.Archard(k_slave=k_slave, k_master=k_master))
-        state = _pressed(problem)
+        problem = sliding_problem(cylinder_on_flat, model, wear=dfr.Archard(k_slave=k_slave, k_master=k_master))
+        state = pressed(problem)
         path = dfr.CyclePath.waveform(24, tangential=stroke)
         state = problem.commit(state, problem.run_cycle(state, path))
         state = problem.commit(state, problem.run_cycle(state, path))
@@ -228,9 +212,9 @@ def test_both_bodies_wear_the_dissipated_energy_and_the_flat_scar_spans_the_stro
 
 def _tangential_compliance(model):
     """Tangential displacement per unit tangential force of the stuck contact: from a problem with mu large."""
-    problem = _problem(model, "small")
+    problem = sliding_problem(model, "small")
     problem.contact.mu[:] = 100.0
-    state = _pressed(problem)
+    state = pressed(problem)
     state = problem.commit(state, problem.solve(state, tangential=1e-4))
     return 1e-4 / problem.total_force(state)[1]
 
@@ -239,8 +223,8 @@ def test_a_checkpoint_keeps_the_pairing_and_the_master_wear(cylinder_on_flat, tm
     """save_state / load_state of a re-paired, worn state: the next increment is the same, to the force
     control's tolerance (1e-8: its root finder starts from the slope the previous solve left, so two solves of
     one state agree to the tolerance, not to the bit; measured 1.7e-10)."""
-    problem = _problem(cylinder_on_flat, "finite", wear=dfr.Archard(k_slave=1e-6, k_master=1e-6))
-    state = _pressed(problem)
+    problem = sliding_problem(cylinder_on_flat, "finite", wear=dfr.Archard(k_slave=1e-6, k_master=1e-6))
+    state = pressed(problem)
     for d in np.linspace(0.0, 0.05, 6)[1:]:
         state = problem.commit(state, problem.solve(state, tangential=d))
     problem.save_state(state, tmp_path / "state.npz")
@@ -250,6 +234,60 @@ def test_a_checkpoint_keeps_the_pairing_and_the_master_wear(cylinder_on_flat, tm
     b = problem.commit(loaded, problem.solve(loaded, tangential=0.06))
     for name in ("forces", "positions", "wear_gap", "master_wear"):
         assert np.allclose(getattr(a, name), getattr(b, name), rtol=0, atol=1e-8 * np.abs(getattr(a, name)).max())
+
+
+def test_a_saved_master_facet_is_found_by_its_nodes_in_any_order():
+    """A checkpoint's master facet (its nodes' input mesh indices, in the saved node order) is found in this
+    problem's master surface by its node set, and its weights follow its nodes into this problem's node order (a
+    2D segment's ends follow the local vertex numbers, which depend on the partition): a reversed segment, a
+    rotated quadrilateral, a triangle with its padding; the paired point sum_i w_i X_i is then unchanged."""
+    here = np.array([[10, 11, -1, -1], [12, 11, -1, -1], [4, 5, 6, 7], [5, 8, 9, -1]])
+    saved = np.array([[11, 12, -1, -1], [6, 7, 4, 5], [9, 5, 8, -1]])
+    weights = np.array([[0.3, 0.7, 0.0, 0.0], [0.1, 0.2, 0.3, 0.4], [0.5, 0.25, 0.25, 0.0]])
+    faces, permuted = _find_facets(saved, weights, here, "state.npz")
+    assert faces.tolist() == [1, 2, 3]
+    assert permuted.tolist() == [[0.7, 0.3, 0.0, 0.0], [0.3, 0.4, 0.1, 0.2], [0.25, 0.25, 0.5, 0.0]]
+    with pytest.raises(ValueError, match=r"contact 1 is on a master facet \(input mesh nodes \[4, 5, 6\]\)"):
+        _find_facets(np.array([[10, 11, -1, -1], [4, 5, 6, -1]]), weights[:2], here, "state.npz")
+
+
+def _rewritten(path, out, **changes):
+    """A copy of the checkpoint ``path`` at ``out`` with arrays replaced (None: removed)."""
+    with np.load(path) as npz:
+        arrays = {k: npz[k] for k in npz.files}
+    arrays.update(changes)
+    np.savez(out, **{k: v for k, v in arrays.items() if v is not None})
+    return out
+
+
+def test_a_finite_sliding_checkpoint_is_refused_where_its_nodes_are_not_found(cylinder_on_flat, tmp_path):
+    """A saved master facet or master wear node that is not this problem's is refused with a message naming it; a
+    checkpoint of the earlier format (facet indices and DOLFINx's node numbers) still loads where they are the
+    same (serially: the same numbers) and is refused where they differ."""
+    problem = sliding_problem(cylinder_on_flat, "finite", wear=dfr.Archard(k_slave=1e-6, k_master=1e-6))
+    state = pressed(problem)
+    for d in np.linspace(0.0, 0.05, 6)[1:]:
+        state = problem.commit(state, problem.solve(state, tangential=d))
+    path = tmp_path / "state.npz"
+    problem.save_state(state, path)
+    with np.load(path) as npz:
+        facet_nodes, wear_nodes = npz["pairing_facet_nodes"], npz["master_wear_nodes"]
+    elsewhere = facet_nodes.copy()
+    elsewhere[3, 0] = wear_nodes.max() + 10**6   # a node of no master facet
+    with pytest.raises(ValueError, match="contact 3 is on a master facet"):
+        problem.load_state(_rewritten(path, tmp_path / "facet.npz", pairing_facet_nodes=elsewhere))
+    moved = wear_nodes.copy()
+    moved[0] = wear_nodes.max() + 10**6
+    with pytest.raises(ValueError, match="master wear is on .* surface nodes"):
+        problem.load_state(_rewritten(path, tmp_path / "wear.npz", master_wear_nodes=moved))
+    old = dict(pairing_facet_nodes=None, master_wear_nodes=None, pairing_faces=state.pairing.master_faces,
+               pairing_nodes=state.pairing.master_nodes)
+    loaded, _ = problem.load_state(_rewritten(path, tmp_path / "old.npz", **old))
+    assert np.array_equal(loaded.pairing.master_nodes, state.pairing.master_nodes)
+    assert np.array_equal(loaded.master_wear, state.master_wear)
+    old["pairing_nodes"] = state.pairing.master_nodes + 1   # numbered otherwise: another partition's
+    with pytest.raises(ValueError, match="the saved pairing or master wear does not fit"):
+        problem.load_state(_rewritten(path, tmp_path / "renumbered.npz", **old))
 
 
 def test_finite_sliding_is_refused_where_it_does_not_apply():
@@ -268,7 +306,7 @@ def test_finite_sliding_is_refused_where_it_does_not_apply():
 
 def test_a_reach_shorter_than_the_reference_pairing_is_refused(cylinder_on_flat):
     with pytest.raises(ValueError, match="ElasticBody.reach"):
-        _problem(cylinder_on_flat, "finite", reach=1e-6)
+        sliding_problem(cylinder_on_flat, "finite", reach=1e-6)
 
 
 def test_the_scene_runs_with_finite_sliding(tmp_path):
@@ -425,9 +463,9 @@ def test_re_pairing_happens_once_a_point_has_moved_repair_slip_elements(cylinder
     is), and it is renewed no more often than once per repair_slip of relative slide: about one re-pairing per
     2.5 steps, between slide / (repair_slip h) - 2 and slide / (0.1 h) (the steps; the stick phase slides less)."""
     h, step, repair_slip = 0.02, 0.002, 0.25
-    problem = _problem(cylinder_on_flat, "finite")
+    problem = sliding_problem(cylinder_on_flat, "finite")
     assert problem.contact.obstacle.repair_slip == repair_slip
-    state = _pressed(problem)
+    state = pressed(problem)
     worst = 0.0
     steps = 30
     for d in step * np.arange(1, steps + 1):
