@@ -113,6 +113,24 @@ def test_equal_states_share_their_token_and_every_commit_changes_it():
     problem.destroy()
 
 
+def test_an_increment_that_changes_nothing_but_the_counter_is_committed_once():
+    """With the plane away from the body (every gap open), an increment that moves nothing (the same approach)
+    returns the state's own forces, positions and obstacle: only the increment counter tells the committed state
+    from the one it was solved from, so the token must hold the counter (else the result commits twice, counting
+    the increment twice). Each counter alone changes the token."""
+    problem = rounded_block()
+    away = problem.commit(problem.initial_state(), problem.solve(problem.initial_state(), normal=-APPROACH))
+    result = problem.solve(away, normal=-APPROACH)   # the plane where it is (the approach is its position)
+    state = problem.commit(away, result)
+    assert np.array_equal(state.forces, away.forces) and np.array_equal(state.obstacle, away.obstacle)
+    assert state.increment == away.increment + 1 and state.token != away.token
+    with pytest.raises(ValueError, match="solved from another state"):
+        problem.commit(state, result)
+    for counter in ("increment", "local_iterations"):
+        assert dataclasses.replace(away, **{counter: getattr(away, counter) + 1}).token != away.token, counter
+    problem.destroy()
+
+
 def test_cutbacks_commit_each_sub_increment_to_its_own_state():
     """advance halves a failed increment and commits each half to the state it was solved from: its state equals
     the two halves solved and committed by hand (the same local problems from the same warm starts; 1e-12 of the

@@ -130,3 +130,25 @@ def test_energy_law_keys_are_checked(overrides, message):
     with pytest.raises(SceneError) as info:
         load_scene("stromberg-block", overrides)
     assert message in str(info.value)
+
+
+def test_a_scene_s_energy_law_per_body_and_its_rates():
+    """The scene's ``[wear]`` section as the runner reads it (``WearSettings``): per-body alphas give each body its
+    own coefficient (the wear gap's alpha their sum, the slave's share alpha_slave / (alpha_slave + alpha_master) =
+    1e-8 / 4e-8 = 0.25), and ``rate_coefficient(mu)``, the rate without the acceleration that the sphere's
+    worn-radius sizing multiplies by the acceleration itself, is alpha mu; the law's in-cycle rate is acceleration
+    times that. Exact closed forms of the inputs (1e-15 relative: one product or sum in floating point)."""
+    from dolfinx_fretting.scenes import WearSettings
+
+    wear = WearSettings(law="energy", alpha_slave=1e-8, alpha_master=3e-8, acceleration=10.0)
+    law = wear.wear_law()
+    assert isinstance(law, dfr.EnergyWear)
+    assert law.body_coefficients == pytest.approx((1e-8, 3e-8), rel=1e-15)
+    assert wear.coefficient_total == pytest.approx(4e-8, rel=1e-15)
+    assert wear.slave_share == pytest.approx(0.25, rel=1e-15)
+    mu = 0.6
+    assert wear.rate_coefficient(mu) == pytest.approx(4e-8 * mu, rel=1e-15)   # without the acceleration
+    in_cycle = law.coefficients(True, np.array([mu, 0.3]))
+    assert in_cycle == pytest.approx(10.0 * 4e-8 * np.array([mu, 0.3]), rel=1e-15)
+    single = WearSettings(law="energy", alpha=2e-8, acceleration=5.0)
+    assert single.rate_coefficient(0.5) == pytest.approx(1e-8, rel=1e-15) and single.slave_share == 1.0

@@ -203,6 +203,16 @@ E_STAR = E / (1 - NU**2)   # hertz.toml against the rigid plane
     # (6 P / (pi^3 R^2 E*))^(1/3) in [1e-8, 0.1]
     ("sphere-flat", ["loading.normal_force=1e-300"], "loading.normal_force",
      1e-24 * math.pi**3 * 100 * 105000 / 0.91 / 6, 1e-3 * math.pi**3 * 100 * 105000 / 0.91 / 6),
+    # an approach d of the sphere: d / R >= 1e-8 and its Hertz strain a / R = sqrt(d / R) <= 0.1, d in [1e-7, 0.1] mm;
+    # d = 0.5 mm is refused by the square root (its d / R = 0.05 alone would pass 0.1)
+    ("sphere-flat", ["loading.normal_force=none", "loading.normal_displacement=0.5"], "loading.normal_displacement",
+     1e-8 * 10, 1e-2 * 10),
+    # a block twice as wide as high (100 x 50 mm, pressed on its bottom face): the force spreads over the face's
+    # 100 mm, the approach over the 50 mm depth (a square block cannot tell the two apart)
+    ("stromberg-block", ["geometry.width=100.0", "loading.normal_displacement=1e-300"], "loading.normal_displacement",
+     50e-8, 5.0),
+    ("stromberg-block", ["geometry.width=100.0", "loading.normal_displacement=none", "loading.normal_force=1e-300"],
+     "loading.normal_force", 1e-8 * 100 * 210000 / 0.91, 0.1 * 100 * 210000 / 0.91),
 ])
 def test_a_degenerate_load_is_refused_with_its_range(scene, overrides, key, low, high):
     """Before issue 27 ``loading.normal_force = 1e-300`` passed "> 0" and ended in a traceback ("q: contains

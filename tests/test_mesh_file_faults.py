@@ -328,6 +328,36 @@ def test_two_contact_zones_on_one_group_are_refused(files, tmp_path, capsys):
         assert_refused(code, err, message, str(files / "block.msh"))
 
 
+
+def one_facet_floor():
+    """gmsh model of the unit square whose floor is one facet (its two nodes the corners), with groups "floor"
+    (y = 0), "left" (x = 0), "right" (x = 1), "top" (y = 1) and "block": held at both sides, no floor node can
+    move."""
+    g = gmsh.model.geo
+    p = [g.addPoint(x, y, 0, 0.5) for x, y in [(0, 0), (1, 0), (1, 1), (0, 1)]]
+    lines = [g.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
+    g.addPlaneSurface([g.addCurveLoop(lines)])
+    g.synchronize()
+    gmsh.model.mesh.setTransfiniteCurve(lines[0], 2)   # the floor: one facet
+    for dim, tags, tag, name in ((1, [lines[0]], 1, "floor"), (1, [lines[1]], 2, "right"), (1, [lines[2]], 3, "top"),
+                                 (1, [lines[3]], 4, "left"), (2, [1], 1, "block")):
+        gmsh.model.addPhysicalGroup(dim, tags, tag)
+        gmsh.model.setPhysicalName(dim, tag, name)
+
+
+@pytest.mark.parametrize("sets, held", [
+    (["boundary.fixed=['left', 'right']"], "left, right"),
+    (["boundary.displacement={left = [0.0, 0.001], right = [0.0, 0.001]}"], "top, left, right"),
+])
+def test_a_contact_surface_held_at_every_node_is_refused(files, tmp_path, capsys, sets, held):
+    """A floor of one facet whose two nodes lie on the held sides (clamped, or moved by a prescribed displacement:
+    either holds a node) cannot move towards its plane: refused before any work, naming the group, every held group
+    and the file (a contact whose nodes are all prescribed has nothing to solve)."""
+    mesh = write_msh(files / "one_facet_floor.msh", one_facet_floor)
+    code, err = run(capsys, scene_file(files), tmp_path / "out", f'geometry.path="{mesh}"', *sets)
+    assert_refused(code, err, f"contact.surface = 'floor': every node of the group is held by boundary.fixed or "
+                              f"boundary.displacement ({held}) in {mesh}: none can move towards the plane")
+
 # Under MPI --------------------------------------------------------------------------------------------------------
 @pytest.mark.slow
 def test_faults_under_mpirun_give_one_line(files, tmp_path, mpirun_env):

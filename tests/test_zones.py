@@ -17,8 +17,8 @@ from dolfinx import mesh  # noqa: E402
 
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import compat  # noqa: E402
-from support.blocks import (E, E_PLANE, LMBDA, MU_LAME, NU, TIGHT, component, elasticity, plane_above,  # noqa: E402
-                            tagged, two_blocks, unit_squares)
+from support.blocks import (E, E_PLANE, LEFT_X, LMBDA, MU_LAME, NU, TIGHT, component, elasticity,  # noqa: E402
+                            plane_above, tagged, two_blocks, unit_squares)
 
 
 # A corner touching two walls ---------------------------------------------------------------------------------
@@ -268,6 +268,30 @@ def test_an_elastic_plastic_checkpoint_is_matched_by_coordinates(tmp_path):
     other, *_ = problem_of(4)   # 3 x 3 Gauss points (degrees 2 and 3 both give 2 x 2)
     with pytest.raises(ValueError, match="does not fit this mesh"):
         other.load_state(tmp_path / "plastic.npz")
+
+
+def test_an_elastic_plastic_checkpoint_refuses_a_mesh_with_a_moved_node(tmp_path):
+    """The same blocks with one interior node of block A moved by a tenth of an element: the same nodes (the
+    displacement's keys all match) but the quadrature points of the four cells around it elsewhere. The saved
+    history belongs to the saved points; loading it onto the moved ones would give those cells another cell's
+    stress without a word, so every point must find its own (within 1e-9 of the extent), not only one of them."""
+    def problem_on(V, tags, bcs):
+        a = dfr.Contact(V, (tags, 1), plane_above(), mu=0.3, bcs=bcs)
+        b = dfr.Contact(V, (tags, 2), plane_above(), mu=0.3, bcs=bcs)
+        plasticity = dfr.Plasticity(dfr.J2Plasticity(E, NU, 400.0, 1000.0))
+        return dfr.FrettingProblem(elasticity(V), [a, b], bcs, solver=TIGHT, plasticity=plasticity), a, b
+
+    problem, a, b = problem_on(*two_blocks())
+    state, _ = problem.advance(problem.initial_state(), normal={a: 1e-3, b: dfr.Force(200.0)})
+    problem.save_state(state, tmp_path / "plastic.npz")
+    V, tags, bcs = two_blocks()
+    x = V.mesh.geometry.x
+    centre = np.isclose(x[:, 0], LEFT_X + 0.5) & np.isclose(x[:, 1], 0.5)   # block A's centre node (every copy)
+    assert MPI.COMM_WORLD.allreduce(int(centre.sum())) >= 1
+    x[centre, 0] += 0.1 / 6                                                      # 1/10 of the 1/6 element
+    moved, *_ = problem_on(V, tags, bcs)
+    with pytest.raises(ValueError, match="does not fit this mesh"):
+        moved.load_state(tmp_path / "plastic.npz")
 
 def test_each_zone_wears_by_its_own_law():
     """Both blocks rubbed in gross slip, each zone with its Archard coefficient (block B's four times A's), and a
