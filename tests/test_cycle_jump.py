@@ -467,6 +467,8 @@ def _plastic_differences(a, b):
             float(np.abs(a["plastic_p"] - b["plastic_p"]).max()))
 
 
+# slow: 20 s a stack; the plastic jumps stay covered by default by the elastic-shakedown and resume tests below
+@pytest.mark.slow
 def test_plastic_jumps_in_plastic_shakedown_stay_within_their_error_estimates(tmp_path):
     """Gross slip, 30 cycles every cycle and jumped: the jumped run extrapolates the plastic state with the wear
     gap, and its accumulated estimates bound the actual differences at the end (wear gap, eps_p, p)."""

@@ -203,6 +203,8 @@ def _cycle_end_profiles(folder):
     return out
 
 
+# slow: 20 s a stack (80 cycles); validation row 6, run by ./tasks.sh bench
+@pytest.mark.slow
 def test_partial_slip_wear_final_state(tmp_path):
     """Force-controlled partial slip (+-Q*, phi = Q*/(mu P) = 0.5) worn to its final state with a large
     hypothetical k: the slip zone wears until it carries nothing; the stick zone |x| < c keeps its width and
@@ -229,6 +231,8 @@ def test_partial_slip_wear_final_state(tmp_path):
     assert np.allclose(p[inner], p_inf, rtol=0.05)
 
 
+# slow: 50 s a stack (McColl's wear-in to 18000 cycles); validation row 7, run by ./tasks.sh bench
+@pytest.mark.slow
 def test_gross_slip_wear_in_asymptote(tmp_path):
     """McColl's gross-slip case under constant force (18.5 N/mm, +-25 um, k = 4.8e-8 1/MPa both bodies):
     once the scar is much wider than the stroke, the wear depth follows h(N) = [3 k delta P N / sqrt(2R)]^(2/3)
