@@ -53,7 +53,7 @@ from .contact_output import read_table
 from .outdir import OutputFolderError, ensure_writable_folder
 from .scenes import Scene, SceneError, load_scene
 from .study import QUIET_OUTPUT
-from .tables import cell_text, read_rows, write_rows
+from .tables import cell_text, read_rows, write_table
 from .units import Units
 
 __all__ = ["GROSS_SLIP_ENERGY_RATIO", "MAP_FIELDS", "MAP_FILES", "REGIMES", "MapPoint", "parse_values",
@@ -401,12 +401,7 @@ def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = 
 # Tables and picture ----------------------------------------------------------------------------------------------
 def write_map_table(rows: Sequence[dict[str, Any]], out: str | Path) -> tuple[Path, Path]:
     """Write ``map.csv`` (:data:`MAP_FIELDS`) and ``map.md`` into ``out``; returns their paths."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    md_path = out / "map.md"
-    csv_path = write_rows(out / "map.csv", rows, MAP_FIELDS)
-    md_path.write_text(format_markdown(rows) + "\n")
-    return csv_path, md_path
+    return write_table(out, "map", rows, MAP_FIELDS, format_markdown(rows))
 
 
 def read_map_csv(path: str | Path) -> list[dict[str, Any]]:

@@ -154,15 +154,19 @@ class PlasticState:
         self.trial_p = self.p.copy()
         self.yielded = np.zeros(n, dtype=bool)
         self.update_count = 0
+        self._point_coordinates: np.ndarray | None = None  # point_coordinates(), computed once
 
     # ------------------------------------------------------------------------------------------------
     def point_coordinates(self) -> np.ndarray:
         """(n, 3) coordinates of the quadrature points of the owned cells, in the order of ``sigma``'s rows (what a
-        checkpoint keys the plastic state by: they do not depend on the partition). Collective (a JIT compile)."""
-        points, _ = basix.make_quadrature(dfx.basix_cell(self.mesh), self._degree)
-        expression = dfx.expression(ufl.SpatialCoordinate(self.mesh), points)
-        coordinates = dfx.eval_expression(expression, self.mesh, self.cells).reshape(-1, self.gdim)
-        return np.column_stack([coordinates, np.zeros((coordinates.shape[0], 3 - self.gdim))])
+        checkpoint keys the plastic state by: they do not depend on the partition). Collective the first time (a
+        JIT compile); the cells never change, so every checkpoint after the first reuses them."""
+        if self._point_coordinates is None:
+            points, _ = basix.make_quadrature(dfx.basix_cell(self.mesh), self._degree)
+            expression = dfx.expression(ufl.SpatialCoordinate(self.mesh), points)
+            coordinates = dfx.eval_expression(expression, self.mesh, self.cells).reshape(-1, self.gdim)
+            self._point_coordinates = np.column_stack([coordinates, np.zeros((coordinates.shape[0], 3 - self.gdim))])
+        return self._point_coordinates
 
     def strain(self, u: fem.Function) -> np.ndarray:
         """Total strain (n, 6) Mandel at the quadrature points of the owned cells."""

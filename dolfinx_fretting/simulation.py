@@ -59,6 +59,9 @@ from .sizes import SizeEstimate, check_size
 __all__ = ["ContactModel", "Progress", "SimulationError", "RunInterrupted", "OutputFolderLost", "run_scene",
            "read_checkpoint", "CHECKPOINT"]
 
+#: The run's files (:data:`~dolfinx_fretting.outdir.RUN_FILES`) as a set, for the check after each write.
+_RUN_FILE_NAMES = frozenset(RUN_FILES)
+
 #: Checkpoint file name in the output folder.
 CHECKPOINT = "checkpoint.npz"
 # Scene sections that may change between a checkpoint and its resume (they do not change the physics).
@@ -431,13 +434,15 @@ class _Run:
                                    "is gone with the folder): start it again")
 
     def note_written(self) -> None:
-        """Rank 0, after a write: the files of the run now in the folder (by inode), until the next check."""
+        """Rank 0, after a write: the files of the run now in the folder (by inode), until the next check. One
+        listing of the folder (its entries carry their inodes), not a stat per run file: it follows every
+        cycle's write."""
         if self.rank0 and self.lock is not None:
-            for name in RUN_FILES:
-                try:
-                    self._fresh.add(os.stat(self.out / name).st_ino)
-                except OSError:
-                    pass
+            try:
+                with os.scandir(self.out) as entries:
+                    self._fresh.update(entry.inode() for entry in entries if entry.name in _RUN_FILE_NAMES)
+            except OSError:   # the folder is gone: nothing of the run is there to take back
+                pass
 
     def _take_back(self, fresh: set[int]) -> None:
         """The folder was replaced: delete from the new one the files this run wrote there since its last check

@@ -44,7 +44,7 @@ from mpi4py import MPI
 from .geometries import GEOMETRIES
 from .outdir import OutputFolderError, ensure_writable_folder
 from .scenes import Scene, SceneError, load_scene
-from .tables import cell_text, read_rows, write_rows
+from .tables import cell_text, read_rows, write_table
 
 __all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
            "default_sweep", "sweep_entries", "plan_study", "run_study", "point_errors", "profile_l2_error", "write_study_table",
@@ -571,12 +571,7 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
 # Tables and picture --------------------------------------------------------------------------------------
 def write_study_table(rows: Sequence[dict[str, Any]], out: str | Path) -> tuple[Path, Path]:
     """Write ``study.csv`` and ``study.md`` into ``out``; returns their paths."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    md_path = out / "study.md"
-    csv_path = write_rows(out / "study.csv", rows, STUDY_FIELDS)
-    md_path.write_text(format_markdown(rows) + "\n")
-    return csv_path, md_path
+    return write_table(out, "study", rows, STUDY_FIELDS, format_markdown(rows))
 
 
 def read_study_csv(path: str | Path) -> list[dict[str, Any]]:

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["cell_text", "write_rows", "read_rows"]
+__all__ = ["cell_text", "write_rows", "write_table", "read_rows"]
 
 
 def cell_text(value: Any) -> str:
@@ -39,6 +39,18 @@ def write_rows(path: str | Path, rows: Sequence[dict[str, Any]], fields: Sequenc
         for row in rows:
             writer.writerow({key: cell_text(row.get(key)) for key in fields})
     return path
+
+
+def write_table(out: str | Path, stem: str, rows: Sequence[dict[str, Any]], fields: Sequence[str],
+                markdown: str) -> tuple[Path, Path]:
+    """Write ``<stem>.csv`` (:func:`write_rows`) and ``<stem>.md`` (``markdown``) into ``out`` (created if
+    missing); returns their paths."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    md_path = out / f"{stem}.md"
+    csv_path = write_rows(out / f"{stem}.csv", rows, fields)
+    md_path.write_text(markdown + "\n")
+    return csv_path, md_path
 
 
 def read_rows(path: str | Path, text: Collection[str] = (), flags: Collection[str] = (),

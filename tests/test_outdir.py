@@ -290,3 +290,24 @@ def test_a_deleted_output_folder_stops_every_rank(tmp_path):
     assert output.count(f"--out {out}") == 1 and output.count("was deleted") == 1, output
     assert "Traceback" not in output and "stopping all" not in output, output
     assert not out.exists()
+
+
+def test_files_written_into_a_replacement_folder_are_taken_back(tmp_path):
+    """The run's bookkeeping of what it wrote since its last folder check (simulation._Run.note_written) and its
+    taking back of those files when the folder turned out to be replaced (_Run._take_back): a run file written
+    after the replacement is deleted; the new folder's other files, and a run file it creates after the run's
+    write, stay (inodes, not names, say whose a file is)."""
+    from types import SimpleNamespace
+
+    from dolfinx_fretting.simulation import _Run
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("the new folder's own")
+    (out / "history.csv").write_text("a row the run wrote after the folder was replaced")
+    run = SimpleNamespace(rank0=True, lock=object(), out=out, _fresh=set())
+    _Run.note_written(run)
+    (out / "summary.json").write_text("{}")   # the new folder's owner writes a run file of its own afterwards
+    _Run._take_back(run, run._fresh)
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "summary.json"]
+    _Run.note_written(SimpleNamespace(rank0=True, lock=object(), out=tmp_path / "gone", _fresh=set()))  # no folder
