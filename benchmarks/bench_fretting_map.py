@@ -40,7 +40,7 @@ from dolfinx_fretting.fretting_map import (mindlin_transition_amplitude, parse_v
 
 #: No wear (the transition of the unworn contact), two cycles of 16 increments: the stick classifier reads the
 #: virgin curve and the closed loop.
-OVERRIDES = ["wear.law='none'", "loading.increments_per_cycle=16"]
+OVERRIDES = ["wear.law='none'", "wear.k=none", "loading.increments_per_cycle=16"]
 NORMAL = 100.0
 
 

@@ -214,7 +214,8 @@ def _add_map_parser(sub) -> None:
 
 
 def _map(args: argparse.Namespace) -> int:
-    """``dolfinx-fretting map``: the fretting map; 2 for bad input (a failed point stays in the table)."""
+    """``dolfinx-fretting map``: the fretting map; 2 for bad input, 1 if any point fails (the failed points are in
+    the table)."""
     try:
         if not 0.0 < args.energy_threshold < 1.0:
             raise SceneError(f"--energy-threshold = {args.energy_threshold!r}: allowed a number > 0 and < 1")
@@ -235,10 +236,14 @@ def _map(args: argparse.Namespace) -> int:
     except OutputFolderError as exc:
         _say_error("dolfinx-fretting map", exc)
         return 2
+    failed = [f"P = {row['normal']:g}, delta* = {row['amplitude']:g}" for row in rows if not row["converged"]]
     if MPI.COMM_WORLD.rank == 0:
         print(fretting_map.format_markdown(rows))
         print(f"wrote {args.out}/map.csv, map.md, map.png")
-    return 0
+        if failed:  # kept in the table with their messages; the exit code says the map is not whole, as the study's
+            print(f"dolfinx-fretting map: {len(failed)} of {len(rows)} runs failed ({'; '.join(failed)}); their "
+                  "messages are in map.csv and map.md", file=sys.stderr)
+    return 1 if failed else 0
 
 
 def _csv_list(text: str) -> list[str]:

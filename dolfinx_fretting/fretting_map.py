@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,7 +51,7 @@ from .analytic import hertz_sphere, mindlin_shear_modulus
 from .contact_output import read_table
 from .outdir import OutputFolderError, ensure_writable_folder
 from .scenes import Scene, SceneError, load_scene
-from .study import QUIET_OUTPUT
+from .study import QUIET_OUTPUT, check_on_rank0, run_point
 from .tables import cell_text, read_rows, write_table
 from .units import Units
 
@@ -325,8 +324,9 @@ def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = 
     """Run every point of ``plan``, classify it and write ``map.csv``, ``map.md`` and ``map.png``.
 
     Collective: every rank runs every scene; files are written and rows built on rank 0 and broadcast. A point
-    whose run fails (an increment, PETSc or MUMPS, a check that needs the mesh) is kept with ``converged = False``,
-    ``regime = "failed"`` and its message; the map goes on.
+    whose run fails (whatever the exception: an increment's, PETSc's or MUMPS's, a check that needs the mesh, a
+    bug) is kept with ``converged = False``, ``regime = "failed"`` and its message; the map goes on. SIGINT or
+    SIGTERM during a run (:class:`~dolfinx_fretting.simulation.RunInterrupted`) stops the map.
 
     Args:
         plan: From :func:`plan_map`.
@@ -343,42 +343,21 @@ def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = 
     Raises:
         OutputFolderError: before any run: ``out`` is a file, not writable, or holds a map and not ``overwrite``;
             or a point's folder is locked by another run.
+        RunInterrupted: A signal stopped a run.
         ValueError: ``threshold`` outside (0, 1), before any run.
     """
-    # Lazy: these import petsc4py and DOLFINx (PETSc initialised); planning a map, and the CLI's checks before
-    # it, need neither
-    from .compliance import DelassusError
-    from .simulation import SimulationError, run_scene
-
     classify_cycles({}, threshold)  # the threshold's range, before any run
     comm = comm or MPI.COMM_WORLD
     rank0 = comm.rank == 0
     out = Path(out)
-    problem = None
-    if rank0:
-        try:
-            check_map_folder(out, overwrite)
-        except OutputFolderError as exc:
-            problem = str(exc)
-    problem = comm.bcast(problem, root=0)
-    if problem is not None:
-        raise OutputFolderError(problem)
+    check_on_rank0(check_map_folder, out, overwrite, comm)
     say = (lambda m: print(m, flush=True)) if (rank0 and not quiet) else (lambda m: None)
     rows: list[dict[str, Any]] = []
     for i, point in enumerate(plan):
         folder = out / "runs" / point.label
         say(f"[map {i + 1}/{len(plan)}] P = {point.normal:g}, delta* = {point.amplitude:g}: "
             f"{point.scene.loading.cycles} cycles ...")
-        comm.barrier()
-        start = time.perf_counter()
-        failure = ""
-        try:  # the map owns runs/: a point's folder from an earlier map is replaced
-            run_scene(point.scene, folder, comm, quiet=True, overwrite=True, ignore_size=ignore_size)
-        except OutputFolderError:
-            raise  # locked by another run: not a result of this point
-        except (SimulationError, ValueError, DelassusError) as exc:  # ValueError: checks that need the mesh
-            failure = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
-        wall = comm.bcast(time.perf_counter() - start, root=0)  # rank 0's clock decides
+        failure, wall = run_point(point.scene, folder, comm, ignore_size)
         row: dict[str, Any] = {}
         if rank0:
             row = _point_row(point, folder, failure, wall, threshold)

@@ -33,7 +33,7 @@ import math
 import re
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,10 +46,10 @@ from .outdir import OutputFolderError, ensure_writable_folder
 from .scenes import Scene, SceneError, load_scene
 from .tables import cell_text, read_rows, write_table
 
-__all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep", "parse_point", "default_reference",
-           "default_sweep", "sweep_entries", "plan_study", "run_study", "point_errors", "profile_l2_error", "write_study_table",
-           "read_study_csv", "format_markdown", "plot_study",
-           "map_l2_error", "wear_l2_error"]
+__all__ = ["StudyPoint", "STUDY_FIELDS", "STUDY_FILES", "check_study_folder", "ERROR_FIELDS", "parse_sweep",
+           "parse_point", "default_reference", "default_sweep", "sweep_entries", "plan_study", "check_on_rank0",
+           "run_point", "run_study", "point_errors", "profile_l2_error", "write_study_table", "read_study_csv",
+           "format_markdown", "plot_study", "map_l2_error", "wear_l2_error"]
 
 #: Error columns of the study table (relative errors against the reference run).
 ERROR_FIELDS = ("err_max_wear", "err_wear_l2", "err_peak_pressure", "err_energy")
@@ -467,6 +467,49 @@ def _warm_up(point: StudyPoint, out: Path, comm, ignore_size: bool = False) -> N
         pass  # a warm-up only loads code; the real runs report their own failures
 
 
+def check_on_rank0(check: Callable[[Path, bool], Any], out: Path, overwrite: bool, comm) -> None:
+    """A sweep's folder check (:func:`check_study_folder`, the map's) on rank 0 only, its refusal raised on every
+    rank (collective), so that all ranks stop before any run."""
+    problem = None
+    if comm.rank == 0:
+        try:
+            check(out, overwrite)
+        except OutputFolderError as exc:
+            problem = str(exc)
+    problem = comm.bcast(problem, root=0)
+    if problem is not None:
+        raise OutputFolderError(problem)
+
+
+def run_point(scene: Scene, folder: Path, comm, ignore_size: bool = False) -> tuple[str, float]:
+    """Run one point of a sweep (the study's, the fretting map's) with the scene runner, quietly, in ``folder``
+    (the sweep owns it: an earlier run there is replaced). Collective.
+
+    Returns:
+        The point's failure message (``""`` when its run finished) and its wall time in seconds (rank 0's clock,
+        on every rank). Any failure of the run (a solver's, a check that needs the mesh, PETSc's or MUMPS's, a bug)
+        is the point's result, so that the sweep's finished points are never lost.
+
+    Raises:
+        OutputFolderError: ``folder`` is locked by another run (not a result of this point).
+        RunInterrupted: SIGINT or SIGTERM stopped the run: the user stops the sweep.
+    """
+    # Lazy: this imports petsc4py and DOLFINx (PETSc initialised); planning a sweep, and the CLI's checks before
+    # it, need neither
+    from .simulation import RunInterrupted, SimulationError, run_scene
+
+    comm.barrier()
+    start = time.perf_counter()
+    failure = ""
+    try:
+        run_scene(scene, folder, comm, quiet=True, overwrite=True, ignore_size=ignore_size)
+    except (OutputFolderError, RunInterrupted):
+        raise
+    except Exception as exc:  # noqa: BLE001 - see Returns
+        failure = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
+    return failure, comm.bcast(time.perf_counter() - start, root=0)
+
+
 def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: bool = False,
               warm_up: bool = True, overwrite: bool = False, ignore_size: bool = False) -> list[dict[str, Any]]:
     """Run every point of ``plan`` (reference first), compute the errors and write the table and plot.
@@ -497,22 +540,10 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
         RuntimeError: The reference run failed (its message included).
         RunInterrupted: A signal stopped a run.
     """
-    # Lazy: this imports petsc4py and DOLFINx (PETSc initialised); planning a study, and the CLI's checks
-    # before it, need neither
-    from .simulation import RunInterrupted, SimulationError, run_scene
-
     comm = comm or MPI.COMM_WORLD
     rank0 = comm.rank == 0
     out = Path(out)
-    problem = None
-    if rank0:
-        try:
-            check_study_folder(out, overwrite)
-        except OutputFolderError as exc:
-            problem = str(exc)
-    problem = comm.bcast(problem, root=0)
-    if problem is not None:
-        raise OutputFolderError(problem)
+    check_on_rank0(check_study_folder, out, overwrite, comm)
     runs_dir = out / "runs"
     say = (lambda m: print(m, flush=True)) if (rank0 and not quiet) else (lambda m: None)
     if warm_up:
@@ -523,18 +554,7 @@ def run_study(plan: Sequence[StudyPoint], out: str | Path, comm=None, quiet: boo
     for i, point in enumerate(plan):
         folder = runs_dir / point.label
         say(f"[study {i + 1}/{len(plan)}] {point.label}: {point.scene.loading.cycles} cycles ...")
-        comm.barrier()
-        t0 = time.perf_counter()
-        failure = ""
-        try:  # the study owns runs/: a point's folder from an earlier study is replaced
-            run_scene(point.scene, folder, comm, quiet=True, overwrite=True, ignore_size=ignore_size)
-        except (OutputFolderError, RunInterrupted):
-            raise  # locked by another run, or the user stopped the study: not a result of this point
-        except Exception as exc:  # noqa: BLE001 - any failure of one point (a solver's, a check that needs the
-            # mesh, PETSc's or MUMPS's, a bug) is that point's result: the finished points must not be lost
-            failure = str(exc) if isinstance(exc, SimulationError) else f"{type(exc).__name__}: {exc}"
-        wall = time.perf_counter() - t0
-        wall = comm.bcast(wall, root=0)  # rank 0's clock decides
+        failure, wall = run_point(point.scene, folder, comm, ignore_size)
         if i == 0:
             if failure:
                 raise RuntimeError(f"the reference run failed: {failure}")
