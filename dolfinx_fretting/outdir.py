@@ -26,6 +26,7 @@ import socket
 import tempfile
 import time
 import zipfile
+from itertools import takewhile
 from pathlib import Path
 from typing import Any
 
@@ -60,16 +61,27 @@ class OutputFolderError(RuntimeError):
 
 # Checks ------------------------------------------------------------------------------------------------------
 def check_output_folder(path: str | Path, *, resume: bool = False, overwrite: bool = False) -> Path:
-    """Check (and create) an output folder: not a file, not under a file, writable; and, unless ``resume`` or
-    ``overwrite``, not holding a run already. Serial (call it on one rank or on each).
+    """Check an output folder: not a file, not under a file, writable (or, if it does not exist yet, creatable
+    where it would be: it is not created, so that a run refused later leaves nothing behind; the run's claim,
+    :func:`claim_output_folder`, creates it); and, unless ``resume`` or ``overwrite``, not holding a run already.
+    Serial (call it on one rank or on each).
 
     Returns:
-        The folder as a :class:`~pathlib.Path` (created if it did not exist).
+        The folder as a :class:`~pathlib.Path`.
 
     Raises:
         OutputFolderError: naming the folder and the reason (also ``resume`` without a checkpoint).
     """
-    folder = _usable_folder(path, resume, overwrite)
+    if resume and overwrite:
+        raise OutputFolderError(f"{path}: --resume continues the run in it, --overwrite deletes it: give one")
+    folder = Path(path)
+    existing = _existing_place(folder)
+    _probe(folder, existing)
+    if existing != folder:  # nothing there yet: no run held, no checkpoint
+        if resume:
+            raise OutputFolderError(f"--resume: no checkpoint {folder / CHECKPOINT_NAME}; run without --resume to "
+                                    "start afresh")
+        return folder
     _refuse_held_run(folder, resume, overwrite)
     if resume and not (folder / CHECKPOINT_NAME).is_file():
         raise OutputFolderError(f"--resume: no checkpoint {folder / CHECKPOINT_NAME}; run without --resume to "
@@ -83,6 +95,35 @@ def _usable_folder(path: str | Path, resume: bool, overwrite: bool) -> Path:
     return ensure_writable_folder(path)
 
 
+def _existing_place(folder: Path) -> Path:
+    """``folder`` if it is a folder, else its nearest existing ancestor (where it would be created).
+
+    Raises:
+        OutputFolderError: ``folder`` is a file, or under one.
+    """
+    if folder.exists() and not folder.is_dir():
+        raise OutputFolderError(f"--out {folder} is a file, not a folder; choose a folder")
+    if folder.is_dir():
+        return folder
+    for parent in folder.absolute().parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise OutputFolderError(f"--out {folder} is under {parent}, which is a file, not a folder")
+            return parent
+    raise OutputFolderError(f"--out {folder}: no folder of its path exists")  # pragma: no cover - '/' exists
+
+
+def _probe(folder: Path, place: Path) -> None:
+    """Write and delete a file in ``place`` (``folder`` or the ancestor it would be created in): os.access answers
+    yes to root on a read-only file system."""
+    try:
+        with tempfile.NamedTemporaryFile(dir=place, prefix=".write_probe_"):
+            pass
+    except OSError as exc:
+        what = "is not writable" if place == folder else f"cannot be created in {place}"
+        raise OutputFolderError(f"--out {folder} {what}: {exc.strerror or exc}") from None
+
+
 def ensure_writable_folder(path: str | Path) -> Path:
     """Create ``path`` if needed and check that it is a folder this process can write (compare, study).
 
@@ -90,22 +131,12 @@ def ensure_writable_folder(path: str | Path) -> Path:
         OutputFolderError: it is a file, under a file, or cannot be created or written.
     """
     folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise OutputFolderError(f"--out {folder} is a file, not a folder; choose a folder")
-    for parent in folder.absolute().parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise OutputFolderError(f"--out {folder} is under {parent}, which is a file, not a folder")
-            break
+    _existing_place(folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputFolderError(f"--out {folder} cannot be created: {exc.strerror or exc}") from None
-    try:  # os.access answers yes to root on a read-only file system: write a probe
-        with tempfile.NamedTemporaryFile(dir=folder, prefix=".write_probe_"):
-            pass
-    except OSError as exc:
-        raise OutputFolderError(f"--out {folder} is not writable: {exc.strerror or exc}") from None
+    _probe(folder, folder)
     return folder
 
 
@@ -165,6 +196,9 @@ class OutputLock:
         folder: The output folder.
         previous_holder: The record of a stale lock taken over (a run that died), or ``None``.
         removed: Files deleted by ``overwrite``.
+        created: The folders the claim created (the output folder first, then the parents it needed):
+            :meth:`release` deletes them again if the run left them empty (a run refused once its model was read,
+            e.g. a mesh file's fault, leaves no empty folder behind).
     """
 
     def __init__(self, folder: Path, fd: int | None = None, previous_holder: dict[str, Any] | None = None,
@@ -173,6 +207,7 @@ class OutputLock:
         self._fd = fd
         self.previous_holder = previous_holder
         self.removed = removed or []
+        self.created: list[Path] = []
         # The folder itself, open: its (device, inode) tells a folder deleted or replaced by another of the same
         # name (or moved away), and the lock file is deleted from it wherever it is now.
         self._dir_fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY) if fd is not None else None
@@ -222,7 +257,10 @@ class OutputLock:
             # and only the file this lock holds.
             if os.stat(LOCK_NAME, dir_fd=dir_fd).st_ino == os.fstat(fd).st_ino:
                 os.unlink(LOCK_NAME, dir_fd=dir_fd)
-        except OSError:  # gone with its folder
+            if self.created and _identity(self.folder) == self._identity:  # still ours: not one of the same name
+                for folder in self.created:
+                    os.rmdir(folder)  # only if empty: anything the run (or anyone) wrote keeps it (and its parents)
+        except OSError:  # gone with its folder, or not empty
             pass
         finally:
             fcntl.flock(fd, fcntl.LOCK_UN)
@@ -318,9 +356,11 @@ def claim_output_folder(path: str | Path, comm: Any = None, resume: bool = False
     lock: OutputLock | None = None
     error = None
     if comm.rank == 0:
+        created = list(takewhile(lambda p: not p.exists(), [folder.absolute(), *folder.absolute().parents]))
         try:
             _usable_folder(folder, resume, overwrite)
             lock = _acquire(folder)
+            lock.created = created
             _refuse_held_run(folder, resume, overwrite)  # under the lock: no run can start in between
             if overwrite:
                 lock.removed = clear_run_files(folder)

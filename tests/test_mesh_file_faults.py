@@ -253,6 +253,21 @@ def test_a_file_that_is_no_2d_mesh_is_named(files, tmp_path, capsys, path, messa
     (files / "empty.msh").write_text("")
     code, err = run(capsys, scene_file(files), tmp_path / "out", f'geometry.path="{path}"')
     assert_refused(code, err, f"geometry.path = '{files / path}': {message}")
+    # the output folder is claimed (locked) before the file is read: the run created it and wrote nothing, so it
+    # is gone again (an empty folder was left behind before)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_refused_file_keeps_a_folder_the_user_made(files, tmp_path, capsys):
+    """--out made by the user (empty, or with the user's own file in it) stays as it was after a refusal."""
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "README").write_text("mine")
+    for out in ("empty", "notes"):
+        code, err = run(capsys, scene_file(files), tmp_path / out, 'geometry.path="missing.msh"')
+        assert_refused(code, err, "no such file")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty", "notes"]
+    assert not list((tmp_path / "empty").iterdir()) and [p.name for p in (tmp_path / "notes").iterdir()] == ["README"]
 
 
 def test_a_relative_path_given_by_set_is_taken_from_the_working_directory(files, tmp_path, monkeypatch):

@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -38,8 +39,17 @@ def test_out_that_is_a_file_under_a_file_or_read_only(tmp_path):
         check_output_folder(READ_ONLY_DIR)
     with pytest.raises(OutputFolderError, match="give one"):
         check_output_folder(tmp_path / "x", resume=True, overwrite=True)
-    assert check_output_folder(tmp_path / "new" / "folder").is_dir()
-    assert os.listdir(tmp_path / "new" / "folder") == []  # the write probe is gone
+    # a folder not there yet is checked where it would be created, and not created: a run refused later (a mesh
+    # file's fault) must leave nothing behind; the run's claim creates it
+    assert check_output_folder(tmp_path / "new" / "folder") == tmp_path / "new" / "folder"
+    assert sorted(os.listdir(tmp_path)) == ["a_file"]  # nor the write probe
+    with pytest.raises(OutputFolderError, match=f"cannot be created in {READ_ONLY_DIR}: "):
+        check_output_folder(Path(READ_ONLY_DIR) / "new")
+    with pytest.raises(OutputFolderError, match="no checkpoint"):
+        check_output_folder(tmp_path / "new", resume=True)
+    with claim_output_folder(tmp_path / "new" / "folder", MPI.COMM_WORLD):
+        assert os.listdir(tmp_path / "new" / "folder") == [LOCK_NAME]  # the write probe is gone
+    assert not (tmp_path / "new").exists()  # the claim created it (and its parent): left empty, it is deleted
 
 
 def test_a_second_run_into_a_locked_folder_is_refused_with_the_holders_pid(tmp_path):
