@@ -24,6 +24,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import warnings
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -333,7 +334,7 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
     ``mu``, wear law with its coefficients and acceleration (``wear_laws``, one per zone), obstacle kind, normal and
     a plane's position). Not checked: the material (bilinear form), the Dirichlet conditions, the load vectors'
     values, the solver settings and the plastic law; nor, in a checkpoint written before the contact parameters
-    were saved (it still loads), the contact parameters.
+    were saved (it still loads, with a warning on rank 0), the contact parameters.
 
     Raises:
         ValueError: the file does not match this problem; the message names what differs, with both values.
@@ -366,6 +367,10 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
         if differences:
             raise ValueError(f"{path}: the checkpoint was written with other contact parameters than this "
                              f"problem's: {'; '.join(differences)}; load it into a problem with the saved values")
+    elif operators.comm.rank == 0:  # loads as before, but the user must know what was not checked
+        warnings.warn(f"{path}: written by an earlier release, the checkpoint does not record its contact "
+                      "parameters (mu, wear law, obstacle): they were not checked against this problem's",
+                      stacklevel=3)
     plastic = None
     if info["plastic"] and "plastic_points" in data:   # keyed by coordinates: any partition
         if plastic_points is None:

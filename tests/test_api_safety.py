@@ -12,6 +12,7 @@ Runs serially and under ``mpirun -n 2`` (every call is collective; the checkpoin
 
 import dataclasses
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -249,7 +250,8 @@ def test_load_state_accepts_the_same_plane_given_by_another_point(saved_checkpoi
 
 def test_an_older_checkpoint_without_contact_parameters_still_loads(saved_checkpoint, tmp_path):
     """A checkpoint written before the contact parameters were saved loads as before (they are unchecked: the
-    docstring and docs/api.md say so), even into a problem with another mu."""
+    docstring and docs/api.md say so), even into a problem with another mu; rank 0 warns that they were not
+    checked."""
     path, state = saved_checkpoint
     older = shared_path(tmp_path, "older.npz")
     if MPI.COMM_WORLD.rank == 0:
@@ -261,8 +263,15 @@ def test_an_older_checkpoint_without_contact_parameters_still_loads(saved_checkp
         np.savez(older, **arrays)
     MPI.COMM_WORLD.barrier()
     problem = rounded_block(mu=0.3)
-    back, _ = problem.load_state(older)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        back, _ = problem.load_state(older)
     assert np.array_equal(back.forces, state.forces)
+    said = [str(w.message) for w in caught if "earlier release" in str(w.message)]
+    if MPI.COMM_WORLD.rank == 0:
+        assert len(said) == 1 and "contact parameters (mu, wear law, obstacle): they were not checked" in said[0]
+    else:
+        assert not said
     problem.destroy()
 
 
