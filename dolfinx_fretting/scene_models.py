@@ -23,6 +23,7 @@ import numpy as np
 from mpi4py import MPI
 
 from .contact import ElasticBody, RigidPlane
+from .interrupts import keep_handlers
 from .meshes import BODY_CELL_TAG, BodyMesh
 
 __all__ = ["SceneModel", "FurtherZone", "further_zones", "elastic_model", "contact_surface", "rigid_plane",
@@ -364,7 +365,8 @@ def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[s
     """
     from . import _dolfinx as dfx  # lazy: see the module docstring
 
-    import gmsh  # lazy: see the module docstring
+    with keep_handlers():  # gmsh 4.8 sets SIGINT to its default action (kill, no clean-up) when imported
+        import gmsh  # lazy: see the module docstring
 
     names = failure = None
     if comm.rank == 0:
@@ -373,7 +375,8 @@ def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[s
         except MeshFileError as exc:
             failure = str(exc)
         if failure is None:
-            gmsh.initialize()
+            with keep_handlers():  # ... and gmsh 4.11+ when initialised: a run's handlers stay
+                gmsh.initialize(readConfigFiles=False)  # no user gmshrc: the file read the same on every machine
             gmsh.option.setNumber("General.Terminal", 0)
             try:
                 gmsh.open(path)
@@ -384,7 +387,8 @@ def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[s
             except Exception as exc:  # noqa: BLE001 - gmsh raises plain Exceptions with its log
                 failure = f"geometry.path = {path!r}: gmsh cannot read it ({exc})"
             if failure is not None:
-                gmsh.finalize()
+                with keep_handlers():  # finalize restores the handler gmsh found (not necessarily the run's)
+                    gmsh.finalize()
     names, failure = comm.bcast((names, failure), root=0)
     if failure is not None:
         raise MeshFileError(failure)
@@ -392,7 +396,8 @@ def read_msh(path: str, comm: MPI.Comm, gdim: int = 2) -> tuple[BodyMesh, dict[s
         msh, cell_tags, facet_tags = dfx.model_to_mesh(gmsh.model, comm, 0, gdim)
     finally:
         if comm.rank == 0:
-            gmsh.finalize()
+            with keep_handlers():
+                gmsh.finalize()
     body = BodyMesh(msh, facet_tags, cell_tags, dict(names[gdim - 1]), 0.0, None, {}, dict(names[gdim]))
     return body, names[gdim]
 
