@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 from mpi4py import MPI  # before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs
 
-from dolfinx import mesh  # noqa: E402
+import ufl  # noqa: E402
+from dolfinx import fem, mesh  # noqa: E402
+from petsc4py import PETSc  # noqa: E402
 from support.blocks import E_PLANE, TIGHT, component, elasticity  # noqa: E402
 
 import dolfinx_fretting as dfr  # noqa: E402
@@ -127,12 +129,16 @@ def test_bad_input_is_refused():
 
 
 # The patch test on non-matching meshes -------------------------------------------------------------------------------
-def stacked_blocks(lower_x, upper_x, ny=3, comm=MPI.COMM_WORLD):
+def stacked_blocks(lower_x, upper_x, ny=3, second=None, comm=MPI.COMM_WORLD):
     """Two rectangles of quadrilaterals in one mesh: the lower [0, 1] x [0, 1] with the vertical grid lines
     ``lower_x``, the upper [0, 1] x [1, 2] with ``upper_x``, ``ny`` cells high each, separate nodes. Facet tags: 1 the
-    upper's bottom (slave), 2 the lower's top (master)."""
+    upper's bottom (slave), 2 the lower's top (master), 3 the other outer facets. ``second``: another such stack
+    (lower and upper grid lines on [0, 1]) placed 1.5 to the right, its slave tagged 4 and its master 5."""
+    stacks = [(np.asarray(lower_x), np.asarray(upper_x))]
+    if second is not None:
+        stacks.append((np.asarray(second[0]) + 1.5, np.asarray(second[1]) + 1.5))
     points, cells = [], []
-    for xs, y0 in ((lower_x, 0.0), (upper_x, 1.0)):
+    for xs, y0 in [(xs, y0) for lower, upper in stacks for xs, y0 in ((lower, 0.0), (upper, 1.0))]:
         first = sum(len(p) for p in points)
         X, Y = np.meshgrid(xs, np.linspace(y0, y0 + 1, ny + 1), indexing="ij")
         points.append(np.column_stack([X.ravel(), Y.ravel()]))
@@ -145,9 +151,15 @@ def stacked_blocks(lower_x, upper_x, ny=3, comm=MPI.COMM_WORLD):
     msh.topology.create_connectivity(fdim, 2)
     interface = mesh.locate_entities_boundary(msh, fdim, lambda x: np.isclose(x[1], 1.0))
     f_to_c = msh.topology.connectivity(fdim, 2)
-    centre_y = np.array([mesh.compute_midpoints(msh, 2, f_to_c.links(f))[0, 1] for f in interface])
-    order = np.argsort(interface)
-    tags = mesh.meshtags(msh, fdim, interface[order], np.where(centre_y[order] > 1.0, 1, 2).astype(np.int32))
+    centre = np.array([mesh.compute_midpoints(msh, 2, f_to_c.links(f))[0] for f in interface]).reshape(-1, 3)
+    outer = mesh.locate_entities_boundary(msh, fdim, lambda x: (x[0] < 1.2) & (
+        np.isclose(x[1], 0.0) | np.isclose(x[1], 2.0) | np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0)))
+    outer = np.setdiff1d(outer, interface)
+    facets = np.concatenate([interface, outer])
+    markers = np.concatenate([np.where(centre[:, 1] > 1.0, 1, 2) + np.where(centre[:, 0] > 1.2, 3, 0),
+                              np.full(outer.size, 3)]).astype(np.int32)
+    order = np.argsort(facets)
+    tags = mesh.meshtags(msh, fdim, facets[order], markers[order])
     return msh, tags
 
 
@@ -201,3 +213,62 @@ def test_mortar_is_refused_in_3d():
     tags = mesh.meshtags(msh, 2, np.sort(top), np.ones(top.size, dtype=np.int32))
     with pytest.raises(ValueError, match="formulation = 'mortar' on a 3D mesh"):
         dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 1), [0.0, 0.0, 1.0], formulation="mortar"), mu=0.0)
+
+
+def test_the_mortar_formulation_passes_the_shear_patch_test():
+    """The 3:5 blocks with friction (mu = 1), pressed by delta and sheared by the traction of a uniform shear stress
+    tau on their outer faces (sigma . n with sigma = [[0, tau], [tau, 0]]: tau along x on the upper's top, -tau on
+    the lower's bottom, +-tau along y on the sides), the tangential total force -tau prescribed (Force: on the slave,
+    along t1 = x, balancing its top's traction), tau = 0.3 p so the interface sticks: the exact solution is uniform,
+    p = E' delta / 2 and shear tau, linear in the elements (the corner pins carry nothing). Mortar gives every nodal
+    pressure and shear and the total forces to 1e-8 (local tolerance 1e-12; measured 1.1e-10); node-to-segment on
+    the same meshes is off by up to 17 % (asserted > 1e-2)."""
+    delta = 6e-4
+    pressure = E_PLANE * delta / 2
+    tau = 0.3 * pressure
+    errors = {}
+    for formulation in ("mortar", "node"):
+        msh, tags = stacked_blocks(*MESHES["3:5"])
+        V = compat.vector_space(msh, 1)
+        ends = lambda x: np.isclose(x[1], 0.0) | np.isclose(x[1], 2.0)  # noqa: E731
+        bcs = [component(V, 1, ends), component(V, 0, lambda x: ends(x) & np.isclose(x[0], 0.0))]
+        ds = ufl.Measure("ds", domain=msh, subdomain_data=tags)
+        stress = fem.Constant(msh, PETSc.ScalarType(((0.0, tau), (tau, 0.0))))
+        shear = ufl.inner(ufl.dot(stress, ufl.FacetNormal(msh)), ufl.TestFunction(V)) * ds(3)
+        contact = dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 1.0], formulation=formulation),
+                              mu=1.0, bcs=bcs)
+        problem = dfr.FrettingProblem(elasticity(V), contact, bcs, loads={"shear": shear}, solver=TIGHT)
+        state, _ = problem.advance(problem.initial_state(), normal=delta, tangential=dfr.Force(-tau),
+                                   loads={"shear": 1.0})
+        fields = problem.contact_fields(state)
+        force = problem.total_force(state)
+        errors[formulation] = max(np.abs(fields["pressure"] / pressure - 1).max(),
+                                  np.abs(fields["shear"][:, 0] / -tau - 1).max())
+        if formulation == "mortar":
+            assert np.all(state.status == 1)   # every contact sticks
+            assert force[0] == pytest.approx(pressure, rel=1e-8) and force[1] == pytest.approx(-tau, rel=1e-8)
+        problem.destroy()
+    assert errors["mortar"] < 1e-8 and errors["node"] > 1e-2, errors
+
+
+def test_a_mortar_zone_beside_a_node_to_segment_zone():
+    """Two stacks in one problem: zone 0 the 7:4 blocks with mortar, zone 1 matching 4:4 blocks with node-to-segment
+    (matching faces pass the patch test too), frictionless, each pressed by its own approach. The zones' contact sets
+    stack (their master nodes per contact padded to one width) and each zone carries its uniaxial stress: nodal
+    pressures and total forces to 1e-8 (local tolerance 1e-12)."""
+    msh, tags = stacked_blocks(*MESHES["7:4"], second=(np.linspace(0, 1, 5), np.linspace(0, 1, 5)))
+    V = compat.vector_space(msh, 1)
+    ends = lambda x: np.isclose(x[1], 0.0) | np.isclose(x[1], 2.0)  # noqa: E731
+    corners = lambda x: ends(x) & (np.isclose(x[0], 0.0) | np.isclose(x[0], 1.5))  # noqa: E731
+    bcs = [component(V, 1, ends), component(V, 0, corners)]
+    mortar_zone = dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 1.0], formulation="mortar"), mu=0.0,
+                              bcs=bcs)
+    node_zone = dfr.Contact(V, (tags, 4), dfr.ElasticBody((tags, 5), [0.0, 1.0]), mu=0.0, bcs=bcs)
+    assert mortar_zone.contact_set.master_nodes.shape[1] != node_zone.contact_set.master_nodes.shape[1]
+    problem = dfr.FrettingProblem(elasticity(V), [mortar_zone, node_zone], bcs, solver=TIGHT)
+    approach = {mortar_zone: 6e-4, node_zone: 4e-4}
+    state, _ = problem.advance(problem.initial_state(), normal=approach)
+    for zone, delta in approach.items():
+        assert problem.total_force(state, zone)[0] == pytest.approx(E_PLANE * delta / 2, rel=1e-8)
+        assert np.allclose(problem.contact_fields(state, zone)["pressure"], E_PLANE * delta / 2, rtol=1e-8, atol=0)
+    problem.destroy()
