@@ -1,8 +1,8 @@
 """Mortar integrals of two 2D contact surfaces of linear segments (pure NumPy; no mesh).
 
 For a slave surface and a master surface, each a set of straight two-node segments, this module computes the
-mortar matrices of the segment-to-segment method (Puso & Laursen 2004; with dual Lagrange multipliers:
-Wohlmuth 2000, Popp, Gee & Wall 2009):
+mortar matrices of the segment-to-segment method (Puso & Laursen, CMAME 193, 2004; with dual Lagrange multipliers:
+Wohlmuth, SIAM J. Numer. Anal. 38, 2000; Popp, Gee & Wall, IJNME 79, 2009):
 
     D_jk = integral over the slave surface of  phi_j N_k,       M_jl = integral over the slave surface of  phi_j N^m_l,
 
@@ -23,9 +23,11 @@ master must not fold over itself as seen from a slave segment (no double cover).
 Dual multipliers and the partial segments. On a slave segment wholly facing the master, ``psi_1 = 2 N_1 - N_2``
 and ``psi_2 = 2 N_2 - N_1`` (biorthogonal: ``integral psi_i N_k = delta_ik integral N_k``). A slave segment only
 partly facing the master (at the master's end, or where the slave surface overhangs it) gets the dual functions of
-its facing part (Popp, Wall et al., CMAME 264, 2013, the "partial segment" treatment): ``psi_i = sum_k A_ik N_k``
-with ``A = diag(d) Me^-1``, ``Me_ik`` and ``d_k`` the integrals of ``N_i N_k`` and ``N_k`` over the facing part only,
-so that biorthogonality holds where the constraint is integrated. D stays diagonal, ``D_jj`` is the measure of
+its facing part (the consistent treatment of partial segments: Cichosz & Bischoff, CMAME 200, 2011; Popp, Seitz,
+Gee & Wall, CMAME 264, 2013): ``psi_i = sum_k A_ik N_k`` with ``A = diag(d) Me^-1``, ``Me_ik`` and ``d_k`` the
+integrals of ``N_i N_k`` and ``N_k`` over the facing part only, so that biorthogonality holds where the constraint
+is integrated; the ratios ``M_jl / D_jj`` stay bounded as the facing part shrinks (they tend to the weights that
+extrapolate the master's segment to the slave node: 13/3 and -10/3 for a master segment 0.3 long). D stays diagonal, ``D_jj`` is the measure of
 slave node j's hat function over the facing part, and every row of M sums to ``D_jj`` (the master's hats sum to one):
 the weighted gap does not change under a rigid translation of both bodies, and a uniform multiplier gives the
 master the nodal forces of a uniform traction (the patch test). The slave surface's end nodes need no boundary
@@ -186,17 +188,16 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
         / np.einsum("ij,ij->i", d_master, d_slave)[:, None]
     master_hats = np.stack([1.0 - eta, eta], axis=2)                                       # (p, g, 2)
 
-    # Each slave segment's facing part: its mass matrix and hat integrals there; segments facing too little dropped.
+    # Each slave segment's facing part: its mass matrix there; segments facing too little are dropped.
     n_seg = slave_x.shape[0]
     mass = np.zeros((n_seg, 2, 2))
     np.add.at(mass, seg, np.einsum("pg,pgi,pgk->pik", weight, slave_hats, slave_hats))
     facing = np.zeros(n_seg)
     np.add.at(facing, seg, high - low)
     used = facing >= MIN_FACING
-    hat_integrals = mass.sum(axis=2)                                                        # (f, 2): integral N_k
-    if multipliers == "dual":
+    if multipliers == "dual":   # psi_i = sum_k A_ik N_k, A = diag(d) Me^-1, d_k = integral N_k = Me's row sums
         coefficients = np.zeros((n_seg, 2, 2))
-        coefficients[used] = hat_integrals[used][:, :, None] * np.linalg.inv(mass[used])  # diag(d) Me^-1
+        coefficients[used] = mass[used].sum(axis=2)[:, :, None] * np.linalg.inv(mass[used])
     else:
         coefficients = np.broadcast_to(np.eye(2), (n_seg, 2, 2)).copy()
         coefficients[~used] = 0.0
@@ -204,21 +205,22 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
 
     row_of = np.searchsorted(slave_nodes, slave_segment_nodes)                              # (f, 2)
     col_of = np.searchsorted(master_nodes, master_segment_nodes)
-    # D: phi_i N_k over the facing parts (dual: diag(d) exactly, assembled without rounding off-diagonal noise).
-    if multipliers == "dual":
-        rows, cols = row_of[used].ravel(), row_of[used].ravel()
-        values = hat_integrals[used].ravel()
-    else:
-        rows = np.repeat(row_of[used], 2, axis=1).ravel()
-        cols = np.tile(row_of[used], (1, 2)).ravel()
-        values = mass[used].ravel()
-    n_slave = slave_nodes.size
-    D = sp.csr_matrix((values, (rows, cols)), shape=(n_slave, n_slave))
     keep = used[seg]
     local = np.einsum("pg,pgi,pgl->pil", weight, shape, master_hats)[keep]                   # (p, 2, 2)
     rows = np.broadcast_to(row_of[seg[keep]][:, :, None], local.shape).ravel()
     cols = np.broadcast_to(col_of[mseg[keep]][:, None, :], local.shape).ravel()
+    n_slave = slave_nodes.size
     M = sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n_slave, master_nodes.size))
+    # D: phi_i N_k over the facing parts. Dual: diagonal, D_jj = integral psi_j = integral psi_j sum_l N^m_l, M's row
+    # sum (equal to the integral of N_j by biorthogonality), so that the weights M_jl / D_jj sum to one to rounding
+    # even where Me is ill-conditioned (a sliver facing the master: Me^-1 loses digits as 1/facing^2).
+    if multipliers == "dual":
+        D = sp.csr_matrix(sp.diags(np.asarray(M.sum(axis=1)).ravel()))
+        D.eliminate_zeros()
+    else:
+        rows = np.repeat(row_of[used], 2, axis=1).ravel()
+        cols = np.tile(row_of[used], (1, 2)).ravel()
+        D = sp.csr_matrix((mass[used].ravel(), (rows, cols)), shape=(n_slave, n_slave))
 
     # The master segments' mean size seen by each slave node, weighted by the facing length.
     size_sum, size_weight = np.zeros(n_slave), np.zeros(n_slave)

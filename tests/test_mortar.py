@@ -95,6 +95,23 @@ def test_dual_functions_are_biorthogonal_on_the_part_facing_the_master():
         assert np.abs(moved).max() < 1e-15
 
 
+def test_a_sliver_facing_the_master_keeps_bounded_weights():
+    """A slave segment [0, 1] facing a master segment [1 - eps, 1.3] over eps only: the slave node at 0 faces the
+    master over a sliver; its weights M_0l / D_00 tend, as eps -> 0, to those that extrapolate the master's line to
+    x = 0 (13/3 and -10/3: 0 = 13/3 x 1 - 10/3 x 1.3), and stay finite: within 15 eps of the limit (approached
+    linearly: measured 0.14 at eps = 1e-2, 1.4e-5 at 1e-6), summing to one to 1e-12 (D_jj is M's row sum; the
+    integral of N_0 over the sliver itself, eps^2 / 2, is recovered to 1e-9 of it at eps = 1e-6)."""
+    slave = flat([0.0, 1.0], 0.0, 0, above=True)
+    for eps in (1e-2, 1e-6):
+        master = flat([1.0 - eps, 1.3], 0.0, 10, above=False)
+        result = mortar.mortar_matrices(*slave, *master)
+        weights = result.M.toarray() / result.D.diagonal()[:, None]
+        assert np.allclose(weights.sum(axis=1), 1.0, atol=1e-12, rtol=0)
+        assert np.abs(weights).max() < 13 / 3 + 1e-9
+        assert np.allclose(weights[0], [13 / 3, -10 / 3], atol=15 * eps, rtol=0)
+    assert result.D.diagonal()[0] == pytest.approx(eps ** 2 / 2, rel=1e-9)
+
+
 def test_weighted_gap_of_a_tilted_master_is_the_integral_of_the_gap():
     """A flat slave over a tilted master y = -0.1 - 0.2 x (two segments, not matching): the gap along the slave's
     normal is g(x) = 0.1 + 0.2 x (linear), so with dual multipliers g_j = integral psi_j g = D_jj g(x_j) (the dual
