@@ -25,6 +25,7 @@ import scipy.sparse as sp
 from mpi4py import MPI
 
 from .laws import Coulomb, FrictionLaw
+from .mortar import MortarMatrices, mortar_matrices, weighted_gaps
 
 # DOLFINx, UFL and petsc4py are imported inside the functions that read the mesh: this module's value types
 # (ContactSet, MasterSurface, RigidPlane, ElasticBody and the pure pairing functions) are imported by modules that
@@ -34,7 +35,7 @@ from .laws import Coulomb, FrictionLaw
 __all__ = ["Obstacle", "RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates",
            "find_pairs",
            "tangent_frame", "constrained_dofs", "constrained_global_dofs", "pair_with_faces", "pair_with_segments",
-           "paired_contact_set"]
+           "paired_contact_set", "find_mortar_pairs", "mortar_contact_set"]
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
@@ -578,6 +579,116 @@ def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords:
                       master_sizes=surface.sizes[faces], master_faces=faces, master_surface=surface)
 
 
+def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
+                      exclude_nodes: np.ndarray | None = None,
+                      reference_frame: np.ndarray | None = None) -> ContactSet:
+    """2D mortar contact of the slave surface with the master surface, in the reference configuration. Collective.
+
+    The mortar matrices D and M of the two surfaces (dual multipliers, :mod:`dolfinx_fretting.mortar`) give each
+    slave node j with some of its hat function facing the master (``D_jj > 0``) one contact, whose rows of H are
+    the weighted gap and weighted relative tangential displacement divided by ``D_jj`` (see
+    :func:`mortar_contact_set`). Slave candidates: the free owned nodes of ``slave_facets`` within ``half_width``
+    (along t) of the slave node with the smallest gap, as :func:`find_pairs`.
+
+    Args:
+        V: Vector P1 displacement space on the mesh holding both bodies (2D).
+        slave_facets, master_facets: Local facet indices of the two contact surfaces.
+        half_width: Candidate window half-width (length units), or None for every slave node.
+        exclude_nodes: Local block indices with prescribed displacement (never candidates).
+        reference_frame: The obstacle frame (n, t); held by the master surface.
+
+    Raises:
+        ValueError: if the mesh is not 2D, or no slave node faces the master.
+    """
+    gdim = V.mesh.geometry.dim
+    if gdim != 2:
+        raise ValueError(f"mortar contact is implemented for 2D meshes (segments); the mesh is {gdim}D")
+    imap = V.dofmap.index_map
+    slave_nodes_of, slave_x, slave_inside = _boundary_segments(V, slave_facets)
+    master_nodes_of, master_x, master_inside = _boundary_segments(V, master_facets)
+    if master_nodes_of.shape[0] == 0 or slave_nodes_of.shape[0] == 0:
+        raise ValueError("contact: the master or the slave surface has no facet")
+    ref = tangent_frame([0.0, 1.0]) if reference_frame is None else np.asarray(reference_frame, dtype=float)
+    surface = MasterSurface(master_nodes_of, master_x, np.full(master_nodes_of.shape[0], 2), master_inside, ref)
+    mortar = mortar_matrices(slave_nodes_of, slave_x, slave_inside, master_nodes_of, master_x, master_inside)
+    free, _, _ = _slave_nodes(V, slave_facets, exclude_nodes, V.tabulate_dof_coordinates()[:, :gdim])
+    contacts = np.flatnonzero(np.isin(mortar.slave_nodes, free) & (mortar.D.diagonal() > 0))
+    if contacts.size == 0:
+        raise ValueError("contact: no free slave node faces the master surface (mortar: every D_jj = 0)")
+    contact_set = mortar_contact_set(mortar, slave_nodes_of, slave_x, surface, imap.size_global * gdim)
+    gaps, coords = contact_set.gap0[contacts], contact_set.coords[contacts]
+    abscissa = contact_set.abscissa[contacts]
+    closest = coords[np.lexsort((coords[:, 0], np.abs(abscissa), _tied_gaps(gaps, coords)))[0]]
+    keep = np.ones(contacts.size, dtype=bool)
+    if half_width is not None:
+        keep = np.abs(np.einsum("ij,ij->i", coords - closest, contact_set.frames[contacts, 1])) \
+            <= half_width * (1 + 1e-12)
+    order = contacts[np.flatnonzero(keep)[np.argsort(abscissa[keep], kind="stable")]]
+    contact_set = contact_set.subset(order)
+    contact_set.window_centre = closest
+    return contact_set
+
+
+def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, slave_x: np.ndarray,
+                       surface: MasterSurface, n_dofs: int) -> ContactSet:
+    """The contact set of every slave node of ``mortar`` (pure NumPy; the same on every rank), rows in
+    ``mortar.slave_nodes``' order (a node with ``D_jj = 0`` gets an empty row: select the others with
+    :meth:`ContactSet.subset`). Dual multipliers only (D diagonal).
+
+    Contact j's relative position is the weighted gap and the weighted relative tangential displacement divided by
+    ``D_jj``, in the node's averaged frame (n_j, t_j):
+
+        x^j = [n_j; t_j] (u_j - sum_l w_jl u_l) + g0_j,    w_jl = M_jl / D_jj,    g0_j = g_j / D_jj,
+
+    with ``sum_l w_jl = 1``. The contact force r_j is then ``D_jj`` times the multiplier (a nodal force, as with
+    node-to-segment pairing), the slave node gets ``r_j`` and master node l ``-w_jl r_j``: the nodal forces of the
+    traction ``sum_j lambda_j psi_j``. The tributary measure is ``D_jj`` (the slave hat's measure over the part facing
+    the master), so the pressure read, force over tributary, is the multiplier ``lambda_j`` itself.
+
+    Args:
+        mortar: The mortar matrices (``multipliers="dual"``) of the slave segments and the master surface.
+        slave_segment_nodes, slave_x: (f, 2) the slave segments' global nodes and (f, 2, 2) their end points.
+        surface: The master surface (its nodes the columns of ``mortar.M``).
+        n_dofs: Global number of displacement dofs (the columns of H).
+    """
+    if mortar.multipliers != "dual":
+        raise ValueError(f"mortar_contact_set: multipliers = {mortar.multipliers!r}: the nodal contact solvers need "
+                         "the dual ones (D diagonal)")
+    dim = 2
+    nodes = mortar.slave_nodes
+    coords = np.zeros((nodes.size, dim))
+    coords[np.searchsorted(nodes, slave_segment_nodes.ravel())] = slave_x.reshape(-1, dim)
+    master_coords = np.zeros((mortar.master_nodes.size, dim))
+    master_coords[np.searchsorted(mortar.master_nodes, surface.nodes.ravel())] = surface.x.reshape(-1, dim)
+    measure = mortar.D.diagonal()
+    scale = np.divide(1.0, measure, out=np.zeros_like(measure), where=measure > 0)
+    weights = sp.csr_matrix(sp.diags(scale) @ mortar.M)
+    weights.sort_indices()
+    gaps = weighted_gaps(mortar, coords, master_coords) * scale
+    frames = np.stack([mortar.normals, mortar.tangents], axis=1)                   # (s, 2, 2) rows n, t
+    # Each contact's master nodes and weights, padded with -1 and 0 to the widest row.
+    counts = np.diff(weights.indptr)
+    width = max(int(counts.max(initial=0)), 1)
+    master_nodes = np.full((nodes.size, width), -1, dtype=np.int64)
+    master_weights = np.zeros((nodes.size, width))
+    slot = np.arange(weights.indices.size) - np.repeat(weights.indptr[:-1], counts)
+    row = np.repeat(np.arange(nodes.size), counts)
+    master_nodes[row, slot] = mortar.master_nodes[weights.indices]
+    master_weights[row, slot] = weights.data
+    # H: rows (n, t) of contact j; the slave node's columns, then each master node's with -w_jl.
+    node_cols = np.column_stack([nodes, np.where(master_nodes >= 0, master_nodes, nodes[:, None])])
+    node_coef = np.column_stack([np.where(measure > 0, 1.0, 0.0), -master_weights])
+    vals = frames[:, :, None, :] * node_coef[:, None, :, None]                       # (s, dim, nodes, dim)
+    cols = np.broadcast_to(dim * node_cols[:, None, :, None] + np.arange(dim)[None, None, None, :], vals.shape)
+    rws = np.broadcast_to(np.arange(nodes.size * dim).reshape(nodes.size, dim, 1, 1), vals.shape)
+    H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nodes.size * dim, n_dofs))
+    H.eliminate_zeros()
+    return ContactSet(dim=dim, global_nodes=nodes, coords=coords, frames=frames, gap0=gaps, tributary=measure,
+                      abscissa=np.einsum("ij,ij->i", coords, mortar.tangents), H=H, master_nodes=master_nodes,
+                      master_weights=master_weights, master_points=np.asarray(weights @ master_coords),
+                      master_sizes=mortar.master_sizes, master_faces=None, master_surface=surface)
+
+
 def pair_with_segments(points: np.ndarray, segments_x: np.ndarray,
                        inside: np.ndarray) -> dict[str, np.ndarray]:
     """Pair each point with the closest point of a set of 2D segments (pure NumPy; :func:`pair_with_faces` in 2D).
@@ -927,6 +1038,8 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
 # The public contact object ---------------------------------------------------------------------------------
 #: Sliding models of two deformable bodies (:class:`ElasticBody`).
 SLIDING = ("small", "finite")
+#: :class:`ElasticBody`'s contact formulations: node-to-segment/face pairing, or mortar (2D).
+FORMULATIONS = ("node", "mortar")
 
 @dataclass(frozen=True)
 class ElasticBody(Obstacle):
@@ -969,6 +1082,13 @@ class ElasticBody(Obstacle):
             over the master: the master facets within ``reach`` of a slave candidate enter the surface
             compliance. None: every facet of the master surface. A pairing that would need a facet beyond it
             raises an error.
+        formulation: ``"node"`` (default): each slave node paired with the closest master point (above);
+            ``"mortar"`` (2D, small sliding): the segment-to-segment mortar integrals with dual Lagrange multipliers
+            (:mod:`dolfinx_fretting.mortar`, :func:`find_mortar_pairs`): each slave node facing the master is a
+            contact whose gap and relative tangential displacement are the weighted ones divided by ``D_jj``, its
+            frame the slave's averaged nodal normal and tangent, its tributary measure ``D_jj``; the pressure read
+            is the multiplier. It passes the contact patch test on non-matching meshes, which node-to-segment
+            pairing does not.
     """
 
     surface: tuple
@@ -977,6 +1097,7 @@ class ElasticBody(Obstacle):
     sliding: str = "small"
     repair_slip: float = 0.25
     reach: float | None = None
+    formulation: str = "node"
 
     def __post_init__(self) -> None:
         n = np.asarray(self.normal, dtype=float)
@@ -992,6 +1113,12 @@ class ElasticBody(Obstacle):
         if self.reach is not None and not (isinstance(self.reach, (int, float)) and np.isfinite(self.reach)
                                            and self.reach > 0):
             raise ValueError(f"ElasticBody.reach = {self.reach!r}: allowed None or a finite length > 0")
+        if self.formulation not in FORMULATIONS:
+            raise ValueError(f"ElasticBody.formulation = {self.formulation!r}: allowed "
+                             f"{', '.join(map(repr, FORMULATIONS))}")
+        if self.formulation == "mortar" and self.sliding == "finite":
+            raise ValueError("ElasticBody.formulation = 'mortar' with sliding = 'finite': allowed sliding = 'small' "
+                             "only (re-pairing by recomputing the mortar matrices is not implemented)")
 
     @property
     def finite_sliding(self) -> bool:
@@ -1004,13 +1131,21 @@ class ElasticBody(Obstacle):
         return self.cells
 
     def check(self, V) -> None:
-        """The master surface's marker tags facets (a message naming the markers the tags hold otherwise)."""
+        """The master surface's marker tags facets (a message naming the markers the tags hold otherwise); a mortar
+        formulation needs a 2D mesh."""
+        if self.formulation == "mortar" and V.mesh.geometry.dim != 2:
+            raise ValueError(f"ElasticBody.formulation = 'mortar' on a {V.mesh.geometry.dim}D mesh: allowed on 2D "
+                             "meshes only (3D mortar is not implemented yet); use formulation = 'node'")
         _tagged_facets(self.surface, V.mesh, "ElasticBody.surface")
 
     def candidates(self, V, facets: np.ndarray, half_width: float | None,
                    exclude_nodes: np.ndarray | None) -> ContactSet:
-        """:func:`find_pairs`: each slave node of ``facets`` paired with the master surface. Collective."""
+        """:func:`find_pairs` (or :func:`find_mortar_pairs`): each slave node of ``facets`` paired with the master
+        surface. Collective."""
         master_facets = _tagged_facets(self.surface, V.mesh, "ElasticBody.surface")
+        if self.formulation == "mortar":
+            return find_mortar_pairs(V, facets, master_facets, half_width, exclude_nodes=exclude_nodes,
+                                     reference_frame=self.frame)
         return find_pairs(V, facets, master_facets, half_width, exclude_nodes=exclude_nodes,
                           reference_frame=self.frame)
 

@@ -34,16 +34,23 @@ def concatenate(sets: Sequence[ContactSet]) -> ContactSet:
     :meth:`ContactZones.zone_set`)."""
     dim = sets[0].dim
 
-    def join(name: str):
+    def join(name: str, fill: float = 0):
         values = [getattr(s, name) for s in sets]
-        return None if any(v is None for v in values) else np.concatenate(values)
+        if any(v is None for v in values):
+            return None
+        if values[0].ndim == 2:
+            # master nodes and weights per contact: 2 (a segment), 4 (a face) or a mortar row's count, padded as a
+            # triangle's are (node -1, weight 0); the points' width is the dimension, the same in every zone
+            width = max(v.shape[1] for v in values)
+            values = [np.pad(v, ((0, 0), (0, width - v.shape[1])), constant_values=fill) for v in values]
+        return np.concatenate(values)
 
     surfaces = {id(s.master_surface) for s in sets}
     return ContactSet(dim, np.concatenate([s.global_nodes for s in sets]), np.concatenate([s.coords for s in sets]),
                       np.concatenate([s.frames for s in sets]), np.concatenate([s.gap0 for s in sets]),
                       np.concatenate([s.tributary for s in sets]), np.concatenate([s.abscissa for s in sets]),
                       sp.vstack([s.H for s in sets], format="csr"),
-                      join("master_nodes"), join("master_weights"), join("master_points"), join("master_sizes"),
+                      join("master_nodes", -1), join("master_weights"), join("master_points"), join("master_sizes"),
                       None, sets[0].master_surface if len(surfaces) == 1 else None, None)
 
 
