@@ -57,7 +57,7 @@ def _partition_fingerprint(operators: ContactOperators) -> str:
 def contact_parameters(operators: ContactOperators, wear_laws: Sequence[WearLaw | None]) -> list[dict[str, Any]]:
     """Each zone's contact parameters as plain data (what a checkpoint saves and checks): its friction coefficient
     per contact (``mu``), its wear law (class name, each body's coefficient, acceleration; None without wear) and
-    its obstacle (class name, normal, and a rigid plane's point)."""
+    its obstacle (class name, normal, a rigid plane's point, an elastic body's contact formulation)."""
     contacts = operators.contact
     zones = []
     for zone, (obstacle, law) in enumerate(zip((c.obstacle for c in contacts.zones), wear_laws)):
@@ -66,7 +66,8 @@ def contact_parameters(operators: ContactOperators, wear_laws: Sequence[WearLaw 
                                          "acceleration": float(law.acceleration), "describe": law.describe()}
         zones.append({"mu": contacts.mu[contacts.zone_slice(zone)].tolist(), "wear": wear,
                       "obstacle": {"kind": type(obstacle).__name__, "normal": np.asarray(obstacle.normal).tolist(),
-                                   "point": None if point is None else np.asarray(point).tolist()}})
+                                   "point": None if point is None else np.asarray(point).tolist(),
+                                   "formulation": getattr(obstacle, "formulation", None)}})
     return zones
 
 
@@ -80,7 +81,16 @@ def _values(values: list[float]) -> str:
 
 def _obstacle(obstacle: Mapping[str, Any]) -> str:
     point = "" if obstacle["point"] is None else f" point {np.asarray(obstacle['point']).tolist()}"
-    return f"{obstacle['kind']}{point} normal {np.round(obstacle['normal'], 12).tolist()}"
+    formulation = _formulation(obstacle)
+    formulation = "" if formulation is None else f" formulation {formulation!r}"
+    return f"{obstacle['kind']}{point} normal {np.round(obstacle['normal'], 12).tolist()}{formulation}"
+
+
+def _formulation(obstacle: Mapping[str, Any]) -> str | None:
+    """An elastic body's contact formulation; a checkpoint saved before mortar existed (no key) was "node"."""
+    if "formulation" not in obstacle and obstacle["kind"] == "ElasticBody":
+        return "node"
+    return obstacle.get("formulation")
 
 
 def parameter_differences(saved: list[dict[str, Any]], current: list[dict[str, Any]], extent: float) -> list[str]:
@@ -113,7 +123,8 @@ def parameter_differences(saved: list[dict[str, Any]], current: list[dict[str, A
         same = (obstacle_old["kind"] == obstacle_new["kind"]
                 and np.shape(obstacle_old["normal"]) == normal_new.shape
                 and np.allclose(obstacle_old["normal"], normal_new, rtol=0.0, atol=1e-12)
-                and (obstacle_old["point"] is None) == (obstacle_new["point"] is None))
+                and (obstacle_old["point"] is None) == (obstacle_new["point"] is None)
+                and _formulation(obstacle_old) == _formulation(obstacle_new))
         if same and obstacle_new["point"] is not None:
             offset = (np.asarray(obstacle_old["point"], dtype=float) - np.asarray(obstacle_new["point"])) @ normal_new
             same = abs(float(offset)) <= 1e-9 * extent

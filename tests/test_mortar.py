@@ -426,4 +426,13 @@ def test_mortar_wear_energy_identity_and_checkpoint(compiled, tmp_path):
     back, _ = problem.load_state(path)
     for name in ("forces", "positions", "slip", "wear_gap", "obstacle"):
         assert np.array_equal(getattr(back, name), getattr(state, name))
+    # the same nodes under the node-to-segment formulation: the state means other forces (multipliers against
+    # nodal forces), so the checkpoint's formulation is checked (before, it loaded)
+    node = dfr.FrettingProblem(elasticity(V), dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 1.0]),
+                                                          mu=0.3, bcs=bcs), bcs, wear=dfr.EnergyWear(alpha))
+    assert np.array_equal(node.contact.contact_set.coords, contact.contact_set.coords)
+    with pytest.raises(ValueError, match="obstacle: saved ElasticBody .*formulation 'mortar', this problem's "
+                                         "ElasticBody .*formulation 'node'"):
+        node.load_state(path)
+    node.destroy()
     problem.destroy()
