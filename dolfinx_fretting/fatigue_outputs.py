@@ -111,7 +111,7 @@ class FatigueOutputs:
         self.path = Path(out) / FATIGUE_TABLE
         self.arguments = fatigue_arguments(scene)
         self.acceleration = float(scene.wear.acceleration)
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         try:   # collective: the same error on every rank
             fatigue_over_cycle(problem, [check], **self.arguments)
         except ValueError as exc:
@@ -122,6 +122,7 @@ class FatigueOutputs:
         self.evaluations = int(saved.get("evaluations", 0))
         self.table_bytes = saved.get("table_bytes")
         self.wall_time = float(saved.get("wall_time_s", 0.0))
+        self.cpu_time = float(saved.get("cpu_time_s", 0.0))
         self._summary: dict[str, Any] = dict(saved.get("summary") or {})
         self.miner: MinerSum | None = None
         if self.rank0 and saved.get("damage") is not None:
@@ -144,6 +145,7 @@ class FatigueOutputs:
         if problem_text is not None:
             raise ValueError(f"--resume: {problem_text}")
         self.wall_time += time.perf_counter() - started
+        self.cpu_time += time.process_time() - cpu
         self._pending: list[dict[str, Any]] = []
 
     def due(self, cycle: int) -> bool:
@@ -153,7 +155,7 @@ class FatigueOutputs:
     def evaluate(self, cycle: int, result: CycleResult, cycle_end: int) -> FatigueResult:
         """Evaluate simulated cycle ``cycle`` (its result kept, ``run_cycle(..., keep=True)``), whose jump ends at
         cycle ``cycle_end``: its rows (written by :meth:`write`), Miner's sum and the summary. Collective."""
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         result = fatigue_over_cycle(self.problem, result, **self.arguments)
         parts = self.comm.gather((result.coordinates, result.columns()), root=0)
         summary, error = None, None
@@ -170,6 +172,7 @@ class FatigueOutputs:
         self.last_evaluated, self.covered = cycle, cycle_end
         self.evaluations += 1
         self.wall_time += time.perf_counter() - started
+        self.cpu_time += time.process_time() - cpu
         return result
 
     def _on_root(self, parts, api_summary: dict[str, Any], cycle: int, cycle_end: int) -> dict[str, Any]:
@@ -213,7 +216,8 @@ class FatigueOutputs:
         """What a checkpoint holds to resume (JSON; the damage and table size rank 0's)."""
         miner = self.miner
         return {"last_evaluated": self.last_evaluated, "covered": self.covered, "evaluations": self.evaluations,
-                "table_bytes": self.table_bytes, "wall_time_s": self.wall_time, "summary": self._summary,
+                "table_bytes": self.table_bytes, "wall_time_s": self.wall_time, "cpu_time_s": self.cpu_time,
+                "summary": self._summary,
                 "damage": miner.damage.tolist() if miner is not None else None,
                 "cycles_summed": miner.cycles if miner is not None else 0.0,
                 "initiation": _finite(miner.initiation) if miner is not None else None,
@@ -221,9 +225,10 @@ class FatigueOutputs:
 
     def summary(self) -> dict[str, Any]:
         """``summary.json["fatigue"]``: the last evaluation's numbers (every rank the same), the evaluations made
-        and the time they took (s, this process and the runs resumed from)."""
+        and the time they took (wall and this rank's CPU, s; the runs resumed from included)."""
         fields = [*SUMMARY_FIELDS, *(CRITICAL_DISTANCE_FIELDS if self.arguments["critical"] is not None else ()),
                   *(MINER_FIELDS if self.arguments["strain_life"] is not None else ())]
         values = {"cycle": None, "equivalent_cycles": None, "points": 0, **{key: None for key in fields},
                   **self._summary}
-        return {**values, "evaluations": self.evaluations, "wall_time_s": round(self.wall_time, 6)}
+        return {**values, "evaluations": self.evaluations, "wall_time_s": round(self.wall_time, 6),
+                "cpu_time_s": round(self.cpu_time, 6)}

@@ -5,12 +5,15 @@ repeats a row."""
 import json
 import math
 import shutil
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
 from dolfinx_fretting import fatigue
+from dolfinx_fretting._dolfinx import mpiexec
 from dolfinx_fretting.fatigue import MinerSum
 from dolfinx_fretting.fatigue_fields import fatigue_over_cycle
 from dolfinx_fretting.fatigue_outputs import TABLE_COLUMNS, fatigue_arguments
@@ -172,11 +175,12 @@ def test_miner_damage_over_the_run(runs):
 
 def test_a_resumed_run_neither_loses_nor_repeats_a_row(runs):
     """The run cut after cycle 1 and resumed: fatigue.csv the straight run's, byte for byte (the per-increment
-    path repeats its arithmetic), and the same fatigue summary (but its wall time)."""
+    path repeats its arithmetic), and the same fatigue summary (but its times)."""
     straight, cut = runs["root"] / "straight", runs["root"] / "cut"
     assert (cut / "fatigue.csv").read_text() == (straight / "fatigue.csv").read_text()
     assert runs["resumed"]["resumed_from_cycle"] == 1
-    drop = lambda summary: {k: v for k, v in summary["fatigue"].items() if k != "wall_time_s"}  # noqa: E731
+    drop = lambda summary: {k: v for k, v in summary["fatigue"].items()  # noqa: E731
+                            if k not in ("wall_time_s", "cpu_time_s")}
     assert drop(runs["resumed"]) == drop(runs["straight"])
     on_disk = json.loads((cut / "summary.json").read_text())
     assert on_disk["fatigue"]["evaluations"] == 2
@@ -213,3 +217,27 @@ def test_with_cycle_jumps_a_block_is_the_jumps_cycles(tmp_path):
     damage = np.array([r["damage"] for r in rows if r["cycle"] == cycles[-1]])
     assert damage == pytest.approx((blocks[:, None] / lives).sum(axis=0), rel=1e-5)
     assert summary["fatigue"]["miner_damage_max"] == pytest.approx(damage.max(), rel=1e-5)
+
+
+@pytest.mark.mpi
+def test_two_ranks_write_the_serial_fatigue_outputs(runs, tmp_path, mpirun_env):
+    """The 2-cycle run under mpirun -n 2 (the CLI): the fatigue summary is the serial run's (the same contact
+    states to the factorisation's rounding: 1e-8, as tests/test_mpi.py), fatigue.csv has every point once per
+    evaluation, in the serial order (the points sorted by their coordinates, not by rank), its values the serial
+    ones to their 6 digits (a last digit may round the other way: 2e-5)."""
+    cmd = [*mpiexec(2), sys.executable, "-m", "mpi4py", "-m", "dolfinx_fretting", "run", "stromberg-block",
+           "--out", str(tmp_path), "--quiet"]
+    for override in SMALL + FATIGUE + ["loading.cycles=2"]:
+        cmd += ["--set", override]
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=mpirun_env, timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    parallel = json.loads((tmp_path / "summary.json").read_text())["fatigue"]
+    serial = runs["straight"]["fatigue"]
+    for key in (*fatigue.SUMMARY_FIELDS, *fatigue.MINER_FIELDS):
+        assert parallel[key] == pytest.approx(serial[key], rel=1e-8, abs=1e-14), key
+    assert parallel["points"] == serial["points"] and parallel["evaluations"] == serial["evaluations"]
+    mine, theirs = _table(tmp_path), _table(runs["root"] / "straight")
+    assert len(mine) == len(theirs)
+    for name in TABLE_COLUMNS:
+        assert np.array([r[name] for r in mine]) == pytest.approx(np.array([r[name] for r in theirs]), rel=2e-5,
+                                                                   abs=1e-12), name
