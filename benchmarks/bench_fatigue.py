@@ -76,7 +76,8 @@ def table(rows: list[dict]) -> str:
                 continue
             lines.append(f"| {name} | {r['configuration']} | {r['cycles']} | {r.get('points', '')} | "
                          f"{r.get('evaluations', '')} | {r['cpu_s']:.2f} | {r['cpu_s'] / off:.3f} | "
-                         f"{r.get('fatigue_cpu_s', 0.0):.2f} | {r.get('fatigue_wall_s', 0.0):.2f} | {r['wall_s']:.2f} |")
+                         f"{r.get('fatigue_cpu_s', 0.0):.2f} | {r.get('fatigue_wall_s', 0.0):.2f} | "
+                         f"{r['wall_s']:.2f} |")
     return "\n".join(lines)
 
 
