@@ -37,7 +37,8 @@ import numpy as np
 
 __all__ = ["POINT_COLUMNS", "SUMMARY_FIELDS", "DEFAULT_ANGLE_STEP", "BasquinCoffinManson", "ShearStrainLife",
            "FatemiSocie", "PlaneSet", "CriticalPlanes", "mandel_to_tensor", "plane_normals", "critical_planes",
-           "ruiz_parameter", "critical_distance", "CriticalDistance", "depth_profile", "CRITICAL_DISTANCE_FIELDS"]
+           "ruiz_parameter", "critical_distance", "CriticalDistance", "depth_profile", "CRITICAL_DISTANCE_FIELDS",
+           "MinerSum", "MINER_FIELDS"]
 
 #: Per-point columns of a fatigue evaluation (one declaration: the result object and any table writer read it).
 #: ``x`` the point's x coordinate, ``depth`` below the contact surface, ``sigma_xx`` its largest value over the
@@ -50,6 +51,9 @@ SUMMARY_FIELDS = ("swt_max", "swt_x", "swt_depth", "swt_angle", "fs_max", "ruiz_
 #: Summary numbers added with a critical distance: SWT by the point or line method below the SWT hot spot, and
 #: the life it gives (None without strain-life constants).
 CRITICAL_DISTANCE_FIELDS = ("swt_critical", "life_critical")
+#: Summary numbers of Miner's sum over a run (:class:`MinerSum`): the largest damage, the (equivalent) cycle at
+#: which the first point's damage reached 1 (None: not within the run) and that point's x and depth.
+MINER_FIELDS = ("miner_damage_max", "initiation_cycles", "initiation_x", "initiation_depth")
 #: The default step (degrees) of the plane search: 1 in 2D (180 planes); 5 in 3D (about 800 planes).
 DEFAULT_ANGLE_STEP = {2: 1.0, 3: 5.0}
 
@@ -542,3 +546,49 @@ def depth_profile(x, depth, values, x0: float, band: float) -> tuple[np.ndarray,
     else:
         levels[0] = 0.0
     return levels, means
+
+
+@dataclass(frozen=True)
+class MinerSum:
+    """Miner's linear damage sum over blocks of cycles, per point (Madge et al. 2007, Wear 262, 1159-1170:
+    contact-evolution based fretting fatigue life): ``D = sum_i n_i / N_i``, block i's ``n_i`` cycles at the life
+    ``N_i`` its evaluated cycle gives; a crack initiates where D reaches 1.
+
+    Attributes:
+        damage: (P,) D at each point after the blocks added.
+        cycles: The cycles summed (the blocks' lengths).
+        initiation: The cycle at which the first point's D reached 1, inside its block by the block's constant
+            rate (``cycles before the block + (1 - D before) N_i``); inf while no point has.
+        initiation_point: That point's index (-1 while none).
+    """
+
+    damage: np.ndarray
+    cycles: float = 0.0
+    initiation: float = math.inf
+    initiation_point: int = -1
+
+    @classmethod
+    def start(cls, points: int) -> "MinerSum":
+        """No damage at ``points`` points."""
+        return cls(np.zeros(int(points)))
+
+    def add(self, lives, block: float) -> "MinerSum":
+        """The sum after a block of ``block`` cycles (> 0) at the lives ``lives`` (P,) (inf: no damage).
+
+        Raises:
+            ValueError: ``block`` not finite and > 0, or ``lives`` not (P,) values > 0.
+        """
+        block = _positive("MinerSum.add", "block", block)
+        lives = np.asarray(lives, dtype=float)
+        if lives.shape != self.damage.shape or np.isnan(lives).any() or (lives <= 0).any():
+            raise ValueError(f"MinerSum.add: lives of shape {lives.shape} (> 0, inf allowed) for the "
+                             f"{self.damage.size} points of the sum")
+        damage = self.damage + block / lives
+        initiation, point = self.initiation, self.initiation_point
+        if not math.isfinite(initiation):
+            crossing = (self.damage < 1.0) & (damage >= 1.0)
+            if crossing.any():
+                when = np.where(crossing, self.cycles + (1.0 - self.damage) * lives, np.inf)
+                point = int(np.argmin(when))
+                initiation = float(when[point])
+        return MinerSum(damage, self.cycles + block, initiation, point)

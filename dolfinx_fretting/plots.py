@@ -23,7 +23,9 @@ Pictures (all in the output folder):
   - ``node_history.png`` (paper Figs. 8-9): normal gap, slip increment, P_n and P_t of the tracked nodes
     over the steps of the first, a middle and the last snapshot cycle, shaded by contact state;
   - ``fretting_loops.png``: tangential contact force against displacement for the loop cycles;
-  - ``wear_growth.png``: maximum wear depth, wear area and dissipated energy per cycle.
+  - ``wear_growth.png``: maximum wear depth, wear area and dissipated energy per cycle;
+  - ``fatigue.png`` (a scene's ``[fatigue]``, from ``fatigue.csv``): SWT and Miner's damage over the near-surface
+    region at the last evaluated cycle.
 
 A run with several contact zones is drawn for its first zone (the one a scene's ``[loading]`` drives): its
 profiles (the ``zone`` column of ``contact_profiles.csv``) and its forces (``zone0_normal_force``,
@@ -47,6 +49,7 @@ from .analytic import hertz_pressure
 from .contact_output import STATE_NAMES, ContactProfiles, read_profiles, read_table
 from .io import plot_profiles
 from .output import RunDescription, read_description
+from .tables import read_rows
 from .units import Units
 
 # matplotlib (heavy: ~0.5 s to import) is imported inside the functions that draw, so that importing this
@@ -55,7 +58,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["plot_run", "read_table", "plot_wear_first_cycle", "plot_wear_evolution", "plot_node_history",
-           "plot_fretting_loops", "plot_wear_growth", "tracked_nodes", "CYCLIC_PICTURES"]
+           "plot_fretting_loops", "plot_wear_growth", "plot_fatigue_map", "tracked_nodes", "CYCLIC_PICTURES"]
 
 #: PNG files :func:`plot_run` writes for a cyclic run besides ``profiles.png``.
 CYCLIC_PICTURES = ("wear_first_cycle.png", "wear_evolution.png", "node_history.png", "fretting_loops.png",
@@ -532,6 +535,34 @@ def plot_wear_growth(path: Path, run: RunDescription, cycles: dict[str, np.ndarr
     return _save(fig, path)
 
 
+def plot_fatigue_map(path: Path, run: RunDescription, table: Path) -> Path | None:
+    """SWT (and Miner's damage, where ``fatigue.csv`` has it) at the points of the near-surface region, x against
+    depth, at the last evaluated cycle of ``fatigue.csv``.
+
+    Returns:
+        ``path``, or ``None`` when the table has no row.
+    """
+    rows = read_rows(table, integers=("cycle",))
+    if not rows:
+        return None
+    last = max(row["cycle"] for row in rows)
+    rows = [row for row in rows if row["cycle"] == last]
+    columns = {name: np.array([row[name] for row in rows]) for name in ("x", "depth", "swt", "damage")}
+    shown = [("swt", "SWT (MPa)")] + ([("damage", "Miner's damage D")]
+                                      if np.isfinite(columns["damage"]).any() else [])
+    fig = _figure((8, 2.6 * len(shown) + 0.6))
+    axes = fig.subplots(len(shown), 1, sharex=True, squeeze=False, gridspec_kw=dict(
+        left=0.1, right=0.97, bottom=0.16 if len(shown) == 1 else 0.09, top=0.88, hspace=0.25))[:, 0]
+    length = run.units.length
+    for ax, (name, label) in zip(axes, shown):
+        dots = ax.scatter(columns["x"], -columns["depth"], c=columns[name], s=14, cmap="viridis")
+        fig.colorbar(dots, ax=ax, label=label)
+        ax.set_ylabel(f"-depth ({length})")
+    axes[-1].set_xlabel(f"x ({length})")
+    fig.suptitle(f"{run.name}: fatigue parameters, cycle {last}")
+    return _save(fig, path)
+
+
 #: The fields of ``contact_maps.png``: (name, quantity: "stress", "length" (in the run's units) or "state"; value of a
 #: row of the profiles).
 _MAP_FIELDS = (
@@ -691,4 +722,6 @@ def plot_run(out: Path, run: RunDescription | None = None) -> list[Path]:
                     lambda: plot_fretting_loops(out / "fretting_loops.png", run, hist))
         if cycles:
             attempt("wear_growth.png", lambda: plot_wear_growth(out / "wear_growth.png", run, cycles))
+        if (out / "fatigue.csv").is_file():
+            attempt("fatigue.png", lambda: plot_fatigue_map(out / "fatigue.png", run, out / "fatigue.csv"))
     return written

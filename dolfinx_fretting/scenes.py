@@ -615,6 +615,66 @@ class OutputSettings(_Section):
     progress: bool = True
 
 
+
+class FatigueSettings(_Section):
+    """Fatigue parameters over the cycles of a cyclic run (:mod:`dolfinx_fretting.fatigue_outputs`): off by default.
+
+    The critical planes (SWT; Fatemi–Socie with ``k`` and ``yield_stress``), Ruiz's parameter and, with the
+    strain-life constants ``sigma_f``, ``b``, ``eps_f``, ``c`` (E from ``[material]``), the life by SWT and Miner's
+    damage summed over the evaluated cycles. Every key but ``enabled`` is refused while ``enabled`` is false.
+    """
+
+    enabled: bool = False
+    #: Depth (mm) below the contact surface of the points evaluated (required with ``enabled``).
+    region: Length | None = None
+    #: The cycles evaluated: ``"last"`` (the run's last cycle), or n: every n-th cycle and the last (with cycle
+    #: jumps, the first simulated cycle at or after each multiple of n).
+    cycles: Literal["last"] | Cycle = "last"
+    #: Degrees between the planes of the search (default 1 in 2D, 5 in 3D); 0 < angle_step <= 45.
+    angle_step: float | None = Field(None, gt=0, le=45)
+    #: Fatemi–Socie's normal-stress sensitivity k (>= 0) and the yield stress (MPa) it divides by: both or neither.
+    k: float | None = Field(None, ge=0, le=100)
+    yield_stress: float | None = Field(None, gt=0, le=MAX_MODULUS)
+    #: Strain-life (Basquin–Coffin–Manson) constants: all four or none. sigma'_f (MPa), b < 0, eps'_f, c < 0.
+    sigma_f: float | None = Field(None, gt=0, le=MAX_MODULUS)
+    b: float | None = Field(None, ge=-1, lt=0)
+    eps_f: float | None = Field(None, gt=0, le=100)
+    c: float | None = Field(None, ge=-2, lt=0)
+    #: Taylor's critical distance L (mm): SWT by the point or line method below the SWT hot spot.
+    critical_distance: Length | None = None
+    method: Literal["point", "line"] = "point"
+
+    @model_validator(mode="after")
+    def _given_together(self) -> FatigueSettings:
+        if not self.enabled:
+            given = [k for k in type(self).model_fields if k != "enabled" and k in self.model_fields_set]
+            if given:
+                raise ValueError(f"fatigue.{given[0]} is given but fatigue.enabled = false; set fatigue.enabled = "
+                                 "true or remove it")
+            return self
+        if self.region is None:
+            raise ValueError("fatigue.region (mm, the depth below the contact surface evaluated, > 0) is required "
+                             "with fatigue.enabled = true")
+        if (self.k is None) != (self.yield_stress is None):
+            missing = "fatigue.yield_stress" if self.yield_stress is None else "fatigue.k"
+            raise ValueError(f"{missing} is missing: Fatemi-Socie needs both fatigue.k (>= 0) and "
+                             "fatigue.yield_stress (MPa, > 0), or neither")
+        constants = ("sigma_f", "b", "eps_f", "c")
+        given = [k for k in constants if getattr(self, k) is not None]
+        if given and len(given) < 4:
+            missing = ", ".join(f"fatigue.{k}" for k in constants if k not in given)
+            raise ValueError(f"fatigue: strain-life constants {missing} missing (given: {', '.join(given)}): all four "
+                             "of sigma_f, b, eps_f, c or none")
+        if "method" in self.model_fields_set and self.critical_distance is None:
+            raise ValueError("fatigue.method is given without fatigue.critical_distance (mm, > 0)")
+        return self
+
+    @property
+    def strain_life(self) -> bool:
+        """The strain-life constants are given: a life and Miner's damage."""
+        return self.sigma_f is not None
+
+
 # Numerics presets (solver.preset) --------------------------------------------------------------------------
 #: What each ``solver.preset`` supplies, chosen from the measured speed-vs-accuracy frontier
 #: (``docs/study.md``, ``benchmarks/results/study_*.md``). ``contact_elements_per_half_width``: the contact
@@ -707,6 +767,8 @@ class Scene(_Section):
     loading: LoadingSettings
     solver: SolverSettings = Field(default_factory=SolverSettings)
     output: OutputSettings = Field(default_factory=OutputSettings)
+    #: Fatigue parameters over the cycles (off by default).
+    fatigue: FatigueSettings = Field(default_factory=FatigueSettings)
 
     @model_validator(mode="before")
     @classmethod
@@ -728,11 +790,13 @@ class Scene(_Section):
 
     @model_serializer(mode="wrap")
     def _dump(self, handler) -> dict[str, Any]:
-        """The scene as data; ``zones`` only when there are some, so a one-zone scene dumps (``show``, a checkpoint's
-        identity) as before zones existed."""
+        """The scene as data; ``zones`` only when there are some and ``fatigue`` only when enabled, so a one-zone
+        scene without fatigue dumps (``show``, a checkpoint's identity) as before they existed."""
         data = handler(self)
         if not data.get("zones"):
             data.pop("zones", None)
+        if not data.get("fatigue", {}).get("enabled"):   # (and a scene without [fatigue], as before it existed)
+            data.pop("fatigue", None)
         return data
 
     @model_validator(mode="after")
@@ -824,6 +888,23 @@ class Scene(_Section):
         return self
 
     @model_validator(mode="after")
+    def _fatigue_fits(self) -> Scene:
+        """``[fatigue]`` needs cycles of an elastic body with a fixed pairing (a cycle's kept states are read)."""
+        if not self.fatigue.enabled:
+            return self
+        if self.loading.cycles < 1:
+            raise range_error("loading.cycles", self.loading.cycles, ">= 1 with fatigue.enabled = true (the "
+                              "fatigue parameters are those of a load cycle)")
+        if self.material.model != "elastic":
+            raise range_error("material.model", self.material.model, "'elastic' with fatigue.enabled = true (an "
+                              "elastic-plastic cycle keeps no stress per increment; fatigue_fields.fatigue_over_cycle "
+                              "takes the committed states of one from a script)")
+        if self.contact.sliding == "finite":
+            raise range_error("contact.sliding", self.contact.sliding, "'small' with fatigue.enabled = true (a "
+                              "cycle's kept states hold one pairing)")
+        return self
+
+    @model_validator(mode="after")
     def _plastic_tolerances(self) -> Scene:
         # An elastic-plastic body in sliding contact is soft in the plastic shear mode: the noise of a
         # force control at 1e-8 shows up as displacement corrections of ~1e-3 of an increment and Newton's
@@ -859,7 +940,7 @@ class Scene(_Section):
 
 #: Every key name of a scene (to tell keys from pydantic's union tags in an error's location).
 _KEY_NAMES = {name for model in (Scene, GeometrySettings, MaterialSettings, ContactSettings, ZoneSettings,
-                                 WearSettings, LoadingSettings, SolverSettings, OutputSettings)
+                                 WearSettings, LoadingSettings, SolverSettings, OutputSettings, FatigueSettings)
               for name in model.model_fields}
 
 

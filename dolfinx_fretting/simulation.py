@@ -40,6 +40,7 @@ from .contact_output import write_contact_xdmf
 from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, cycle_wear,
                          extrapolate_plastic_history, hertz_jump_limit, jump_error, local_jump_error,
                          plastic_jump_error, plastic_jump_limit, propagate_error)
+from .fatigue_outputs import FATIGUE_TABLE, FatigueOutputs
 from .interrupts import Interrupted, RunSignals, stage_hook
 from .io import non_finite_keys, write_json_atomic
 from .materials import J2Plasticity, elastic_stiffness
@@ -215,6 +216,8 @@ class Progress:
     sliding_warned: bool = False
     newton_fallbacks: int = 0
     plastic_regime: str = "none"                      #: The last simulated cycle's (elastic-plastic bodies).
+    #: ``[fatigue]``: what its outputs need to resume (``fatigue_outputs.FatigueOutputs.saved``).
+    fatigue: dict[str, Any] | None = None
     jump: dict[str, Any] = field(default_factory=lambda: {
         # error: the run's wear-gap error estimate (max |propagated| + carried); error_sum: the jumps' bounds summed
         # (not propagated); error_vector: the propagated error per contact after the last jump (rank 0's decision);
@@ -369,6 +372,15 @@ class _Run:
             shifted_cells=self.model.setup.display_cells,
             resume={"sizes": sizes, "xdmf_started": xdmf_started} if meta is not None else None)
         self.note_written()
+        #: ``[fatigue]``: the evaluations, fatigue.csv and Miner's sum (a region without points refused here).
+        self.fatigue: FatigueOutputs | None = None
+        if scene.fatigue.enabled:
+            try:
+                self.fatigue = FatigueOutputs(scene, self.problem, out_dir, self.progress.fatigue if meta else None,
+                                              self.state)
+            except ValueError as exc:
+                raise SimulationError(str(exc)) from None
+            self.note_written()
         # proof of a resume in the summary: where it started, and the cycles this process simulated
         self.resumed_from_cycle = self.progress.cycle if meta is not None else None
         self.last_checkpoint = time.perf_counter()
@@ -460,6 +472,8 @@ class _Run:
 
     def checkpoint(self) -> None:
         self.check_folder(f"{self._done_so_far()}, before its checkpoint")
+        if self.fatigue is not None:
+            self.progress.fatigue = self.fatigue.saved()
         progress = asdict(self.progress)
         for key in ("rate", "error_vector"):
             value = self.progress.jump[key]
@@ -663,8 +677,9 @@ class _Run:
             keep = cycle in self.snapshots
             write_history = keep or cycle == 1 or cycle % every == 0 or cycle in loop_cycles
             growths = len(self.progress.window_growths)
+            fatigue_due = self.fatigue is not None and self.fatigue.due(cycle)
             # (several zones: the writer reads each zone's columns from every increment's forces)
-            result = self._cycle(cycle, keep or jumping or len(self.model.contacts) > 1, path)
+            result = self._cycle(cycle, keep or jumping or len(self.model.contacts) > 1 or fatigue_due, path)
             self.cycle_mode = "compiled" if result.compiled else "python"
             start = self.state
             new_state = self.problem.commit(start, result)
@@ -678,12 +693,19 @@ class _Run:
                 jump = {**jump, "plastic_regime": plastic.regime, "plastic_flow": plastic.flow,
                         "plastic_net": plastic.net}
                 self.progress.plastic_regime = plastic.regime
+            if fatigue_due:   # the cycle's states (before it is committed: a refusal leaves no trace of it)
+                try:         # the block of cycles the evaluation stands for ends with the cycle's jump
+                    self.fatigue.evaluate(cycle, result, cycle + jump.get("jump", 1) - 1)
+                except ValueError as exc:
+                    raise SimulationError(str(exc)) from None
             self.state = new_state
             self.progress.newton_fallbacks += int(result.records.get("full_newton_fallbacks", np.zeros(1)).sum())
             self._check_small_sliding(result.records["mean_relative_tangential"])
             self.check_folder(f"after cycle {cycle}, before writing it")
             crow = self.writer.write_cycle(cycle, start, result, history=write_history, profiles=keep,
                                            wall=time.perf_counter() - t0, jump=jump)
+            if fatigue_due:
+                self.fatigue.write()
             self.note_written()
             self.progress.cycle = cycle + jump.get("jump", 1) - 1
             self.progress.last_cycle_row = crow
@@ -936,6 +958,8 @@ class _Run:
         summary["window_growths"] = progress.window_growths
         summary["modelled"] = self._modelled()
         summary["units"] = self.writer.description.units.to_json(model.contact.dim)
+        if self.fatigue is not None:
+            summary["fatigue"] = self.fatigue.summary()
         if self.size_estimate is not None:  # the estimate made before meshing, to compare with what was built
             summary["size_estimate"] = self.size_estimate.as_dict()
         if error is not None:
@@ -1067,6 +1091,7 @@ def _scene_outputs(scene: Scene) -> list[str]:
     names = ["history.csv", *(["cycles.csv", CHECKPOINT] if cyclic else []),
              *(["contact_profiles.csv"] if out.contact_profiles else []), *(["fields.xdmf"] if out.xdmf else []),
              *(["worn_profiles.csv"] if scene.wear.law != "none" else []),
+             *([FATIGUE_TABLE] if scene.fatigue.enabled else []),
              *(["contact.xdmf"] if out.xdmf and out.contact_profiles else []), *([PLOTS] if out.plots else []),
              *(PICTURES if out.plots and out.xdmf else ())]
     return names

@@ -1,4 +1,5 @@
-"""The small CSV tables of the sweeps (``study.csv``, ``map.csv``): one way to write a cell and to read rows back.
+"""The small CSV tables of the sweeps (``study.csv``, ``map.csv``) and of a run's fatigue (``fatigue.csv``): one way
+to write a cell, to write or append rows and to read them back.
 
 A number is written with 6 significant digits (a non-finite one as a blank cell), a flag as ``True``/``False``;
 reading gives floats (blank: NaN), the named text, flag and integer columns as such.
@@ -14,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["cell_text", "write_rows", "write_table", "read_rows"]
+__all__ = ["cell_text", "write_rows", "append_rows", "write_table", "read_rows"]
 
 
 def cell_text(value: Any) -> str:
@@ -36,6 +37,16 @@ def write_rows(path: str | Path, rows: Sequence[dict[str, Any]], fields: Sequenc
     with open(path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(fields), extrasaction="ignore")
         writer.writeheader()
+        for row in rows:
+            writer.writerow({key: cell_text(row.get(key)) for key in fields})
+    return path
+
+
+def append_rows(path: str | Path, rows: Sequence[dict[str, Any]], fields: Sequence[str]) -> Path:
+    """Append ``rows`` to a table of :func:`write_rows` with the columns ``fields`` (its header already written)."""
+    path = Path(path)
+    with open(path, "a", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(fields), extrasaction="ignore")
         for row in rows:
             writer.writerow({key: cell_text(row.get(key)) for key in fields})
     return path

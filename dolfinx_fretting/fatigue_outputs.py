@@ -1,0 +1,234 @@
+"""The scene runner's fatigue outputs: a scene's ``[fatigue]`` evaluated over the run's cycles.
+
+At each evaluated cycle (``fatigue.cycles``: the last, or every n-th and the last) the runner hands the cycle's
+kept result to :func:`~dolfinx_fretting.fatigue_fields.fatigue_over_cycle` (the public API, the same call a
+script makes) and :class:`FatigueOutputs`:
+
+* appends one row per point of the near-surface region to ``fatigue.csv`` (:data:`TABLE_COLUMNS`: the cycle, its
+  equivalent cycles, :data:`~dolfinx_fretting.fatigue.POINT_COLUMNS`, Miner's damage), rank 0, the points in one
+  order whatever the partition (by their coordinates);
+* with strain-life constants, adds the block of cycles since the previous evaluation to Miner's sum
+  (:class:`~dolfinx_fretting.fatigue.MinerSum`): the block runs from the cycle after the previous evaluation's to
+  the end of this cycle's jump (with cycle jumps: the jump's physical cycles), times ``wear.acceleration`` (each
+  simulated cycle stands for that many), at the life this cycle gives;
+* keeps the summary (``summary.json["fatigue"]``: :data:`~dolfinx_fretting.fatigue.SUMMARY_FIELDS`, with a
+  critical distance :data:`~dolfinx_fretting.fatigue.CRITICAL_DISTANCE_FIELDS`, with constants
+  :data:`~dolfinx_fretting.fatigue.MINER_FIELDS`; a value that is not finite, such as an infinite life, is null).
+
+What a checkpoint needs (:meth:`FatigueOutputs.saved`: the damage per point, the cycles summed, ``fatigue.csv``'s
+byte size) goes into the run's progress; a resume truncates ``fatigue.csv`` to that size, as the other tables
+are, so no row is lost or written twice. Collective: every rank calls every method.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from .fatigue import (CRITICAL_DISTANCE_FIELDS, MINER_FIELDS, POINT_COLUMNS, SUMMARY_FIELDS, BasquinCoffinManson,
+                      CriticalDistance, FatemiSocie, MinerSum)
+from .fatigue_fields import FatigueResult, fatigue_over_cycle
+from .materials import LinearElastic
+from .outdir import check_resume_tables
+from .scenes import Scene
+from .state import CycleResult
+from .tables import append_rows, write_rows
+
+__all__ = ["FATIGUE_TABLE", "TABLE_COLUMNS", "FatigueOutputs", "fatigue_arguments", "evaluated"]
+
+#: The per-point table of the evaluated cycles.
+FATIGUE_TABLE = "fatigue.csv"
+#: Its columns: the cycle evaluated (simulated), the equivalent cycles reached (the end of its jump, times
+#: ``wear.acceleration``), the point's :data:`~dolfinx_fretting.fatigue.POINT_COLUMNS` and Miner's damage
+#: summed up to it (blank without strain-life constants).
+TABLE_COLUMNS = ("cycle", "equivalent_cycles", *POINT_COLUMNS, "damage")
+
+
+def fatigue_arguments(scene: Scene) -> dict[str, Any]:
+    """The keyword arguments of :func:`~dolfinx_fretting.fatigue_fields.fatigue_over_cycle` a scene's
+    ``[fatigue]`` gives (after the problem and the states): ``region``, ``material``, ``fatemi_socie``,
+    ``strain_life``, ``angle_step``, ``critical``."""
+    f, m = scene.fatigue, scene.material
+    return {"region": f.region, "material": LinearElastic(m.E, m.nu),
+            "fatemi_socie": FatemiSocie(f.k, f.yield_stress) if f.k is not None else None,
+            "strain_life": BasquinCoffinManson(f.sigma_f, f.b, f.eps_f, f.c, m.E) if f.strain_life else None,
+            "angle_step": f.angle_step,
+            "critical": CriticalDistance(f.critical_distance, f.method) if f.critical_distance is not None else None}
+
+
+def evaluated(scene: Scene, cycle: int, last_evaluated: int) -> bool:
+    """Whether simulated cycle ``cycle`` is evaluated: the run's last, or (``fatigue.cycles = n``) the first
+    simulated cycle at or after the next multiple of n past ``last_evaluated`` (with jumps a multiple may be
+    skipped over)."""
+    every = scene.fatigue.cycles
+    if cycle >= scene.loading.cycles:
+        return True
+    return every != "last" and cycle >= (last_evaluated // every + 1) * every
+
+
+def _finite(value: Any) -> Any:
+    """A summary number, None where it is not finite (JSON has no inf; an infinite life is no crack)."""
+    if value is None:
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _canonical_order(coordinates: np.ndarray) -> np.ndarray:
+    """The points sorted by x, then y, then z, rounded to 1e-9 of the region's extent: the same order whatever
+    the partition (a cell's midpoint is computed from its vertices in the order its rank holds them)."""
+    scale = float(np.ptp(coordinates, axis=0).max(initial=0.0)) or 1.0
+    key = np.round(coordinates / (scale * 1e-9))
+    return np.lexsort((key[:, 2], key[:, 1], key[:, 0]))
+
+
+class FatigueOutputs:
+    """A run's fatigue evaluations, its ``fatigue.csv``, Miner's sum and summary (module docstring). Collective.
+
+    Args:
+        scene: The scene (``[fatigue]`` enabled).
+        problem: The run's :class:`~dolfinx_fretting.problem.FrettingProblem`.
+        out: The output folder.
+        saved: :meth:`saved` of the checkpoint resumed from (None: a fresh run, a new ``fatigue.csv``).
+        check: The initial state: one call of ``fatigue_over_cycle`` on it refuses a region without points (and
+            any other argument the API refuses) before the cycles start.
+
+    Raises:
+        ValueError: the region holds no point, or (resume) ``fatigue.csv`` is missing or shorter than the
+            checkpoint records (on every rank).
+    """
+
+    def __init__(self, scene: Scene, problem, out: Path, saved: dict[str, Any] | None, check) -> None:
+        self.scene = scene
+        self.problem = problem
+        self.comm: MPI.Comm = problem.comm
+        self.rank0 = self.comm.rank == 0
+        self.path = Path(out) / FATIGUE_TABLE
+        self.arguments = fatigue_arguments(scene)
+        self.acceleration = float(scene.wear.acceleration)
+        started, cpu = time.perf_counter(), time.process_time()
+        try:   # collective: the same error on every rank
+            fatigue_over_cycle(problem, [check], **self.arguments)
+        except ValueError as exc:
+            raise ValueError(f"fatigue: {exc}") from None
+        saved = dict(saved or {})
+        self.last_evaluated = int(saved.get("last_evaluated", 0))
+        self.covered = int(saved.get("covered", 0))        # simulated cycles summed into Miner's sum
+        self.evaluations = int(saved.get("evaluations", 0))
+        self.table_bytes = saved.get("table_bytes")
+        self.wall_time = float(saved.get("wall_time_s", 0.0))
+        self.cpu_time = float(saved.get("cpu_time_s", 0.0))
+        self._summary: dict[str, Any] = dict(saved.get("summary") or {})
+        self.miner: MinerSum | None = None
+        if self.rank0 and saved.get("damage") is not None:
+            initiation = saved.get("initiation")
+            self.miner = MinerSum(np.array(saved["damage"], dtype=float), float(saved["cycles_summed"]),
+                                  math.inf if initiation is None else float(initiation),
+                                  int(saved["initiation_point"]))
+        problem_text = None
+        if self.rank0:
+            if saved:
+                problem_text = check_resume_tables(self.path.parent, {self.path.stem: int(self.table_bytes)})
+                if problem_text is None:
+                    with open(self.path, "r+") as table:
+                        table.truncate(int(self.table_bytes))
+            else:
+                write_rows(self.path, [], TABLE_COLUMNS)
+                self.table_bytes = self.path.stat().st_size
+        if self.comm.size > 1:
+            problem_text = self.comm.bcast(problem_text, root=0)
+        if problem_text is not None:
+            raise ValueError(f"--resume: {problem_text}")
+        self.wall_time += time.perf_counter() - started
+        self.cpu_time += time.process_time() - cpu
+        self._pending: list[dict[str, Any]] = []
+
+    def due(self, cycle: int) -> bool:
+        """Whether simulated cycle ``cycle`` is evaluated (:func:`evaluated`)."""
+        return evaluated(self.scene, cycle, self.last_evaluated)
+
+    def evaluate(self, cycle: int, result: CycleResult, cycle_end: int) -> FatigueResult:
+        """Evaluate simulated cycle ``cycle`` (its result kept, ``run_cycle(..., keep=True)``), whose jump ends at
+        cycle ``cycle_end``: its rows (written by :meth:`write`), Miner's sum and the summary. Collective."""
+        started, cpu = time.perf_counter(), time.process_time()
+        result = fatigue_over_cycle(self.problem, result, **self.arguments)
+        parts = self.comm.gather((result.coordinates, result.columns()), root=0)
+        summary, error = None, None
+        if self.rank0:
+            try:
+                summary = self._on_root(parts, result.summary, cycle, cycle_end)
+            except ValueError as exc:   # (a resumed damage of another size): raised on every rank below
+                error = str(exc)
+        if self.comm.size > 1:
+            summary, error = self.comm.bcast((summary, error), root=0)
+        if error is not None:
+            raise ValueError(f"fatigue, cycle {cycle}: {error}")
+        self._summary = summary
+        self.last_evaluated, self.covered = cycle, cycle_end
+        self.evaluations += 1
+        self.wall_time += time.perf_counter() - started
+        self.cpu_time += time.process_time() - cpu
+        return result
+
+    def _on_root(self, parts, api_summary: dict[str, Any], cycle: int, cycle_end: int) -> dict[str, Any]:
+        """Rank 0: the points gathered in their canonical order, Miner's sum, the rows and the summary."""
+        coordinates = np.concatenate([part[0] for part in parts])
+        columns = {name: np.concatenate([part[1][name] for part in parts]) for name in POINT_COLUMNS}
+        order = _canonical_order(coordinates)
+        columns = {name: values[order] for name, values in columns.items()}
+        summary = {"cycle": cycle, "equivalent_cycles": cycle_end * self.acceleration, "points": int(order.size),
+                   **{key: _finite(api_summary[key]) for key in SUMMARY_FIELDS}}
+        if self.arguments["critical"] is not None:
+            summary.update({key: _finite(api_summary[key]) for key in CRITICAL_DISTANCE_FIELDS})
+        damage = np.full(order.size, np.nan)
+        if self.arguments["strain_life"] is not None:
+            if self.miner is None:
+                self.miner = MinerSum.start(order.size)
+            if self.miner.damage.size != order.size:
+                raise ValueError(f"{order.size} points in the region, {self.miner.damage.size} in the damage "
+                                 "resumed from the checkpoint (another mesh or partition rounding)")
+            self.miner = self.miner.add(columns["life"], (cycle_end - self.covered) * self.acceleration)
+            damage = self.miner.damage
+            found = math.isfinite(self.miner.initiation)
+            at = self.miner.initiation_point
+            summary.update({"miner_damage_max": float(damage.max(initial=0.0)),
+                            "initiation_cycles": self.miner.initiation if found else None,
+                            "initiation_x": float(columns["x"][at]) if found else None,
+                            "initiation_depth": float(columns["depth"][at]) if found else None})
+        self._pending = [{"cycle": cycle, "equivalent_cycles": cycle_end * self.acceleration,
+                          **{name: columns[name][i] for name in POINT_COLUMNS}, "damage": damage[i]}
+                         for i in range(order.size)]
+        return summary
+
+    def write(self) -> None:
+        """Rank 0: append the last evaluation's rows to ``fatigue.csv`` (after the runner's folder check)."""
+        if self.rank0 and self._pending:
+            append_rows(self.path, self._pending, TABLE_COLUMNS)
+            self.table_bytes = self.path.stat().st_size
+        self._pending = []
+
+    def saved(self) -> dict[str, Any]:
+        """What a checkpoint holds to resume (JSON; the damage and table size rank 0's)."""
+        miner = self.miner
+        return {"last_evaluated": self.last_evaluated, "covered": self.covered, "evaluations": self.evaluations,
+                "table_bytes": self.table_bytes, "wall_time_s": self.wall_time, "cpu_time_s": self.cpu_time,
+                "summary": self._summary,
+                "damage": miner.damage.tolist() if miner is not None else None,
+                "cycles_summed": miner.cycles if miner is not None else 0.0,
+                "initiation": _finite(miner.initiation) if miner is not None else None,
+                "initiation_point": miner.initiation_point if miner is not None else -1}
+
+    def summary(self) -> dict[str, Any]:
+        """``summary.json["fatigue"]``: the last evaluation's numbers (every rank the same), the evaluations made
+        and the time they took (wall and this rank's CPU, s; the runs resumed from included)."""
+        fields = [*SUMMARY_FIELDS, *(CRITICAL_DISTANCE_FIELDS if self.arguments["critical"] is not None else ()),
+                  *(MINER_FIELDS if self.arguments["strain_life"] is not None else ())]
+        values = {"cycle": None, "equivalent_cycles": None, "points": 0, **{key: None for key in fields},
+                  **self._summary}
+        return {**values, "evaluations": self.evaluations, "wall_time_s": round(self.wall_time, 6),
+                "cpu_time_s": round(self.cpu_time, 6)}
