@@ -7,7 +7,8 @@ The rig has two pads, one on each face of the specimen, loaded alike: the model 
 specimen (a roller on its mid-plane, y = -thickness/2) and one pad, the half-cylinder of the ``half_cylinder`` kind
 on its elastic flat (:func:`dolfinx_fretting.meshes.cylinder_on_flat`, both bodies deformable, one material). The
 pad's top is clamped (the bridge holds it); the specimen's left end is held along x (a roller: the grip), its right
-end carries the bulk stress, the named load :data:`BULK_STRESS_LOAD` (factor: sigma_B in MPa, positive in tension).
+end carries the bulk stress, the named load :data:`~dolfinx_fretting.scene_models.BULK_STRESS_LOAD` (factor: sigma_B
+in MPa, positive in tension).
 P and Q are the contact's total forces (force control through the relative rigid motion of the two bodies, as on
 the elastic flat), so the specimen's grip reacts Q + sigma_B x thickness / 2.
 
@@ -22,10 +23,10 @@ import numpy as np
 from mpi4py import MPI
 
 from .. import meshes
-from ..scene_models import (BULK_STRESS_LOAD, PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane, roller,
-                            two_body_cells)
-from .base import (MAX_ELASTIC_STRAIN, MIN_ELASTIC_STRAIN, check_no_boundary, check_plane_strain, load_range_error,
-                   range_error)
+from ..scene_models import (BULK_STRESS_LOAD, PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model,
+                            rigid_plane, roller, two_body_cells)
+from .base import (MAX_ELASTIC_STRAIN, MIN_ELASTIC_STRAIN, MeshSize, check_no_boundary, check_plane_strain,
+                   load_range_error, range_error)
 from .half_cylinder import HalfCylinder
 
 __all__ = ["PadSpecimen"]
@@ -102,7 +103,7 @@ class PadSpecimen(HalfCylinder):
             raise load_range_error("loading.bulk_stress", stress, MIN_ELASTIC_STRAIN * E, MAX_ELASTIC_STRAIN * E,
                                    "MPa (either sign, or 0)", f"|sigma_B| / E with material.E = {E:g} MPa")
 
-    def mesh_size(self, scene: Scene):
+    def mesh_size(self, scene: Scene) -> MeshSize:
         """The half-cylinder's estimate on the elastic flat, with the specimen's keys as drivers."""
         size = super().mesh_size(scene)
         geometry = scene.geometry
