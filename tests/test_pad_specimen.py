@@ -236,6 +236,47 @@ def test_the_scene_run_cyclic_in_phase(tmp_path):
         assert abs(np.sum(x * corrective) / np.sum(corrective) - first * e) <= tolerance * h
 
 
+def test_the_scene_runner_loads_as_the_api(rig, tmp_path):
+    """``loading.cycles = 0`` through the scene runner (P in 2 increments, then Q and sigma_B together in 5): the
+    contact tractions of the last increment are those of the API driven by hand in the fixture (same targets, same
+    solver: to 1e-6 of mu p0, the force control's tolerance), so the runner hands the bulk stress to the model."""
+    scene, runs, _ = rig
+    a, p0, P, Q, mu, h = _reference(scene)
+    run_scene(load_scene("pad-specimen", MODEL + [f"loading.tangential_increments={RAMP}"]), tmp_path, quiet=True)
+    with open(tmp_path / "contact_profiles.csv") as f:
+        rows = list(csv.DictReader(f))
+    last = max(int(r["increment"]) for r in rows)
+    rows = sorted((r for r in rows if int(r["increment"]) == last), key=lambda r: float(r["position"]))
+    fields = runs["bulk"]["fields"]
+    order = np.argsort(fields["coordinates"][:, 0])
+    assert np.allclose([float(r["position"]) for r in rows], fields["coordinates"][order, 0], rtol=0, atol=1e-9)
+    assert np.allclose([float(r["pressure"]) for r in rows], fields["pressure"][order], rtol=0, atol=1e-6 * mu * p0)
+    assert np.allclose(np.abs([float(r["shear"]) for r in rows]), np.abs(fields["shear"][order, 0]), rtol=0,
+                       atol=1e-6 * mu * p0)
+    assert [int(r["state"]) for r in rows] == list(fields["status"][order])
+
+
+# slow: 25 s a stack (two runs of a cycle of 16 increments)
+@pytest.mark.slow
+def test_a_lagging_bulk_stress_is_there_at_the_cycle_start(tmp_path):
+    """``loading.bulk_phase = 90``: sigma_B(t) = sigma_B sin(2 pi t - pi/2), -sigma_B where the cycle starts, which the
+    preload reaches with P (Q = 0). A bulk stress on a stuck contact shears it (the specimen's surface strains by
+    sigma_B / E', the pad's does not): at the preload's end the largest shear traction is several times the one P
+    alone locks in through the finite bodies' supports (measured 45.5 MPa against 5.9 MPa in phase, 5 % of mu p0);
+    5x is asserted (the preload's ramp of sigma_B dropped: equal). Both runs converge through their cycle."""
+    largest = {}
+    for phase in (0.0, 90.0):
+        out = tmp_path / f"phase{phase:g}"
+        overrides = ["output.progress=false", "loading.cycles=1", f"loading.bulk_phase={phase}"]
+        scene = load_scene("pad-specimen", overrides)
+        summary = run_scene(scene, out, quiet=True)
+        assert summary["converged"] is True
+        with open(out / "contact_profiles.csv") as f:
+            preload = [r for r in csv.DictReader(f) if int(r["increment"]) == scene.loading.normal_increments]
+        largest[phase] = max(abs(float(r["shear"])) for r in preload)
+    assert largest[90.0] > 5 * largest[0.0]
+
+
 def test_closed_forms_of_the_support_module():
     """The references themselves: McEwen's sigma_xx on the surface is Johnson's (-p - 2 q0 x / a inside, 2 q0 (|x| -
     sqrt(x^2 - a^2)) sign(-x) outside), on the axis Hertz's subsurface sigma_xx, and the trailing-edge value of the
