@@ -144,11 +144,12 @@ def tangential_item(values: np.ndarray, forced: np.ndarray):
 
 
 
-def waveform(kind: str, n: int) -> np.ndarray:
+def waveform(kind: str, n: int, phase: float = 0.0) -> np.ndarray:
     """Shape of one load cycle at the ends of its ``n`` increments, t = j/n (j = 1 .. n), in [-1, 1].
 
     ``"triangular"``: 0 -> 1 at t = 1/4 -> 0 at 1/2 -> -1 at 3/4 -> 0 at t = 1 (the paper's Example 1
-    path); ``"sinusoidal"``: sin(2 pi t).
+    path); ``"sinusoidal"``: sin(2 pi t). ``phase`` (degrees): the shape lagging by that much, w(t - phase / 360)
+    (periodic; 0: the shape itself, bit for bit).
 
     ``n`` must be a multiple of 4 (as a scene's ``loading.increments_per_cycle``): both shapes peak at t = 1/4 and
     3/4, which are increment ends only then; with n = 3 the path would turn at 0.67 of its amplitude, with n = 6
@@ -161,12 +162,12 @@ def waveform(kind: str, n: int) -> np.ndarray:
         raise ValueError(f"increments per cycle = {n!r}: expected a multiple of 4, at least 4 (the waveform peaks at "
                          "1/4 and 3/4 of the cycle, increment ends only then; otherwise the path never reaches its "
                          "amplitude)")
-    t = np.arange(1, n + 1) / n
+    t = np.mod(np.arange(1, n + 1) / n - phase / 360.0, 1.0)  # t = 1 is t = 0 of the next cycle
     if kind == "triangular":
         return np.interp(t, [0.0, 0.25, 0.75, 1.0], [0.0, 1.0, -1.0, 0.0])
     if kind == "sinusoidal":
         w = np.sin(2 * np.pi * t)
-        w[np.isclose(t, 0.5) | np.isclose(t, 1.0)] = 0.0  # exact zeros at the half and full cycle
+        w[np.isclose(t, 0.5) | np.isclose(t, 0.0) | np.isclose(t, 1.0)] = 0.0  # exact zeros at the half and full cycle
         return w
     raise ValueError(f"loading.waveform = {kind!r}: allowed 'triangular', 'sinusoidal'")
 

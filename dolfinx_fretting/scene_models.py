@@ -29,10 +29,14 @@ from .meshes import BODY_CELL_TAG, BodyMesh
 __all__ = ["SceneModel", "FurtherZone", "further_zones", "elastic_model", "contact_surface", "rigid_plane",
            "elastic_flat", "two_body_cells", "roller", "displacement_conditions", "boundary_pressure", "facet_length",
            "axis_normal", "read_msh", "read_xdmf", "MeshFileError", "check_file_exists", "PAIRING", "PRESSURE_LOAD",
+           "BULK_STRESS_LOAD",
            "BOUNDARY_DISPLACEMENT", "BOUNDARY_PRESSURE"]
 
 #: Name of the face-pressure load of a scene (``loading.tangential_pressure``), factor in MPa.
 PRESSURE_LOAD = "face_pressure"
+#: Name of the bulk-stress load of the fretting-fatigue rig (``geometry.kind = "pad_specimen"``, a unit tension
+#: on the specimen's end), factor: ``loading.bulk_stress`` in MPa.
+BULK_STRESS_LOAD = "bulk_stress"
 #: Names of the ``[boundary]`` loads of a mesh file's scene (ramped with the preload, then held).
 BOUNDARY_DISPLACEMENT = "boundary_displacement"
 BOUNDARY_PRESSURE = "boundary_pressure"

@@ -78,7 +78,7 @@ Cycle = Annotated[int, Field(ge=1, le=100_000_000)]
 class GeometrySettings(_Section):
     """Body and mesh (mm)."""
 
-    kind: Literal["half_cylinder", "rectangle", "file", "sphere"] = "half_cylinder"
+    kind: Literal["half_cylinder", "rectangle", "file", "sphere", "pad_specimen"] = "half_cylinder"
     #: ``kind = "file"``: the user's mesh, 2D: a gmsh ``.msh`` file with physical groups (names), or a DOLFINx XDMF
     #: file with its facet meshtags (``XDMFFile.write_mesh`` + ``write_meshtags``); a relative path is taken from
     #: the scene file's folder (given by ``--set``: from the working directory). Boundaries are named in the
@@ -108,6 +108,10 @@ class GeometrySettings(_Section):
     #: Its top is y = 0, centred under the cylinder; its bottom is fixed.
     flat_width: Length = 20.0
     flat_height: Length = 10.0
+    #: The fretting-fatigue rig (``kind = "pad_specimen"``): the specimen's whole thickness between its two pads
+    #: and its length (mm). The model holds its upper half (a roller on the mid-plane: the second pad's mirror).
+    specimen_thickness: Length = 10.0
+    specimen_length: Length = 40.0
     #: A sphere (``kind = "sphere"``, :func:`dolfinx_fretting.meshes_3d.sphere_on_flat`): model half of it (and
     #: of the flat) about the plane y = 0 that contains the sliding direction x, with a roller there; forces,
     #: energies and volumes are the whole contact's. False: the whole sphere.
@@ -414,6 +418,12 @@ class LoadingSettings(_Section):
     cycles: int = Field(0, ge=0, le=100_000_000)
     increments_per_cycle: int = Field(80, ge=4, le=100000)
     waveform: Literal["triangular", "sinusoidal"] = "triangular"
+    #: The fretting-fatigue rig (``geometry.kind = "pad_specimen"``): the bulk stress on the specimen's end (MPa,
+    #: positive in tension), reached with the tangential load (``cycles = 0``) or its amplitude (``cycles > 0``).
+    #: The range (small strain) is checked against ``material.E`` by the geometry kind.
+    bulk_stress: float | None = None
+    #: Its phase lag behind the tangential load in a cycle (degrees): sigma_B(t) = sigma_B w(t - phase / 360).
+    bulk_phase: float | None = Field(None, ge=-360.0, le=360.0)
 
     @model_validator(mode="after")
     def _one_control_each(self) -> LoadingSettings:
@@ -833,7 +843,11 @@ class Scene(_Section):
     @model_validator(mode="after")
     def _window_fits(self) -> Scene:
         c = self.contact
-        # what the geometry kind accepts of the obstacle, the loads, the plane, the surface, the window, [boundary]
+        # the keys of other sections only another kind reads; then what the geometry kind accepts of the obstacle,
+        # the loads, the plane, the surface, the window, [boundary]
+        for other in GEOMETRIES.values():
+            if other is not GEOMETRIES[self.geometry.kind]:
+                other.refuse_own_scene_keys(self)
         GEOMETRIES[self.geometry.kind].check_scene(self)
         if c.sliding == "finite" and c.obstacle != "elastic_flat":
             raise range_error("contact.sliding", c.sliding, "'small' unless contact.obstacle = 'elastic_flat' (finite "

@@ -53,7 +53,7 @@ from .problem import (Archard, ContactState, ConvergenceError, CyclePath, CycleR
                       Displacement, Force, FrettingProblem, LocalSolver, PlasticHistory, Plasticity, WindowError)
 from .outdir import RUN_FILES, OutputFolderError, OutputLock, claim_output_folder, folder_lost, load_checkpoint
 from .geometries import build_scene_model
-from .scene_models import PRESSURE_LOAD, MeshFileError, SceneModel
+from .scene_models import BULK_STRESS_LOAD, PRESSURE_LOAD, MeshFileError, SceneModel
 from .scenes import Scene, SceneError, describe_differences, scene_differences
 from .sizes import SizeEstimate, check_size
 
@@ -286,6 +286,8 @@ def _tangential_target(force_controlled: bool, value, setup: SceneModel):
 def _step_targets(step: LoadStep, model: ContactModel, normal_increments: int) -> dict[str, Any]:
     """The API's arguments of a scene's load step (the geometry's ramped loads follow the preload)."""
     loads = {PRESSURE_LOAD: step.pressure} if PRESSURE_LOAD in model.problem.load_names else {}
+    if BULK_STRESS_LOAD in model.problem.load_names:
+        loads[BULK_STRESS_LOAD] = step.bulk_stress
     for name in model.setup.ramped:
         loads[name] = min(1.0, step.increment / normal_increments) if step.stage == "normal" else 1.0
     fraction = model.setup.model_fraction
@@ -308,6 +310,8 @@ def _cycle_path(scene: Scene, model: ContactModel) -> CyclePath:
     setup = model.setup
     pressures = np.array([s.pressure for s in steps])
     loads = {PRESSURE_LOAD: pressures} if PRESSURE_LOAD in model.problem.load_names else {}
+    if BULK_STRESS_LOAD in model.problem.load_names:
+        loads[BULK_STRESS_LOAD] = np.array([s.bulk_stress for s in steps])
     normal = _target(first.normal_force_controlled, [s.normal for s in steps], setup.model_fraction)
     tangential = _tangential_target(first.tangential_force_controlled, [s.tangential for s in steps], setup)
     if len(model.contacts) > 1:
@@ -1029,7 +1033,8 @@ class _Run:
                        + setup.contact_text,
             "loads": (f"{scene.loading.cycles} cycles ({getattr(self, 'cycle_mode', 'python')} path)"
                       if scene.loading.cycles > 0 else "preload and a monotonic tangential load")
-                     + ("; face pressure load" if PRESSURE_LOAD in self.problem.load_names else ""),
+                     + ("; face pressure load" if PRESSURE_LOAD in self.problem.load_names else "")
+                     + ("; bulk stress on the specimen's end" if BULK_STRESS_LOAD in self.problem.load_names else ""),
         }
 
 

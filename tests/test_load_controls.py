@@ -30,6 +30,7 @@ TINY = {
     "sphere-flat": ["geometry.contact_mesh_size=0.09"],
     "sphere-flat:whole": ["geometry.contact_mesh_size=0.09", "geometry.half_model=false"],
     "stromberg-block": ["geometry.nx=8", "geometry.ny=8"],
+    "pad-specimen": ["geometry.contact_mesh_size=0.04"],
 }
 #: (normal force, an approach giving about that force on the tiny mesh (measured), tangential force = mu P / 2,
 #: stroke, face pressure) in the scene's units: loads that make sense, so that every run must end converged.
@@ -41,6 +42,9 @@ LOADS = {
     "sphere-flat": (100.0, 0.0033, 40.0, 0.02, 10.0),
     "sphere-flat:whole": (100.0, 0.0033, 40.0, 0.02, 10.0),
     "stromberg-block": (24.4, 1e-4, 4.88, 0.001, 10.0),   # 1e-4 mm: the scene's approach (24.4 N/mm measured)
+    # 0.0064 mm: 93.25 N/mm measured. Q = mu P / 4: under an approach the bulk stress (92.7 MPa, the scene's)
+    # thins the specimen by Poisson's ratio and unloads the pad to mu P = 38.6 N/mm (refused at mu P / 2, measured)
+    "pad-specimen": (93.25, 0.0064, 17.48, 0.002, 10.0),
 }
 QUIET = ["output.xdmf=false", "output.plots=false", "output.progress=false", "loading.normal_increments=1",
          "loading.tangential_increments=2", "loading.increments_per_cycle=4"]
@@ -61,7 +65,7 @@ def _refusal(name, tangential, cycles):
     if tangential == "none" and cycles:
         return "loading.cycles = 1: a cyclic load needs its amplitude: one of loading.tangential_displacement"
     kind = load_scene(name.split(":")[0]).geometry.kind
-    if tangential == "pressure" and kind in ("half_cylinder", "sphere"):
+    if tangential == "pressure" and kind in ("half_cylinder", "sphere", "pad_specimen"):
         return f"loading.tangential_pressure = 10.0 is out of range; allowed: unset with geometry.kind = {kind!r}"
     return None
 
@@ -77,6 +81,7 @@ DEFAULT_RUNS = {
     "mccoll": {("force", "displacement", 1), ("displacement", "none", 0)},
     "sphere-flat": {("force", "force", 1), ("displacement", "force", 0)},
     "sphere-flat:whole": {("force", "displacement", 1), ("displacement", "displacement", 0)},
+    "pad-specimen": {("force", "force", 1), ("displacement", "none", 0)},
 }
 
 

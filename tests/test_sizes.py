@@ -34,6 +34,7 @@ CASES = [
     # the sphere's uniform zone sized from the wear of 10^4 cycles (0.51 mm, window 0.42 mm), and set by hand
     ("sphere-flat", ["loading.cycles=10000", "wear.cycle_jump=true", "geometry.contact_mesh_size=0.09"]),
     ("sphere-flat", ["geometry.contact_half_width=0.4", "geometry.contact_mesh_size=0.09"]),
+    ("pad-specimen", []), ("pad-specimen", ["geometry.contact_mesh_size=0.04"]),
 ]
 
 

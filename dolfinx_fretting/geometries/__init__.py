@@ -48,6 +48,7 @@ from ..scene_models import SceneModel
 from .base import Geometry
 from .half_cylinder import HalfCylinder
 from .mesh_file import MeshFile
+from .pad_specimen import PadSpecimen
 from .rectangle import Rectangle
 from .sphere import Sphere
 
@@ -59,6 +60,7 @@ GEOMETRIES: dict[str, Geometry] = {
     "rectangle": Rectangle(),
     "sphere": Sphere(),
     "file": MeshFile(),
+    "pad_specimen": PadSpecimen(),
 }
 
 

@@ -131,7 +131,7 @@ class Geometry(metaclass=ABCMeta):
     :data:`dolfinx_fretting.geometries.GEOMETRIES`.
 
     Schema checks (called by the validators of :mod:`dolfinx_fretting.scenes`; each raises a ``ValueError`` whose
-    message names the key): :meth:`refuse_own_keys`, :meth:`check_geometry`, :meth:`check_scene`,
+    message names the key): :meth:`refuse_own_keys`, :meth:`refuse_own_scene_keys`, :meth:`check_geometry`, :meth:`check_scene`,
     :meth:`check_loads`. Numerics: :meth:`preset_values` (``solver.preset``), :meth:`finer` and :meth:`coarser`
     (the keys that refine its mesh in a study, ``dolfinx_fretting.study``). Before any mesh:
     :meth:`contact_size` (the Hertz reference), :meth:`element_size`, :meth:`model_fraction`, :meth:`mesh_size`
@@ -142,6 +142,10 @@ class Geometry(metaclass=ABCMeta):
 
     def refuse_own_keys(self, geometry: GeometrySettings) -> None:
         """Refuse the ``[geometry]`` keys only this kind reads, set while another kind is chosen."""
+
+    def refuse_own_scene_keys(self, scene: Scene) -> None:
+        """Refuse the keys of the other sections (``[loading]``, ...) only this kind reads, set while another kind is
+        chosen."""
 
     def check_geometry(self, geometry: GeometrySettings) -> None:
         """Check the ``[geometry]`` section of this kind alone: which keys it takes, the sizes against the body."""

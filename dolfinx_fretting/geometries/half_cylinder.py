@@ -63,6 +63,10 @@ class HalfCylinder(Geometry):
                               f">= pi x radius / {MAX_CONTACT_ELEMENTS} = "
                               f"{math.pi * radius / MAX_CONTACT_ELEMENTS:.3g} mm")
 
+    def flat_size(self, geometry: GeometrySettings) -> tuple[float, float]:
+        """Width and height (mm) of the elastic flat under the cylinder (``flat_width``, ``flat_height``)."""
+        return geometry.flat_width, geometry.flat_height
+
     def check_scene(self, scene: Scene) -> None:
         """No ``[boundary]``, no face pressure (its faces are the fixed top and the contact surface), a window within
         the radius, a 2D plane; on the elastic flat, a flat wider and deeper than the refined zone."""
@@ -155,7 +159,7 @@ class HalfCylinder(Geometry):
 
         nodes = body(lambda x, y: _cylinder_regions(x, y, R, a, t), _cylinder_boundary(R), math.sqrt(2) * R, n_arc)
         if scene.contact.obstacle == "elastic_flat":
-            width, height = geometry.flat_width, geometry.flat_height
+            width, height = self.flat_size(geometry)
             nodes += body(lambda x, y: _flat_regions(x, y, width, height, a, t), _flat_boundary(width, height),
                           math.hypot(width / 2, height), n_flat)
         window, _ = self.candidate_window(scene, geometry.refined_half_width, geometry.contact_mesh_size)
@@ -178,7 +182,7 @@ class HalfCylinder(Geometry):
         zone, h = geometry.refined_half_width, geometry.contact_mesh_size
         start = time.perf_counter()
         mesher = meshes.cylinder_on_flat if two_body else meshes.half_cylinder
-        flat = (geometry.flat_width, geometry.flat_height) if two_body else ()
+        flat = self.flat_size(geometry) if two_body else ()
         body = mesher(comm, geometry.radius, *flat, contact_mesh_size=h, contact_half_width=zone,
                       coarse_mesh_size=geometry.coarse_mesh_size, quadrilateral=geometry.quadrilateral)
         mesh_s = time.perf_counter() - start
