@@ -14,7 +14,7 @@ import numpy as np
 
 from .laws import EvolvingFriction
 
-__all__ = ["evolving_laws", "tracks_energy", "coefficients", "energy_density", "accumulated_energy"]
+__all__ = ["evolving_laws", "tracks_energy", "coefficients", "energy_density", "accumulated_energy", "jump_limit"]
 
 
 def evolving_laws(contact) -> list[tuple[int, EvolvingFriction]]:
@@ -69,3 +69,30 @@ def accumulated_energy(contact, state, forces: np.ndarray, slip: np.ndarray, sca
     contact_set = contact.contact_set
     before = np.zeros(contact_set.nc) if state.friction_energy is None else state.friction_energy
     return before + scale * energy_density(contact_set.dim, contact_set.tributary, forces, slip)
+
+
+def jump_limit(contact, start, end, acceleration: float) -> float:
+    """The largest cycle jump dN (the simulated cycle from ``start`` to ``end`` and the dN - 1 cycles extrapolated
+    from it) over which no zone's friction changes: the jump extrapolates the simulated cycle's wear rate, which
+    holds only for that cycle's mu. ``inf`` when no law evolves (or each has reached its last value), 1 while mu
+    changes at once (a sloped part of a table, or a function: its course is not known).
+
+    A law of the cycles allows ``1 + (limit - N) / acceleration`` (N the simulated cycle's count, limit
+    :meth:`~dolfinx_fretting.laws.EvolvingFriction.constant_until`); one of the energy, with each contact's energy
+    per cycle e and the energy E at the simulated cycle's start, ``(limit - E) / e`` over the contacts that
+    dissipate (every increment of the extrapolated cycles below the limit)."""
+    bound = np.inf
+    for zone, law in evolving_laws(contact):
+        rows = contact.zone_slice(zone)
+        if law.variable == "cycles":
+            limit = float(law.constant_until(np.array([float(start.cycles)]))[0])
+            bound = min(bound, 1.0 + np.floor((limit - float(start.cycles)) / acceleration))
+            continue
+        before, after = start.friction_energy[rows], end.friction_energy[rows]
+        per_cycle = after - before
+        dissipating = per_cycle > 0
+        if not dissipating.any():
+            continue
+        limit = law.constant_until(before[dissipating])
+        bound = min(bound, float(np.floor(((limit - before[dissipating]) / per_cycle[dissipating]).min())))
+    return max(bound, 1.0)

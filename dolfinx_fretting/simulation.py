@@ -34,6 +34,8 @@ import numpy as np
 from mpi4py import MPI
 from tqdm import tqdm
 
+from . import friction
+from .commit import acceleration
 from .analytic import hertz_line_contact
 from .contact import Contact
 from .contact_output import write_contact_xdmf
@@ -128,7 +130,7 @@ class ContactModel:
         self.half_width = s.window if window is None else window
         try:
             all_bcs = s.bcs + [bc for conditions in s.prescribed.values() for bc in conditions]
-            contact = Contact(s.V, s.surface, s.obstacle, scene.contact.mu, all_bcs, self.half_width)
+            contact = Contact(s.V, s.surface, s.obstacle, scene.contact.friction_law(), all_bcs, self.half_width)
             # further zones (a mesh file's [[contact]] tables): each its surface, plane, friction and window
             zones = [Contact(s.V, zone.surface, zone.obstacle, zone.mu, all_bcs, zone.window) for zone in s.zones]
         except ValueError as exc:
@@ -786,6 +788,7 @@ class _Run:
         ``plastic``: an elastic-plastic body's cycle (:meth:`_plastic_cycle`): the jump is bounded by the
         plastic state's change too, and the plastic history is extrapolated with the wear gap."""
         scene, contact, jumps = self.scene, self.model.contact, self.progress.jump
+        contact_zones = self.problem.contact
         w = scene.wear
         h_e = self.model.setup.element_size
         k = self._wear_rate()
@@ -824,6 +827,10 @@ class _Run:
                 dN, bound = 1, "first_cycle"
             elif settling:
                 dN, bound, free = 1, "plastic_settling", jumps["free"]
+            # The jump extrapolates this cycle's wear rate, which holds only for its friction coefficients.
+            friction_bound = friction.jump_limit(contact_zones, start, new, acceleration(self.problem.wear_laws))
+            if dN > friction_bound:
+                dN, bound = int(friction_bound), "friction_evolving"
             # The error at this cycle's start (the last jump's local error added), carried over this cycle and its
             # jump (decided above; error_vector: the error after it, the next cycle's start but for that jump's own)
             vector = propagate_error(before + local, a, k, dN)
@@ -842,7 +849,11 @@ class _Run:
             new = replace(new, wear_gap=new.wear_gap + extra * rate,
                           increment=new.increment + extra * scene.loading.increments_per_cycle,
                           dissipated_energy=new.dissipated_energy
-                          + extra * float(result.records["dissipated_energy"].sum()))
+                          + extra * float(result.records["dissipated_energy"].sum()),
+                          # the jumped cycles count for an evolving friction law (mu held over them: bound above)
+                          cycles=new.cycles + extra * acceleration(self.problem.wear_laws),
+                          friction_energy=None if new.friction_energy is None else
+                          new.friction_energy + extra * (new.friction_energy - start.friction_energy))
             if plastic is not None and plastic.regime != "elastic_shakedown":  # eps_p and p follow the wear gap
                 before, after, m = start.plastic, new.plastic, scene.material
                 sigma, eps_p, p = extrapolate_plastic_history(after.sigma, before.eps_p, after.eps_p, before.p,
@@ -986,7 +997,8 @@ class _Run:
                          f"'{scene.solver.newton_tangent}', {newton['iteration']}"
                          if body is not None else "linear elastic: no Newton loop, no plastic state"),
             "delassus": "W of the elastic K built once" + (f"; {newton['delassus']}" if body is not None else ""),
-            "friction": self.problem.contacts[0].friction.describe() if scene.contact.mu > 0 else
+            "friction": self.problem.contacts[0].friction.describe()
+                        if scene.contact.mu > 0 or scene.contact.mu_table is not None else
                         "frictionless (mu = 0): normal-only contact, the local problem solved on the normal rows of "
                         "W alone",
             "wear": (self.problem.wear.describe()

@@ -12,12 +12,17 @@ accumulated dissipated energy density, against independent references.
 - A checkpoint holds the cycles and the energy (round trip), and refuses another table; bad tables are refused.
 """
 
+import tomllib
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from mpi4py import MPI  # noqa: F401  (before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs)
 
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import friction  # noqa: E402
+from dolfinx_fretting.scenes import SceneError, builtin_scenes, load_scene  # noqa: E402
+from dolfinx_fretting.simulation import run_scene  # noqa: E402
 from support.blocks import elasticity, plane_above, two_blocks  # noqa: E402
 
 ALPHA = 2e-6   # 1/MPa, as tests/test_energy_wear.py
@@ -178,3 +183,84 @@ def test_bad_variable_and_function_are_refused():
         dfr.EvolvingFriction([(0, 0.2)], variable="time")
     with pytest.raises(ValueError, match="the function gave .*finite coefficient >= 0"):
         dfr.EvolvingFriction(lambda n: -0.1 + 0 * n)
+
+
+def _one_zone(law, nc):
+    """What friction.jump_limit reads of a contact: its zones' laws and their rows."""
+    return SimpleNamespace(zones=(SimpleNamespace(friction=law),), zone_slice=lambda zone: slice(0, nc),
+                           mu=np.full(nc, 0.2))
+
+
+def test_jump_limit_keeps_mu_constant_over_the_jumped_cycles():
+    """A jump extrapolates the simulated cycle's rate, so it may not carry the variable past where mu changes.
+    Cycles: mu flat up to 10, from cycle 4 (acceleration 2) the jump may reach 1 + (10 - 4) / 2 = 4 cycles; on the
+    slope, 1. Energy: per-cycle energies 0.01 and 0.02 from 0.02 and 0.04 below the flat's end 0.1: the extrapolated
+    cycles' energy must stay <= 0.1: floor(min(0.08 / 0.01, 0.06 / 0.02)) = 3. Coulomb: no bound."""
+    cycles_law = dfr.EvolvingFriction([(0, 0.2), (10, 0.2), (20, 0.8)], variable="cycles")
+    start = SimpleNamespace(cycles=4.0, friction_energy=None)
+    assert friction.jump_limit(_one_zone(cycles_law, 2), start, None, 2.0) == 4.0
+    assert friction.jump_limit(_one_zone(cycles_law, 2), SimpleNamespace(cycles=12.0), None, 1.0) == 1.0
+    assert friction.jump_limit(_one_zone(cycles_law, 2), SimpleNamespace(cycles=25.0), None, 1.0) == np.inf
+    energy_law = dfr.EvolvingFriction([(0, 0.2), (0.1, 0.2), (0.2, 0.8)], variable="energy")
+    start = SimpleNamespace(cycles=0.0, friction_energy=np.array([0.02, 0.04, 0.0]))
+    end = SimpleNamespace(cycles=1.0, friction_energy=np.array([0.03, 0.06, 0.0]))   # the third does not slide
+    assert friction.jump_limit(_one_zone(energy_law, 3), start, end, 1.0) == 3.0
+    assert friction.jump_limit(_one_zone(0.2, 3), start, end, 1.0) == np.inf
+    function_law = dfr.EvolvingFriction(lambda n: 0.2 + 0 * n, variable="cycles")
+    assert friction.jump_limit(_one_zone(function_law, 1), SimpleNamespace(cycles=3.0), None, 1.0) == 1.0
+
+
+def test_scene_tables():
+    """``contact.mu_table`` and ``contact.mu_variable`` make the contact's law; ``contact.mu`` becomes the table's
+    starting coefficient (the cylinder-flat scene sets mu = 0.9: a table starting elsewhere needs contact.mu too); bad
+    tables name the key, the value and the allowed range."""
+    scene = load_scene("cylinder-flat", ["contact.mu=0.2", "contact.mu_table=[[0, 0.2], [5, 0.8]]",
+                                 "contact.mu_variable='energy'"])
+    assert scene.contact.mu == 0.2
+    data = tomllib.loads(builtin_scenes()["cylinder-flat"].read_text(encoding="utf-8"))
+    data["contact"] = {key: value for key, value in data["contact"].items() if key != "mu"}
+    unset = load_scene({**data, "contact": {**data["contact"], "mu_table": [[1.0, 0.3], [5.0, 0.8]]}})
+    assert unset.contact.mu == 0.3   # filled in: the table's coefficient at x = 0 (held below its first row)
+    law = scene.contact.friction_law()
+    assert isinstance(law, dfr.EvolvingFriction) and law.variable == "energy"
+    assert law.at(np.array([2.5])) == pytest.approx([0.5], rel=1e-15)
+    assert load_scene("cylinder-flat").contact.friction_law() == load_scene("cylinder-flat").contact.mu
+    for override, message in [  # (with contact.mu unset below: the table is checked first)
+        ("contact.mu_table=[[0, 0.2], [0, 0.8]]", r"contact\.mu_table = .*row 1 has x = 0: allowed x > 0"),
+        ("contact.mu_table=[[0, 0.2], [1, -0.8]]", r"contact\.mu_table = .*row 1 has mu = -0\.8: allowed mu >= 0"),
+        ("contact.mu_table=[[0, 0.2, 1]]", r"contact\.mu_table = .*rows \[x, mu\] of two finite numbers"),
+    ]:
+        with pytest.raises(SceneError, match=message):
+            load_scene("cylinder-flat", ["contact.mu=0.2", override])
+    with pytest.raises(SceneError, match=r"contact\.mu = 0\.9 is out of range; allowed: unset, or 0\.2"):
+        load_scene("cylinder-flat", ["contact.mu_table=[[0, 0.2], [5, 0.8]]"])
+    with pytest.raises(SceneError, match=r"contact\.mu_variable"):
+        load_scene("cylinder-flat", ["contact.mu=0.2", "contact.mu_table=[[0, 0.2], [5, 0.8]]", "contact.mu_variable='time'"])
+
+
+def test_scene_run_with_jumps_holds_mu_over_each_jump(tmp_path):
+    """A cylinder on a rigid flat in gross slip (the compiled loop), mu(N) = 0.5 up to cycle 3, 0.9 from cycle 4,
+    with forced jumps of 4: cycle 1 is simulated (never jumped from), cycle 2 jumps only 3 (to cycle 4, the last
+    with mu(3) = 0.5: ``jump_bound = friction_evolving``), cycle 5 is simulated with mu(4) = 0.9 and jumps to the
+    last cycle. In every gross-slip increment of history.csv, |Q| = mu(N) P (1e-6: the scene's local solver
+    tolerance, 1e-8 relative on the forces, summed over the contact)."""
+    scene = load_scene("cylinder-flat", [
+        "loading.normal_force=none", "loading.normal_displacement=0.0045", "geometry.contact_mesh_size=0.04",
+        "loading.increments_per_cycle=8", "loading.cycles=8", "wear.k=8.5e-8", "wear.cycle_jump=true",
+        "wear.jump_forced=4", "output.xdmf=false", "output.plots=false", "output.history_every=1",
+        "contact.mu=0.5", "contact.mu_table=[[0, 0.5], [3, 0.5], [4, 0.9]]"])
+    summary = run_scene(scene, tmp_path / "run", quiet=True)
+    assert summary["converged"] and summary["cycles"] == 8
+    cycles = np.genfromtxt(tmp_path / "run" / "cycles.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    jumps = dict(zip(cycles["cycle"].tolist(), zip(cycles["jump"].tolist(), cycles["jump_bound"].tolist())))
+    assert jumps == {1: (1, "first_cycle"), 2: (3, "friction_evolving"), 5: (3, "forced"), 8: (1, "forced")}
+    history = np.genfromtxt(tmp_path / "run" / "history.csv", delimiter=",", names=True, dtype=None,
+                            encoding="utf-8")
+    checked = 0
+    for cycle, mu in ((1, 0.5), (2, 0.5), (5, 0.9), (8, 0.9)):
+        rows = (history["cycle"] == cycle) & (history["n_stick"] == 0) & (history["n_slip"] > 0)
+        assert rows.sum() >= 2
+        ratio = np.abs(history["tangential_force"][rows]) / history["normal_force"][rows]
+        assert ratio == pytest.approx(mu, rel=1e-6)
+        checked += int(rows.sum())
+    assert checked >= 8
