@@ -791,7 +791,9 @@ class _Run:
         contact_zones = self.problem.contact
         w = scene.wear
         h_e = self.model.setup.element_size
-        k = self._wear_rate()
+        # the simulated cycle's rate (its friction coefficients'; after a window growth ``start`` is of the old
+        # contact set: the new state's)
+        k = self._wear_rate(new if regrown else start)
         out_r, out_x, _, _, out_status = result.kept
         plastic_limit, settling = self._plastic_bounds(plastic)  # collective: before rank 0 decides
         if regrown:  # (the window grows only for elastic bodies: plastic is None here)
@@ -799,8 +801,8 @@ class _Run:
             # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
             # stands for itself; jumps restart from one. The propagated error cannot follow the contacts: its
             # maximum is carried, no longer propagated.
-            this = float(cycle_wear(self.problem.wear_coefficients(True), contact.tributary, out_r, out_x, out_status,
-                                    contact.dim).max(initial=0.0))
+            this = float(cycle_wear(self.problem.wear_coefficients(True, new), contact.tributary, out_r, out_x,
+                                    out_status, contact.dim).max(initial=0.0))
             old = float(jumps["rate"].max(initial=0.0)) if jumps["rate"] is not None else 0.0
             err = (jumps["last"] - 1) * max(old, this)
             vector = jumps["error_vector"]
@@ -978,11 +980,13 @@ class _Run:
                 self.model.setup.element_size, k, abs(scene.loading.tangential_amplitude), E_star)
         return out
 
-    def _wear_rate(self) -> float:
+    def _wear_rate(self, state: ContactState | None = None) -> float:
         """The cycles' wear rate c of ``dg = c p |dx_t|`` (Archard's k or the energy law's alpha mu, times the
-        acceleration): the largest over the contacts, which bounds a jump's stability (the fastest-wearing
-        contact) where zones' friction differs under the energy law."""
-        return float(self.problem.wear_coefficients(True).max(initial=0.0))
+        acceleration) of a cycle solved from ``state`` (default: the run's; an evolving friction law's mu there):
+        the largest over the contacts, which bounds a jump's stability (the fastest-wearing contact) where zones'
+        friction differs under the energy law."""
+        state = self.state if state is None else state
+        return float(self.problem.wear_coefficients(True, state).max(initial=0.0))
 
     def _modelled(self) -> dict[str, str]:
         """What this run assembled and iterated, and what it skipped (the scene decides)."""

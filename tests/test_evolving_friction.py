@@ -264,3 +264,23 @@ def test_scene_run_with_jumps_holds_mu_over_each_jump(tmp_path):
         assert ratio == pytest.approx(mu, rel=1e-6)
         checked += int(rows.sum())
     assert checked >= 8
+
+
+def test_window_change_carries_the_energy_by_node():
+    """Another window carries each contact's accumulated energy by node: narrowed, the kept nodes keep theirs;
+    widened again, the nodes back in start at 0 (as a new candidate: it has dissipated nothing here), and mu
+    follows the law at the carried values (exact: copies)."""
+    law = dfr.EvolvingFriction([(0.0, 0.2), (0.15, 0.8)], variable="energy")
+    problem, _, state = pressed_block(law)
+    state, _ = rub(problem, state, 1)
+    nodes = problem.contact.contact_set.global_nodes.tolist()
+    before = dict(zip(nodes, state.friction_energy.tolist()))
+    assert min(before.values()) > 0
+    narrow = problem.set_window(state, 0.3)
+    kept = dict(zip(problem.contact.contact_set.global_nodes.tolist(), narrow.friction_energy.tolist()))
+    assert 0 < len(kept) < len(before) and all(kept[node] == before[node] for node in kept)
+    wide = problem.set_window(narrow, None)
+    back = dict(zip(problem.contact.contact_set.global_nodes.tolist(), wide.friction_energy.tolist()))
+    assert back == {node: kept.get(node, 0.0) for node in nodes}
+    assert np.array_equal(friction.coefficients(problem.contact, wide), law.at(wide.friction_energy))
+    problem.destroy()
