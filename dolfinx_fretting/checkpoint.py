@@ -42,7 +42,7 @@ from .operators import ContactOperators
 from .commit import SlidingMonitor
 from .state import ContactState, PlasticHistory
 
-__all__ = ["save_state", "load_state", "contact_parameters", "parameter_differences"]
+__all__ = ["save_state", "load_state", "contact_parameters", "friction_parameters", "parameter_differences"]
 
 #: The per-contact and per-component arrays of a :class:`~dolfinx_fretting.state.ContactState`, stored as they are.
 ARRAYS = ("forces", "positions", "slip", "wear_gap", "obstacle", "load_factors")
