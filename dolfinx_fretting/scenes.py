@@ -853,12 +853,15 @@ class Scene(_Section):
         geometry kind: it knows its body)."""
         c, m, loading = self.contact, self.material, self.loading
         mu, P, Q = c.mu, loading.normal_force, loading.tangential_force
+        name = "contact.mu"
+        if c.mu_table is not None:   # the force must be carried all along: by the table's smallest coefficient
+            mu, name = min(row[1] for row in c.mu_table), "min(contact.mu_table's mu)"
         if Q is not None and Q != 0 and mu == 0:
-            raise range_error("loading.tangential_force", Q, "0 with contact.mu = 0 (a frictionless contact "
+            raise range_error("loading.tangential_force", Q, f"0 with {name} = 0 (a frictionless contact "
                               "carries no tangential force)")
         if Q is not None and Q != 0 and P is not None and abs(Q) >= mu * P:
             raise range_error("loading.tangential_force", Q,
-                              f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} "
+                              f"|Q| < {name} x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} "
                               f"{'N' if self.dim == 3 else 'N/mm'} "
                               "(at or beyond mu P the contact slides and no displacement gives Q)")
         GEOMETRIES[self.geometry.kind].check_loads(self)

@@ -284,3 +284,23 @@ def test_window_change_carries_the_energy_by_node():
     assert back == {node: kept.get(node, 0.0) for node in nodes}
     assert np.array_equal(friction.coefficients(problem.contact, wide), law.at(wide.friction_energy))
     problem.destroy()
+
+
+def test_scene_tables_of_further_zones_and_force_control():
+    """A further ``[[contact]]`` table takes its own table (messages name ``contact[i]``); a prescribed tangential
+    force must stay below the table's smallest coefficient times P (it must be carried all along)."""
+    data = {"name": "corner", "geometry": {"kind": "file", "path": "block.msh"}, "boundary": {"fixed": ["top"]},
+            "contact": [{"surface": "floor", "mu": 0.5},
+                        {"surface": "wall", "plane_point": [1.0, 0.0], "plane_normal": [-1.0, 0.0],
+                         "mu_table": [[0, 0.3], [2, 0.1], [1, 0.2]]}],
+            "loading": {"normal_force": 1.0, "normal_increments": 1},
+            "output": {"xdmf": False, "plots": False, "progress": False}}
+    with pytest.raises(SceneError, match=r"contact\[1\]\.mu_table = .*row 2 has x = 1: allowed x > 2"):
+        load_scene(data)
+    data["contact"][1]["mu_table"] = [[0, 0.1], [2, 0.3]]
+    data["contact"][1]["mu_variable"] = "energy"
+    zone = load_scene(data).zones[0]
+    assert zone.mu == 0.1 and zone.friction_law() == dfr.EvolvingFriction([[0, 0.1], [2, 0.3]], "energy")
+    # hertz: Q = 89.658 N/mm under P = 199.24 N/mm: 0.9 carries it, a table falling to 0.2 would not
+    with pytest.raises(SceneError, match=r"\|Q\| < min\(contact\.mu_table's mu\) x loading\.normal_force = 0\.2 x"):
+        load_scene("hertz", ["contact.mu_table=[[0, 0.9], [5, 0.2]]"])
