@@ -33,15 +33,16 @@ from mpi4py import MPI
 from scipy.spatial import cKDTree
 
 from . import _dolfinx as dfx
+from . import friction
 from .contact import ContactSet, paired_contact_set
 from .increments import on_rank0
 from .io import _jsonable
-from .laws import WearLaw
+from .laws import EvolvingFriction, WearLaw
 from .operators import ContactOperators
 from .commit import SlidingMonitor
 from .state import ContactState, PlasticHistory
 
-__all__ = ["save_state", "load_state", "contact_parameters", "parameter_differences"]
+__all__ = ["save_state", "load_state", "contact_parameters", "friction_parameters", "parameter_differences"]
 
 #: The per-contact and per-component arrays of a :class:`~dolfinx_fretting.state.ContactState`, stored as they are.
 ARRAYS = ("forces", "positions", "slip", "wear_gap", "obstacle", "load_factors")
@@ -54,17 +55,30 @@ def _partition_fingerprint(operators: ContactOperators) -> str:
     return hashlib.sha1(np.round(coords, 9).tobytes()).hexdigest()
 
 
+def friction_parameters(law) -> dict[str, Any] | None:
+    """A friction law's parameters beyond its starting coefficients, as plain data: an
+    :class:`~dolfinx_fretting.laws.EvolvingFriction`'s variable and table (a function: its description, which names
+    it), None for a constant law."""
+    if not isinstance(law, EvolvingFriction):
+        return None
+    table = law.table
+    return {"law": type(law).__name__, "variable": law.variable,
+            "table": None if table is None else table.tolist(), "describe": law.describe()}
+
+
 def contact_parameters(operators: ContactOperators, wear_laws: Sequence[WearLaw | None]) -> list[dict[str, Any]]:
     """Each zone's contact parameters as plain data (what a checkpoint saves and checks): its friction coefficient
-    per contact (``mu``), its wear law (class name, each body's coefficient, acceleration; None without wear) and
-    its obstacle (class name, normal, a rigid plane's point, an elastic body's contact formulation)."""
+    per contact at the start (``mu``) and an evolving law's variable and table (``friction``,
+    :func:`friction_parameters`), its wear law (class name, each body's coefficient, acceleration; None without
+    wear) and its obstacle (class name, normal, a rigid plane's point, an elastic body's contact formulation)."""
     contacts = operators.contact
     zones = []
     for zone, (obstacle, law) in enumerate(zip((c.obstacle for c in contacts.zones), wear_laws)):
         point = getattr(obstacle, "point", None)
         wear = None if law is None else {"law": type(law).__name__, "body_coefficients": list(law.body_coefficients),
                                          "acceleration": float(law.acceleration), "describe": law.describe()}
-        zones.append({"mu": contacts.mu[contacts.zone_slice(zone)].tolist(), "wear": wear,
+        zones.append({"mu": contacts.mu[contacts.zone_slice(zone)].tolist(),
+                      "friction": friction_parameters(contacts.zones[zone].friction), "wear": wear,
                       "obstacle": {"kind": type(obstacle).__name__, "normal": np.asarray(obstacle.normal).tolist(),
                                    "point": None if point is None else np.asarray(point).tolist(),
                                    "formulation": getattr(obstacle, "formulation", None)}})
@@ -77,6 +91,19 @@ def _values(values: list[float]) -> str:
     if array.size and np.all(array == array[0]):
         return f"{array[0]:g}"
     return f"{array.min(initial=np.inf):g} to {array.max(initial=-np.inf):g} per contact"
+
+
+def _same_friction(old: Mapping[str, Any] | None, new: Mapping[str, Any] | None) -> bool:
+    """Whether two zones' :func:`friction_parameters` are the same law: both constant, or the same variable and table
+    (1e-12: the user's values through JSON's exact float repr, as mu), or functions of the same name."""
+    if old is None or new is None:
+        return old is None and new is None
+    if old["variable"] != new["variable"] or (old["table"] is None) != (new["table"] is None):
+        return False
+    if old["table"] is None:
+        return old["describe"] == new["describe"]
+    return (np.shape(old["table"]) == np.shape(new["table"])
+            and np.allclose(old["table"], new["table"], rtol=1e-12, atol=0.0))
 
 
 def _obstacle(obstacle: Mapping[str, Any]) -> str:
@@ -107,6 +134,11 @@ def parameter_differences(saved: list[dict[str, Any]], current: list[dict[str, A
         # coefficient recomputed by another NumPy.
         if mu_old.shape != mu_new.shape or not np.allclose(mu_old, mu_new, rtol=1e-12, atol=1e-15):
             out.append(f"{who}mu: saved {_values(old['mu'])}, this problem's {_values(new['mu'])}")
+        # (a checkpoint of an earlier release has no "friction": its laws were constant)
+        friction_old, friction_new = old.get("friction"), new.get("friction")
+        if not _same_friction(friction_old, friction_new):
+            describe = lambda law: "constant mu" if law is None else law["describe"]  # noqa: E731
+            out.append(f"{who}friction law: saved {describe(friction_old)}, this problem's {describe(friction_new)}")
         wear_old, wear_new = old["wear"], new["wear"]
         same_wear = (wear_old is None) == (wear_new is None) and (wear_old is None or (
             wear_old["law"] == wear_new["law"]
@@ -309,6 +341,7 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
         arrays["contact_coordinates"] = operators.contact_set_of(state).coords
         arrays["status"] = state.status if state.status is not None else np.zeros(0, np.int8)
         arrays["warm"] = state.warm if state.warm is not None else np.zeros(0)
+        arrays["friction_energy"] = state.friction_energy if state.friction_energy is not None else np.zeros(0)
         arrays["targets"] = state.targets if state.targets is not None else state.obstacle
         arrays["force_controlled"] = (state.force_controlled if state.force_controlled is not None
                                       else np.zeros(state.obstacle.size, dtype=bool))
@@ -320,7 +353,7 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
             arrays["repairs"] = np.array(monitor.repairs)
         for name, values in (plastic or {}).items():
             arrays[f"plastic_{name}"] = values
-        info = {"increment": state.increment, "dissipated_energy": state.dissipated_energy,
+        info = {"increment": state.increment, "dissipated_energy": state.dissipated_energy, "cycles": state.cycles,
                 "local_iterations": state.local_iterations, "record": state.record, "ranks": operators.comm.size,
                 "load_names": operators.load_names, "global_nodes": operators.contact.contact_set.global_nodes.tolist(),
                 "plastic": state.plastic is not None, "contact_parameters": parameters,
@@ -408,10 +441,16 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
         pairing, master_wear = _pairing_from(operators, data, path)
         operators.surface_compliance.rows(pairing.master_nodes)   # within reach, or a message
         monitor.repairs = int(data["repairs"])
+    # (a checkpoint of an earlier release holds neither: no cycles counted, no energy tracked)
+    energy = data["friction_energy"] if "friction_energy" in data and data["friction_energy"].size else None
+    if energy is None and friction.tracks_energy(operators.contact):
+        energy = np.zeros(contact_set.nc)
     state = ContactState(*(data[k].copy() for k in ARRAYS), increment=int(info["increment"]),
                          dissipated_energy=float(info["dissipated_energy"]),
                          local_iterations=int(info["local_iterations"]), record=info["record"],
                          status=data["status"].copy() if data["status"].size else None, warm=warm,
                          targets=data["targets"].copy(), force_controlled=data["force_controlled"].copy(),
-                         plastic=plastic, pairing=pairing, master_wear=master_wear)
+                         plastic=plastic, pairing=pairing, master_wear=master_wear,
+                         cycles=float(info.get("cycles", 0.0)),
+                         friction_energy=None if energy is None else energy.copy())
     return state, info["meta"]

@@ -12,13 +12,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import sliding
+from . import friction, sliding
 from .operators import ContactOperators
 from .readers import worn_measure
 from .state import ContactState, CycleResult, IncrementResult, solver_columns
 from .wear import ROW, ROW_FIELDS, commit_increment
 
-__all__ = ["SlidingMonitor", "commit", "check_solved_from", "relative_slip_ratio", "wear_coefficients"]
+__all__ = ["SlidingMonitor", "commit", "check_solved_from", "relative_slip_ratio", "wear_coefficients", "acceleration"]
 
 
 @dataclass
@@ -38,16 +38,25 @@ class SlidingMonitor:
     reach_warned: bool = False
 
 
-def wear_coefficients(operators: ContactOperators, laws: tuple, in_cycle: bool) -> np.ndarray:
+def wear_coefficients(operators: ContactOperators, laws: tuple, in_cycle: bool,
+                      mu: np.ndarray | None = None) -> np.ndarray:
     """Each contact's wear rate ``c`` of an increment (``dg = c p |dx_t|``): its zone's law's (``laws``, one per
-    zone; 0 where None), given the zone's friction coefficients."""
+    zone; 0 where None), given each contact's friction coefficient ``mu`` (default: the contact's own, the
+    coefficients at the start of an evolving law)."""
     contacts = operators.contact
+    mu = contacts.mu if mu is None else mu
     coefficients = np.zeros(contacts.nc)
     for zone, law in enumerate(laws):
         if law is not None:
             rows = contacts.zone_slice(zone)
-            coefficients[rows] = law.coefficients(in_cycle, contacts.mu[rows])
+            coefficients[rows] = law.coefficients(in_cycle, mu[rows])
     return coefficients
+
+
+def acceleration(laws: tuple) -> float:
+    """The physical cycles each simulated cycle stands for: the wear laws' acceleration (one value per run), 1
+    without wear."""
+    return next((float(law.acceleration) for law in laws if law is not None), 1.0)
 
 
 def check_solved_from(state: ContactState, result: IncrementResult | CycleResult) -> None:
@@ -79,15 +88,20 @@ def commit(operators: ContactOperators, laws: tuple, monitor: SlidingMonitor, st
     check_solved_from(state, result)
     if isinstance(result, CycleResult):
         check_sliding(operators, monitor, result.final)
-        return result.final
+        # the cycle counts the physical cycles it stands for (what a friction law of the cycles reads next)
+        return replace(result.final, cycles=state.cycles + acceleration(laws))
     operators.activate(state)
     contact_set = operators.contact.contact_set
     states = np.empty(contact_set.nc, dtype=np.int8)
     row = np.empty(len(ROW_FIELDS))
     wear_gap = state.wear_gap.copy()
-    coefficients = wear_coefficients(operators, laws, result.in_cycle)
-    commit_increment(result.forces, result.slip, result.positions, operators.contact.mu, contact_set.dim,
+    # The coefficients the increment was solved with: those of the state it started from (explicit update).
+    mu = friction.coefficients(operators.contact, state)
+    coefficients = wear_coefficients(operators, laws, result.in_cycle, mu)
+    commit_increment(result.forces, result.slip, result.positions, mu, contact_set.dim,
                      contact_set.tributary, contact_set.abscissa, coefficients, wear_gap, states, row)
+    friction_energy = friction.accumulated_energy(operators.contact, state, result.forces, result.slip,
+                                                  acceleration(laws) if result.in_cycle else 1.0)
     master_wear = state.master_wear
     wear = laws[0]   # finite sliding: one zone
     if operators.surface_compliance is not None and wear is not None:
@@ -105,7 +119,8 @@ def commit(operators: ContactOperators, laws: tuple, monitor: SlidingMonitor, st
                   dissipated_energy=state.dissipated_energy + row[ROW["dissipated_energy"]],
                   local_iterations=state.local_iterations + result.iterations, record=record, status=states,
                   targets=result.targets, force_controlled=result.force_controlled,
-                  plastic=result.plastic if result.plastic is not None else state.plastic, master_wear=master_wear)
+                  plastic=result.plastic if result.plastic is not None else state.plastic, master_wear=master_wear,
+                  friction_energy=friction_energy)
     if operators.surface_compliance is not None:
         return _repair(operators, monitor, new)
     check_sliding(operators, monitor, new)

@@ -1275,8 +1275,9 @@ class Contact:
         obstacle: An :class:`Obstacle`: :class:`RigidPlane` (2D or 3D, any orientation) or :class:`ElasticBody` (2D
             or 3D).
         mu: The friction law (:class:`~dolfinx_fretting.laws.FrictionLaw`, e.g.
-            :class:`~dolfinx_fretting.laws.Coulomb`), or Coulomb's coefficient (finite, >= 0): one value or one per
-            contact.
+            :class:`~dolfinx_fretting.laws.Coulomb`, or :class:`~dolfinx_fretting.laws.EvolvingFriction`: a
+            coefficient of the cycles or of the dissipated energy), or Coulomb's coefficient (finite, >= 0): one
+            value or one per contact.
         bcs: The Dirichlet conditions of the problem (their dofs are excluded as above).
         window: Candidate half-width (length units): only nodes within this distance, measured in the
             obstacle's tangent plane, of the body point closest to the obstacle; ``None``: every node of
@@ -1295,7 +1296,8 @@ class Contact:
         H_free: H without the columns of fixed dofs (what W is built from).
         held_rows: Rows of H (``dim c + k``, k >= 1) whose every dof is fixed: held tangential directions.
         friction: The friction law (``Coulomb(mu)`` when ``mu`` was a number).
-        mu: Friction coefficient per contact (the law's).
+        mu: Friction coefficient per contact (the law's; an evolving law's at the start: a state's are
+            :func:`dolfinx_fretting.friction.coefficients`).
 
     Raises:
         TypeError: ``surface`` (or ``ElasticBody.surface``) is not ``(facet tags, integer marker)``, or the

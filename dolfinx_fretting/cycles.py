@@ -11,7 +11,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import local_solvers
+from . import friction, local_solvers
+from .commit import acceleration, wear_coefficients
 from .cycling import N_ROW, run_increments
 from .increments import on_rank0, per_zone, target_items
 from .loading import CyclePath, Displacement, Force
@@ -100,14 +101,21 @@ def stepwise_cycle(operators: ContactOperators, advance: Callable[..., tuple[Con
                        tuple(pairings) if keep and current.pairing is not None else None)
 
 
-def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coefficients: np.ndarray,
-                   state: ContactState, obstacle: np.ndarray, factors: np.ndarray, keep: bool) -> CycleResult:
+def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple, state: ContactState,
+                   obstacle: np.ndarray, factors: np.ndarray, keep: bool) -> CycleResult:
     """The cycle in the compiled loop (rank 0, broadcast; the warm start of the next cycle stays on rank 0), with
-    ``wear_coefficients`` each contact's wear coefficient in cycles. Collective."""
+    ``laws`` each zone's wear law. Collective.
+
+    The friction coefficients are the state's (:func:`~dolfinx_fretting.friction.coefficients`): a friction law of
+    the cycles holds them over the cycle (one compiled call); one of the dissipated energy changes them after every
+    increment, so the loop then runs one increment per call, with each contact's energy and mu (and an energy wear
+    law's rate, alpha mu) updated in between (``benchmarks/results/evolving_friction.md`` measures the cost)."""
     contact_set = operators.contact.contact_set
     n, m, dim = obstacle.shape[0], contact_set.nc * contact_set.dim, contact_set.dim
     # Each zone's translation against G's block of its contacts (one zone: G = its rigid modes).
     D = np.ascontiguousarray(operators.contact.translations(obstacle))
+    per_increment = friction.tracks_energy(operators.contact)
+    scale = acceleration(laws)
     warm_new = None
 
     def work():  # rank 0: the compiled loop; its result is broadcast, the warm start stays on rank 0
@@ -124,24 +132,37 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
         G = np.ascontiguousarray(operators.contact.rigid_modes)
         Q = np.ascontiguousarray(operators.responses)
         S = np.ascontiguousarray(factors)
-        done, status, err = run_increments(
-            Wc, rho, operators.contact.mu, dim, contact_set.gap0, wear_gap, G, D, Q, S, contact_set.tributary,
-            contact_set.abscissa, y, r_last,
-            r_warm, warm, wear_coefficients, solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r, out_x,
-            out_y, out_wear, out_states, rows, active, cache.pattern, cache.lu, cache.piv, cache.lu_ok,
-            cache.counts)
-        if done < n:
-            why = "non-finite values" if status == 2 else "max_iter reached"
-            raise ConvergenceError(f"local solver did not converge ({why}, error {err:.3e} >= tol {solver.tol:.1e} "
-                                   f"after {solver.max_iter} sweeps)", step=done + 1)
+        current = state
+        # One call for the cycle, or (mu changing with the energy) one per increment: the slices of the per-increment
+        # arrays are C-contiguous views, so the kernel writes its results in place either way.
+        calls = [slice(j, j + 1) for j in range(n)] if per_increment else [slice(0, n)]
+        for part in calls:
+            mu = friction.coefficients(operators.contact, current)
+            if active:   # factors made with another mu are stale (an evolving law changed it)
+                stale = np.any(cache.factor_mu[part] != mu, axis=1)
+                cache.lu_ok[part][stale] = False
+                cache.factor_mu[part] = mu
+            done, status, err = run_increments(
+                Wc, rho, mu, dim, contact_set.gap0, wear_gap, G, D[part], Q, S[part], contact_set.tributary,
+                contact_set.abscissa, y, r_last, r_warm[part], warm, wear_coefficients(operators, laws, True, mu),
+                solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r[part], out_x[part], out_y[part],
+                out_wear[part], out_states[part], rows[part], active, cache.pattern[part], cache.lu[part],
+                cache.piv[part], cache.lu_ok[part], cache.counts)
+            if done < part.stop - part.start:
+                why = "non-finite values" if status == 2 else "max_iter reached"
+                raise ConvergenceError(f"local solver did not converge ({why}, error {err:.3e} >= tol "
+                                       f"{solver.tol:.1e} after {solver.max_iter} sweeps)", step=part.start + done + 1)
+            if per_increment:
+                current = replace(current, friction_energy=friction.accumulated_energy(
+                    operators.contact, current, out_r[part.start], out_x[part.start], scale))
         # Every increment of the cycle, not only the last: one product of the outside rows with the cycle's forces.
         operators.check_window(out_r, obstacle, factors, solver.tol, cycle=True)
         warm_new = r_warm  # the cycle's forces: the next cycle's warm start
         outs = (out_r, out_x, out_y, out_wear, out_states) if keep else (out_x[-1:], out_states[-1:])
-        return rows, wear_gap, y, r_last, outs
+        return rows, wear_gap, y, r_last, outs, current.friction_energy
 
     result = on_rank0(operators.comm, work)
-    rows, wear_gap, y, r_last, outs = result
+    rows, wear_gap, y, r_last, outs, energy_new = result
     nf = len(ROW_FIELDS)
     records = {name: rows[:, i] for i, name in enumerate(ROW_FIELDS)}
     records.update(local_iterations=rows[:, nf].astype(int), local_error=rows[:, nf + 1],
@@ -155,5 +176,5 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, wear_coeffi
                     dissipated_energy=state.dissipated_energy + float(rows[:, ROW["dissipated_energy"]].sum()),
                     local_iterations=state.local_iterations + int(rows[:, nf].sum()),
                     record={k: records[k][-1].item() for k in INCREMENT_COLUMNS},
-                    status=status, warm=warm_new if operators.comm.rank == 0 else None)
+                    status=status, warm=warm_new if operators.comm.rank == 0 else None, friction_energy=energy_new)
     return CycleResult(records, obstacle, factors, final, outs if keep else None, True)

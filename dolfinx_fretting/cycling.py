@@ -66,6 +66,9 @@ class ActivePatternCache:
         self.lu_ok = np.zeros(n if used else 1, dtype=np.bool_)
         #: Counts of the exact pattern solves accepted and rejected, and of the factorisations.
         self.counts = np.zeros(3, dtype=np.int64)
+        #: The friction coefficients each increment's factors were made with (NaN: none yet): an evolving
+        #: friction law changes mu between cycles, and a factor of another mu is dropped before the loop.
+        self.factor_mu = np.full(shape_n, np.nan)
 
 
 @numba.njit(cache=True)

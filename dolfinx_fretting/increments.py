@@ -14,7 +14,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 from mpi4py import MPI
 
-from . import local_solvers
+from . import friction, local_solvers
 from .loading import Displacement, Force, LoadControlError, find_displacement, tangential_item
 from .operators import ContactOperators
 from .plasticity import ElastoplasticBody, NewtonError
@@ -146,6 +146,7 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
     warm = [state.forces.copy() if r_warm is None else r_warm.copy()]
     count = {"solves": 0, "iterations": 0}
     last: dict[str, Any] = {}
+    mu = friction.coefficients(operators.contact, state)   # held over the increment (explicit update)
 
     def local(trial: np.ndarray) -> np.ndarray:
         if not np.all(np.isfinite(trial)):
@@ -157,7 +158,7 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
                                    "trial obstacle displacement is not finite (the force did not change between its "
                                    "trials): a load this far below the model's scale is degenerate")
         q, q_abs = operators.q(trial, factors, state.positions, state.wear_gap, q_body)
-        solved = local_solvers.solve(Wm, q, operators.contact.mu, dim, method=solver.method, tol=solver.tol,
+        solved = local_solvers.solve(Wm, q, mu, dim, method=solver.method, tol=solver.tol,
                                   max_iter=solver.max_iter, r0=warm[0], block_steps=steps)
         count["solves"] += 1
         count["iterations"] += solved.iterations
@@ -191,7 +192,7 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
                         d[k], _, _ = find_displacement(force_k, targets[k], d[k], operators.stiffness[k], ftol,
                                                        name=names[k])
                 except LoadControlError as exc:
-                    raise ConvergenceError(_beyond_friction(operators, k, targets, controlled, last["F"])
+                    raise ConvergenceError(_beyond_friction(operators, k, targets, controlled, last["F"], mu)
                                            or str(exc)) from None
                 F = last["F"]  # the root finder's last evaluation is at the returned d[k]
                 if d[k] != d_old and F[k] != F_old:
@@ -208,7 +209,7 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
 
 
 def _beyond_friction(operators: ContactOperators, k: int, targets: np.ndarray, controlled: np.ndarray,
-                     forces: np.ndarray) -> str | None:
+                     forces: np.ndarray, mu: np.ndarray) -> str | None:
     """The physical reason a prescribed tangential force (component ``k``) cannot be reached, with its numbers:
     ``|Q| >= mu P``, the most friction the zone's normal force can carry (None if ``k`` is a normal component or
     ``|Q|`` is below that bound: then the load control's own message stands)."""
@@ -220,7 +221,7 @@ def _beyond_friction(operators: ContactOperators, k: int, targets: np.ndarray, c
     tangential = tangential[controlled[tangential]]
     magnitude = float(np.linalg.norm(targets[tangential]))
     normal = float(forces[dim * zone])
-    mu = np.asarray(operators.contact.zones[zone].mu, dtype=float)
+    mu = np.asarray(mu[operators.contact.zone_slice(zone)], dtype=float)   # the increment's coefficients
     mu_max = float(mu.max(initial=0.0))
     if magnitude < mu_max * max(normal, 0.0):
         return None

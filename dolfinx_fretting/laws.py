@@ -1,10 +1,17 @@
 """The contact's laws as objects: friction (how much tangential force a contact carries before it slides) and
 wear (what the wear gap gains in an increment from the contact pressure and the slip).
 
-A friction law is any object with the :class:`FrictionLaw` protocol; :class:`Coulomb` (constant coefficient,
-one value or one per contact) is the one the package ships, and a plain number given as ``mu`` to
-:class:`~dolfinx_fretting.contact.Contact` means ``Coulomb(mu)``. The local solvers read the coefficient per
-contact (:meth:`FrictionLaw.coefficients`).
+A friction law is any object with the :class:`FrictionLaw` protocol. The package ships two:
+
+- :class:`Coulomb`: a constant coefficient, one value or one per contact; a plain number given as ``mu`` to
+  :class:`~dolfinx_fretting.contact.Contact` means ``Coulomb(mu)``;
+- :class:`EvolvingFriction`: a coefficient that follows the load cycles committed or each contact's accumulated
+  dissipated energy density (a table or the user's function), as the coefficient of many metal pairs rises from
+  about 0.2 to 0.8 over the first cycles while the oxide films wear through.
+
+The local solvers read each contact's coefficient from the state an increment starts from
+(:func:`dolfinx_fretting.friction.coefficients`): a constant law's :meth:`FrictionLaw.coefficients`, an evolving
+law's :meth:`EvolvingFriction.at` of the state's cycles or energy.
 
 A wear law is any object with the :class:`WearLaw` protocol. The package ships two:
 
@@ -23,14 +30,14 @@ else (the scene runner's cycle jumps, the writers, the tests) reads the law thro
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from dataclasses import dataclass, field
+from typing import Callable, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
 from .settings import finite
 
-__all__ = ["FrictionLaw", "Coulomb", "WearLaw", "Archard", "EnergyWear"]
+__all__ = ["FrictionLaw", "Coulomb", "EvolvingFriction", "FRICTION_VARIABLES", "WearLaw", "Archard", "EnergyWear"]
 
 
 @runtime_checkable
@@ -74,6 +81,131 @@ class Coulomb:
         if values.ndim == 0:
             return f"Coulomb, mu = {float(values):g}"
         return f"Coulomb, mu = {values.min():g} to {values.max():g} per contact"
+
+
+#: What an :class:`EvolvingFriction` coefficient follows: the load cycles committed (physical ones: each simulated
+#: cycle counts the wear law's acceleration), or each contact's accumulated dissipated energy per unit area.
+FRICTION_VARIABLES = ("cycles", "energy")
+
+
+@dataclass(frozen=True)
+class EvolvingFriction:
+    """Coulomb friction whose coefficient evolves with the load cycles or with the dissipated energy.
+
+    ``mu`` is a table ``((x0, mu0), (x1, mu1), ...)`` with strictly increasing abscissae, interpolated piecewise
+    linearly and held at its end values outside them, or a function of the variable (a NumPy array, one value per
+    contact) returning the coefficients (finite, >= 0). ``variable`` says what x is:
+
+    - ``"cycles"``: the load cycles committed (:attr:`~dolfinx_fretting.state.ContactState.cycles`: every
+      :meth:`~dolfinx_fretting.problem.FrettingProblem.run_cycle` result committed, each counting the wear law's
+      acceleration: the physical cycles it stands for). One value for the whole zone, held over a cycle.
+    - ``"energy"``: each contact's accumulated dissipated frictional energy per unit area
+      (:attr:`~dolfinx_fretting.state.ContactState.friction_energy`; N mm / mm^2 = N/mm with N, mm, i.e. kJ/m^2),
+      counting the acceleration in cycles likewise.
+
+    The update is explicit: an increment is solved with the coefficients of the state it starts from, and its
+    commit updates the variable. Held within the increment, the local problem stays the plain Coulomb one the
+    solvers converge on (an implicit coefficient would make it a fixed point in mu as well); the error is one
+    increment's change of mu, which the increments of a cycle keep small.
+
+    Example:
+        ``Contact(V, surface, obstacle, mu=EvolvingFriction([(0, 0.2), (5, 0.8)], variable="cycles"))``
+    """
+
+    mu: Sequence[Sequence[float]] | Callable[[np.ndarray], np.ndarray]
+    variable: str = "cycles"
+    _abscissae: np.ndarray | None = field(init=False, repr=False, compare=False, default=None)
+    _values: np.ndarray | None = field(init=False, repr=False, compare=False, default=None)
+
+    def __post_init__(self) -> None:
+        if self.variable not in FRICTION_VARIABLES:
+            raise ValueError(f"EvolvingFriction.variable = {self.variable!r}: allowed {', '.join(FRICTION_VARIABLES)}")
+        if callable(self.mu):
+            self.at(np.zeros(1))   # refuses a function that gives no finite coefficient >= 0 at the start
+            return
+        abscissae, values = check_friction_table("EvolvingFriction.mu", self.mu)
+        object.__setattr__(self, "_abscissae", abscissae)
+        object.__setattr__(self, "_values", values)
+
+    @property
+    def table(self) -> np.ndarray | None:
+        """The table as an (n, 2) array (None for a function)."""
+        return None if self._abscissae is None else np.column_stack([self._abscissae, self._values])
+
+    def at(self, values: np.ndarray) -> np.ndarray:
+        """The coefficient at each of ``values`` of the variable (one per contact).
+
+        Raises:
+            ValueError: the user's function gave a coefficient that is not finite or below 0, or not one per value.
+        """
+        values = np.asarray(values, dtype=float)
+        if self._abscissae is not None:
+            return np.interp(values, self._abscissae, self._values)
+        out = np.asarray(self.mu(values.copy()), dtype=float)
+        if out.shape == ():
+            out = np.full(values.shape, float(out))
+        if out.shape != values.shape or not np.all(np.isfinite(out)) or np.any(out < 0):
+            bad = "" if out.shape != values.shape else values[~(np.isfinite(out) & (out >= 0))][:3].tolist()
+            where = f" (at {self.variable} {bad})" if bad else ""
+            raise ValueError(f"EvolvingFriction.mu: the function gave {out.ravel()[:3].tolist()}...{where}: expected a "
+                             f"finite coefficient >= 0 for each of {values.size} value(s) of the {self.variable}")
+        return out
+
+    def coefficients(self, contacts: int) -> np.ndarray:
+        """The coefficient at the start (the variable at 0) for each contact."""
+        return self.at(np.zeros(contacts))
+
+    def constant_until(self, values: np.ndarray) -> np.ndarray:
+        """For each of ``values``, the largest value of the variable up to which the coefficient stays the one at
+        ``values`` (inf when it never changes again; the value itself where it changes right away, and for a
+        function, whose course is not known): how far a cycle jump may carry the variable without changing mu."""
+        values = np.asarray(values, dtype=float)
+        if self._abscissae is None:
+            return values.copy()
+        x, mu = self._abscissae, self._values
+        out = np.full(values.shape, np.inf)
+        for index, value in np.ndenumerate(values):
+            # the first breakpoint past ``value`` after which mu differs from mu(value)
+            here = float(np.interp(value, x, mu))
+            later = np.flatnonzero((x > value) & (mu != here))
+            if later.size:
+                first = later[0]
+                # mu changes from the breakpoint before the first different one (linear in between)
+                out[index] = max(value, float(x[first - 1])) if first > 0 else value
+        return out
+
+    def describe(self) -> str:
+        """``"mu(cycles) from table [[0, 0.2], [5, 0.8]]"`` (a function: its name)."""
+        if self._abscissae is None:
+            return f"mu({self.variable}) = {getattr(self.mu, '__qualname__', type(self.mu).__name__)}(...)"
+        rows = ", ".join(f"[{x:g}, {m:g}]" for x, m in zip(self._abscissae, self._values))
+        return f"mu({self.variable}) from table [{rows}]"
+
+
+def check_friction_table(key: str, table) -> tuple[np.ndarray, np.ndarray]:
+    """(abscissae, coefficients) of a friction table ``((x0, mu0), (x1, mu1), ...)``.
+
+    Raises:
+        ValueError: naming ``key``, the value and the allowed range: not rows of two finite numbers, an abscissa
+            not above the one before, a coefficient below 0.
+    """
+    try:
+        array = np.asarray(table, dtype=float)
+    except (TypeError, ValueError):  # a string, None, ragged rows
+        array = np.zeros((0, 0))
+    if array.ndim != 2 or array.shape[0] < 1 or array.shape[1] != 2 or not np.all(np.isfinite(array)):
+        raise ValueError(f"{key} = {table!r}: expected rows [x, mu] of two finite numbers (at least one row)")
+    abscissae, values = array[:, 0].copy(), array[:, 1].copy()
+    step = np.flatnonzero(np.diff(abscissae) <= 0)
+    if step.size:
+        i = int(step[0]) + 1
+        raise ValueError(f"{key} = {table!r}: row {i} has x = {abscissae[i]:g}: allowed x > {abscissae[i - 1]:g} "
+                         "(the abscissae strictly increasing)")
+    low = np.flatnonzero(values < 0)
+    if low.size:
+        i = int(low[0])
+        raise ValueError(f"{key} = {table!r}: row {i} has mu = {values[i]:g}: allowed mu >= 0")
+    return abscissae, values
 
 
 @runtime_checkable

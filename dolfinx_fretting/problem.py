@@ -52,7 +52,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 from mpi4py import MPI
 
-from . import checkpoint, readers
+from . import checkpoint, friction, readers
 from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficients
 from .compliance import METHODS
 from .contact import Contact, ContactSet
@@ -211,9 +211,11 @@ class FrettingProblem:
                              f"{values.max():g}): read wear_coefficients(in_cycle), one per contact")
         return float(values[0]) if values.size else 0.0
 
-    def wear_coefficients(self, in_cycle: bool) -> np.ndarray:
-        """Each contact's wear coefficient of an increment (its zone's law's; 0 where a zone does not wear)."""
-        return wear_coefficients(self.operators, self.wear_laws, in_cycle)
+    def wear_coefficients(self, in_cycle: bool, state: ContactState | None = None) -> np.ndarray:
+        """Each contact's wear coefficient of an increment (its zone's law's; 0 where a zone does not wear), solved
+        from ``state`` (an energy law's alpha mu with an evolving friction law's mu there; None: at the start)."""
+        mu = None if state is None else friction.coefficients(self.operators.contact, state)
+        return wear_coefficients(self.operators, self.wear_laws, in_cycle, mu)
 
     # States and increments --------------------------------------------------------------------------------
     def initial_state(self) -> ContactState:
@@ -236,7 +238,9 @@ class FrettingProblem:
         return ContactState(np.zeros(m), y, np.zeros(m), np.zeros(contact_set.nc), np.zeros(size), factors,
                             targets=np.zeros(size), force_controlled=np.zeros(size, dtype=bool), plastic=plastic,
                             pairing=contact_set if finite else None,
-                            master_wear=np.zeros(operators.surface_compliance.nodes.size) if finite else None)
+                            master_wear=np.zeros(operators.surface_compliance.nodes.size) if finite else None,
+                            friction_energy=np.zeros(contact_set.nc) if friction.tracks_energy(operators.contact)
+                            else None)
 
     def solve(self, state: ContactState, normal: float | Displacement | Force | None = None,
               tangential: float | Sequence[float] | Displacement | Force | None = None,
@@ -382,8 +386,7 @@ class FrettingProblem:
             # Finite sliding pairs anew between increments: increment by increment.
             if (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
                     and not forced.any() and operators.surface_compliance is None):
-                return compiled_cycle(operators, self.solver, self.wear_coefficients(True), start, obstacle, factors,
-                                      keep)
+                return compiled_cycle(operators, self.solver, self.wear_laws, start, obstacle, factors, keep)
             return stepwise_cycle(operators, self._advance_once, start, obstacle, forced, factors, keep, check)
         # A growth solves the whole cycle again from ``state`` in the wider window (its increments then all refer
         # to one contact set); the result is still ``state``'s to commit (its final state is in the wider window).

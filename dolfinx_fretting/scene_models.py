@@ -24,6 +24,7 @@ from mpi4py import MPI
 
 from .contact import ElasticBody, RigidPlane
 from .interrupts import keep_handlers
+from .laws import EvolvingFriction
 from .meshes import BODY_CELL_TAG, BodyMesh
 
 __all__ = ["SceneModel", "FurtherZone", "further_zones", "elastic_model", "contact_surface", "rigid_plane",
@@ -50,7 +51,7 @@ class FurtherZone:
         name: The surface's name (the mesh file's physical group).
         surface: ``(facet_tags, marker)`` of the surface.
         obstacle: The zone's rigid plane.
-        mu: Its friction coefficient.
+        mu: Its friction coefficient, or its evolving law (``mu_table``).
         window: Its candidate half-width (None: the whole surface).
         approach: The plane's approach along its normal, reached with the preload and held (mm).
     """
@@ -58,7 +59,7 @@ class FurtherZone:
     name: str
     surface: tuple
     obstacle: RigidPlane
-    mu: float
+    mu: float | EvolvingFriction
     window: float | None
     approach: float
 
@@ -66,7 +67,7 @@ class FurtherZone:
 def further_zones(scene: Scene, body: BodyMesh) -> tuple[FurtherZone, ...]:
     """The scene's further contact zones on ``body`` (its named facet groups; the names checked before)."""
     return tuple(FurtherZone(zone.surface, (body.facet_tags, body.tags[zone.surface]),
-                             RigidPlane(np.array(zone.plane_point), np.array(zone.plane_normal)), zone.mu,
+                             RigidPlane(np.array(zone.plane_point), np.array(zone.plane_normal)), zone.friction_law(),
                              zone.candidate_half_width, zone.approach) for zone in scene.zones)
 
 

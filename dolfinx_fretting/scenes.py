@@ -30,12 +30,13 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import annotated_types
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_serializer, model_validator
 
 from .analytic import plane_strain_modulus
 from .geometries import GEOMETRIES
 from .geometries.base import MAX_CELLS, MAX_ELASTIC_STRAIN, range_error
-from .laws import Archard, EnergyWear
+from .laws import Archard, EnergyWear, EvolvingFriction, check_friction_table
 
 __all__ = ["Scene", "SceneError", "builtin_scenes", "load_scene", "apply_overrides", "PRESETS", "preset_values",
            "scene_differences", "describe_differences", "MAX_ELASTIC_STRAIN", "SHAKEDOWN_TOLERANCE"]
@@ -196,6 +197,24 @@ class MaterialSettings(_Section):
         return self.E * self.tangent_modulus / (self.E - self.tangent_modulus)
 
 
+def check_mu_table(section: _Section, key: str) -> None:
+    """A contact table's ``mu_table`` (rows of two finite numbers, x strictly increasing, mu >= 0) and its ``mu``:
+    the table's coefficient at x = 0, filled in when not given (so every reader of ``mu`` sees the starting
+    coefficient), refused when given otherwise. Messages name ``<key>.mu_table`` or ``<key>.mu``, the value and
+    the allowed range."""
+    if section.mu_table is None:
+        return
+    abscissae, values = check_friction_table(f"{key}.mu_table", section.mu_table)
+    start = float(np.interp(0.0, abscissae, values))
+    if start > 100:
+        raise range_error(f"{key}.mu_table", section.mu_table, "coefficients with mu(0) <= 100, as contact.mu")
+    if "mu" in section.model_fields_set and section.mu != start:
+        raise range_error(f"{key}.mu", section.mu, f"unset, or {start:g}: the starting coefficient of "
+                          f"{key}.mu_table (its mu at {section.mu_variable} = 0)")
+    # (no validation on this assignment: validate_assignment would run this validator again)
+    object.__setattr__(section, "mu", start)
+
+
 class ContactSettings(_Section):
     """Frictional contact with an obstacle: a rigid plane, or a second, deformable body.
 
@@ -210,6 +229,14 @@ class ContactSettings(_Section):
     #: Coulomb friction coefficient. At most 100: measured coefficients stay below ~10 (clean metals in
     #: vacuum); beyond, the cone is a wall and the tangential problem is meaningless.
     mu: float = Field(0.9, ge=0, le=100)
+    #: Friction that evolves: rows ``[x, mu]`` (x strictly increasing, mu >= 0), interpolated linearly and held
+    #: past its ends; x is ``mu_variable``. ``contact.mu`` is then the table's coefficient at x = 0 (set it only to
+    #: that value). None: Coulomb with ``mu``.
+    mu_table: list[list[FiniteFloat]] | None = None
+    #: What ``mu_table``'s x is: ``"cycles"`` (load cycles, physical: each simulated one counts
+    #: ``wear.acceleration``) or ``"energy"`` (each contact's accumulated dissipated frictional energy per unit
+    #: area, N·mm/mm² = N/mm with mm and N, i.e. kJ/m², acceleration counted likewise).
+    mu_variable: Literal["cycles", "energy"] = "cycles"
     obstacle: Literal["rigid_plane", "elastic_flat"] = "rigid_plane"
     #: Two bodies: "small" (the pairing is fixed) or "finite" (paired anew when a paired point has moved
     #: ``repair_slip`` elements from its node; elastic bodies; cycles run increment by increment).
@@ -235,6 +262,16 @@ class ContactSettings(_Section):
             raise range_error("contact.plane_normal", self.plane_normal, "a non-zero vector")
         return self
 
+    @model_validator(mode="after")
+    def _friction_table(self) -> ContactSettings:
+        check_mu_table(self, "contact")
+        return self
+
+    def friction_law(self) -> float | EvolvingFriction:
+        """What :class:`~dolfinx_fretting.contact.Contact` takes as ``mu``: the coefficient, or the evolving law of
+        ``mu_table``."""
+        return self.mu if self.mu_table is None else EvolvingFriction(self.mu_table, variable=self.mu_variable)
+
 
 class ZoneSettings(_Section):
     """A further contact zone: the second and later ``[[contact]]`` tables of a scene (``contact[1]``, ...).
@@ -250,6 +287,9 @@ class ZoneSettings(_Section):
     plane_normal: list[FiniteFloat] = Field(min_length=2, max_length=3)
     #: Coulomb friction coefficient of this zone.
     mu: float = Field(0.9, ge=0, le=100)
+    #: This zone's evolving friction (as ``contact.mu_table``) and its variable (as ``contact.mu_variable``).
+    mu_table: list[list[FiniteFloat]] | None = None
+    mu_variable: Literal["cycles", "energy"] = "cycles"
     #: The plane's approach along its normal (mm, into the body), held after the preload: 0 places it at
     #: ``plane_point`` (a wall the body may come to touch), > 0 an interference, < 0 a clearance.
     approach: FiniteFloat = 0.0
@@ -257,6 +297,11 @@ class ZoneSettings(_Section):
     candidate_half_width: Length | None = None
     #: Only ``"rigid_plane"``: a further zone's obstacle is a rigid plane.
     obstacle: str = "rigid_plane"
+
+    def friction_law(self) -> float | EvolvingFriction:
+        """This zone's ``mu`` for :class:`~dolfinx_fretting.contact.Contact` (see
+        :meth:`ContactSettings.friction_law`)."""
+        return self.mu if self.mu_table is None else EvolvingFriction(self.mu_table, variable=self.mu_variable)
 
 
 class WearSettings(_Section):
@@ -838,6 +883,7 @@ class Scene(_Section):
                                       "first table's dimension)")
             if sum(c * c for c in zone.plane_normal) < 1e-24:
                 raise range_error(f"contact[{i}].plane_normal", zone.plane_normal, "a non-zero vector")
+            check_mu_table(zone, f"contact[{i}]")
         return self
 
     @model_validator(mode="after")
@@ -885,12 +931,15 @@ class Scene(_Section):
         geometry kind: it knows its body)."""
         c, m, loading = self.contact, self.material, self.loading
         mu, P, Q = c.mu, loading.normal_force, loading.tangential_force
+        name = "contact.mu"
+        if c.mu_table is not None:   # the force must be carried all along: by the table's smallest coefficient
+            mu, name = min(row[1] for row in c.mu_table), "min(contact.mu_table's mu)"
         if Q is not None and Q != 0 and mu == 0:
-            raise range_error("loading.tangential_force", Q, "0 with contact.mu = 0 (a frictionless contact "
+            raise range_error("loading.tangential_force", Q, f"0 with {name} = 0 (a frictionless contact "
                               "carries no tangential force)")
         if Q is not None and Q != 0 and P is not None and abs(Q) >= mu * P:
             raise range_error("loading.tangential_force", Q,
-                              f"|Q| < contact.mu x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} "
+                              f"|Q| < {name} x loading.normal_force = {mu:g} x {P:g} = {mu * P:.6g} "
                               f"{'N' if self.dim == 3 else 'N/mm'} "
                               "(at or beyond mu P the contact slides and no displacement gives Q)")
         GEOMETRIES[self.geometry.kind].check_loads(self)

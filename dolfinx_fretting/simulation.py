@@ -34,6 +34,8 @@ import numpy as np
 from mpi4py import MPI
 from tqdm import tqdm
 
+from . import friction
+from .commit import acceleration
 from .analytic import hertz_line_contact
 from .contact import Contact
 from .contact_output import write_contact_xdmf
@@ -129,7 +131,7 @@ class ContactModel:
         self.half_width = s.window if window is None else window
         try:
             all_bcs = s.bcs + [bc for conditions in s.prescribed.values() for bc in conditions]
-            contact = Contact(s.V, s.surface, s.obstacle, scene.contact.mu, all_bcs, self.half_width)
+            contact = Contact(s.V, s.surface, s.obstacle, scene.contact.friction_law(), all_bcs, self.half_width)
             # further zones (a mesh file's [[contact]] tables): each its surface, plane, friction and window
             zones = [Contact(s.V, zone.surface, zone.obstacle, zone.mu, all_bcs, zone.window) for zone in s.zones]
         except ValueError as exc:
@@ -812,9 +814,12 @@ class _Run:
         ``plastic``: an elastic-plastic body's cycle (:meth:`_plastic_cycle`): the jump is bounded by the
         plastic state's change too, and the plastic history is extrapolated with the wear gap."""
         scene, contact, jumps = self.scene, self.model.contact, self.progress.jump
+        contact_zones = self.problem.contact
         w = scene.wear
         h_e = self.model.setup.element_size
-        k = self._wear_rate()
+        # the simulated cycle's rate (its friction coefficients'; after a window growth ``start`` is of the old
+        # contact set: the new state's)
+        k = self._wear_rate(new if regrown else start)
         out_r, out_x, _, _, out_status = result.kept
         plastic_limit, settling = self._plastic_bounds(plastic)  # collective: before rank 0 decides
         if regrown:  # (the window grows only for elastic bodies: plastic is None here)
@@ -822,8 +827,8 @@ class _Run:
             # jump's error is bounded by (dN - 1) times the larger rate (each rate is >= 0), and this cycle
             # stands for itself; jumps restart from one. The propagated error cannot follow the contacts: its
             # maximum is carried, no longer propagated.
-            this = float(cycle_wear(self.problem.wear_coefficients(True), contact.tributary, out_r, out_x, out_status,
-                                    contact.dim).max(initial=0.0))
+            this = float(cycle_wear(self.problem.wear_coefficients(True, new), contact.tributary, out_r, out_x,
+                                    out_status, contact.dim).max(initial=0.0))
             old = float(jumps["rate"].max(initial=0.0)) if jumps["rate"] is not None else 0.0
             err = (jumps["last"] - 1) * max(old, this)
             vector = jumps["error_vector"]
@@ -850,6 +855,10 @@ class _Run:
                 dN, bound = 1, "first_cycle"
             elif settling:
                 dN, bound, free = 1, "plastic_settling", jumps["free"]
+            # The jump extrapolates this cycle's wear rate, which holds only for its friction coefficients.
+            friction_bound = friction.jump_limit(contact_zones, start, new, acceleration(self.problem.wear_laws))
+            if dN > friction_bound:
+                dN, bound = int(friction_bound), "friction_evolving"
             # The error at this cycle's start (the last jump's local error added), carried over this cycle and its
             # jump (decided above; error_vector: the error after it, the next cycle's start but for that jump's own)
             vector = propagate_error(before + local, a, k, dN)
@@ -868,7 +877,11 @@ class _Run:
             new = replace(new, wear_gap=new.wear_gap + extra * rate,
                           increment=new.increment + extra * scene.loading.increments_per_cycle,
                           dissipated_energy=new.dissipated_energy
-                          + extra * float(result.records["dissipated_energy"].sum()))
+                          + extra * float(result.records["dissipated_energy"].sum()),
+                          # the jumped cycles count for an evolving friction law (mu held over them: bound above)
+                          cycles=new.cycles + extra * acceleration(self.problem.wear_laws),
+                          friction_energy=None if new.friction_energy is None else
+                          new.friction_energy + extra * (new.friction_energy - start.friction_energy))
             if plastic is not None and plastic.regime != "elastic_shakedown":  # eps_p and p follow the wear gap
                 before, after, m = start.plastic, new.plastic, scene.material
                 sigma, eps_p, p = extrapolate_plastic_history(after.sigma, before.eps_p, after.eps_p, before.p,
@@ -995,11 +1008,13 @@ class _Run:
                 self.model.setup.element_size, k, abs(scene.loading.tangential_amplitude), E_star)
         return out
 
-    def _wear_rate(self) -> float:
+    def _wear_rate(self, state: ContactState | None = None) -> float:
         """The cycles' wear rate c of ``dg = c p |dx_t|`` (Archard's k or the energy law's alpha mu, times the
-        acceleration): the largest over the contacts, which bounds a jump's stability (the fastest-wearing
-        contact) where zones' friction differs under the energy law."""
-        return float(self.problem.wear_coefficients(True).max(initial=0.0))
+        acceleration) of a cycle solved from ``state`` (default: the run's; an evolving friction law's mu there):
+        the largest over the contacts, which bounds a jump's stability (the fastest-wearing contact) where zones'
+        friction differs under the energy law."""
+        state = self.state if state is None else state
+        return float(self.problem.wear_coefficients(True, state).max(initial=0.0))
 
     def _modelled(self) -> dict[str, str]:
         """What this run assembled and iterated, and what it skipped (the scene decides)."""
@@ -1014,7 +1029,8 @@ class _Run:
                          f"'{scene.solver.newton_tangent}', {newton['iteration']}"
                          if body is not None else "linear elastic: no Newton loop, no plastic state"),
             "delassus": "W of the elastic K built once" + (f"; {newton['delassus']}" if body is not None else ""),
-            "friction": self.problem.contacts[0].friction.describe() if scene.contact.mu > 0 else
+            "friction": self.problem.contacts[0].friction.describe()
+                        if scene.contact.mu > 0 or scene.contact.mu_table is not None else
                         "frictionless (mu = 0): normal-only contact, the local problem solved on the normal rows of "
                         "W alone",
             "wear": (self.problem.wear.describe()

@@ -34,7 +34,8 @@ INCREMENT_COLUMNS = ROW_FIELDS + SOLVER_COLUMNS
 #: holds alike (not ``warm``, rank 0's only, nor ``plastic``, each rank's own) and the counters, so a commit
 #: (which adds at least one increment) always changes it.
 STATE_TOKEN_FIELDS = ("forces", "positions", "slip", "wear_gap", "obstacle", "load_factors", "targets",
-                      "force_controlled", "master_wear", "increment", "dissipated_energy", "local_iterations")
+                      "force_controlled", "master_wear", "increment", "dissipated_energy", "local_iterations",
+                      "cycles", "friction_energy")
 
 
 class ConvergenceError(RuntimeError):
@@ -137,6 +138,12 @@ class ContactState:
             (:attr:`~dolfinx_fretting.operators.ContactOperators.surface_compliance`; 0 at slave nodes); the master's
             share of ``wear_gap`` is this,
             interpolated at each contact's paired point. None otherwise (the share is carried per contact).
+        cycles: Load cycles committed (:meth:`~dolfinx_fretting.problem.FrettingProblem.run_cycle` results), each
+            counting the wear law's acceleration (the physical cycles it stands for), a cycle jump's cycles added
+            by the runner: what an :class:`~dolfinx_fretting.laws.EvolvingFriction` with ``variable="cycles"``
+            reads.
+        friction_energy: Each contact's accumulated dissipated frictional energy per unit area (acceleration
+            counted in cycles) when a zone's friction follows it (``variable="energy"``), else None.
     """
 
     forces: np.ndarray
@@ -156,6 +163,8 @@ class ContactState:
     plastic: PlasticHistory | None = None
     pairing: ContactSet | None = None
     master_wear: np.ndarray | None = None
+    cycles: float = 0.0
+    friction_energy: np.ndarray | None = None
 
     @property
     def token(self) -> str:

@@ -211,9 +211,9 @@ def outside_gaps_of(operators, u: np.ndarray, obstacle: np.ndarray) -> np.ndarra
 
 
 def carry_state(old_contact, new_contact, state: ContactState) -> dict[str, Any]:
-    """``state``'s per-contact arrays (forces, slip, wear gap, warm starts, status) carried from ``old_contact``'s
-    contact set into ``new_contact``'s (another window): by (zone, global node), a corner's node being in two zones;
-    new candidates start open and unworn."""
+    """``state``'s per-contact arrays (forces, slip, wear gap, warm starts, status, the friction's accumulated
+    energy) carried from ``old_contact``'s contact set into ``new_contact``'s (another window): by (zone, global
+    node), a corner's node being in two zones; new candidates start open and unworn, having dissipated nothing."""
     old, new = old_contact.contact_set, new_contact.contact_set
 
     def keys(contact) -> list[tuple[int, int]]:
@@ -235,4 +235,4 @@ def carry_state(old_contact, new_contact, state: ContactState) -> dict[str, Any]
 
     status = None if state.status is None else carry(state.status.astype(float), 1).astype(np.int8)
     return {"forces": carry(state.forces, dim), "wear_gap": carry(state.wear_gap, 1), "slip": carry(state.slip, dim),
-            "warm": carry(state.warm, dim), "status": status}
+            "warm": carry(state.warm, dim), "status": status, "friction_energy": carry(state.friction_energy, 1)}

@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .contact import Contact, ContactSet
+from .friction import evolving_laws
 from .laws import WearLaw
 
 __all__ = ["ContactZones", "concatenate", "as_zones", "zone_wear_laws"]
@@ -114,7 +115,10 @@ class ContactZones:
         split is not unique and the local solver converges slowly, if at all. A frictionless zone at the corner
         keeps it unique."""
         nodes = self.contact_set.global_nodes
+        # (an evolving law may start frictionless and gain friction later)
         frictional = self.mu > 0
+        for zone, _ in evolving_laws(self):
+            frictional[self.zone_slice(zone)] = True
         shared, counts = np.unique(nodes[frictional], return_counts=True)
         shared = shared[counts > 1]
         if shared.size and self.V.mesh.comm.rank == 0:

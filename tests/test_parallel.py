@@ -317,6 +317,39 @@ def test_two_contact_zones_match_serial():
     assert parallel["obstacle"] == pytest.approx(serial["obstacle"], rel=1e-8, abs=1e-14)
 
 
+def _evolving_friction_run(comm: MPI.Comm, compiled: bool) -> dict:
+    """Two blocks rubbed two cycles, one zone's mu a table of the cycles, the other's of the energy."""
+    import dolfinx_fretting as dfr
+    from support.blocks import elasticity, plane_above, two_blocks
+
+    V, tags, bcs = two_blocks(comm=comm)
+    a = dfr.Contact(V, (tags, 1), plane_above(), mu=dfr.EvolvingFriction([(0, 0.2), (1, 0.6)]), bcs=bcs)
+    b = dfr.Contact(V, (tags, 2), plane_above(), mu=dfr.EvolvingFriction([(0, 0.2), (0.15, 0.8)], "energy"),
+                    bcs=bcs)
+    problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, wear=dfr.EnergyWear(2e-6),
+                                  solver=dfr.LocalSolver(tol=1e-12, compiled_cycles=compiled))
+    state, _ = problem.advance(problem.initial_state(), normal={a: 1e-3, b: 1e-3})
+    path = dfr.CyclePath.waveform(8, tangential={a: 3e-3, b: 3e-3})
+    for _ in range(2):
+        state = problem.commit(state, problem.run_cycle(state, path))
+    out = {"energy": state.friction_energy, "wear": state.wear_gap, "cycles": state.cycles}
+    problem.destroy()
+    return out
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "stepwise"])
+def test_evolving_friction_matches_serial(compiled):
+    """Friction of the cycles and of the energy under MPI: every rank holds the serial run's energies, wear and
+    cycle count (other factorisations' rounding only: 1e-8)."""
+    parallel = _evolving_friction_run(COMM, compiled)
+    serial = COMM.bcast(_evolving_friction_run(MPI.COMM_SELF, compiled) if COMM.rank == 0 else None, root=0)
+    assert parallel["cycles"] == serial["cycles"] == 2.0
+    assert serial["energy"].max() > 0.15   # mu of the energy zone reached its last value
+    assert parallel["energy"] == pytest.approx(serial["energy"], rel=1e-8, abs=1e-12)
+    assert parallel["wear"] == pytest.approx(serial["wear"], rel=1e-8, abs=1e-8 * serial["wear"].max())
+
+
 def _two_block_problem(comm: MPI.Comm, plastic: bool = False):
     import dolfinx_fretting as dfr
     from support.blocks import E, NU, TIGHT, elasticity, plane_above, two_blocks
