@@ -68,7 +68,7 @@ def measure(name: str, repeat: int) -> dict:
         target = (dfr.Force(lo.normal_force * k / lo.normal_increments * setup.model_fraction)
                   if lo.normal_force is not None else dfr.Displacement(lo.normal_displacement * k / lo.normal_increments))
         state, _ = problem.advance(state, normal=target)
-    path = _cycle_path(scene, problem, setup)
+    path = _cycle_path(scene, model)
     state = problem.commit(state, problem.run_cycle(state, path))   # the first cycle compiles and warms up
     result, row["cycle_s"] = best_of(lambda: problem.run_cycle(state, path, keep=True), repeat)
     forces = result.kept[0]

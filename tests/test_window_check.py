@@ -171,6 +171,11 @@ def test_no_window_and_an_unviolated_window_leave_the_answer_untouched():
     assert ops.block_steps.size == ops.contact.contact_set.nc != before.size
     assert np.array_equal(ops.block_steps, local_solvers.block_rho(ops.W, 2))
     assert ops.kernel_data(4)[1] is ops.block_steps
+    # The 2D contact-pattern cache has one row per increment and the compiled loop indexes it unchecked: a cache
+    # made for a one-increment call (an evolving friction of the energy runs one increment a call) must not serve a
+    # cycle of 8 (before: any cache of one row was reused, whatever the cycle's length)
+    assert ops.kernel_data(1)[2].pattern.shape[0] == 1
+    assert ops.kernel_data(8)[2].pattern.shape == (8, ops.contact.contact_set.nc)
 
 
 def test_every_increment_of_a_cycle_is_checked():
