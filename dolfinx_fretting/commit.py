@@ -155,10 +155,11 @@ def _repair(operators: ContactOperators, monitor: SlidingMonitor, state: Contact
     carried = sliding.carry_state(contact_set, new, operators.surface_compliance, u, D, state.forces, state.slip,
                                   state.wear_gap, state.master_wear)
     monitor.repairs += 1
+    if not monitor.warn or monitor.reach_warned:   # (the check below only warns, once)
+        return replace(state, pairing=new, **carried)
     loaded = state.forces[0::contact_set.dim] > 0
     beyond = sliding.offsets(new, operators.surface_compliance, u, D)[loaded]
-    if beyond.size and beyond.max() > operators.contact.obstacle.repair_slip and monitor.warn \
-            and not monitor.reach_warned:
+    if beyond.size and beyond.max() > operators.contact.obstacle.repair_slip:
         monitor.reach_warned = True
         if operators.comm.rank == 0:
             warnings.warn(f"finite sliding: a loaded contact is {beyond.max():.3g} master elements from the "

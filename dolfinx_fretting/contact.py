@@ -16,10 +16,12 @@ by position along the surface, so the local problem is the same whatever the par
 from __future__ import annotations
 
 import copy
+import functools
 from abc import ABCMeta, abstractmethod
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
@@ -569,10 +571,16 @@ def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords:
     node_coef = np.column_stack([np.ones(nc), -np.where(masters >= 0, weights, 0.0)])
     vals = frames[:, :, None, :] * node_coef[:, None, :, None]           # (nc, dim, nodes, dim)
     cols = dim * node_cols[:, None, :, None] + np.arange(dim)[None, None, None, :]
-    cols = np.broadcast_to(cols, vals.shape)
-    rws = np.broadcast_to(np.arange(nc * dim).reshape(nc, dim, 1, 1), vals.shape)
-    H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nc * dim, n_dofs))
-    H.eliminate_zeros()  # zero weights (a node facing a master node or edge) touch no column
+    # CSR directly (finite sliding pairs anew at almost every increment): each row's columns sorted; a padding
+    # column repeats the slave node's with a zero value, which goes with the zero weights (a node facing a master
+    # node or edge touches no column)
+    per_row = node_cols.shape[1] * dim
+    cols = np.broadcast_to(cols, vals.shape).reshape(nc * dim, per_row)
+    order = np.argsort(cols, axis=1, kind="stable")
+    H = sp.csr_matrix((np.take_along_axis(vals.reshape(nc * dim, per_row), order, axis=1).ravel(),
+                       np.take_along_axis(cols, order, axis=1).ravel(), np.arange(nc * dim + 1) * per_row),
+                      shape=(nc * dim, n_dofs))
+    H.eliminate_zeros()
     return ContactSet(dim=dim, global_nodes=global_nodes, coords=coords, frames=frames, gap0=gaps,
                       tributary=tributary, abscissa=abscissa, H=H, master_nodes=masters,
                       master_weights=np.asarray(weights, dtype=float), master_points=point,
@@ -702,22 +710,42 @@ def pair_with_segments(points: np.ndarray, segments_x: np.ndarray,
         ``face`` (n,) the closest segment (the first among equally close ones), ``weights`` (n, 2) on its ends,
         ``point`` (n, 2), ``normal`` (n, 2) the segment's unit normal, pointing out of the body, ``distance`` (n,).
     """
+    if segments_x.shape[0] == 0:
+        raise ValueError("pair_with_segments: no master segment to pair with")
     A, B = segments_x[:, 0], segments_x[:, 1]
     d = B - A
     L2 = np.einsum("ij,ij->i", d, d)
-    rel = points[:, None, :] - A[None, :, :]   # dense (points x segments): both are a contact surface's, small
-    xi = np.clip(np.einsum("sij,ij->si", rel, d) / L2[None, :], 0.0, 1.0)
-    P = A[None] + xi[..., None] * d[None]
-    dist = np.linalg.norm(points[:, None, :] - P, axis=2)
-    best = np.argmin(dist, axis=1)
-    rows = np.arange(points.shape[0])
-    xi, P = xi[rows, best], P[rows, best]
+    points = np.ascontiguousarray(points, dtype=float)
+    n = points.shape[0]
+    best, xi, distance = np.empty(n, dtype=np.int64), np.empty(n), np.empty(n)
+    _closest_segments(points, np.ascontiguousarray(A), np.ascontiguousarray(d), L2, best, xi, distance)
+    P = A[best] + xi[:, None] * d[best]
     tang = d[best] / np.sqrt(L2[best])[:, None]
     normal = np.stack([-tang[:, 1], tang[:, 0]], axis=1)
     flip = np.einsum("ij,ij->i", inside[best] - A[best], normal) > 0
     normal[flip] *= -1
     return {"face": best, "weights": np.column_stack([1.0 - xi, xi]), "point": P, "normal": normal,
-            "distance": dist[rows, best]}
+            "distance": distance}
+
+
+@numba.njit(cache=True)
+def _closest_segments(points: np.ndarray, A: np.ndarray, d: np.ndarray, L2: np.ndarray, best: np.ndarray,
+                      xi: np.ndarray, distance: np.ndarray) -> None:
+    """For each point, the closest segment ``A + t d`` (the first among equally close ones), its ``t`` and the
+    distance: every segment tried (a contact surface's, a few hundred), no search structure. Finite sliding
+    pairs anew at almost every increment, where the dense NumPy search cost more than the increment's solve."""
+    for p in range(points.shape[0]):
+        best[p] = -1
+        distance[p] = np.inf
+        for s in range(A.shape[0]):
+            rx = points[p, 0] - A[s, 0]
+            ry = points[p, 1] - A[s, 1]
+            t = min(max((rx * d[s, 0] + ry * d[s, 1]) / L2[s], 0.0), 1.0)
+            ex = points[p, 0] - (A[s, 0] + t * d[s, 0])
+            ey = points[p, 1] - (A[s, 1] + t * d[s, 1])
+            dist = np.sqrt(ex * ex + ey * ey)
+            if dist < distance[p]:
+                best[p], xi[p], distance[p] = s, t, dist
 
 
 @dataclass(frozen=True)
@@ -743,9 +771,10 @@ class MasterSurface:
     def dim(self) -> int:
         return int(self.x.shape[2])
 
-    @property
+    @functools.cached_property
     def sizes(self) -> np.ndarray:
-        """Each facet's size: a segment's length, a face's mean edge length (the scale of re-pairing)."""
+        """Each facet's size: a segment's length, a face's mean edge length (the scale of re-pairing; computed once:
+        finite sliding reads it at every re-pairing)."""
         edges = np.linalg.norm(np.roll(self.x, -1, axis=1) - self.x, axis=2)
         if self.dim == 2:
             return edges[:, 0]
@@ -1377,10 +1406,12 @@ class Contact:
     def _use(self, contact_set: ContactSet) -> None:
         """Hold ``contact_set``: its H without the fixed columns and its held rows (see the class's docstring)."""
         self.contact_set: ContactSet = contact_set
-        H = contact_set.H.tocsc(copy=True)
-        free = np.ones(H.shape[1], dtype=bool)
-        free[self.fixed_global] = False
-        self.H_free = sp.csr_matrix(H @ sp.diags(free.astype(float)))
+        H = contact_set.H.tocsr()
+        free = np.ones(H.shape[1])
+        free[self.fixed_global] = 0.0
+        # H's entries at the free columns (the product H diag(free) without forming it: finite sliding holds a new
+        # pairing at almost every increment)
+        self.H_free = sp.csr_matrix((H.data * free[H.indices], H.indices.copy(), H.indptr.copy()), shape=H.shape)
         self.H_free.eliminate_zeros()
         empty = np.diff(self.H_free.indptr) == 0
         normal_rows = np.arange(empty.size) % contact_set.dim == 0

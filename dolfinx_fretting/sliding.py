@@ -21,8 +21,9 @@ Nothing here touches DOLFINx or MPI: every rank holds the same arrays and comput
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 
@@ -102,6 +103,8 @@ class SurfaceCompliance:
     responses: np.ndarray
     faces: np.ndarray
     master_areas: np.ndarray
+    #: id(pairing) -> (pairing, what :meth:`_held` gives) of the last pairings read; a cache, not data.
+    _restricted: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def dofs(self) -> np.ndarray:
@@ -110,20 +113,44 @@ class SurfaceCompliance:
     def restrict(self, pairing: ContactSet) -> sp.csr_matrix:
         """L: H's columns at the surface dofs (``H = L S``).
 
+        H's columns are renumbered, not sliced out of its full width: the surface dofs are in the order of the
+        global dofs (``nodes`` sorted), so L's entries are H's, in the same order.
+
         Raises:
             ValueError: H touches a dof outside the surfaces (a pairing beyond the reach).
         """
-        L = sp.csr_matrix(pairing.H[:, self.dofs])
-        if L.nnz != pairing.H.nnz:
+        return self._held(pairing)[0]
+
+    def pairing_rows(self, pairing: ContactSet) -> tuple[np.ndarray, np.ndarray]:
+        """(the row in :attr:`nodes` of each slave node, of each master node (-1 for padding)) of ``pairing``
+        (:meth:`rows`)."""
+        return self._held(pairing)[1:3]
+
+    def _held(self, pairing: ContactSet) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray, sp.csc_matrix]:
+        """(L, the slave nodes' rows, the master nodes' rows, L^T) of ``pairing``, kept for the last few pairings: a
+        re-paired increment reads them a dozen times (the operators, the outside rows, the displacement, the carry,
+        the offsets, the master's wear)."""
+        held = self._restricted.get(id(pairing))
+        if held is not None and held[0] is pairing:
+            return held[1:]
+        H = pairing.H
+        dofs = H.indices
+        where = np.minimum(np.searchsorted(self.nodes, dofs // self.dim), self.nodes.size - 1)
+        if np.any(self.nodes[where] != dofs // self.dim):
             raise ValueError("finite sliding: the pairing touches nodes outside the surface compliance: "
                              "ElasticBody.reach is shorter than the pairing needs")
-        return L
+        L = sp.csr_matrix((H.data.copy(), self.dim * where + dofs % self.dim, H.indptr.copy()),
+                          shape=(H.shape[0], self.dim * self.nodes.size))
+        entry = (L, self.rows(pairing.global_nodes), self.rows(pairing.master_nodes), L.T)
+        if len(self._restricted) >= 4:   # the pairings of the last increments only (their states hold them)
+            self._restricted.pop(next(iter(self._restricted)))
+        self._restricted[id(pairing)] = (pairing, *entry)
+        return entry
 
     def operators(self, pairing: ContactSet) -> tuple[np.ndarray, np.ndarray]:
         """(W, the load responses) of ``pairing``: ``L C L^T`` and ``L S K^-1 f_l``."""
         L = self.restrict(pairing)
-        LC = np.asarray(L @ self.C)
-        W = np.asarray(L @ LC.T)
+        W = _congruence(L.indptr, L.indices, L.data, self.C)
         W = 0.5 * (W + W.T)  # exactly symmetric, as the factorisation's W
         responses = np.zeros((self.responses.shape[0], L.shape[0]))
         if responses.size:
@@ -133,8 +160,7 @@ class SurfaceCompliance:
     def displacement(self, pairing: ContactSet, forces: np.ndarray, factors: np.ndarray) -> np.ndarray:
         """The surface nodes' displacement (nodes, dim) under the contact forces of ``pairing`` and the loads
         at ``factors``: ``C L^T r + sum_l s_l S K^-1 f_l`` (without the master's rigid translation)."""
-        L = self.restrict(pairing)
-        u = self.C @ (L.T @ forces)
+        u = self.C @ (self._held(pairing)[3] @ forces)
         if self.responses.shape[0]:
             u = u + factors @ self.responses
         return u.reshape(-1, self.dim)
@@ -151,6 +177,27 @@ class SurfaceCompliance:
             raise ValueError(f"finite sliding: node {int(global_nodes[missing].flat[0])} is paired but lies outside "
                              "the surface compliance: ElasticBody.reach is shorter than the pairing needs")
         return np.where(global_nodes >= 0, where, -1)
+
+
+@numba.njit(cache=True)
+def _congruence(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """``L C L^T`` for a CSR ``L`` (its arrays) and a dense ``C``: the rows of ``L C`` first, then their products
+    with L's rows, each sum in the order of L's entries (scipy's CSR products' order, without their per-call
+    cost: finite sliding forms a W at almost every increment)."""
+    rows, m = indptr.size - 1, C.shape[1]
+    LC = np.zeros((rows, m))
+    for i in range(rows):
+        for k in range(indptr[i], indptr[i + 1]):
+            a, col = data[k], indices[k]
+            for j in range(m):
+                LC[i, j] += a * C[col, j]
+    W = np.zeros((rows, rows))
+    for i in range(rows):
+        for k in range(indptr[i], indptr[i + 1]):
+            a, col = data[k], indices[k]
+            for j in range(rows):
+                W[i, j] += a * LC[j, col]
+    return W
 
 
 def _master_motion(compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -176,8 +223,9 @@ def offsets(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D
     Returns:
         (nc,) the offsets, in master facet sizes.
     """
-    slave = pairing.coords + u[compliance.rows(pairing.global_nodes)]
-    moved = _master_motion(compliance, u, D, compliance.rows(pairing.master_nodes))
+    slave_rows, master_rows = compliance.pairing_rows(pairing)
+    slave = pairing.coords + u[slave_rows]
+    moved = _master_motion(compliance, u, D, master_rows)
     master = np.einsum("ci,cij->cj", pairing.master_weights, pairing.master_surface.x[pairing.master_faces] + moved)
     tangential = np.einsum("ckj,cj->ck", pairing.frames[:, 1:], slave - master)
     return np.linalg.norm(tangential, axis=1) / pairing.master_sizes
@@ -210,7 +258,7 @@ def repair(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D:
     faces = compliance.faces
     rows = compliance.rows(surface.nodes[faces])
     current = surface.x[faces] + _master_motion(compliance, u, D, rows)
-    slave = pairing.coords + u[compliance.rows(pairing.global_nodes)]
+    slave = pairing.coords + u[compliance.pairing_rows(pairing)[0]]
     pairs = MasterSurface(surface.nodes[faces], current, surface.nv[faces], surface.inside[faces] + D,
                           surface.reference_frame).pair(slave)
     chosen = faces[pairs["face"]]
@@ -229,7 +277,7 @@ def interpolate_master(pairing: ContactSet, compliance: SurfaceCompliance, maste
     Returns:
         (nc,) the depth at each paired point.
     """
-    rows = compliance.rows(pairing.master_nodes)
+    rows = compliance.pairing_rows(pairing)[1]
     return np.einsum("ci,ci->c", pairing.master_weights, np.where(rows >= 0, master_wear[np.maximum(rows, 0)], 0.0))
 
 
@@ -249,7 +297,7 @@ def spread_wear(pairing: ContactSet, compliance: SurfaceCompliance, depth: np.nd
     Raises:
         RuntimeError: wear at a node of no master facet.
     """
-    rows = compliance.rows(pairing.master_nodes)
+    rows = compliance.pairing_rows(pairing)[1]
     volume = np.zeros(compliance.nodes.size)
     share = pairing.master_weights * (depth * pairing.tributary)[:, None]
     valid = rows >= 0

@@ -11,6 +11,8 @@ References:
 - The flat's scar in reciprocating gross slip spans the contact width plus the slip stroke.
 """
 
+import copy
+
 import numpy as np
 import pytest
 from mpi4py import MPI  # noqa: F401  (before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs)
@@ -19,7 +21,7 @@ import dolfinx_fretting as dfr
 from dolfinx_fretting import sliding
 from dolfinx_fretting.analytic import hertz_line_contact
 from dolfinx_fretting.checkpoint import _find_facets
-from dolfinx_fretting.contact import MasterSurface, paired_contact_set, tangent_frame
+from dolfinx_fretting.contact import MasterSurface, pair_with_segments, paired_contact_set, tangent_frame
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import run_scene
 from support import finite_sliding as support_sliding
@@ -474,3 +476,118 @@ def test_re_pairing_happens_once_a_point_has_moved_repair_slip_elements(cylinder
     assert worst <= repair_slip
     slide = steps * step                                 # the rigid stroke; the relative slide is a little less
     assert slide / (repair_slip * h) - 4 <= problem.sliding.repairs <= steps
+
+
+# The re-pairing's fast parts against their definitions (issue 26: a re-pairing at almost every increment) -------
+def _brute_closest(points, segments):
+    """Closest point of each segment to each point, plainly: the first segment of least distance, its t."""
+    faces, ts = [], []
+    for p in points:
+        best, best_t, best_d = -1, 0.0, np.inf
+        for s, (a, b) in enumerate(segments):
+            d_ab = b - a
+            t = min(max(((p[0] - a[0]) * d_ab[0] + (p[1] - a[1]) * d_ab[1]) / (d_ab[0] ** 2 + d_ab[1] ** 2), 0.0), 1.0)
+            e = p - (a + t * d_ab)
+            d = np.sqrt(e[0] * e[0] + e[1] * e[1])
+            if d < best_d:
+                best, best_t, best_d = s, t, d
+        faces.append(best)
+        ts.append(best_t)
+    return np.array(faces), np.array(ts)
+
+
+def test_the_closest_segment_is_the_brute_force_one():
+    """pair_with_segments (compiled search) against a plain loop over every segment: the same facet and weights
+    (1e-15: the same formula, evaluated alike), on a wavy master of uneven segments with points off it, beyond
+    its ends and on its nodes (two segments equally close up to rounding)."""
+    rng = np.random.default_rng(11)
+    x_nodes = np.sort(rng.uniform(-1.0, 1.0, 41))
+    y_nodes = 1e-2 * np.sin(7 * x_nodes)
+    ends = np.column_stack([x_nodes, y_nodes])
+    segments = np.stack([ends[:-1], ends[1:]], axis=1)
+    inside = segments.mean(axis=1) - [0.0, 1.0]
+    points = np.vstack([np.column_stack([rng.uniform(-1.2, 1.2, 60), rng.normal(0.0, 0.02, 60)]), ends[5:9]])
+    pairs = pair_with_segments(points, segments, inside)
+    faces, ts = _brute_closest(points, segments)
+    assert np.array_equal(pairs["face"], faces)
+    assert np.abs(pairs["weights"][:, 1] - ts).max() <= 1e-15
+    with pytest.raises(ValueError, match="no master segment"):
+        pair_with_segments(points, segments[:0], inside[:0])
+
+
+def test_the_contact_operator_maps_displacements_as_its_definition():
+    """H of paired_contact_set (its CSR built row by row) applied to a displacement: frame . (u_s - sum_i w_i u_i)
+    per contact (1e-14 relative), in 2D and in 3D with a triangle's padding; its rows' columns are sorted and hold
+    no zero (a zero weight touches no column)."""
+    rng = np.random.default_rng(5)
+    surface = _segment_surface(np.linspace(-0.5, 0.5, 51))
+    xs = np.r_[np.linspace(-0.1, 0.1, 9) + 0.003, -0.3]              # the last on a master node: a zero weight
+    cs = _slaves_on(surface, xs, gap=0.001)
+    quad = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    tri = [[1, 0, 0], [2, 0, 0], [1, 1, 0], [1, 1, 0]]
+    faces3 = MasterSurface(np.array([[0, 1, 2, 3], [1, 4, 2, -1]]), np.array([quad, tri], float), np.array([4, 3]),
+                           np.array([[0.5, 0.5, -1], [1.3, 0.3, -1]]), tangent_frame([0.0, 0.0, 1.0]))
+    coords3 = np.array([[0.3, 0.6, 0.01], [1.2, 0.3, 0.02], [1.6, 0.1, 0.0]])
+    pairs3 = faces3.pair(coords3)
+    cs3 = paired_contact_set(faces3, np.array([10, 11, 12]), coords3, np.full(3, 0.1), coords3[:, 0].copy(),
+                             pairs3["face"], pairs3["weights"], 3 * 20)
+    for contact_set in (cs, cs3):
+        dim = contact_set.dim
+        u = rng.normal(size=contact_set.H.shape[1]).reshape(-1, dim)
+        masters = contact_set.master_nodes
+        relative = u[contact_set.global_nodes] - np.einsum(
+            "ci,cij->cj", np.where(masters >= 0, contact_set.master_weights, 0.0), u[np.maximum(masters, 0)])
+        expected = np.einsum("ckj,cj->ck", contact_set.frames, relative).ravel()
+        assert np.abs(contact_set.H @ u.ravel() - expected).max() <= 1e-14 * np.abs(expected).max()
+        H = contact_set.H
+        assert H.has_sorted_indices and np.all(H.data != 0.0)
+        assert all(np.all(np.diff(H.indices[H.indptr[i]:H.indptr[i + 1]]) > 0) for i in range(H.shape[0]))
+    # normal rows (n = y): the slave's and the master nodes' y dofs; on a master node only that node's
+    assert cs.H[0].nnz == 3 and cs.H[2 * (cs.nc - 1)].nnz == 2
+
+
+def test_a_pairing_s_surface_operators_are_their_definitions():
+    """SurfaceCompliance on a random symmetric C: L is H at the surface dofs (exactly: the same entries), the
+    same object for the same pairing and its own for another; W = L C L^T (1e-13 of max W, against the dense
+    product); the node rows those of :meth:`rows`; a pairing touching a node outside is refused."""
+    rng = np.random.default_rng(9)
+    surface = _segment_surface(np.linspace(-0.5, 0.5, 51))
+    cs = _slaves_on(surface, np.linspace(-0.1, 0.1, 9) + 0.003, gap=0.001)
+    nodes = np.union1d(cs.global_nodes, surface.nodes.ravel())
+    m = 2 * nodes.size
+    A = rng.normal(size=(m, m))
+    comp = sliding.SurfaceCompliance(nodes, 2, A @ A.T / m, rng.normal(size=(1, m)),
+                                     np.arange(surface.nodes.shape[0]), sliding.master_node_areas(surface, nodes))
+    L = comp.restrict(cs)
+    assert np.array_equal(L.toarray(), cs.H[:, comp.dofs].toarray())
+    assert comp.restrict(cs) is L
+    moved = sliding.repair(cs, comp, np.zeros((nodes.size, 2)), np.array([0.067, 0.0]))
+    assert comp.restrict(moved) is not L and np.array_equal(comp.restrict(moved).toarray(),
+                                                            moved.H[:, comp.dofs].toarray())
+    W, responses = comp.operators(moved)
+    dense = moved.H[:, comp.dofs].toarray()
+    assert np.abs(W - dense @ comp.C @ dense.T).max() <= 1e-13 * np.abs(W).max()
+    assert np.abs(responses - comp.responses @ dense.T).max() <= 1e-13 * np.abs(responses).max()
+    slave_rows, master_rows = comp.pairing_rows(moved)
+    assert np.array_equal(slave_rows, comp.rows(moved.global_nodes))
+    assert np.array_equal(master_rows, comp.rows(moved.master_nodes))
+    short = sliding.SurfaceCompliance(nodes[:-5], 2, np.eye(m - 10), np.zeros((0, m - 10)),
+                                      np.arange(surface.nodes.shape[0]), np.zeros(nodes.size - 5))
+    far = _slaves_on(surface, np.array([0.47]))                  # on a master facet whose nodes were cut off
+    with pytest.raises(ValueError, match="ElasticBody.reach"):
+        short.restrict(far)
+
+
+def test_the_free_contact_operator_drops_the_fixed_columns(cylinder_on_flat):
+    """Contact.H_free is H diag(free): the same entries at the free dofs, none at the fixed ones (exactly), with
+    the x dofs of a few master nodes fixed besides the problem's conditions (so that H has fixed columns)."""
+    problem = sliding_problem(cylinder_on_flat, "finite")
+    contact = copy.copy(problem.contact)
+    H = contact.contact_set.H.toarray()
+    masters = np.unique(contact.contact_set.master_nodes)
+    contact.fixed_global = np.union1d(contact.fixed_global, 2 * masters[:5])
+    contact._use(contact.contact_set)
+    free = np.ones(H.shape[1])
+    free[contact.fixed_global] = 0.0
+    assert np.abs(H[:, contact.fixed_global]).max() > 0
+    assert np.array_equal(contact.H_free.toarray(), H * free)

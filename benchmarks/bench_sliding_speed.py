@@ -1,0 +1,102 @@
+"""What finite sliding costs against the fixed pairing on McColl's scene, side by side, and against another tree.
+
+Runs ``dolfinx-fretting run mccoll`` with ``contact.sliding = "finite"`` and ``"small"`` in turn (A, B, A, B, ...),
+each run's CPU time (user + system of the child, ``resource.getrusage``) and wall time recorded; with
+``--reference-tree`` the same pair also from another source tree (``PYTHONPATH``), alternated with this one. On a
+shared machine the wall time follows the other jobs; the CPU time much less, so the ratios are read from it.
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sliding_speed.py [--cycles 40] [--repeats 3] \
+        [--reference-tree /work/main] [--work /tmp/bench_sliding_speed] [--out benchmarks/results/sliding_speed]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+TREE = HERE.parent
+
+
+def run(tree: Path, sliding: str, cycles: int, work: Path) -> dict:
+    """One McColl run from the sources in ``tree``; its CPU and wall seconds and the summary's answers."""
+    out = work / f"{tree.name}-{sliding}"
+    command = [str(Path(sys.executable).parent / "dolfinx-fretting"), "run", "mccoll", "--out", str(out),
+               "--overwrite", "--set", "output.progress=false", "--set", f"contact.sliding={sliding}",
+               "--set", f"loading.cycles={cycles}", "--set", "output.plots=false", "--set", "output.xdmf=false"]
+    env = {**os.environ, "PYTHONPATH": str(tree), "OPENBLAS_NUM_THREADS": "1"}
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    summary = json.loads((out / "summary.json").read_text())
+    return {"cpu_s": cpu, "wall_s": wall, "repairs": summary.get("repairs"),
+            "max_wear_depth": summary["max_wear_depth"], "dissipated_energy": summary["dissipated_energy"],
+            "max_pressure": summary["max_pressure"]}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--cycles", type=int, default=40)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--reference-tree", default=None, help="another source tree (e.g. /work/main) run alike")
+    parser.add_argument("--work", default="/tmp/bench_sliding_speed")
+    parser.add_argument("--out", default=str(HERE / "results" / "sliding_speed"))
+    args = parser.parse_args()
+    work = Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    trees = [TREE] + ([Path(args.reference_tree).resolve()] if args.reference_tree else [])
+    runs: dict[str, list[dict]] = {}
+    for tree in trees:   # untimed: numba's cache of each tree filled, the mesh module imported once
+        for sliding in ("finite", "small"):
+            run(tree, sliding, 1, work)
+    for _ in range(args.repeats):
+        for tree in trees:
+            for sliding in ("finite", "small"):
+                runs.setdefault(f"{tree}|{sliding}", []).append(run(tree, sliding, args.cycles, work))
+    load = os.getloadavg()
+    command = ("OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sliding_speed.py "
+               f"--cycles {args.cycles} --repeats {args.repeats}"
+               + (f" --reference-tree {args.reference_tree}" if args.reference_tree else ""))
+    lines = [f"## Finite sliding against the fixed pairing, McColl, {args.cycles} simulated cycles", "",
+             f"Command: `{command}`", "",
+             f"Date: {datetime.datetime.now().isoformat(timespec='seconds')}; machine: {platform.machine()}, "
+             f"{os.cpu_count()} cores; load average at the end {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}. "
+             f"Runs alternated (tree by tree, finite then fixed), {args.repeats} of each after one untimed run of "
+             "each (1 cycle); medians.", "",
+             "| tree | CPU finite (s) | CPU fixed (s) | finite / fixed (CPU) | wall finite (s) | wall fixed (s) | "
+             "finite / fixed (wall) | per-repeat CPU ratios | repairs |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: |"]
+    for tree in trees:
+        finite, small = runs[f"{tree}|finite"], runs[f"{tree}|small"]
+        med = {k: (statistics.median(r[k] for r in finite), statistics.median(r[k] for r in small))
+               for k in ("cpu_s", "wall_s")}
+        ratios = ", ".join(f"{a['cpu_s'] / b['cpu_s']:.2f}" for a, b in zip(finite, small))
+        lines.append(f"| `{tree}` | {med['cpu_s'][0]:.1f} | {med['cpu_s'][1]:.1f} | "
+                     f"{med['cpu_s'][0] / med['cpu_s'][1]:.2f} | {med['wall_s'][0]:.1f} | {med['wall_s'][1]:.1f} | "
+                     f"{med['wall_s'][0] / med['wall_s'][1]:.2f} | {ratios} | {finite[0]['repairs']} |")
+    if len(trees) == 2:
+        here, there = runs[f"{trees[0]}|finite"], runs[f"{trees[1]}|finite"]
+        same = all(a[k] == b[k] for a, b in zip(here, there)
+                   for k in ("repairs", "max_wear_depth", "dissipated_energy", "max_pressure"))
+        lines += ["", f"The finite-sliding summaries of both trees (repairs, max_wear_depth, dissipated_energy, "
+                  f"max_pressure): {'identical' if same else 'DIFFERENT'}."]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    Path(args.out).with_suffix(".md").write_text(text)
+    Path(args.out).with_suffix(".json").write_text(json.dumps({k: v for k, v in runs.items()}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
