@@ -39,7 +39,7 @@ from .contact import Contact
 from .contact_output import write_contact_xdmf
 from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, cycle_wear,
                          extrapolate_plastic_history, hertz_jump_limit, jump_error, local_jump_error,
-                         plastic_jump_error, plastic_jump_limit, propagate_error)
+                         plastic_jump_error, plastic_jump_limit, propagate_error, tolerance_jump_limit)
 from .interrupts import Interrupted, RunSignals, stage_hook
 from .io import non_finite_keys, write_json_atomic
 from .materials import J2Plasticity, elastic_stiffness
@@ -816,8 +816,11 @@ class _Run:
             local = (local_jump_error(jumps["rate"], a.rate, jumps["last"]) if jumps["rate"] is not None
                      else np.zeros(a.rate.size))
             before = jumps["error_vector"] if jumps["error_vector"] is not None else np.zeros(a.rate.size)
-            dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction, w.jump_pressure_change, w.jump_max,
-                                          jumps["free"], room, plastic_limit)
+            tolerance_limit = (math.inf if w.jump_tolerance is None
+                               else tolerance_jump_limit(jumps["rate"], a.rate, jumps["last"], w.jump_tolerance))
+            dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction,
+                                          w.jump_pressure_change if w.jump_tolerance is None else None, w.jump_max,
+                                          jumps["free"], room, plastic_limit, tolerance_limit)
             if w.jump_forced is not None:
                 dN, bound, free = min(w.jump_forced, room), "forced", w.jump_forced
             if cycle == 1:  # it starts from the preload, not from a cycle: its wear is not the cycles' rate
@@ -955,7 +958,8 @@ class _Run:
                "stability_limit_min": finite(jumps["min_stability_limit"]),
                "jumps_past_stability_limit": jumps["exceeded"], "forced": scene.wear.jump_forced,
                "bounds": {"wear_fraction": scene.wear.jump_wear_fraction,
-                          "pressure_change": scene.wear.jump_pressure_change, "max_jump": scene.wear.jump_max}}
+                          "pressure_change": scene.wear.jump_pressure_change if scene.wear.jump_tolerance is None
+                          else None, "tolerance": scene.wear.jump_tolerance, "max_jump": scene.wear.jump_max}}
         if self.problem.body is not None:
             out["plastic_error_estimate"] = jumps["plastic_error"] + jumps["plastic_error_pending"]
             out["bounds"]["plastic_fraction"] = scene.wear.jump_plastic_fraction
