@@ -36,7 +36,8 @@ jump can be chosen from the error estimate below: the rate's drift per cycle ove
 ``d = |rate - rate_before| / dN_previous``, predicts a jump's local error ``(dN - 1) dN max(d)`` (quadratic in dN),
 held to ``tolerance`` times the wear the jump adds, ``dN max(rate)`` (linear in dN), so
 ``dN <= 1 + tolerance max(rate) / max(d)``: long jumps where the rate is steady, short ones where it moves. The
-other bounds stay (wear per jump, monotone limit, doubling, landings, ``max_jump``, plastic).
+other bounds stay (wear per jump, monotone limit, doubling, landings, ``max_jump``, plastic). No drift is read
+from cycle 1 to the next (cycle 1 starts from the preload): the doubling holds the first jump.
 
 The first cycle is never jumped from: it starts from the preload's tangential state, so its slip path,
 and its wear, differ from those of the cycles that follow.

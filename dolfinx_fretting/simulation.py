@@ -816,8 +816,11 @@ class _Run:
             local = (local_jump_error(jumps["rate"], a.rate, jumps["last"]) if jumps["rate"] is not None
                      else np.zeros(a.rate.size))
             before = jumps["error_vector"] if jumps["error_vector"] is not None else np.zeros(a.rate.size)
+            # No drift from cycle 1 to the next: cycle 1 starts from the preload (its wear is not the cycles' rate),
+            # and the doubling from one cycle holds the first jump.
+            drifted_from = jumps["rate"] if cycle - jumps["last"] > 1 else None
             tolerance_limit = (math.inf if w.jump_tolerance is None
-                               else tolerance_jump_limit(jumps["rate"], a.rate, jumps["last"], w.jump_tolerance))
+                               else tolerance_jump_limit(drifted_from, a.rate, jumps["last"], w.jump_tolerance))
             dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction,
                                           w.jump_pressure_change if w.jump_tolerance is None else None, w.jump_max,
                                           jumps["free"], room, plastic_limit, tolerance_limit)
