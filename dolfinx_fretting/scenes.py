@@ -270,8 +270,9 @@ class WearSettings(_Section):
     uses the real ``k`` and the wear gap is extrapolated over a jump of cycles chosen from
     ``jump_wear_fraction`` (wear per jump / contact element size), ``jump_pressure_change`` (predicted
     pressure change per jump / peak pressure) or, given ``jump_tolerance``, the error estimate (predicted local
-    error per jump / the wear it adds), ``jump_max`` and the explicit stability limit of the wear update. It refuses ``acceleration != 1``: both stretch a simulated cycle over several physical ones,
-    and a fixed k-scaling inside the jump would multiply its step without the control.
+    error per jump / the wear it adds), ``jump_max`` and the explicit stability limit of the wear update. It
+    refuses ``acceleration != 1``: both stretch a simulated cycle over several physical ones, and a fixed
+    k-scaling inside the jump would multiply its step without the control.
     """
 
     law: Literal["none", "archard", "energy"] = "none"
