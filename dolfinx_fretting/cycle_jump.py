@@ -31,6 +31,14 @@ element size h), predicted pressure change ``dN max_j |dp^j/dg dg| <= f_p max p`
 ``dN <= 2 dN_previous`` (the rate is known only at the start of a jump), ``dN <= max_jump``, and landing on
 the next cycle that must be simulated (snapshots, the last cycle).
 
+**Error tolerance** (``wear.jump_tolerance``, :func:`tolerance_jump_limit`). Instead of the pressure bound, the
+jump can be chosen from the error estimate below: the rate's drift per cycle over the last jump,
+``d = |rate - rate_before| / dN_previous``, predicts a jump's local error ``(dN - 1) dN max(d)`` (quadratic in dN),
+held to ``tolerance`` times the wear the jump adds, ``dN max(rate)`` (linear in dN), so
+``dN <= 1 + tolerance max(rate) / max(d)``: long jumps where the rate is steady, short ones where it moves. The
+other bounds stay (wear per jump, monotone limit, doubling, landings, ``max_jump``, plastic). No drift is read
+from cycle 1 to the next (cycle 1 starts from the preload): the doubling holds the first jump.
+
 The first cycle is never jumped from: it starts from the preload's tangential state, so its slip path,
 and its wear, differ from those of the cycles that follow.
 
@@ -83,7 +91,8 @@ from mpi4py import MPI
 
 __all__ = ["CycleAnalysis", "PlasticCycle", "analyse_cycle", "analyse_plastic_cycle", "choose_jump",
            "cycle_wear", "extrapolate", "extrapolate_plastic_history", "jump_error", "hertz_jump_limit",
-           "local_jump_error", "plastic_jump_error", "plastic_jump_limit", "propagate_error"]
+           "local_jump_error", "plastic_jump_error", "plastic_jump_limit", "propagate_error",
+           "tolerance_jump_limit"]
 
 _OPEN = 0
 _SLIP = 2
@@ -172,8 +181,8 @@ def analyse_cycle(W: np.ndarray, dim: int, tributary: np.ndarray, states: np.nda
 
 
 def choose_jump(analysis: CycleAnalysis, k: float, element_size: float, wear_fraction: float,
-                pressure_fraction: float, max_jump: int, previous: int, room: int,
-                plastic_limit: float = math.inf) -> tuple[int, str, int]:
+                pressure_fraction: float | None, max_jump: int, previous: int, room: int,
+                plastic_limit: float = math.inf, tolerance_limit: float = math.inf) -> tuple[int, str, int]:
     """The jump after a simulated cycle: the largest ``dN`` within every bound (see the module docstring).
 
     Args:
@@ -181,11 +190,13 @@ def choose_jump(analysis: CycleAnalysis, k: float, element_size: float, wear_fra
         k: Wear coefficient of a simulated cycle (1/MPa).
         element_size: Contact element size h (mm).
         wear_fraction: f_w, wear per jump as a fraction of h.
-        pressure_fraction: f_p, pressure change per jump as a fraction of the cycle's peak pressure.
+        pressure_fraction: f_p, pressure change per jump as a fraction of the cycle's peak pressure (None: no
+            pressure bound; the error tolerance's bound takes its place).
         max_jump: Upper bound on ``dN``.
         previous: The previous jump (``dN`` may at most double).
         room: Cycles until the next cycle that must be simulated (``dN <= room``).
         plastic_limit: An elastic–plastic body's bound (:func:`plastic_jump_limit`; inf: none).
+        tolerance_limit: The error tolerance's bound (:func:`tolerance_jump_limit`; inf: none).
 
     Returns:
         ``(dN, bound, free)``: the jump (>= 1), the name of the bound that set it, and the jump the bounds
@@ -196,7 +207,8 @@ def choose_jump(analysis: CycleAnalysis, k: float, element_size: float, wear_fra
     bounds = {
         "wear": wear_fraction * element_size / wmax if wmax > 0 else math.inf,
         "pressure": pressure_fraction * analysis.peak_pressure / analysis.pressure_rate
-        if analysis.pressure_rate > 0 else math.inf,
+        if pressure_fraction is not None and analysis.pressure_rate > 0 else math.inf,
+        "tolerance": float(tolerance_limit),
         "stability": analysis.monotone_limit(k),
         "growth": 2.0 * max(previous, 1),
         "max_jump": float(max_jump),
@@ -207,6 +219,37 @@ def choose_jump(analysis: CycleAnalysis, k: float, element_size: float, wear_fra
     if room < free:
         return max(1, room), "landing", free
     return free, free_name, free
+
+
+def tolerance_jump_limit(rate_before: np.ndarray | None, rate: np.ndarray, previous: int,
+                         tolerance: float) -> float:
+    """Largest jump whose predicted local error is at most ``tolerance`` times the wear it adds (the error
+    tolerance's bound of :func:`choose_jump`; inf when no drift of the rate is known yet or none is seen).
+
+    The rate of each contact drifted by ``|rate - rate_before|`` over the ``previous`` cycles between the two
+    simulated cycles; at that drift per cycle ``d`` a jump of ``dN`` cycles has the local error
+    (:func:`local_jump_error`) ``(dN - 1) dN d`` at worst (its rate at the end has moved by ``dN d``), and the
+    jump adds ``dN max(rate)``. So ``(dN - 1) max(d) <= tolerance max(rate)``:
+    ``dN <= 1 + tolerance max(rate) / max(d)``: the error grows with the square of the jump, the wear it adds
+    linearly. Each jump's estimated error is then a fraction ``tolerance`` of the wear it adds, and their sum over
+    the run at most ``tolerance`` times the sum over the jumps of the largest wear each adds (the deepest wear
+    when the deepest contact wears fastest); the run's propagated estimate heals below that.
+
+    Args:
+        rate_before: Wear-gap increment per contact of the previous simulated cycle (None: none, e.g. after a
+            window growth).
+        rate: That of the cycle just simulated.
+        previous: The jump taken from the previous simulated cycle (the cycles between the two).
+        tolerance: The allowed local error per jump as a fraction of the wear the jump adds.
+    """
+    if rate_before is None:
+        return math.inf
+    drift = float(np.abs(np.asarray(rate, dtype=float) - np.asarray(rate_before, dtype=float)).max(initial=0.0))
+    drift /= max(previous, 1)
+    wear = float(np.max(rate, initial=0.0))
+    if drift <= 0.0 or wear <= 0.0:
+        return math.inf
+    return 1.0 + tolerance * wear / drift
 
 
 def jump_error(rate_start: np.ndarray, rate_end: np.ndarray, jump: int) -> float:

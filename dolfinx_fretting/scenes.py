@@ -318,9 +318,10 @@ class WearSettings(_Section):
     ``cycle_jump`` is the controlled alternative (:mod:`dolfinx_fretting.cycle_jump`): each simulated cycle
     uses the real ``k`` and the wear gap is extrapolated over a jump of cycles chosen from
     ``jump_wear_fraction`` (wear per jump / contact element size), ``jump_pressure_change`` (predicted
-    pressure change per jump / peak pressure), ``jump_max`` and the explicit stability limit of the wear
-    update. It refuses ``acceleration != 1``: both stretch a simulated cycle over several physical ones,
-    and a fixed k-scaling inside the jump would multiply its step without the control.
+    pressure change per jump / peak pressure) or, given ``jump_tolerance``, the error estimate (predicted local
+    error per jump / the wear it adds), ``jump_max`` and the explicit stability limit of the wear update. It
+    refuses ``acceleration != 1``: both stretch a simulated cycle over several physical ones, and a fixed
+    k-scaling inside the jump would multiply its step without the control.
     """
 
     law: Literal["none", "archard", "energy"] = "none"
@@ -347,6 +348,10 @@ class WearSettings(_Section):
     jump_wear_fraction: float = Field(0.1, gt=0, le=1)
     #: Largest predicted pressure change of one jump, as a fraction of the cycle's peak pressure.
     jump_pressure_change: float = Field(0.05, gt=0, le=1)
+    #: The jump length from the error estimate instead of the pressure bound: each jump's predicted local error at
+    #: most this fraction of the wear it adds (``cycle_jump.tolerance_jump_limit``), so the run's summed error is
+    #: at most this fraction of the wear; None: the pressure bound ``jump_pressure_change`` (the rule before).
+    jump_tolerance: float | None = Field(None, gt=0, le=1)
     #: Most cycles one jump may stand for.
     jump_max: int = Field(1000, ge=1, le=100_000_000)
     #: A fixed jump (cycles) instead of the automatic choice, for studies: the bounds and the stability
@@ -389,6 +394,11 @@ class WearSettings(_Section):
                               "step, the k-scaling does not)")
         if self.jump_forced is not None and not self.cycle_jump:
             raise range_error("wear.jump_forced", self.jump_forced, "unset unless wear.cycle_jump = true")
+        if self.jump_tolerance is not None and not self.cycle_jump:
+            raise range_error("wear.jump_tolerance", self.jump_tolerance, "unset unless wear.cycle_jump = true")
+        if self.jump_tolerance is not None and "jump_pressure_change" in self.model_fields_set:
+            raise range_error("wear.jump_pressure_change", self.jump_pressure_change,
+                              "unset with wear.jump_tolerance (the tolerance's bound takes the pressure bound's place)")
         # the coefficients of the law not chosen would be silently ignored: the scene may have meant that law
         for name, law in (("k", "archard"), ("alpha", "energy")):
             given = [key for key in (name, f"{name}_slave", f"{name}_master") if getattr(self, key)]

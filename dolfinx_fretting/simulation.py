@@ -41,7 +41,7 @@ from .contact import Contact
 from .contact_output import write_contact_xdmf
 from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, cycle_wear,
                          extrapolate_plastic_history, hertz_jump_limit, jump_error, local_jump_error,
-                         plastic_jump_error, plastic_jump_limit, propagate_error)
+                         plastic_jump_error, plastic_jump_limit, propagate_error, tolerance_jump_limit)
 from .fatigue_outputs import FATIGUE_TABLE, FatigueOutputs
 from .interrupts import Interrupted, RunSignals, stage_hook
 from .io import non_finite_keys, write_json_atomic
@@ -847,8 +847,14 @@ class _Run:
             local = (local_jump_error(jumps["rate"], a.rate, jumps["last"]) if jumps["rate"] is not None
                      else np.zeros(a.rate.size))
             before = jumps["error_vector"] if jumps["error_vector"] is not None else np.zeros(a.rate.size)
-            dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction, w.jump_pressure_change, w.jump_max,
-                                          jumps["free"], room, plastic_limit)
+            # No drift from cycle 1 to the next: cycle 1 starts from the preload (its wear is not the cycles' rate),
+            # and the doubling from one cycle holds the first jump.
+            drifted_from = jumps["rate"] if cycle - jumps["last"] > 1 else None
+            tolerance_limit = (math.inf if w.jump_tolerance is None
+                               else tolerance_jump_limit(drifted_from, a.rate, jumps["last"], w.jump_tolerance))
+            dN, bound, free = choose_jump(a, k, h_e, w.jump_wear_fraction,
+                                          w.jump_pressure_change if w.jump_tolerance is None else None, w.jump_max,
+                                          jumps["free"], room, plastic_limit, tolerance_limit)
             if w.jump_forced is not None:
                 dN, bound, free = min(w.jump_forced, room), "forced", w.jump_forced
             if cycle == 1:  # it starts from the preload, not from a cycle: its wear is not the cycles' rate
@@ -996,7 +1002,8 @@ class _Run:
                "stability_limit_min": finite(jumps["min_stability_limit"]),
                "jumps_past_stability_limit": jumps["exceeded"], "forced": scene.wear.jump_forced,
                "bounds": {"wear_fraction": scene.wear.jump_wear_fraction,
-                          "pressure_change": scene.wear.jump_pressure_change, "max_jump": scene.wear.jump_max}}
+                          "pressure_change": scene.wear.jump_pressure_change if scene.wear.jump_tolerance is None
+                          else None, "tolerance": scene.wear.jump_tolerance, "max_jump": scene.wear.jump_max}}
         if self.problem.body is not None:
             out["plastic_error_estimate"] = jumps["plastic_error"] + jumps["plastic_error_pending"]
             out["bounds"]["plastic_fraction"] = scene.wear.jump_plastic_fraction

@@ -9,7 +9,8 @@ import pytest
 from dolfinx_fretting.contact_output import read_table
 from dolfinx_fretting.cycle_jump import (CycleAnalysis, analyse_cycle, analyse_plastic_cycle, choose_jump, cycle_wear,
                                          extrapolate, extrapolate_plastic_history, hertz_jump_limit, jump_error,
-                                         local_jump_error, plastic_jump_error, plastic_jump_limit, propagate_error)
+                                         local_jump_error, plastic_jump_error, plastic_jump_limit, propagate_error,
+                                         tolerance_jump_limit)
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import CHECKPOINT, SimulationError, read_checkpoint, run_scene
 
@@ -138,6 +139,30 @@ def test_local_error_is_the_signed_bound():
     np.testing.assert_allclose(e, 8 * (start - end), rtol=1e-15)
     assert np.abs(e).max() == pytest.approx(jump_error(start, end, 9), rel=1e-15)
     assert not local_jump_error(start, end, 1).any()
+
+
+def test_tolerance_bound_meets_the_tolerance_on_a_linear_drift():
+    """Rates drifting linearly, r(N) = a + b N: the rate moved by |b| P over the previous jump of P cycles, and a jump
+    of dN cycles from N0 then has the worst-case local error jump_error(r(N0), r(N0 + dN), dN) = (dN - 1) dN max|b|.
+    The tolerance's bound is the longest jump whose error is at most tol x the wear it adds, dN max r(N0): the whole
+    jump below it meets the tolerance, one cycle more breaks it."""
+    a, b = np.array([4e-6, 1e-6, 2e-6]), np.array([-2e-9, 3e-9, 1e-10])
+    rate = lambda N: a + b * N  # noqa: E731
+    N0, previous, tol = 300, 37, 0.05
+    limit = tolerance_jump_limit(rate(N0 - previous), rate(N0), previous, tol)
+    assert limit == pytest.approx(1 + tol * rate(N0).max() / np.abs(b).max(), rel=1e-9)
+    dN = int(limit)
+    assert dN > 2
+    assert jump_error(rate(N0), rate(N0 + dN), dN) <= tol * dN * rate(N0).max() * (1 + 1e-9)
+    assert jump_error(rate(N0), rate(N0 + dN + 1), dN + 1) > tol * (dN + 1) * rate(N0).max()
+    # A tighter tolerance, a shorter jump; no rate before (a window growth) or no drift: no bound.
+    assert tolerance_jump_limit(rate(N0 - previous), rate(N0), previous, tol / 10) < limit
+    assert tolerance_jump_limit(None, rate(N0), previous, tol) == np.inf
+    assert tolerance_jump_limit(rate(N0), rate(N0), previous, tol) == np.inf
+    # In choose_jump it takes the pressure bound's place (None: no pressure bound) under the name 'tolerance'.
+    an = CycleAnalysis(rate=rate(N0), rho=1.0, pressure_rate=1e3, peak_pressure=100.0)
+    assert choose_jump(an, 1e-9, 1.0, 1.0, None, 10**6, 10**6, 10**6, tolerance_limit=limit) == (dN, "tolerance", dN)
+    assert choose_jump(an, 1e-9, 1.0, 1.0, 0.05, 10**6, 10**6, 10**6)[1] == "pressure"
 
 
 def test_propagated_error_heals_as_the_linearised_map_says():
@@ -275,6 +300,11 @@ def test_extrapolated_plastic_history_keeps_hookes_law_at_the_kept_strain():
     (["wear.cycle_jump=true", "wear.jump_wear_fraction=1.5"], "wear.jump_wear_fraction = 1.5"),
     (["wear.cycle_jump=true", "wear.jump_pressure_change=0"], "wear.jump_pressure_change = 0"),
     (["wear.cycle_jump=true", "wear.jump_max=0"], "wear.jump_max = 0"),
+    (["wear.cycle_jump=true", "wear.jump_tolerance=0"], "wear.jump_tolerance = 0"),
+    (["wear.cycle_jump=true", "wear.jump_tolerance=1.5"], "wear.jump_tolerance = 1.5"),
+    (["wear.jump_tolerance=0.1"], "wear.jump_tolerance = 0.1 is out of range"),
+    (["wear.cycle_jump=true", "wear.jump_tolerance=0.1", "wear.jump_pressure_change=0.05"],
+     "wear.jump_pressure_change = 0.05 is out of range"),
     (["wear.cycle_jump=true", "wear.jump_plastic_fraction=0"], "wear.jump_plastic_fraction = 0"),
     (["material.model='elastoplastic'", "material.yield_stress=840", "material.hardening_modulus=7230",
       "material.shakedown_tolerance=2"], "material.shakedown_tolerance = 2"),
@@ -312,8 +342,17 @@ def _extrema(v):
     return int(np.sum(np.sign(d[1:]) != np.sign(d[:-1])))
 
 
-def test_jumped_run_matches_every_cycle_within_its_error_estimate(tmp_path):
-    every, w_every, rate_every, _ = _cylinder(tmp_path, "every", 400)
+@pytest.fixture(scope="module")
+def every_cycle_cylinder(tmp_path_factory):
+    """The 400-cycle cylinder simulated every cycle (the reference of the jumped runs): its summary, last wear
+    profile, and final wear gap per contact."""
+    folder = tmp_path_factory.mktemp("every")
+    every, w_every, _, _ = _cylinder(folder, "every", 400)
+    return every, w_every, read_checkpoint(folder / "every" / CHECKPOINT)[1]["wear_gap"]
+
+
+def test_jumped_run_matches_every_cycle_within_its_error_estimate(tmp_path, every_cycle_cylinder):
+    every, w_every, gap_every = every_cycle_cylinder
     jump, w_jump, _, cyc = _cylinder(tmp_path, "jump", 400, ["wear.cycle_jump=true"])
     info = jump["cycle_jump"]
     assert jump["cycles"] == 400 and jump["increments"] == every["increments"]
@@ -331,7 +370,6 @@ def test_jumped_run_matches_every_cycle_within_its_error_estimate(tmp_path):
     # deep carries less pressure and heals) give 1.75x the measured largest wear-gap error here (1.6-2.0x on the
     # built-in scenes, benchmarks/results/cycle_jump.md; the sum of the local bounds, the estimate before, was
     # 3.9-7.4x). [1, 10]: an upper bound, within a decade.
-    gap_every = read_checkpoint(tmp_path / "every" / CHECKPOINT)[1]["wear_gap"]
     gap_jump = read_checkpoint(tmp_path / "jump" / CHECKPOINT)[1]["wear_gap"]
     measured = np.abs(gap_jump - gap_every).max()
     assert 1.0 <= info["wear_error_estimate"] / measured <= 10.0
@@ -340,6 +378,32 @@ def test_jumped_run_matches_every_cycle_within_its_error_estimate(tmp_path):
     assert np.linalg.norm(w_jump - w_every) <= 0.01 * np.linalg.norm(w_every)
     # The jumped energy stands for every cycle: the wear-energy identity holds for the extrapolated totals.
     assert jump["wear_area"] == pytest.approx(8.5e-8 / 0.9 * jump["dissipated_energy"], rel=1e-8)
+
+
+def test_a_tighter_jump_tolerance_gives_shorter_jumps_and_a_smaller_error(tmp_path, every_cycle_cylinder):
+    """wear.jump_tolerance chooses the jumps from the error estimate: on the 400-cycle cylinder a 10x tighter
+    tolerance takes more, shorter jumps, and the measured error (the final wear gap against the every-cycle run's)
+    falls with it. At both the run's estimate is an upper bound within a decade of the measured error ([1, 10];
+    measured 1.7x) and below the tolerance's promise, tol x the deepest wear (measured: 1.5 % and 0.21 % of it)."""
+    every, _, gap_every = every_cycle_cylinder
+    runs = {}
+    for tol in (0.1, 0.01):
+        s, _, _, cyc = _cylinder(tmp_path, f"tol{tol}", 400, ["wear.cycle_jump=true", f"wear.jump_tolerance={tol}"])
+        gap = read_checkpoint(tmp_path / f"tol{tol}" / CHECKPOINT)[1]["wear_gap"]
+        measured = float(np.abs(gap - gap_every).max())
+        info = s["cycle_jump"]
+        assert cyc["jump"].sum() == 400 and "tolerance" in list(cyc["jump_bound"])
+        assert "pressure" not in list(cyc["jump_bound"])  # the tolerance takes the pressure bound's place
+        # No drift is read from cycle 1 (it starts from the preload): the jump from cycle 2 is the doubling's.
+        assert cyc["cycle"][1] == 2 and cyc["jump_bound"][1] == "growth"
+        assert np.all(cyc["jump"] <= cyc["jump_stability_limit"] / 2 * (1 + 1e-12))  # the monotone limit holds
+        assert 1.0 <= info["wear_error_estimate"] / measured <= 10.0
+        assert info["wear_error_estimate"] <= tol * every["max_wear_depth"]
+        assert info["bounds"]["tolerance"] == tol and info["bounds"]["pressure_change"] is None
+        runs[tol] = (info["simulated_cycles"], info["largest_jump"], measured)
+    # measured: 25 and 126 simulated cycles, largest jumps 21 and 6, errors 1.9e-5 and 2.7e-6 mm
+    assert runs[0.01][0] > 2 * runs[0.1][0] and runs[0.01][1] < runs[0.1][1]
+    assert runs[0.01][2] < runs[0.1][2] / 2
 
 
 def test_a_jump_past_the_stability_limit_makes_edge_spikes(tmp_path):
