@@ -660,8 +660,9 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
     :meth:`ContactSet.subset`). Dual multipliers only (D diagonal).
 
     Contact j's relative position is the weighted gap and the weighted relative tangential displacement divided by
-    ``D_jj``, in the node's averaged frame (n_j, t_j) (3D: (n_j, t1_j, t2_j), :attr:`MortarMatrices.tangents`;
-    the abscissa is then the position along the reference frame's t1, as node-to-face's):
+    ``D_jj``, in the node's averaged frame (n_j, t_j) (3D: (n_j, t1_j, t2_j), the tangents of
+    :class:`~dolfinx_fretting.mortar.MortarMatrices`; the abscissa is then the position along the reference frame's
+    t1, as node-to-face's):
 
         x^j = [n_j; t_j] (u_j - sum_l w_jl u_l) + g0_j,    w_jl = M_jl / D_jj,    g0_j = g_j / D_jj,
 

@@ -1,7 +1,8 @@
-"""Mortar integrals of two 2D contact surfaces of linear segments (pure NumPy; no mesh).
+"""Mortar integrals of two contact surfaces: 2D of linear segments, 3D of triangles and quadrilaterals (pure NumPy;
+no mesh).
 
-For a slave surface and a master surface, each a set of straight two-node segments, this module computes the
-mortar matrices of the segment-to-segment method (Puso & Laursen, CMAME 193, 2004; with dual Lagrange multipliers:
+For a slave surface and a master surface, each a set of straight two-node segments (3D: faces, below), this module
+computes the mortar matrices of the segment-to-segment method (Puso & Laursen, CMAME 193, 2004; with dual Lagrange multipliers:
 Wohlmuth, SIAM J. Numer. Anal. 38, 2000; Popp, Gee & Wall, IJNME 79, 2009):
 
     D_jk = integral over the slave surface of  phi_j N_k,       M_jl = integral over the slave surface of  phi_j N^m_l,
@@ -37,6 +38,25 @@ constraint). Segments facing the master over less than :data:`MIN_FACING` of the
 
 Standard multipliers (``multipliers="standard"``) give the consistent D (not diagonal) of the same facing parts,
 for comparison; the package's nodal contact solvers need the dual ones.
+
+3D: faces. Surfaces of triangles (linear shape functions) and quadrilaterals (bilinear, vertices in cyclic order)
+are integrated face against face in an auxiliary plane (Puso & Laursen, CMAME 193, 2004; Popp, Gee & Wall, IJNME
+83, 2010): the plane of each slave face (through its vertices' centroid, normal to the face at its centre), onto
+which the slave face and every nearby master face facing it (normals opposed) are projected along that normal; the
+master polygon is clipped by the slave polygon (Sutherland–Hodgman; both convex) and the overlap triangulated from
+its vertices' centroid. On each triangle a slave and a master point face each other along the normal: the face
+parameters of a plane point are found by inverting each face's map in the plane (affine for a triangle, Newton for
+a quadrilateral). Quadrature: Radon's seven-point rule of degree 5 on each triangle, exact for the degree-4 products
+of two bilinear shape functions where those are polynomials of the plane's coordinates (triangles and
+parallelograms; on a general quadrilateral, whose inverse map is not polynomial, it approximates, as in the
+references). The plane's area element is corrected to the slave surface's (a warped quadrilateral). Dual functions
+as in 2D, ``psi_i = sum_k A_ik N_k``, ``A = diag(d) Me^-1`` from the face's own mass matrix over its facing part
+(on a whole face: ``psi_i = 4 N_i - 1`` on a triangle, ``4 N_1 - 2 N_2 + N_3 - 2 N_4`` on a parallelogram); a face
+facing the master over less than :data:`MIN_FACING` of its area is left out. Nodal normals: minus the normalised
+sum of the unit outward normals (at the face centres) of the slave faces meeting at the node; tangents: ``t1`` a
+reference direction projected on the node's tangent plane, ``t2 = n x t1`` (the node-to-face rule,
+:meth:`~dolfinx_fretting.contact.MasterSurface.frames`). The master must not fold over itself as seen from a slave
+face.
 """
 
 from __future__ import annotations
