@@ -2,8 +2,8 @@
 no mesh).
 
 For a slave surface and a master surface, each a set of straight two-node segments (3D: faces, below), this module
-computes the mortar matrices of the segment-to-segment method (Puso & Laursen, CMAME 193, 2004; with dual Lagrange multipliers:
-Wohlmuth, SIAM J. Numer. Anal. 38, 2000; Popp, Gee & Wall, IJNME 79, 2009):
+computes the mortar matrices of the segment-to-segment method (Puso & Laursen, CMAME 193, 2004; with dual Lagrange
+multipliers: Wohlmuth, SIAM J. Numer. Anal. 38, 2000; Popp, Gee & Wall, IJNME 79, 2009):
 
     D_jk = integral over the slave surface of  phi_j N_k,       M_jl = integral over the slave surface of  phi_j N^m_l,
 
@@ -357,24 +357,28 @@ def _inverse_map(plane_x: np.ndarray, quad: np.ndarray, points: np.ndarray) -> n
 
 def _clip(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
     """Sutherland–Hodgman: the polygon ``subject`` (k, 2) clipped by the convex polygon ``clip`` (m, 2),
-    counter-clockwise; an empty (0, 2) array when they do not overlap."""
-    output = subject
-    for i in range(clip.shape[0]):
-        if output.shape[0] == 0:
+    counter-clockwise; an empty (0, 2) array when they do not overlap. Python floats inside: a few vertices each,
+    where NumPy's per-element overhead would dominate."""
+    output = [tuple(point) for point in subject.tolist()]
+    corners = [tuple(point) for point in clip.tolist()]
+    for i, (ax, ay) in enumerate(corners):
+        if not output:
             break
-        a, b = clip[i], clip[(i + 1) % clip.shape[0]]
-        edge = b - a
-        side = edge[0] * (output[:, 1] - a[1]) - edge[1] * (output[:, 0] - a[0])   # >= 0: inside (left of a->b)
+        bx, by = corners[(i + 1) % len(corners)]
+        ex, ey = bx - ax, by - ay
+        side = [ex * (y - ay) - ey * (x - ax) for x, y in output]   # >= 0: inside (left of a->b)
         points = []
-        for k in range(output.shape[0]):
-            current, following = output[k], output[(k + 1) % output.shape[0]]
-            side_current, side_following = side[k], side[(k + 1) % output.shape[0]]
+        for k, (x, y) in enumerate(output):
+            following = (k + 1) % len(output)
+            side_current, side_following = side[k], side[following]
             if side_current >= 0:
-                points.append(current)
+                points.append((x, y))
             if (side_current >= 0) != (side_following >= 0):
-                points.append(current + side_current / (side_current - side_following) * (following - current))
-        output = np.array(points).reshape(-1, 2)
-    return output
+                fraction = side_current / (side_current - side_following)
+                fx, fy = output[following]
+                points.append((x + fraction * (fx - x), y + fraction * (fy - y)))
+        output = points
+    return np.array(output, dtype=float).reshape(-1, 2)
 
 
 def _face_normals(x: np.ndarray, quad: np.ndarray, inside: np.ndarray) -> np.ndarray:
@@ -480,7 +484,13 @@ def _mortar_matrices_3d(slave_labels: np.ndarray, slave_x: np.ndarray, slave_ins
 
     # Each slave face's facing part: its mass matrix there; faces facing too little are dropped.
     mass = np.zeros((n_slave_faces, 4, 4))
-    np.add.at(mass, point_slave, np.einsum("p,pi,pk->pik", weight, slave_shapes, slave_shapes))
+    # Sums over each pair's points first (a pair's points are consecutive), then over the pairs of a face.
+    pair_start = np.flatnonzero(np.r_[True, point_pair[1:] != point_pair[:-1]]) if point_pair.size else \
+        np.zeros(0, dtype=np.int64)
+    pair_of_sum = point_pair[pair_start]
+    per_pair = lambda values: np.add.reduceat(values, pair_start, axis=0) if pair_start.size \
+        else np.zeros((0,) + values.shape[1:])  # noqa: E731
+    np.add.at(mass, pair_slave[pair_of_sum], per_pair(np.einsum("p,pi,pk->pik", weight, slave_shapes, slave_shapes)))
     facing = np.zeros(n_slave_faces)
     np.add.at(facing, point_slave, weight)
     used = facing >= MIN_FACING * _face_areas(slave_x, slave_quad)
@@ -496,10 +506,10 @@ def _mortar_matrices_3d(slave_labels: np.ndarray, slave_x: np.ndarray, slave_ins
 
     row_of = np.searchsorted(slave_nodes, np.where(slave_labels >= 0, slave_labels, slave_nodes[0]))
     col_of = np.searchsorted(master_nodes, np.where(master_labels >= 0, master_labels, master_nodes[0]))
-    keep = used[point_slave]
-    local = np.einsum("p,pi,pl->pil", weight, shape, master_shapes)[keep]                      # (p, 4, 4)
-    rows = np.broadcast_to(row_of[point_slave[keep]][:, :, None], local.shape).ravel()
-    cols = np.broadcast_to(col_of[point_master[keep]][:, None, :], local.shape).ravel()
+    kept_pairs = used[pair_slave[pair_of_sum]]
+    local = per_pair(np.einsum("p,pi,pl->pil", weight, shape, master_shapes))[kept_pairs]       # (pairs, 4, 4)
+    rows = np.broadcast_to(row_of[pair_slave[pair_of_sum[kept_pairs]]][:, :, None], local.shape).ravel()
+    cols = np.broadcast_to(col_of[pair_master[pair_of_sum[kept_pairs]]][:, None, :], local.shape).ravel()
     n_slave = slave_nodes.size
     M = sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n_slave, master_nodes.size))
     M.eliminate_zeros()
@@ -515,12 +525,13 @@ def _mortar_matrices_3d(slave_labels: np.ndarray, slave_x: np.ndarray, slave_ins
     # The master faces' mean size (mean edge length) seen by each slave node, weighted by the facing area.
     edges = np.linalg.norm(np.roll(master_x, -1, axis=1) - master_x, axis=2)
     master_size = edges.sum(axis=1) / master_corners   # a triangle's fourth repeats its third: edges 2-3, 3-0
-    point_weight = np.where(keep, weight, 0.0)
+    pair_area = np.where(kept_pairs, per_pair(weight), 0.0)
+    pair_faces, pair_masters = pair_slave[pair_of_sum], pair_master[pair_of_sum]
     size_sum, size_weight = np.zeros(n_slave), np.zeros(n_slave)
     for corner in range(4):
-        real = slave_labels[point_slave, corner] >= 0
-        np.add.at(size_sum, row_of[point_slave[real], corner], (point_weight * master_size[point_master])[real])
-        np.add.at(size_weight, row_of[point_slave[real], corner], point_weight[real])
+        real = slave_labels[pair_faces, corner] >= 0
+        np.add.at(size_sum, row_of[pair_faces[real], corner], (pair_area * master_size[pair_masters])[real])
+        np.add.at(size_weight, row_of[pair_faces[real], corner], pair_area[real])
     sizes = np.divide(size_sum, size_weight, out=np.zeros(n_slave), where=size_weight > 0)
 
     # Averaged nodal normals (from the master into the slave) and the tangents of the reference tangent.

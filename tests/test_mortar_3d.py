@@ -170,6 +170,8 @@ def test_mortar_matrices_of_tensor_grids_are_products_of_1d_ones(multipliers):
     assert np.allclose(result.M.toarray(), np.kron(Mx, My), atol=1e-14, rtol=0)
     if multipliers == "standard":
         assert np.allclose(result.D.toarray(), np.kron(Dx, Dy), atol=1e-14, rtol=0)
+    # every master face 0.3 x 0.325: the mean edge length each slave node sees (the small-sliding scale)
+    assert np.allclose(result.master_sizes, (0.3 + 0.325) / 2, atol=1e-14, rtol=0)
 
 
 @pytest.mark.parametrize("triangles", [False, True])
