@@ -388,3 +388,35 @@ def test_the_mortar_formulation_passes_the_shear_patch_test(boxes):
             assert abs(force[2]) < 1e-8 * tau
         problem.destroy()
     assert errors["mortar"] < 1e-8 and errors["node"] > 1e-2, errors
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_mortar_wear_energy_identity_and_checkpoint(compiled, tmp_path):
+    """The hexahedral 3x3-on-4x5 boxes with mortar, mu = 0.3, Fouvry's energy law, pressed then rubbed one gross-slip
+    cycle along t1 (in the compiled loop and increment by increment): each contact dissipates r_t . dx_t, the
+    multiplier's work on the weighted slip (both tangents), and wears alpha mu p |dx_t| over its tributary D_jj, so
+    the worn volume is alpha times the energy (to 1e-10: rounding of sums over 16 contacts and 9 increments). The
+    state saved and loaded back is the same."""
+    alpha = 2e-6
+    msh, tags = stacked_boxes(*BOXES["hexahedra 3x3 on 4x5"])
+    V = compat.vector_space(msh, 1)
+    ends = lambda x: np.isclose(x[2], 0.0) | np.isclose(x[2], 2.0)  # noqa: E731
+    origin = lambda x: ends(x) & np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0)  # noqa: E731
+    on_x = lambda x: ends(x) & np.isclose(x[1], 0.0) & (np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0))  # noqa: E731
+    bcs = [component(V, 2, ends), component(V, 0, origin), component(V, 1, on_x)]
+    contact = dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 0.0, 1.0], formulation="mortar"), mu=0.3,
+                          bcs=bcs)
+    problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=dfr.EnergyWear(alpha),
+                                  solver=dfr.LocalSolver(tol=1e-12, compiled_cycles=compiled))
+    state, _ = problem.advance(problem.initial_state(), normal=6e-4)
+    state = problem.commit(state, problem.run_cycle(state, dfr.CyclePath.waveform(8, tangential=3e-3)))
+    assert np.any(state.status == 2)   # the cycle slid
+    volume = float(state.wear_gap @ contact.contact_set.tributary)
+    assert state.dissipated_energy > 0 and volume > 0
+    assert volume == pytest.approx(alpha * state.dissipated_energy, rel=1e-10)
+    path = MPI.COMM_WORLD.bcast(str(tmp_path / "state.npz"), root=0)
+    problem.save_state(state, path)
+    back, _ = problem.load_state(path)
+    for name in ("forces", "positions", "slip", "wear_gap", "obstacle"):
+        assert np.array_equal(getattr(back, name), getattr(state, name))
+    problem.destroy()
