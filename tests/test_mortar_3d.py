@@ -210,6 +210,29 @@ def test_partly_facing_faces_and_the_weighted_gap():
         assert np.abs(moved).max() < 1e-15
 
 
+def test_slivers_facing_the_master_keep_bounded_weights():
+    """A unit slave quadrilateral facing a master over a strip eps wide along its edge x = 1 (master quadrilaterals or
+    triangles) or over an eps x eps square at its corner (1, 1): the dual functions of the facing part keep the
+    weights M_jl / D_jj bounded as eps -> 0 (measured: 3.6 ... 4.2 along the edge, 17.6 ... 18.8 at the corner,
+    settling as eps falls; bounds 5 and 20) and summing to one to 1e-12 (D_jj is M's row sum); a corner facing part
+    below MIN_FACING of the face (eps = 1e-6: 1e-12) leaves the face out (every D_jj = 0)."""
+    slave = grid_faces(np.array([0.0, 1.0]), np.array([0.0, 1.0]), 0.0, 0, above=True)
+    for eps in (1e-2, 1e-4, 1e-6):
+        cases = [(grid_faces(np.array([1 - eps, 1.3]), np.array([-0.2, 1.2]), 0.0, 10, above=False,
+                             triangles=triangles), 5.0) for triangles in (False, True)]
+        cases.append((grid_faces(np.array([1 - eps, 1.3]), np.array([1 - eps, 1.3]), 0.0, 10, above=False), 20.0))
+        for master, bound in cases:
+            result = mortar.mortar_matrices(*slave, *master)
+            D = result.D.diagonal()
+            if eps == 1e-6 and bound == 20.0:
+                assert np.all(D == 0)
+                continue
+            assert np.all(D > 0)
+            weights = result.M.toarray() / D[:, None]
+            assert np.abs(weights).max() < bound
+            assert np.allclose(weights.sum(axis=1), 1.0, atol=1e-12, rtol=0)
+
+
 @pytest.mark.parametrize("triangles", [False, True])
 def test_weighted_gap_of_a_tilted_master_is_the_integral_of_the_gap(triangles):
     """A flat slave over a tilted master z = -0.1 - 0.2 x + 0.1 y (non-matching; its faces planar parallelograms or
