@@ -443,3 +443,18 @@ def test_mortar_wear_energy_identity_and_checkpoint(compiled, tmp_path):
     for name in ("forces", "positions", "slip", "wear_gap", "obstacle"):
         assert np.array_equal(getattr(back, name), getattr(state, name))
     problem.destroy()
+
+
+def test_the_candidate_window_is_node_to_faces():
+    """A candidate window (half-width 0.5) on the hexahedral boxes: mortar keeps the same slave nodes as node-to-face,
+    in the same order (within 0.5, in the obstacle frame's tangent plane, of the first point of contact: on this
+    flat interface the node nearest the frame's origin, (0, 0, 1)), here the four nodes of the corner cell."""
+    msh, tags = stacked_boxes(*BOXES["hexahedra 3x3 on 4x5"])
+    V = compat.vector_space(msh, 1)
+    coords = {}
+    for formulation in ("mortar", "node"):
+        contact = dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 0.0, 1.0], formulation=formulation),
+                              mu=0.0, window=0.5)
+        coords[formulation] = contact.contact_set.coords
+    assert np.array_equal(coords["mortar"], coords["node"])
+    assert np.allclose(np.sort(coords["mortar"][:, :2], axis=0), [[0, 0], [0, 0], [1 / 3, 1 / 3], [1 / 3, 1 / 3]])
