@@ -590,48 +590,72 @@ def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords:
 def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
                       exclude_nodes: np.ndarray | None = None,
                       reference_frame: np.ndarray | None = None) -> ContactSet:
-    """2D mortar contact of the slave surface with the master surface, in the reference configuration. Collective.
+    """Mortar contact of the slave surface with the master surface, in the reference configuration (2D segments,
+    3D triangles and quadrilaterals). Collective.
 
     The mortar matrices D and M of the two surfaces (dual multipliers, :mod:`dolfinx_fretting.mortar`) give each
     slave node j with some of its hat function facing the master (``D_jj > 0``) one contact, whose rows of H are
     the weighted gap and weighted relative tangential displacement divided by ``D_jj`` (see
     :func:`mortar_contact_set`). Slave candidates: the free owned nodes of ``slave_facets`` within ``half_width``
-    (along t) of the slave node with the smallest gap, as :func:`find_pairs`.
+    of the slave node with the smallest gap, as :func:`find_pairs` (2D along t; 3D in the reference frame's tangent
+    plane, ordered as node-to-face orders them).
 
     Args:
-        V: Vector P1 displacement space on the mesh holding both bodies (2D).
+        V: Vector P1 displacement space on the mesh holding both bodies (2D or 3D).
         slave_facets, master_facets: Local facet indices of the two contact surfaces.
         half_width: Candidate window half-width (length units), or None for every slave node.
         exclude_nodes: Local block indices with prescribed displacement (never candidates).
-        reference_frame: The obstacle frame (n, t); held by the master surface.
+        reference_frame: The obstacle frame (n, t1[, t2]); held by the master surface; in 3D its t1 projected on
+            each slave node's tangent plane is the contact's t1 (as node-to-face projects it on the master facet).
 
     Raises:
-        ValueError: if the mesh is not 2D, or no slave node faces the master.
+        ValueError: if the mesh is neither 2D nor 3D, or no slave node faces the master.
     """
     gdim = V.mesh.geometry.dim
-    if gdim != 2:
-        raise ValueError(f"mortar contact is implemented for 2D meshes (segments); the mesh is {gdim}D")
+    if gdim not in (2, 3):
+        raise ValueError(f"mortar contact needs a 2D or 3D mesh; the mesh is {gdim}D")
     imap = V.dofmap.index_map
-    slave_nodes_of, slave_x, slave_inside = _boundary_segments(V, slave_facets)
-    master_nodes_of, master_x, master_inside = _boundary_segments(V, master_facets)
+    if gdim == 2:
+        slave_nodes_of, slave_x, slave_inside = _boundary_segments(V, slave_facets)
+        master_nodes_of, master_x, master_inside = _boundary_segments(V, master_facets)
+        master_nv = np.full(master_nodes_of.shape[0], 2)
+        coordinates = V.tabulate_dof_coordinates()[:, :gdim]
+    else:
+        slave_nodes_of, slave_x, _, slave_inside = _boundary_faces(V, slave_facets)
+        master_nodes_of, master_x, master_nv, master_inside = _boundary_faces(V, master_facets)
+        coordinates = _node_coordinates(V)
     if master_nodes_of.shape[0] == 0 or slave_nodes_of.shape[0] == 0:
         raise ValueError("contact: the master or the slave surface has no facet")
-    ref = tangent_frame([0.0, 1.0]) if reference_frame is None else np.asarray(reference_frame, dtype=float)
-    surface = MasterSurface(master_nodes_of, master_x, np.full(master_nodes_of.shape[0], 2), master_inside, ref)
-    mortar = mortar_matrices(slave_nodes_of, slave_x, slave_inside, master_nodes_of, master_x, master_inside)
-    free, _, _ = _slave_nodes(V, slave_facets, exclude_nodes, V.tabulate_dof_coordinates()[:, :gdim])
+    ref = tangent_frame(np.eye(gdim)[-1 if gdim == 3 else 1]) if reference_frame is None \
+        else np.asarray(reference_frame, dtype=float)
+    surface = MasterSurface(master_nodes_of, master_x, master_nv, master_inside, ref)
+    mortar = mortar_matrices(slave_nodes_of, slave_x, slave_inside, master_nodes_of, master_x, master_inside,
+                             reference_tangent=ref[1] if gdim == 3 else None)
+    free, _, _ = _slave_nodes(V, slave_facets, exclude_nodes, coordinates)
     contacts = np.flatnonzero(np.isin(mortar.slave_nodes, free) & (mortar.D.diagonal() > 0))
     if contacts.size == 0:
         raise ValueError("contact: no free slave node faces the master surface (mortar: every D_jj = 0)")
     contact_set = mortar_contact_set(mortar, slave_nodes_of, slave_x, surface, imap.size_global * gdim)
     gaps, coords = contact_set.gap0[contacts], contact_set.coords[contacts]
-    abscissa = contact_set.abscissa[contacts]
-    closest = coords[np.lexsort((coords[:, 0], np.abs(abscissa), _tied_gaps(gaps, coords)))[0]]
-    keep = np.ones(contacts.size, dtype=bool)
-    if half_width is not None:
-        keep = np.abs(np.einsum("ij,ij->i", coords - closest, contact_set.frames[contacts, 1])) \
-            <= half_width * (1 + 1e-12)
-    order = contacts[np.flatnonzero(keep)[np.argsort(abscissa[keep], kind="stable")]]
+    if gdim == 2:
+        abscissa = contact_set.abscissa[contacts]
+        closest = coords[np.lexsort((coords[:, 0], np.abs(abscissa), _tied_gaps(gaps, coords)))[0]]
+        keep = np.ones(contacts.size, dtype=bool)
+        if half_width is not None:
+            keep = np.abs(np.einsum("ij,ij->i", coords - closest, contact_set.frames[contacts, 1])) \
+                <= half_width * (1 + 1e-12)
+        order = contacts[np.flatnonzero(keep)[np.argsort(abscissa[keep], kind="stable")]]
+    else:   # as node-to-face (_find_pairs_3d): in the reference frame's tangent plane
+        in_plane = coords @ ref[1:].T
+        distance = np.linalg.norm(in_plane, axis=1)
+        closest = coords[np.lexsort((coords[:, 1], coords[:, 0], distance, _tied_gaps(gaps, coords)))[0]]
+        keep = np.ones(contacts.size, dtype=bool)
+        if half_width is not None:
+            keep = np.linalg.norm((coords - closest) @ ref[1:].T, axis=1) <= half_width * (1 + 1e-12)
+        if not keep.any():
+            raise ValueError("contact: no slave node within the candidate window")
+        kept = np.flatnonzero(keep)
+        order = contacts[kept[_in_plane_order(in_plane[kept], np.ptp(coords, axis=0).max())]]
     contact_set = contact_set.subset(order)
     contact_set.window_centre = closest
     return contact_set
@@ -644,7 +668,9 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
     :meth:`ContactSet.subset`). Dual multipliers only (D diagonal).
 
     Contact j's relative position is the weighted gap and the weighted relative tangential displacement divided by
-    ``D_jj``, in the node's averaged frame (n_j, t_j):
+    ``D_jj``, in the node's averaged frame (n_j, t_j) (3D: (n_j, t1_j, t2_j), the tangents of
+    :class:`~dolfinx_fretting.mortar.MortarMatrices`; the abscissa is then the position along the reference frame's
+    t1, as node-to-face's):
 
         x^j = [n_j; t_j] (u_j - sum_l w_jl u_l) + g0_j,    w_jl = M_jl / D_jj,    g0_j = g_j / D_jj,
 
@@ -655,25 +681,28 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
 
     Args:
         mortar: The mortar matrices (``multipliers="dual"``) of the slave segments and the master surface.
-        slave_segment_nodes, slave_x: (f, 2) the slave segments' global nodes and (f, 2, 2) their end points.
+        slave_segment_nodes, slave_x: (f, 2) the slave segments' global nodes and (f, 2, 2) their end points; 3D
+            (f, 4) the slave faces' (a triangle's fourth -1) and (f, 4, 3) their vertices.
         surface: The master surface (its nodes the columns of ``mortar.M``).
         n_dofs: Global number of displacement dofs (the columns of H).
     """
     if mortar.multipliers != "dual":
         raise ValueError(f"mortar_contact_set: multipliers = {mortar.multipliers!r}: the nodal contact solvers need "
                          "the dual ones (D diagonal)")
-    dim = 2
+    dim = mortar.normals.shape[1]
     nodes = mortar.slave_nodes
     coords = np.zeros((nodes.size, dim))
-    coords[np.searchsorted(nodes, slave_segment_nodes.ravel())] = slave_x.reshape(-1, dim)
+    real = slave_segment_nodes.ravel() >= 0   # 3D: a triangle's fourth label is -1
+    coords[np.searchsorted(nodes, slave_segment_nodes.ravel()[real])] = slave_x.reshape(-1, dim)[real]
     master_coords = np.zeros((mortar.master_nodes.size, dim))
-    master_coords[np.searchsorted(mortar.master_nodes, surface.nodes.ravel())] = surface.x.reshape(-1, dim)
+    real = surface.nodes.ravel() >= 0
+    master_coords[np.searchsorted(mortar.master_nodes, surface.nodes.ravel()[real])] = surface.x.reshape(-1, dim)[real]
     measure = mortar.D.diagonal()
     scale = np.divide(1.0, measure, out=np.zeros_like(measure), where=measure > 0)
     weights = sp.csr_matrix(sp.diags(scale) @ mortar.M)
     weights.sort_indices()
     gaps = weighted_gaps(mortar, coords, master_coords) * scale
-    frames = np.stack([mortar.normals, mortar.tangents], axis=1)                   # (s, 2, 2) rows n, t
+    frames = mortar.frames                                                          # (s, dim, dim) rows n, t1[, t2]
     # Each contact's master nodes and weights, padded with -1 and 0 to the widest row.
     counts = np.diff(weights.indptr)
     width = max(int(counts.max(initial=0)), 1)
@@ -692,7 +721,9 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
     H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nodes.size * dim, n_dofs))
     H.eliminate_zeros()
     return ContactSet(dim=dim, global_nodes=nodes, coords=coords, frames=frames, gap0=gaps, tributary=measure,
-                      abscissa=np.einsum("ij,ij->i", coords, mortar.tangents), H=H, master_nodes=master_nodes,
+                      abscissa=coords @ surface.reference_frame[1] if dim == 3 else np.einsum("ij,ij->i", coords,
+                                                                                              mortar.tangents),
+                      H=H, master_nodes=master_nodes,
                       master_weights=master_weights, master_points=np.asarray(weights @ master_coords),
                       master_sizes=mortar.master_sizes, master_faces=None, master_surface=surface)
 
@@ -1067,7 +1098,7 @@ def _find_pairs_3d(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_
 # The public contact object ---------------------------------------------------------------------------------
 #: Sliding models of two deformable bodies (:class:`ElasticBody`).
 SLIDING = ("small", "finite")
-#: :class:`ElasticBody`'s contact formulations: node-to-segment/face pairing, or mortar (2D).
+#: :class:`ElasticBody`'s contact formulations: node-to-segment/face pairing, or mortar (2D and 3D).
 FORMULATIONS = ("node", "mortar")
 
 @dataclass(frozen=True)
@@ -1112,12 +1143,13 @@ class ElasticBody(Obstacle):
             compliance. None: every facet of the master surface. A pairing that would need a facet beyond it
             raises an error.
         formulation: ``"node"`` (default): each slave node paired with the closest master point (above);
-            ``"mortar"`` (2D, small sliding): the segment-to-segment mortar integrals with dual Lagrange multipliers
+            ``"mortar"`` (2D and 3D, small sliding): the segment-to-segment (2D) or face-to-face (3D: triangles
+            and quadrilaterals, clipped in each slave face's plane) mortar integrals with dual Lagrange multipliers
             (:mod:`dolfinx_fretting.mortar`, :func:`find_mortar_pairs`): each slave node facing the master is a
             contact whose gap and relative tangential displacement are the weighted ones divided by ``D_jj``, its
-            frame the slave's averaged nodal normal and tangent, its tributary measure ``D_jj``; the pressure read
-            is the multiplier. It passes the contact patch test on non-matching meshes, which node-to-segment
-            pairing does not.
+            frame the slave's averaged nodal normal and tangent(s), its tributary measure ``D_jj``; the pressure
+            read is the multiplier. It passes the contact patch test on non-matching meshes, which node-to-segment
+            and node-to-face pairing do not.
     """
 
     surface: tuple
@@ -1160,11 +1192,7 @@ class ElasticBody(Obstacle):
         return self.cells
 
     def check(self, V) -> None:
-        """The master surface's marker tags facets (a message naming the markers the tags hold otherwise); a mortar
-        formulation needs a 2D mesh."""
-        if self.formulation == "mortar" and V.mesh.geometry.dim != 2:
-            raise ValueError(f"ElasticBody.formulation = 'mortar' on a {V.mesh.geometry.dim}D mesh: allowed on 2D "
-                             "meshes only (3D mortar is not implemented yet); use formulation = 'node'")
+        """The master surface's marker tags facets (a message naming the markers the tags hold otherwise)."""
         _tagged_facets(self.surface, V.mesh, "ElasticBody.surface")
 
     def candidates(self, V, facets: np.ndarray, half_width: float | None,

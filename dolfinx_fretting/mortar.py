@@ -1,8 +1,9 @@
-"""Mortar integrals of two 2D contact surfaces of linear segments (pure NumPy; no mesh).
+"""Mortar integrals of two contact surfaces: 2D of linear segments, 3D of triangles and quadrilaterals (pure NumPy;
+no mesh).
 
-For a slave surface and a master surface, each a set of straight two-node segments, this module computes the
-mortar matrices of the segment-to-segment method (Puso & Laursen, CMAME 193, 2004; with dual Lagrange multipliers:
-Wohlmuth, SIAM J. Numer. Anal. 38, 2000; Popp, Gee & Wall, IJNME 79, 2009):
+For a slave surface and a master surface, each a set of straight two-node segments (3D: faces, below), this module
+computes the mortar matrices of the segment-to-segment method (Puso & Laursen, CMAME 193, 2004; with dual Lagrange
+multipliers: Wohlmuth, SIAM J. Numer. Anal. 38, 2000; Popp, Gee & Wall, IJNME 79, 2009):
 
     D_jk = integral over the slave surface of  phi_j N_k,       M_jl = integral over the slave surface of  phi_j N^m_l,
 
@@ -37,6 +38,25 @@ constraint). Segments facing the master over less than :data:`MIN_FACING` of the
 
 Standard multipliers (``multipliers="standard"``) give the consistent D (not diagonal) of the same facing parts,
 for comparison; the package's nodal contact solvers need the dual ones.
+
+3D: faces. Surfaces of triangles (linear shape functions) and quadrilaterals (bilinear, vertices in cyclic order)
+are integrated face against face in an auxiliary plane (Puso & Laursen, CMAME 193, 2004; Popp, Gee & Wall, IJNME
+83, 2010): the plane of each slave face (through its vertices' centroid, normal to the face at its centre), onto
+which the slave face and every nearby master face facing it (normals opposed) are projected along that normal; the
+master polygon is clipped by the slave polygon (Sutherland–Hodgman; both convex) and the overlap triangulated from
+its vertices' centroid. On each triangle a slave and a master point face each other along the normal: the face
+parameters of a plane point are found by inverting each face's map in the plane (affine for a triangle, Newton for
+a quadrilateral). Quadrature: Radon's seven-point rule of degree 5 on each triangle, exact for the degree-4 products
+of two bilinear shape functions where those are polynomials of the plane's coordinates (triangles and
+parallelograms; on a general quadrilateral, whose inverse map is not polynomial, it approximates, as in the
+references). The plane's area element is corrected to the slave surface's (a warped quadrilateral). Dual functions
+as in 2D, ``psi_i = sum_k A_ik N_k``, ``A = diag(d) Me^-1`` from the face's own mass matrix over its facing part
+(on a whole face: ``psi_i = 4 N_i - 1`` on a triangle, ``4 N_1 - 2 N_2 + N_3 - 2 N_4`` on a parallelogram); a face
+facing the master over less than :data:`MIN_FACING` of its area is left out. Nodal normals: minus the normalised
+sum of the unit outward normals (at the face centres) of the slave faces meeting at the node; tangents: ``t1`` a
+reference direction projected on the node's tangent plane, ``t2 = n x t1`` (the node-to-face rule,
+:meth:`~dolfinx_fretting.contact.MasterSurface.frames`). The master must not fold over itself as seen from a slave
+face.
 """
 
 from __future__ import annotations
@@ -67,9 +87,10 @@ class MortarMatrices:
         master_nodes: (m,) the master nodes (sorted): the columns of M.
         D: (s, s) sparse; diagonal for dual multipliers.
         M: (s, m) sparse.
-        normals: (s, 2) each slave node's unit contact normal, pointing from the master into the slave (minus the
-            average of the unit outward normals of the slave segments meeting at the node).
-        tangents: (s, 2) ``t = (n_y, -n_x)`` (the package's 2D frame,
+        normals: (s, dim) each slave node's unit contact normal, pointing from the master into the slave (minus the
+            average of the unit outward normals of the slave segments or faces meeting at the node).
+        tangents: 2D (s, 2) ``t = (n_y, -n_x)``; 3D (s, 2, 3) ``t1`` the reference tangent projected on the node's
+            tangent plane, ``t2 = n x t1`` (the package's frames,
             :meth:`~dolfinx_fretting.contact.MasterSurface.frames`).
         master_sizes: (s,) the mean length of the master segments facing each slave node's segments, weighted by the
             facing length (0 where none faces it): the scale of the small-sliding limit.
@@ -84,6 +105,12 @@ class MortarMatrices:
     tangents: np.ndarray
     master_sizes: np.ndarray
     multipliers: str
+
+    @property
+    def frames(self) -> np.ndarray:
+        """(s, dim, dim) each slave node's frame, rows (n, t1[, t2])."""
+        tangents = self.tangents if self.tangents.ndim == 3 else self.tangents[:, None, :]
+        return np.concatenate([self.normals[:, None, :], tangents], axis=1)
 
 
 def _segment_normals(x: np.ndarray, inside: np.ndarray) -> np.ndarray:
@@ -136,26 +163,39 @@ def _overlaps(slave_x: np.ndarray, slave_out: np.ndarray, master_x: np.ndarray,
 
 def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_inside: np.ndarray,
                     master_segment_nodes: np.ndarray, master_x: np.ndarray, master_inside: np.ndarray,
-                    multipliers: str = "dual") -> MortarMatrices:
-    """The mortar matrices D and M of two 2D surfaces of linear segments (see the module).
+                    multipliers: str = "dual", reference_tangent: np.ndarray | None = None) -> MortarMatrices:
+    """The mortar matrices D and M of two surfaces: 2D of linear segments, 3D of triangles and bilinear
+    quadrilaterals (see the module; 3D when the points have three coordinates).
 
     Args:
         slave_segment_nodes, master_segment_nodes: (f, 2) each segment's node labels (integers; a label shared by two
-            segments is one node).
-        slave_x, master_x: (f, 2, 2) the segments' end points, in the order of their labels.
-        slave_inside, master_inside: (f, 2) a point inside each body behind each segment (its cell's centroid).
+            segments is one node); 3D: (f, 4) each face's, a triangle's fourth -1, a quadrilateral's in cyclic order.
+        slave_x, master_x: (f, 2, 2) the segments' end points, in the order of their labels; 3D (f, 4, 3) the faces'
+            vertices (a triangle's fourth any point, unused).
+        slave_inside, master_inside: (f, dim) a point inside each body behind each facet (its cell's centroid).
         multipliers: ``"dual"`` (D diagonal) or ``"standard"``.
+        reference_tangent: 3D: the direction whose projection on each slave node's tangent plane is its first
+            tangent (the second ``n x t1``), as the node-to-face frames
+            (:meth:`~dolfinx_fretting.contact.MasterSurface.frames`); default x. 2D: unused.
 
     Returns:
         The matrices, rows the slave nodes of every segment given (a node facing no master has an empty row and
         ``D_jj = 0``).
 
     Raises:
-        ValueError: ``multipliers`` not one of :data:`MULTIPLIERS`, arrays of the wrong shapes, or a segment of zero
-            length.
+        ValueError: ``multipliers`` not one of :data:`MULTIPLIERS`, arrays of the wrong shapes, a segment of zero
+            length or a face of zero area, or (3D) a reference tangent along a slave node's normal.
     """
     if multipliers not in MULTIPLIERS:
         raise ValueError(f"mortar: multipliers = {multipliers!r}: allowed {', '.join(map(repr, MULTIPLIERS))}")
+    if np.shape(slave_x)[-1:] == (3,):
+        tangent = np.asarray(reference_tangent if reference_tangent is not None else [1.0, 0.0, 0.0], dtype=float)
+        if tangent.shape != (3,) or not np.all(np.isfinite(tangent)):
+            raise ValueError(f"mortar: reference_tangent = {reference_tangent!r}: expected a finite 3-vector")
+        return _mortar_matrices_3d(np.asarray(slave_segment_nodes, dtype=np.int64), np.asarray(slave_x, dtype=float),
+                                   np.asarray(slave_inside, dtype=float),
+                                   np.asarray(master_segment_nodes, dtype=np.int64), np.asarray(master_x, dtype=float),
+                                   np.asarray(master_inside, dtype=float), multipliers, tangent)
     slave_segment_nodes = np.asarray(slave_segment_nodes, dtype=np.int64)
     master_segment_nodes = np.asarray(master_segment_nodes, dtype=np.int64)
     slave_x, master_x = np.asarray(slave_x, dtype=float), np.asarray(master_x, dtype=float)
@@ -264,3 +304,266 @@ def weighted_gaps(mortar: MortarMatrices, slave_points: np.ndarray, master_point
         master_points: (m, 2) the master nodes' positions.
     """
     return weighted_relative_displacement(mortar, slave_points, master_points, mortar.normals)
+
+
+# 3D: faces (triangles and bilinear quadrilaterals) -------------------------------------------------------------------
+#: A degree-5 rule on the triangle (Radon's seven points; Stroud T2:5-1), barycentric points and weights summing to
+#: one: exact for the degree-4 products of two bilinear (or linear) shape functions over a triangle of the overlap
+#: polygon wherever the faces' shape functions are polynomials of the auxiliary plane's coordinates (triangles,
+#: parallelograms: exact; a general quadrilateral's inverse map is not polynomial and the rule then approximates).
+_RADON_A, _RADON_B = (6.0 - np.sqrt(15.0)) / 21.0, (6.0 + np.sqrt(15.0)) / 21.0
+TRIANGLE_POINTS = np.array([[1 / 3, 1 / 3, 1 / 3],
+                            [_RADON_A, _RADON_A, 1 - 2 * _RADON_A], [_RADON_A, 1 - 2 * _RADON_A, _RADON_A],
+                            [1 - 2 * _RADON_A, _RADON_A, _RADON_A],
+                            [_RADON_B, _RADON_B, 1 - 2 * _RADON_B], [_RADON_B, 1 - 2 * _RADON_B, _RADON_B],
+                            [1 - 2 * _RADON_B, _RADON_B, _RADON_B]])
+TRIANGLE_WEIGHTS = np.array([9 / 40] + [(155 - np.sqrt(15.0)) / 1200] * 3 + [(155 + np.sqrt(15.0)) / 1200] * 3)
+
+
+def _face_shapes(params: np.ndarray, quad: np.ndarray) -> np.ndarray:
+    """(p, 4) shape functions at face parameters ``params`` (p, 2): a triangle's ``(1 - s - t, s, t, 0)``, a
+    quadrilateral's bilinear ones in cyclic vertex order (0,0) (1,0) (1,1) (0,1)."""
+    s, t = params[:, 0], params[:, 1]
+    triangle = np.column_stack([1 - s - t, s, t, np.zeros_like(s)])
+    bilinear = np.column_stack([(1 - s) * (1 - t), s * (1 - t), s * t, (1 - s) * t])
+    return np.where(quad[:, None], bilinear, triangle)
+
+
+def _face_tangents(x: np.ndarray, params: np.ndarray, quad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """d x / d s and d x / d t of faces ``x`` (p, 4, k) at ``params`` (p, 2) (k = 2 for faces projected on a plane,
+    3 in space)."""
+    s, t = params[:, 0:1], params[:, 1:2]
+    d_s = np.where(quad[:, None], (1 - t) * (x[:, 1] - x[:, 0]) + t * (x[:, 2] - x[:, 3]), x[:, 1] - x[:, 0])
+    d_t = np.where(quad[:, None], (1 - s) * (x[:, 3] - x[:, 0]) + s * (x[:, 2] - x[:, 1]), x[:, 2] - x[:, 0])
+    return d_s, d_t
+
+
+def _inverse_map(plane_x: np.ndarray, quad: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The face parameters (p, 2) of ``points`` (p, 2) in the plane, for faces with plane vertices ``plane_x``
+    (p, 4, 2): affine for triangles, Newton's method for quadrilaterals (one step on a parallelogram)."""
+    params = np.where(quad[:, None], 0.5, 1.0 / 3.0) * np.ones((points.shape[0], 2))
+    for _ in range(30):
+        shapes = _face_shapes(params, quad)
+        residual = points - np.einsum("pi,pij->pj", shapes, plane_x)
+        d_s, d_t = _face_tangents(plane_x, params, quad)
+        det = d_s[:, 0] * d_t[:, 1] - d_s[:, 1] * d_t[:, 0]
+        step = np.column_stack([d_t[:, 1] * residual[:, 0] - d_t[:, 0] * residual[:, 1],
+                                d_s[:, 0] * residual[:, 1] - d_s[:, 1] * residual[:, 0]]) / det[:, None]
+        params = params + step
+        if np.abs(step).max(initial=0.0) < 1e-15:
+            break
+    return params
+
+
+def _clip(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
+    """Sutherland–Hodgman: the polygon ``subject`` (k, 2) clipped by the convex polygon ``clip`` (m, 2),
+    counter-clockwise; an empty (0, 2) array when they do not overlap. Python floats inside: a few vertices each,
+    where NumPy's per-element overhead would dominate."""
+    output = [tuple(point) for point in subject.tolist()]
+    corners = [tuple(point) for point in clip.tolist()]
+    for i, (ax, ay) in enumerate(corners):
+        if not output:
+            break
+        bx, by = corners[(i + 1) % len(corners)]
+        ex, ey = bx - ax, by - ay
+        side = [ex * (y - ay) - ey * (x - ax) for x, y in output]   # >= 0: inside (left of a->b)
+        points = []
+        for k, (x, y) in enumerate(output):
+            following = (k + 1) % len(output)
+            side_current, side_following = side[k], side[following]
+            if side_current >= 0:
+                points.append((x, y))
+            if (side_current >= 0) != (side_following >= 0):
+                fraction = side_current / (side_current - side_following)
+                fx, fy = output[following]
+                points.append((x + fraction * (fx - x), y + fraction * (fy - y)))
+        output = points
+    return np.array(output, dtype=float).reshape(-1, 2)
+
+
+def _face_normals(x: np.ndarray, quad: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """(f, 3) unit normals of faces ``x`` (f, 4, 3) at their centres, pointing out of the body (away from
+    ``inside``): a triangle's plane normal; a quadrilateral's ``d x/d s x d x/d t`` at its centre (the cross product
+    of its diagonals)."""
+    normal = np.where(quad[:, None], np.cross(x[:, 2] - x[:, 0], x[:, 3] - x[:, 1]),
+                      np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]))
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    centre = np.where(quad[:, None], x.mean(axis=1), x[:, :3].mean(axis=1))
+    flip = np.einsum("ij,ij->i", inside - centre, normal) > 0
+    normal[flip] *= -1
+    return normal
+
+
+def _check_faces(name: str, labels: np.ndarray, x: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """Refuse faces of the wrong shapes or of zero area; return which are quadrilaterals."""
+    f = labels.shape[0]
+    if labels.shape != (f, 4) or x.shape != (f, 4, 3) or np.shape(inside) != (f, 3) or f == 0:
+        raise ValueError(f"mortar: the {name} faces: expected (f, 4) labels (a triangle's fourth -1), (f, 4, 3) "
+                         f"vertices and (f, 3) inside points, f > 0; got {labels.shape}, {x.shape}, {np.shape(inside)}")
+    quad = labels[:, 3] >= 0
+    area = np.where(quad, np.linalg.norm(np.cross(x[:, 2] - x[:, 0], x[:, 3] - x[:, 1]), axis=1),
+                    np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1))
+    if np.any(area == 0):
+        raise ValueError(f"mortar: a {name} face has zero area")
+    return quad
+
+
+def _mortar_matrices_3d(slave_labels: np.ndarray, slave_x: np.ndarray, slave_inside: np.ndarray,
+                        master_labels: np.ndarray, master_x: np.ndarray, master_inside: np.ndarray,
+                        multipliers: str, reference_tangent: np.ndarray) -> MortarMatrices:
+    """:func:`mortar_matrices` for faces (see the module's 3D section)."""
+    slave_quad = _check_faces("slave", slave_labels, slave_x, slave_inside)
+    master_quad = _check_faces("master", master_labels, master_x, master_inside)
+    slave_nodes = np.unique(slave_labels[slave_labels >= 0])
+    master_nodes = np.unique(master_labels[master_labels >= 0])
+    slave_out = _face_normals(slave_x, slave_quad, slave_inside)
+    master_out = _face_normals(master_x, master_quad, master_inside)
+    n_slave_faces = slave_x.shape[0]
+    corners = np.where(slave_quad, 4, 3)
+    master_corners = np.where(master_quad, 4, 3)
+
+    # The auxiliary plane of each slave face: its vertices' centroid and its centre normal; in-plane axes e1, e2.
+    origin = np.array([x[:k].mean(axis=0) for x, k in zip(slave_x, corners)])
+    first_axis = slave_x[:, 1] - slave_x[:, 0]
+    first_axis -= np.einsum("ij,ij->i", first_axis, slave_out)[:, None] * slave_out
+    first_axis /= np.linalg.norm(first_axis, axis=1)[:, None]
+    axes = np.stack([first_axis, np.cross(slave_out, first_axis)], axis=1)                     # (f, 2, 3)
+    slave_plane = np.einsum("fvj,faj->fva", slave_x - origin[:, None], axes)                   # (f, 4, 2)
+    slave_radius = np.linalg.norm(slave_plane, axis=2).max(axis=1)
+    master_centre = np.array([x[:k].mean(axis=0) for x, k in zip(master_x, master_corners)])
+    master_radius = np.array([np.linalg.norm(x[:k] - c, axis=1).max()
+                              for x, k, c in zip(master_x, master_corners, master_centre)])
+
+    # Clip every facing master face near each slave face (in-plane distance of the centres below the sum of their
+    # radii) against it in the slave's plane; triangulate each overlap polygon from its vertex centroid.
+    triangles, triangle_pair, pair_slave, pair_master = [], [], [], []
+    for face in range(n_slave_faces):
+        offset = (master_centre - origin[face]) @ axes[face].T
+        near = np.flatnonzero((np.linalg.norm(offset, axis=1) <= (slave_radius[face] + master_radius) * (1 + 1e-9))
+                              & (master_out @ slave_out[face] < 0.0))
+        clip = slave_plane[face, :corners[face]]
+        first_edge, second_edge = clip[1] - clip[0], clip[2] - clip[0]
+        if first_edge[0] * second_edge[1] - first_edge[1] * second_edge[0] < 0:   # counter-clockwise for _clip
+            clip = clip[::-1]
+        for master in near:
+            subject = (master_x[master, :master_corners[master]] - origin[face]) @ axes[face].T
+            polygon = _clip(subject, clip)
+            if polygon.shape[0] < 3:
+                continue
+            centre = polygon.mean(axis=0)
+            pair = len(pair_slave)
+            pair_slave.append(face)
+            pair_master.append(master)
+            for k in range(polygon.shape[0]):
+                triangles.append([centre, polygon[k], polygon[(k + 1) % polygon.shape[0]]])
+                triangle_pair.append(pair)
+    triangles = np.array(triangles).reshape(-1, 3, 2)
+    triangle_pair = np.asarray(triangle_pair, dtype=np.int64)
+    pair_slave, pair_master = np.asarray(pair_slave, dtype=np.int64), np.asarray(pair_master, dtype=np.int64)
+    edge_1, edge_2 = triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]
+    triangle_area = np.abs(edge_1[:, 0] * edge_2[:, 1] - edge_1[:, 1] * edge_2[:, 0]) / 2
+
+    # Gauss points: their pair, plane position, weight (area in the plane), the slave and master parameters.
+    n_gauss = TRIANGLE_WEIGHTS.size
+    point_pair = np.repeat(triangle_pair, n_gauss)
+    point_slave, point_master = pair_slave[point_pair], pair_master[point_pair]
+    plane_point = np.einsum("ga,tav->tgv", TRIANGLE_POINTS, triangles).reshape(-1, 2)
+    weight = (triangle_area[:, None] * TRIANGLE_WEIGHTS[None, :]).ravel()
+    quad_s, quad_m = slave_quad[point_slave], master_quad[point_master]
+    slave_params = _inverse_map(slave_plane[point_slave], quad_s, plane_point)
+    master_plane = np.einsum("pvj,paj->pva", master_x[point_master] - origin[point_slave][:, None],
+                             axes[point_slave])
+    master_params = _inverse_map(master_plane, quad_m, plane_point)
+    slave_shapes = _face_shapes(slave_params, quad_s)                                          # (p, 4)
+    master_shapes = _face_shapes(master_params, quad_m)
+    # The slave surface's area element over the plane's (1 on a flat face; a warped quadrilateral's ratio).
+    d_s, d_t = _face_tangents(slave_x[point_slave], slave_params, quad_s)
+    p_s, p_t = _face_tangents(slave_plane[point_slave], slave_params, quad_s)
+    weight = weight * np.linalg.norm(np.cross(d_s, d_t), axis=1) \
+        / np.abs(p_s[:, 0] * p_t[:, 1] - p_s[:, 1] * p_t[:, 0])
+
+    # Each slave face's facing part: its mass matrix there; faces facing too little are dropped.
+    mass = np.zeros((n_slave_faces, 4, 4))
+    # Sums over each pair's points first (a pair's points are consecutive), then over the pairs of a face.
+    pair_start = np.flatnonzero(np.r_[True, point_pair[1:] != point_pair[:-1]]) if point_pair.size else \
+        np.zeros(0, dtype=np.int64)
+    pair_of_sum = point_pair[pair_start]
+    per_pair = lambda values: np.add.reduceat(values, pair_start, axis=0) if pair_start.size \
+        else np.zeros((0,) + values.shape[1:])  # noqa: E731
+    np.add.at(mass, pair_slave[pair_of_sum], per_pair(np.einsum("p,pi,pk->pik", weight, slave_shapes, slave_shapes)))
+    facing = np.zeros(n_slave_faces)
+    np.add.at(facing, point_slave, weight)
+    used = facing >= MIN_FACING * _face_areas(slave_x, slave_quad)
+    padded = mass + np.where(slave_quad, 0.0, 1.0)[:, None, None] * np.diag([0.0, 0.0, 0.0, 1.0])  # triangles
+    if multipliers == "dual":   # psi_i = sum_k A_ik N_k, A = diag(d) Me^-1 (d = Me's row sums) on the facing part
+        coefficients = np.zeros((n_slave_faces, 4, 4))
+        coefficients[used] = mass[used].sum(axis=2)[:, :, None] * np.linalg.inv(padded[used])
+    else:
+        coefficients = np.broadcast_to(np.eye(4), (n_slave_faces, 4, 4)).copy()
+        coefficients[~used] = 0.0
+    coefficients[~slave_quad, 3, :] = 0.0
+    shape = np.einsum("pik,pk->pi", coefficients[point_slave], slave_shapes)                  # phi_i at the points
+
+    row_of = np.searchsorted(slave_nodes, np.where(slave_labels >= 0, slave_labels, slave_nodes[0]))
+    col_of = np.searchsorted(master_nodes, np.where(master_labels >= 0, master_labels, master_nodes[0]))
+    kept_pairs = used[pair_slave[pair_of_sum]]
+    local = per_pair(np.einsum("p,pi,pl->pil", weight, shape, master_shapes))[kept_pairs]       # (pairs, 4, 4)
+    rows = np.broadcast_to(row_of[pair_slave[pair_of_sum[kept_pairs]]][:, :, None], local.shape).ravel()
+    cols = np.broadcast_to(col_of[pair_master[pair_of_sum[kept_pairs]]][:, None, :], local.shape).ravel()
+    n_slave = slave_nodes.size
+    M = sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n_slave, master_nodes.size))
+    M.eliminate_zeros()
+    if multipliers == "dual":   # D_jj as M's row sum (see the 2D code: the weights sum to one to rounding)
+        D = sp.csr_matrix(sp.diags(np.asarray(M.sum(axis=1)).ravel()))
+        D.eliminate_zeros()
+    else:
+        rows = np.repeat(row_of[used], 4, axis=1).ravel()
+        cols = np.tile(row_of[used], (1, 4)).ravel()
+        D = sp.csr_matrix((mass[used].ravel(), (rows, cols)), shape=(n_slave, n_slave))
+        D.eliminate_zeros()
+
+    # The master faces' mean size (mean edge length) seen by each slave node, weighted by the facing area.
+    edges = np.linalg.norm(np.roll(master_x, -1, axis=1) - master_x, axis=2)
+    master_size = edges.sum(axis=1) / master_corners   # a triangle's fourth repeats its third: edges 2-3, 3-0
+    pair_area = np.where(kept_pairs, per_pair(weight), 0.0)
+    pair_faces, pair_masters = pair_slave[pair_of_sum], pair_master[pair_of_sum]
+    size_sum, size_weight = np.zeros(n_slave), np.zeros(n_slave)
+    for corner in range(4):
+        real = slave_labels[pair_faces, corner] >= 0
+        np.add.at(size_sum, row_of[pair_faces[real], corner], (pair_area * master_size[pair_masters])[real])
+        np.add.at(size_weight, row_of[pair_faces[real], corner], pair_area[real])
+    sizes = np.divide(size_sum, size_weight, out=np.zeros(n_slave), where=size_weight > 0)
+
+    # Averaged nodal normals (from the master into the slave) and the tangents of the reference tangent.
+    total = np.zeros((n_slave, 3))
+    for corner in range(4):
+        real = slave_labels[:, corner] >= 0
+        np.add.at(total, row_of[real, corner], slave_out[real])
+    length = np.linalg.norm(total, axis=1)
+    if np.any(length == 0):
+        raise ValueError("mortar: a slave node joins faces whose outward normals cancel (the slave surface folds "
+                         "back on itself there)")
+    normals = -total / length[:, None]
+    first = reference_tangent[None, :] - (normals @ reference_tangent)[:, None] * normals
+    first_length = np.linalg.norm(first, axis=1)
+    if np.any(first_length < 1e-8):
+        raise ValueError(f"mortar: reference_tangent = {reference_tangent.tolist()} is along a slave node's normal: "
+                         "allowed a direction in the contact plane")
+    first /= first_length[:, None]
+    tangents = np.stack([first, np.cross(normals, first)], axis=1)
+    return MortarMatrices(slave_nodes, master_nodes, D, M, normals, tangents, sizes, multipliers)
+
+
+def _face_areas(x: np.ndarray, quad: np.ndarray) -> np.ndarray:
+    """(f,) the faces' areas: a triangle's; a (possibly warped) quadrilateral's by the 2 x 2 Gauss rule."""
+    area = np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1) / 2
+    if quad.any():
+        gauss = 0.5 + np.array([-0.5, 0.5]) / np.sqrt(3.0)
+        quad_area = np.zeros(int(quad.sum()))
+        for s in gauss:
+            for t in gauss:
+                params = np.tile([s, t], (quad_area.size, 1))
+                d_s, d_t = _face_tangents(x[quad], params, np.ones(quad_area.size, dtype=bool))
+                quad_area += np.linalg.norm(np.cross(d_s, d_t), axis=1) / 4
+        area[quad] = quad_area
+    return area

@@ -225,15 +225,6 @@ def test_the_mortar_formulation_passes_the_patch_test(ratio):
     assert errors["node"][0] > 1e-2, errors
 
 
-def test_mortar_is_refused_in_3d():
-    msh = mesh.create_unit_cube(MPI.COMM_WORLD, 1, 1, 1)
-    V = compat.vector_space(msh, 1)
-    top = mesh.locate_entities_boundary(msh, 2, lambda x: np.isclose(x[2], 1.0))
-    tags = mesh.meshtags(msh, 2, np.sort(top), np.ones(top.size, dtype=np.int32))
-    with pytest.raises(ValueError, match="formulation = 'mortar' on a 3D mesh"):
-        dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 1), [0.0, 0.0, 1.0], formulation="mortar"), mu=0.0)
-
-
 def test_the_mortar_formulation_passes_the_shear_patch_test():
     """The 3:5 blocks with friction (mu = 1), pressed by delta and sheared by the traction of a uniform shear stress
     tau on their outer faces (sigma . n with sigma = [[0, tau], [tau, 0]]: tau along x on the upper's top, -tau on
