@@ -28,10 +28,9 @@ from .laws import EvolvingFriction
 from .meshes import BODY_CELL_TAG, BodyMesh
 
 __all__ = ["SceneModel", "FurtherZone", "further_zones", "elastic_model", "contact_surface", "rigid_plane",
-           "elastic_flat", "two_body_cells", "roller", "displacement_conditions", "boundary_pressure", "facet_length",
-           "axis_normal", "read_msh", "read_xdmf", "MeshFileError", "check_file_exists", "PAIRING", "PRESSURE_LOAD",
-           "BULK_STRESS_LOAD",
-           "BOUNDARY_DISPLACEMENT", "BOUNDARY_PRESSURE"]
+           "elastic_flat", "pairing_text", "two_body_cells", "roller", "displacement_conditions", "boundary_pressure",
+           "facet_length", "axis_normal", "read_msh", "read_xdmf", "MeshFileError", "check_file_exists", "PAIRING",
+           "PRESSURE_LOAD", "BULK_STRESS_LOAD", "BOUNDARY_DISPLACEMENT", "BOUNDARY_PRESSURE"]
 
 #: Name of the face-pressure load of a scene (``loading.tangential_pressure``), factor in MPa.
 PRESSURE_LOAD = "face_pressure"
@@ -185,6 +184,13 @@ def _pressure_load(V, body: BodyMesh, face: str):
 PAIRING = {"small": "fixed pairing", "finite": "paired anew as the bodies slide"}
 
 
+def pairing_text(contact, dim: int) -> str:
+    """How a scene's two bodies are paired, for the run's description: the formulation and the pairing."""
+    if contact.formulation == "mortar":
+        return f"dual mortar, {PAIRING[contact.sliding]}"
+    return f"{'node-to-face' if dim == 3 else 'node-to-segment'}, {PAIRING[contact.sliding]}"
+
+
 def elastic_flat(scene: Scene, body: BodyMesh, plane: RigidPlane, zone: float, h: float) -> ElasticBody:
     """The flat as the master body. Finite sliding reaches, from every cylinder (or ball) candidate, twice a
     prescribed stroke plus three elements (the relative slip stays below the stroke); under force control, whose
@@ -193,7 +199,7 @@ def elastic_flat(scene: Scene, body: BodyMesh, plane: RigidPlane, zone: float, h
     stroke = scene.loading.tangential_displacement
     reach = 2 * abs(stroke) + 3 * h if stroke is not None else zone
     return ElasticBody((body.facet_tags, body.tags["flat_top"]), plane.normal, sliding=contact.sliding,
-                       repair_slip=contact.repair_slip, reach=reach)
+                       repair_slip=contact.repair_slip, reach=reach, formulation=contact.formulation)
 
 
 def two_body_cells(scene: Scene, body: BodyMesh, curved: str) -> tuple[np.ndarray, np.ndarray | None]:

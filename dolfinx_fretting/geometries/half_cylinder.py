@@ -19,7 +19,7 @@ from mpi4py import MPI
 
 from .. import meshes
 from ..analytic import hertz_line_contact
-from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane,
+from ..scene_models import (SceneModel, contact_surface, elastic_flat, elastic_model, pairing_text, rigid_plane,
                             two_body_cells)
 from .base import (MAX_CONTACT_ELEMENTS, MAX_ELASTIC_STRAIN, MIN_ELASTIC_STRAIN, Geometry, MeshSize, Refinement,
                    check_no_boundary, check_plane_strain, coarser_contact_mesh, finer_contact_mesh, load_range_error,
@@ -193,7 +193,7 @@ class HalfCylinder(Geometry):
             obstacle = elastic_flat(scene, body, plane, zone, h)
             display_cells, elastic_cells = two_body_cells(scene, body, "cylinder")
             label = "two identical elastic bodies: E* = E/(2(1-nu^2))"
-            text = f", each paired with a point of the elastic flat (node-to-segment, {PAIRING[contact.sliding]})"
+            text = f", each paired with the elastic flat ({pairing_text(contact, 2)})"
         else:
             obstacle, display_cells, elastic_cells = plane, None, None
             label = "rigid plane, frictionless: E* = E/(1-nu^2)"

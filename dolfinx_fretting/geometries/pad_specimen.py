@@ -23,7 +23,7 @@ import numpy as np
 from mpi4py import MPI
 
 from .. import meshes
-from ..scene_models import (BULK_STRESS_LOAD, PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model,
+from ..scene_models import (BULK_STRESS_LOAD, SceneModel, contact_surface, elastic_flat, elastic_model, pairing_text,
                             rigid_plane, roller, two_body_cells)
 from .base import (MAX_ELASTIC_STRAIN, MIN_ELASTIC_STRAIN, MeshSize, check_no_boundary, check_plane_strain,
                    load_range_error, range_error)
@@ -141,7 +141,7 @@ class PadSpecimen(HalfCylinder):
         plane = rigid_plane(scene)
         window, automatic = self.candidate_window(scene, zone, h)
         display_cells, elastic_cells = two_body_cells(scene, body, "cylinder")
-        text = (f", each paired with a point of the specimen (node-to-segment, {PAIRING[contact.sliding]}); "
+        text = (f", each paired with the specimen ({pairing_text(scene.contact, 2)}); "
                 "specimen: half its thickness, mid-plane and left end on rollers, bulk stress on its right end")
         return SceneModel(body=body, V=V, form=form, bcs=bcs, surface=contact_surface(scene, body),
                           obstacle=elastic_flat(scene, body, plane, zone, h), loads=loads, element_size=h,

@@ -25,7 +25,7 @@ from mpi4py import MPI
 from .. import meshes_3d
 from ..analytic import (hertz_sphere, mindlin_deresiewicz_energy, mindlin_shear_modulus, worn_sphere_contact_radius,
                         worn_sphere_volume)
-from ..scene_models import (PAIRING, SceneModel, contact_surface, elastic_flat, elastic_model, rigid_plane, roller,
+from ..scene_models import (SceneModel, contact_surface, elastic_flat, elastic_model, pairing_text, rigid_plane, roller,
                             two_body_cells)
 from .base import (MAX_ELASTIC_STRAIN, MIN_ELASTIC_STRAIN, Geometry, MeshSize, Refinement, check_no_boundary,
                    coarser_contact_mesh, finer_contact_mesh, load_range_error, mesher_default, range_error)
@@ -308,8 +308,7 @@ class Sphere(Geometry):
         if two_body:
             obstacle = elastic_flat(scene, body, plane, zone, h)
             display_cells, elastic_cells = two_body_cells(scene, body, "sphere")
-            text = (", each paired with the closest point of the elastic flat's faces (node-to-face, "
-                    f"{PAIRING[contact.sliding]})")
+            text = f", each paired with the elastic flat's faces ({pairing_text(contact, 3)})"
         else:
             obstacle, display_cells, elastic_cells = plane, None, None
             text = ", against a rigid plane"
