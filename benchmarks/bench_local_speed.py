@@ -113,8 +113,10 @@ def markdown(command: str, info: dict, records: list[dict]) -> str:
          f"- tol {info['tol']:g} on the natural-map error (the scenes' `solver.local_tol`), cap 20000 sweeps; "
          f"{info['repeats']} repeats, the three variants alternating within each; median (min) CPU time of "
          "the call to `local_solvers.solve` (one thread; the machine's load makes the wall clock 2-10x longer)",
-         "- problems: the sphere-flat scene's own (W of the FE model, q and the warm start formed by the package: "
-         "`benchmarks/make_sphere_flat_problems.py`, files kept out of the repository)", "",
+         "- problems (`benchmarks/make_sphere_flat_problems.py`, files kept out of the repository): `FE`, the "
+         "sphere-flat scene's own (W of the FE model, q and the warm start formed by the package); `half-space`, a "
+         "synthetic W of the same structure (two like elastic half-spaces, 1/r decay) with the scene's increments",
+         "",
          "`full`: every contact swept on the whole W (the solver before); `working set`: the default, sweeps on the "
          "contacts with a force or a gap below NEAR_MARGIN x the deepest penetration, then a check on all; "
          "`float32`: the same with float32 incremental updates. `set`: working-set size at the end (+ joined "
