@@ -703,8 +703,12 @@ def _nsgs_sweeps(Ws: np.ndarray, Wc: np.ndarray, indptr: np.ndarray, indices: np
 # ----------------------------------------------------------------------------------------------------------
 #: A contact with no force joins the working set of the restricted sweeps when its gap ``x_n`` at the warm start is
 #: below this share of the problem's deepest penetration ``max(-q_n)``: the ring just outside the contact, whose
-#: gaps are the ones an increment may close (chosen by benchmarks/results/local_speed.md; any value >= 0 gives the
-#: same answer, a larger one costs longer rows, a smaller one more passes).
+#: gaps are the ones an increment may close. Any value >= 0 meets the same criterion on the whole problem; a larger
+#: one costs longer rows, a smaller one risks a pass more, and, at 0, the same bits: touching contacts (x_n = 0,
+#: r = 0) are then left out, and where the full sweeps' rounding dips their gap below 0 for a sweep they get forces
+#: of 1e-19 that the restricted sweeps do not (FCLIB NESpheres_30_1). 0 was 1.1-1.8x faster on the sphere-flat
+#: increments (benchmarks/results/local_speed.md); 0.05 keeps the full sweeps' bits on every problem tested.
+#: (The compiled cycle loop reads it when numba compiles cycling.py: clear its cache after changing it.)
 NEAR_MARGIN = 0.05
 
 
