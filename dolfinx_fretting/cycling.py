@@ -36,7 +36,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .local_solvers import _error, _force_scale, _lcp_kernel, _recompute_x, _uzawa_kernel
+from .local_solvers import NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _recompute_x, _restricted_kernel
 from .wear import ROW_FIELDS, commit_increment
 
 __all__ = ["run_increments", "ActivePatternCache", "N_ROW"]
@@ -217,6 +217,8 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
     states = np.empty(nc, dtype=np.int8)
     empty_i = np.zeros(1, dtype=np.int64)
     empty_f = np.zeros(1)
+    empty_blocks = np.zeros((1, dim, dim))
+    working_stats = np.zeros(3, dtype=np.int64)
     nfields = N_ROW - 2
     row = np.empty(nfields)
     # Frictionless: the Uzawa sweeps run on the normal rows alone (W_nn, transposed like Wc), the iterates
@@ -299,8 +301,10 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
             _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)  # the slip rows too
         elif not exact:
             _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-            its, err, change, status = _uzawa_kernel(Wc, empty_i, empty_i, empty_f, False, q, mu, rho, rho, dim,
-                                                     r, x, tol, max_iter, refresh)
+            # Sweeps on the closed and nearly closed contacts, then a check on all (local_solvers.solve's default).
+            its, err, change, status = _restricted_kernel(Wc, False, empty_blocks, q, mu, rho, rho, dim, r, x, tol,
+                                                          max_iter, refresh, False, 1.0, empty_f, empty_f,
+                                                          NEAR_MARGIN, False, working_stats)
             if status != 1:
                 return j, status, err
         # y = W r + q_abs = x + (q_abs - q)

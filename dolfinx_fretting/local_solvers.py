@@ -49,6 +49,7 @@ __all__ = [
     "METHODS",
     "LocalResult",
     "LocalSolverError",
+    "NEAR_MARGIN",
     "block_rho",
     "contact_states",
     "de_saxce_x",
@@ -88,6 +89,10 @@ class LocalResult:
             eq. 34), for information only.
         sweeps: Gauss-Seidel sweeps (Uzawa or NSGS) among ``iterations``.
         newton_steps: Newton steps among ``iterations`` (``"newton"`` and ``"auto"``).
+        passes: Passes of the sweeps on the working set (each ended by a check on all contacts); 0 when the
+            sweeps ran on all contacts (see ``working_set`` in :func:`solve`).
+        working_set: Contacts in the working set at the end (0: all contacts swept).
+        joined: Contacts that joined the working set after the start (their gap closed during the solve).
     """
 
     r: np.ndarray
@@ -100,6 +105,9 @@ class LocalResult:
     change: float = 0.0
     sweeps: int = 0
     newton_steps: int = 0
+    passes: int = 0
+    working_set: int = 0
+    joined: int = 0
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -250,6 +258,37 @@ def _recompute_x(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
 
 
 @numba.njit(cache=True)
+def _recompute_x_by_rows(W: np.ndarray, q: np.ndarray, r: np.ndarray, x: np.ndarray, rows: np.ndarray) -> None:
+    """x[i] = (W r + q)[i] for the rows ``i`` listed, from the rows of a dense W (C-contiguous), skipping r_j = 0:
+    each x[i] the same products added in the same order as :func:`_recompute_x` on W^T, so the same bits (four
+    rows at a time: four independent sums in flight, each in its own order)."""
+    nonzero = np.flatnonzero(r != 0.0)
+    values = r[nonzero]
+    n = rows.size
+    k = 0
+    while k + 4 <= n:
+        i0, i1, i2, i3 = rows[k], rows[k + 1], rows[k + 2], rows[k + 3]
+        w0, w1, w2, w3 = W[i0], W[i1], W[i2], W[i3]
+        s0, s1, s2, s3 = q[i0], q[i1], q[i2], q[i3]
+        for p in range(nonzero.size):
+            j = nonzero[p]
+            v = values[p]
+            s0 += w0[j] * v
+            s1 += w1[j] * v
+            s2 += w2[j] * v
+            s3 += w3[j] * v
+        x[i0], x[i1], x[i2], x[i3] = s0, s1, s2, s3
+        k += 4
+    for kk in range(k, n):
+        i = rows[kk]
+        w = W[i]
+        s = q[i]
+        for p in range(nonzero.size):
+            s += w[nonzero[p]] * values[p]
+        x[i] = s
+
+
+@numba.njit(cache=True)
 def _add_column(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, sparse: bool,
                 j: int, d: float, x: np.ndarray) -> None:
     """x += W[:, j] d."""
@@ -311,8 +350,18 @@ def _uzawa_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data:
 
     Returns (sweeps, error, change, status) with status 1 converged, 0 max_iter, 2 non-finite.
     """
+    return _uzawa_sweeps(Wc, Wc, indptr, indices, data, sparse, q, mu, rho, rho_err, dim, r, x, tol, max_iter,
+                         refresh, _force_scale(q, mu, rho_err, dim))
+
+
+@numba.njit(cache=True)
+def _uzawa_sweeps(Ws: np.ndarray, Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray,
+                  sparse: bool, q: np.ndarray, mu: np.ndarray, rho: np.ndarray, rho_err: np.ndarray, dim: int,
+                  r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, scale: float
+                  ) -> tuple[int, float, float, int]:
+    """:func:`_uzawa_kernel` with the error's force ``scale`` given and the sweeps' incremental updates of ``x``
+    read from ``Ws`` (``Wc`` itself, or a float32 copy of it: the exact recomputations of ``x`` use ``Wc``)."""
     nc = mu.size
-    scale = _force_scale(q, mu, rho_err, dim)
     err = _error(r, x, mu, rho_err, dim, scale)
     if err < tol:
         return 0, err, 0.0, 1
@@ -329,7 +378,7 @@ def _uzawa_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data:
             # Predictor on De Saxce's modified displacement with the full local x (own term included).
             pn, p1, p2 = _project(r[o] - ra * (x[o] + mu[a] * nxt), r[o + 1] - ra * x[o + 1],
                                   rt2 - ra * x2, mu[a])
-            dr2 += _set_contact(Wc, indptr, indices, data, sparse, dim, o, pn, p1, p2, r, x)
+            dr2 += _set_contact(Ws, indptr, indices, data, sparse, dim, o, pn, p1, p2, r, x)
             r2 += pn * pn + p1 * p1 + p2 * p2
         change = math.sqrt(dr2) / max(math.sqrt(r2), 1e-300)
         err, status = _end_of_sweep(k, refresh, Wc, indptr, indices, data, sparse, q, r, x, mu, rho_err, dim, scale,
@@ -600,8 +649,18 @@ def _nsgs_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
 
     Returns (sweeps, error, change, status) like :func:`_uzawa_kernel`.
     """
+    return _nsgs_sweeps(Wc, Wc, indptr, indices, data, sparse, blocks, q, mu, rho_err, dim, r, x, tol, max_iter,
+                        refresh, omega, scan_c, scan_s, _force_scale(q, mu, rho_err, dim))
+
+
+@numba.njit(cache=True)
+def _nsgs_sweeps(Ws: np.ndarray, Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray,
+                 sparse: bool, blocks: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err: np.ndarray, dim: int,
+                 r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, omega: float,
+                 scan_c: np.ndarray, scan_s: np.ndarray, scale: float) -> tuple[int, float, float, int]:
+    """:func:`_nsgs_kernel` with the error's ``scale`` given and the incremental updates read from ``Ws`` (see
+    :func:`_uzawa_sweeps`)."""
     nc = mu.size
-    scale = _force_scale(q, mu, rho_err, dim)
     err = _error(r, x, mu, rho_err, dim, scale)
     if err < tol:
         return 0, err, 0.0, 1
@@ -629,7 +688,7 @@ def _nsgs_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
             if omega != 1.0:
                 pn, p1, p2 = _project(rn + omega * (pn - rn), r1 + omega * (p1 - r1),
                                       rt2 + omega * (p2 - rt2), mu[a])
-            dr2 += _set_contact(Wc, indptr, indices, data, sparse, dim, o, pn, p1, p2, r, x)
+            dr2 += _set_contact(Ws, indptr, indices, data, sparse, dim, o, pn, p1, p2, r, x)
             r2 += pn * pn + p1 * p1 + p2 * p2
         change = math.sqrt(dr2) / max(math.sqrt(r2), 1e-300)
         err, status = _end_of_sweep(k, refresh, Wc, indptr, indices, data, sparse, q, r, x, mu, rho_err, dim, scale,
@@ -637,6 +696,180 @@ def _nsgs_kernel(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
         if status >= 0:
             return k, err, change, status
     return max_iter, err, change, 0
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Sweeps on the working set (the closed and nearly closed contacts), then a check on every contact
+# ----------------------------------------------------------------------------------------------------------
+#: A contact with no force joins the working set of the restricted sweeps when its gap ``x_n`` at the warm start is
+#: below this share of the problem's deepest penetration ``max(-q_n)``: the ring just outside the contact, whose
+#: gaps are the ones an increment may close. Any value >= 0 meets the same criterion on the whole problem; a larger
+#: one costs longer rows, a smaller one risks a pass more, and, at 0, the same bits: touching contacts (x_n = 0,
+#: r = 0) are then left out, and where the full sweeps' rounding dips their gap below 0 for a sweep they get forces
+#: of 1e-19 that the restricted sweeps do not (FCLIB NESpheres_30_1). 0 was 1.1-1.8x faster on the sphere-flat
+#: increments (benchmarks/results/local_speed.md); 0.05 keeps the full sweeps' bits on every problem tested.
+#: (The compiled cycle loop reads it when numba compiles cycling.py: clear its cache after changing it.)
+NEAR_MARGIN = 0.05
+
+
+@numba.njit(cache=True)
+def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.ndarray, mu: np.ndarray, rho: np.ndarray,
+                       rho_err: np.ndarray, dim: int, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int,
+                       refresh: int, nsgs: bool, omega: float, scan_c: np.ndarray, scan_s: np.ndarray,
+                       margin_factor: float, single: bool, stats: np.ndarray) -> tuple[int, float, float, int]:
+    """Uzawa (``nsgs`` False) or NSGS sweeps on the working set only, with a final check on all contacts.
+
+    Dense ``W`` only, given as ``A = W`` (``by_rows``: no transposed copy to make, a solve's own ``W``) or
+    ``A = W^T`` C-contiguous (the other kernels' ``Wc``, held by the compiled loop); ``x = W r + q`` on entry.
+    The working set is the contacts with a force and those whose gap ``x_n`` is below
+    ``margin_factor * max(-q_n)``; the sweeps run on the gathered
+    ``W_AA`` (rows ``dim |A|`` long instead of ``m``, and a matrix that may fit in cache), in float32 for the
+    incremental updates of ``x`` when ``single`` (the exact recomputations stay float64).
+
+    Why it is the full sweeps' answer: a contact with ``r^a = 0`` and ``x_n^a >= 0`` is left at ``r^a = 0`` by
+    a sweep (Uzawa's predictor ``-rho (x_n + mu |x_t|, x_t)`` lies in the polar cone exactly when ``x_n >= 0``,
+    and projects to 0; NSGS's one-contact problem is open when ``b_n = x_n >= 0``) and adds exactly 0 to the
+    natural-map error (whose force scale is the full problem's). So while every contact outside the set keeps
+    ``x_n >= 0`` the restricted sweeps are the full ones, iterate for iterate. Once they converge, ``x = W r + q``
+    is recomputed on all rows and the error on all contacts; a contact outside with ``x_n < 0`` (the only way
+    the two errors can differ) joins the set, with any other below the margin, and the sweeps go on from there.
+    The answer meets the same criterion as the full sweeps', on the whole problem.
+
+    ``stats`` (int64, 3) gets: passes, working-set size at the end, contacts that joined after the start.
+    Returns (sweeps, error, change, status) like :func:`_uzawa_kernel` (sweeps counted over all passes).
+    """
+    nc = mu.size
+    scale = _force_scale(q, mu, rho_err, dim)
+    err = _error(r, x, mu, rho_err, dim, scale)
+    stats[0] = 0
+    stats[1] = 0
+    stats[2] = 0
+    if err < tol:
+        return 0, err, 0.0, 1
+    deepest = 0.0
+    for a in range(nc):
+        deepest = max(deepest, -q[a * dim])
+    margin = margin_factor * deepest
+    member = np.zeros(nc, dtype=np.bool_)
+    for a in range(nc):
+        o = a * dim
+        loaded = r[o] != 0.0 or r[o + 1] != 0.0 or (dim == 3 and r[o + 2] != 0.0)
+        member[a] = loaded or x[o] < margin
+    empty_i = np.zeros(1, dtype=np.int64)
+    empty_f = np.zeros(1)
+    total = 0
+    change = np.inf
+    status = 0
+    while True:
+        stats[0] += 1
+        na = 0
+        for a in range(nc):
+            if member[a]:
+                na += 1
+        stats[1] = na
+        ma = na * dim
+        rows = np.empty(ma, dtype=np.int64)
+        k = 0
+        for a in range(nc):
+            if member[a]:
+                for c in range(dim):
+                    rows[k * dim + c] = a * dim + c
+                k += 1
+        Wa = np.empty((ma, ma))  # (W_AA)^T, C-contiguous, like Wc
+        if by_rows:
+            for j in range(ma):
+                source = A[rows[j]]
+                for i in range(ma):
+                    Wa[i, j] = source[rows[i]]
+        else:
+            for i in range(ma):
+                source = A[rows[i]]
+                for j in range(ma):
+                    Wa[i, j] = source[rows[j]]
+        qa = np.empty(ma)
+        ra = np.empty(ma)
+        xa = np.empty(ma)
+        for i in range(ma):
+            qa[i] = q[rows[i]]
+            ra[i] = r[rows[i]]
+            xa[i] = x[rows[i]]
+        mua = np.empty(na)
+        rhoa = np.empty(na)
+        rho_erra = np.empty(na)
+        blocks_a = np.empty((na if nsgs else 1, dim, dim))
+        for k in range(na):
+            a = rows[k * dim] // dim
+            mua[k] = mu[a]
+            rhoa[k] = rho[a]
+            rho_erra[k] = rho_err[a]
+            if nsgs:
+                blocks_a[k] = blocks[a]
+        left = max_iter - total
+        if left <= 0:
+            return total, err, change, 0
+        if nsgs and single:
+            its, err, change, status = _nsgs_sweeps(Wa.astype(np.float32), Wa, empty_i, empty_i, empty_f, False,
+                                                    blocks_a, qa, mua, rho_erra, dim, ra, xa, tol, left, refresh,
+                                                    omega, scan_c, scan_s, scale)
+        elif nsgs:
+            its, err, change, status = _nsgs_sweeps(Wa, Wa, empty_i, empty_i, empty_f, False, blocks_a, qa, mua,
+                                                    rho_erra, dim, ra, xa, tol, left, refresh, omega, scan_c,
+                                                    scan_s, scale)
+        elif single:
+            its, err, change, status = _uzawa_sweeps(Wa.astype(np.float32), Wa, empty_i, empty_i, empty_f, False,
+                                                     qa, mua, rhoa, rho_erra, dim, ra, xa, tol, left, refresh, scale)
+        else:
+            its, err, change, status = _uzawa_sweeps(Wa, Wa, empty_i, empty_i, empty_f, False, qa, mua, rhoa,
+                                                     rho_erra, dim, ra, xa, tol, left, refresh, scale)
+        total += its
+        for i in range(ma):
+            r[rows[i]] = ra[i]
+        # The check on every contact: x on all rows, exactly, and the error of the whole problem.
+        if by_rows and status == 1:
+            # The set's rows of x are exact (the sub-problem's convergence is confirmed on x recomputed from
+            # W_AA, the same bits as from W); the other rows from W's rows.
+            outside = np.empty(q.size - ma, dtype=np.int64)
+            k = 0
+            for a in range(nc):
+                if not member[a]:
+                    for c in range(dim):
+                        outside[k] = a * dim + c
+                        k += 1
+            for i in range(ma):
+                x[rows[i]] = xa[i]
+            _recompute_x_by_rows(A, q, r, x, outside)
+        elif by_rows:
+            _recompute_x_by_rows(A, q, r, x, np.arange(q.size))
+        else:
+            _recompute_x(A, empty_i, empty_i, empty_f, False, q, r, x)
+        if status == 2:
+            return total, err, change, 2
+        err = _error(r, x, mu, rho_err, dim, scale)
+        if status != 1:
+            return total, err, change, status
+        if err < tol:
+            return total, err, change, 1
+        added = 0
+        for a in range(nc):
+            if not member[a] and x[a * dim] < margin:
+                member[a] = True
+                added += 1
+        stats[2] += added
+        if added == 0:
+            # Not reached in exact arithmetic (the outside terms are exact zeros): finish with full sweeps.
+            left = max_iter - total
+            if left <= 0:
+                return total, err, change, 0
+            Wc = np.ascontiguousarray(A.T) if by_rows else A
+            if nsgs:
+                its, err, change, status = _nsgs_sweeps(Wc, Wc, empty_i, empty_i, empty_f, False, blocks, q, mu,
+                                                        rho_err, dim, r, x, tol, left, refresh, omega, scan_c,
+                                                        scan_s, scale)
+            else:
+                its, err, change, status = _uzawa_sweeps(Wc, Wc, empty_i, empty_i, empty_f, False, q, mu, rho,
+                                                         rho_err, dim, r, x, tol, left, refresh, scale)
+            stats[1] = nc
+            return total + its, err, change, status
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -869,7 +1102,9 @@ def _check_problem(W, q, mu, dim) -> tuple[np.ndarray | sp.csc_matrix, np.ndarra
         values = W
     if W.shape != (m, m):
         raise ValueError(f"W: expected shape ({m}, {m}) to match q, got {W.shape}")
-    if not np.all(np.isfinite(values)):
+    # A finite sum has only finite terms (a NaN or inf term makes it NaN or inf): one vectorised read of W, no
+    # temporary of W's size (np.isfinite's: ~8 ms a solve at 1000 contacts); the exact test only if it is not.
+    if not (math.isfinite(float(np.sum(values))) or np.all(np.isfinite(values))):
         raise ValueError("W: contains non-finite values")
     return W, q, _as_mu(mu, m // dim), int(dim)
 
@@ -1097,6 +1332,9 @@ class _Counts:
     sweeps: int = 0
     steps: int = 0
     fallbacks: int = 0
+    passes: int = 0
+    working_set: int = 0
+    joined: int = 0
 
     @property
     def total(self) -> int:
@@ -1209,7 +1447,8 @@ def _newton_driver(P: _Problem, r: np.ndarray, x: np.ndarray, tol: float, max_it
 def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, dim: int,
           method: str = "uzawa", tol: float = 1e-10, max_iter: int = 10000, r0: np.ndarray | None = None,
           rho: float | None = None, raise_on_failure: bool = False,
-          block_steps: np.ndarray | None = None) -> LocalResult:
+          block_steps: np.ndarray | None = None, working_set: bool = True,
+          float32_sweeps: bool = False) -> LocalResult:
     """Solve the local frictional contact problem ``x = W r + q``, ``r`` and ``x`` satisfying Coulomb's law.
 
     Every method stops when :func:`natural_map_error` ``< tol`` (checked on ``x = W r + q`` recomputed
@@ -1278,6 +1517,17 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         block_steps: ``block_rho(W, dim)`` (the per-contact steps ``1/||W_aa||_2``) when the caller holds it for
             this very ``W`` (e.g. ``ContactOperators.block_steps``): the same numbers, not computed again at
             every solve (its batched SVD was ~26 % of a 3D cycle). None: computed here.
+        working_set: ``"uzawa"`` and ``"nsgs"`` on a dense ``W``: sweep only the contacts with a force and those
+            whose gap at the start is below :data:`NEAR_MARGIN` times the deepest penetration, on their own rows
+            and columns ``W_AA``, then check the whole problem (``x = W r + q`` on all rows, the error on all
+            contacts); a contact outside whose gap closed joins and the sweeps go on. The same iterates as the
+            full sweeps while no outside gap closes, and always the same stopping criterion on the whole
+            problem; a sweep costs ``O(|A|^2)`` instead of ``O(|A| m)`` (benchmarks/results/local_speed.md).
+            False: every contact swept on the full ``W``.
+        float32_sweeps: With ``working_set``: the sweeps' incremental updates of ``x`` read a float32 copy of
+            ``W_AA`` (half the memory traffic); ``x`` is recomputed exactly in float64 every 200 sweeps and
+            before convergence is declared, so the stopping criterion is unchanged, but the iterates differ
+            from the float64 ones by rounding (answers within the tolerance, not the same bits).
 
     Returns:
         A :class:`LocalResult`. ``converged`` is False (with a message) when ``max_iter`` is reached or a
@@ -1322,7 +1572,8 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
                                                   counts, rho_err)
     else:
         r, x, err, change, status = _solve_full(W, q, mu_arr, dim, method, float(tol), int(max_iter), r,
-                                                r0 is not None, rho_factor, counts, rho_err)
+                                                r0 is not None, rho_factor, counts, rho_err, bool(working_set),
+                                                bool(float32_sweeps))
     its = counts.total
     converged = status == 1 and bool(np.all(np.isfinite(r)))
     unit = {"uzawa": "sweeps", "nsgs": "sweeps"}.get(method, "iterations")
@@ -1340,7 +1591,7 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     if not converged and raise_on_failure:
         raise LocalSolverError(f"local solver {method!r}: {message}")
     return LocalResult(r, x, int(its), float(err), converged, method, message, float(change),
-                       int(counts.sweeps), int(counts.steps))
+                       int(counts.sweeps), int(counts.steps), counts.passes, counts.working_set, counts.joined)
 
 
 def _storage(W: np.ndarray | sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
@@ -1354,13 +1605,37 @@ def _storage(W: np.ndarray | sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.
 
 def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray, dim: int, method: str, tol: float,
                 max_iter: int, r: np.ndarray, warm: bool, rho_factor: float, counts: _Counts,
-                rho_err: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, float, int]:
+                rho_err: np.ndarray | None = None, working_set: bool = True, float32_sweeps: bool = False
+                ) -> tuple[np.ndarray, np.ndarray, float, float, int]:
     """The frictional problem in full dimension: (r, x, error, change, status), see :func:`solve` (``rho_err``:
     :func:`block_rho` of ``W``, computed here if None)."""
     rho_err = block_rho(W, dim) if rho_err is None else rho_err
     if warm:
         # A warm start from another problem may lie outside the cones.
         _project_all(r, mu_arr, dim)
+    if working_set and method in ("uzawa", "nsgs") and not sp.issparse(W):
+        # The sweeps on the closed and nearly closed contacts, read from W's rows (no transposed copy of W).
+        W = np.ascontiguousarray(W)
+        x = np.empty(q.size)
+        _recompute_x_by_rows(W, q, r, x, np.arange(q.size))
+        nsgs = method == "nsgs"
+        blocks = np.ascontiguousarray(_diag_blocks(W, dim)) if nsgs else np.zeros((1, dim, dim))
+        stats = np.zeros(3, dtype=np.int64)
+        counts.sweeps, err, change, status = _restricted_kernel(
+            W, True, blocks, q, mu_arr, rho_err * (1.0 if nsgs else rho_factor), rho_err, dim, r, x, tol, max_iter,
+            _REFRESH, nsgs, rho_factor if nsgs else 1.0, _SCAN_COS, _SCAN_SIN, NEAR_MARGIN, float32_sweeps, stats)
+        counts.passes, counts.working_set, counts.joined = (int(v) for v in stats)
+        if nsgs and status != 2 and not _in_cones(r, mu_arr, dim):
+            # As after the full NSGS below: a rounding step outside the cones is projected if that is as good.
+            rp = r.copy()
+            _project_all(rp, mu_arr, dim)
+            xp = np.empty(q.size)
+            _recompute_x_by_rows(W, q, rp, xp, np.arange(q.size))
+            ep = float(_error(rp, xp, mu_arr, rho_err, dim, _force_scale(q, mu_arr, rho_err, dim)))
+            if ep < tol or ep <= err:
+                r, x, err = rp, xp, ep
+                status = 1 if ep < tol else status
+        return r, x, err, change, status
     Wc, indptr, indices, data, sparse = _storage(W)
     x = np.empty(q.size)
     _recompute_x(Wc, indptr, indices, data, sparse, q, r, x)

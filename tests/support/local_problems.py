@@ -1,6 +1,8 @@
 """Small local contact problems (W, q, mu) and checks of a solution that do not depend on the solvers: random
-well-conditioned problems, every solution of a 2D one by enumeration, De Saxce's conditions on (r, W r + q).
-Used by tests/test_local_solvers.py, tests/test_local_solver_suite.py and tests/test_frictionless.py."""
+well-conditioned problems, every solution of a 2D one by enumeration, De Saxce's conditions on (r, W r + q), a
+sphere-flat-like problem on two elastic half-spaces. Used by tests/test_local_solvers.py,
+tests/test_local_solver_suite.py, tests/test_frictionless.py, tests/test_working_set.py and (the half-space
+problem, at 1000+ contacts) benchmarks/make_sphere_flat_problems.py."""
 
 import itertools
 
@@ -71,3 +73,41 @@ def random_problem(seed, nc, dim=2, mu=0.3):
     q = rng.normal(size=m)
     q[::dim] -= 0.5  # most contacts pressed
     return W, q, mu
+
+
+def half_space(n_side: int = 16, h: float = 1.0, nu: float = 0.3, E: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """W of two like elastic half-spaces on an ``n_side^2`` grid of contacts (spacing ``h``): Boussinesq's normal
+    and Cerruti's tangential point-force compliances (the 1/r decay of the FE W of the sphere-flat scene), the
+    self terms from a uniform load on an ``h x h`` square (centre value: ``4 ln(1 + sqrt 2) / h`` for ``1/r``);
+    like materials: no normal-tangential coupling. Blocks ordered (n, t1, t2). Returns (W, contact coordinates)."""
+    side = (np.arange(n_side) - (n_side - 1) / 2) * h
+    xy = np.array([(x, y) for x in side for y in side])
+    dx = xy[:, None, 0] - xy[None, :, 0]
+    dy = xy[:, None, 1] - xy[None, :, 1]
+    dist = np.hypot(dx, dy)
+    self_term = 4.0 * np.log(1.0 + np.sqrt(2.0)) / h
+    np.fill_diagonal(dist, 1.0)
+    inv = 1.0 / dist
+    np.fill_diagonal(inv, self_term)
+    cx, cy = dx * inv, dy * inv  # direction cosines (0 on the diagonal)
+    np.fill_diagonal(cx, np.sqrt(0.5))  # the square's average of cos^2 is 1/2
+    np.fill_diagonal(cy, np.sqrt(0.5))
+    two_bodies = 2.0 / (np.pi * E)
+    nc = xy.shape[0]
+    W = np.zeros((3 * nc, 3 * nc))
+    W[0::3, 0::3] = two_bodies * (1 - nu**2) * inv
+    W[1::3, 1::3] = two_bodies * (1 + nu) * ((1 - nu) + nu * cx**2) * inv
+    W[2::3, 2::3] = two_bodies * (1 + nu) * ((1 - nu) + nu * cy**2) * inv
+    off = two_bodies * (1 + nu) * nu * cx * cy * inv
+    np.fill_diagonal(off, 0.0)
+    W[1::3, 2::3] = off
+    W[2::3, 1::3] = off
+    return W, xy
+
+
+def sphere_flat_q(xy: np.ndarray, radius: float, approach: float, slip: float) -> np.ndarray:
+    """q of a sphere of radius ``radius`` pressed ``approach`` into the flat and moved by ``slip`` along x."""
+    q = np.zeros(3 * xy.shape[0])
+    q[0::3] = (xy[:, 0] ** 2 + xy[:, 1] ** 2) / (2.0 * radius) - approach
+    q[1::3] = -slip
+    return q

@@ -1,0 +1,115 @@
+"""Sweeps on the working set (``local_solvers.solve(..., working_set=True)``, the default) give the full sweeps'
+answer: on the shared FCLIB problems and on a sphere-flat-like half-space problem, including one where contacts
+outside the starting set must join (the check on all contacts after the sweeps is what catches them).
+
+References independent of the restricted route: the full sweeps (``working_set=False``, the solver before issue
+26), and the natural-map error recomputed on the whole problem by :func:`natural_map_error`.
+"""
+
+import numpy as np
+import pytest
+from support.fclib_problems import needs_fclib, problem
+from support.local_problems import half_space, sphere_flat_q
+
+from dolfinx_fretting import local_solvers as ls
+from dolfinx_fretting.local_solvers import natural_map_error, solve
+
+TOL = 1e-10  # the scenes' solver.local_tol
+
+# Dense problems the sweeps solve within seconds (benchmarks/results/local_solvers.md), 2D and 3D, FE and multibody.
+FCLIB_DENSE = ["Box_Stacks-i0122-82-5", "Confeti-ex03-Fc3D-SBM", "NESpheres_30_1", "Spheres-i099-356-679",
+               "FrictionContactProblem00071", "getfem_hertz2d_mu0.9", "gfc2d_granularflowonwall_00230_00206"]
+
+
+@pytest.fixture(scope="module")
+def sphere_flat():
+    W, xy = half_space()
+    assert np.linalg.eigvalsh(W).min() > 0  # SPD (a precondition of the unique solution compared below)
+    return W, xy
+
+
+def test_half_space_is_sphere_flat_like(sphere_flat):
+    """The synthetic W decays like the FE W (benchmarks/results/contacts_3d.md: slope -0.83 over r > 2h; a
+    half-space's exact -1): its normal blocks fall as 1/r, so 8 h away a block is 1/8 of one at h."""
+    W, xy = sphere_flat
+    i = 0
+    j = int(np.argmin(np.abs(np.hypot(*(xy - xy[i]).T) - 1.0)))
+    k = int(np.argmin(np.abs(np.hypot(*(xy - xy[i]).T) - 8.0)))
+    assert W[3 * i, 3 * k] / W[3 * i, 3 * j] == pytest.approx(1.0 / 8.0, rel=1e-12)
+
+
+@needs_fclib
+@pytest.mark.parametrize("method", ["uzawa", "nsgs"])
+@pytest.mark.parametrize("name", FCLIB_DENSE)
+def test_fclib_same_answer(name, method):
+    P = problem(name)
+    full = solve(P.W, P.q, P.mu, P.dim, method=method, tol=TOL, max_iter=20000, working_set=False)
+    restricted = solve(P.W, P.q, P.mu, P.dim, method=method, tol=TOL, max_iter=20000)
+    assert full.converged and restricted.converged, (full.message, restricted.message)
+    assert restricted.passes >= 1 and restricted.working_set >= 1
+    # The stopping criterion holds on the whole problem, recomputed from scratch.
+    assert natural_map_error(P.W, P.q, restricted.r, P.mu, P.dim) < TOL
+    if restricted.joined == 0:
+        # No contact outside the starting set closed at the end, and (measured, with the margin NEAR_MARGIN) none
+        # dipped below a zero gap during the sweeps: the same iterates, hence the same bits. (With the margin 0,
+        # NESpheres_30_1's touching contacts get 1e-19 forces from the full sweeps' rounding: not the same bits.)
+        assert np.array_equal(restricted.r, full.r) and np.array_equal(restricted.x, full.x)
+        assert restricted.sweeps == full.sweeps
+
+
+@pytest.mark.parametrize("method", ["uzawa", "nsgs"])
+@pytest.mark.parametrize("warm", [False, True])
+def test_sphere_flat_same_bits(sphere_flat, method, warm):
+    """Loading from zero and a gross-slip increment from the previous one: only the contact zone (and its rim)
+    is swept, and the answer is the full sweeps' to the last bit."""
+    W, xy = sphere_flat
+    q_before = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.3)
+    q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.6)
+    r0 = solve(W, q_before, 0.5, 3, tol=TOL, working_set=False).r if warm else None
+    full = solve(W, q, 0.5, 3, method=method, tol=TOL, r0=r0, working_set=False)
+    restricted = solve(W, q, 0.5, 3, method=method, tol=TOL, r0=r0)
+    assert full.converged and restricted.converged
+    assert restricted.working_set < xy.shape[0] // 2  # a real restriction: the contact zone is a disc inside
+    assert restricted.joined == 0 and restricted.passes == 1
+    assert np.array_equal(restricted.r, full.r) and np.array_equal(restricted.x, full.x)
+
+
+@pytest.mark.parametrize("method", ["uzawa", "nsgs"])
+@pytest.mark.parametrize("margin", [0.0, ls.NEAR_MARGIN])
+def test_contacts_outside_the_start_join(sphere_flat, method, margin, monkeypatch):
+    """A warm start that overloads the centre holds the rim of the contact open (its gaps well above the margin):
+    the sweeps on the starting set converge with the rim open and penetrating, the check on all contacts finds
+    it, and it joins. The answer is the full sweeps' to the tolerance (one solution: W is SPD)."""
+    monkeypatch.setattr(ls, "NEAR_MARGIN", margin)
+    W, xy = sphere_flat
+    q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.3)
+    exact = solve(W, q, 0.5, 3, tol=1e-14, max_iter=100000, working_set=False)
+    centre = np.repeat(np.hypot(*xy.T) < 2.0, 3)
+    r0 = np.where(centre, 5.0 * exact.r, 0.0)
+    x0 = W @ r0 + q
+    rim = (exact.r[0::3] > 0) & ~centre[0::3]
+    # The rim: closed at the end, open beyond the default margin at the start (the deepest penetration is -min q_n).
+    assert rim.sum() >= 8 and np.all(x0[0::3][rim] > ls.NEAR_MARGIN * -q[0::3].min())
+    full = solve(W, q, 0.5, 3, method=method, tol=TOL, r0=r0, working_set=False)
+    restricted = solve(W, q, 0.5, 3, method=method, tol=TOL, r0=r0)
+    assert full.converged and restricted.converged
+    assert restricted.joined >= rim.sum() and restricted.passes >= 2
+    assert natural_map_error(W, q, restricted.r, 0.5, 3) < TOL
+    # Both within the tolerance of the one solution: the natural-map error bounds the distance to it by a
+    # constant of W's conditioning (here measured: max |r - r_exact| / max |r_exact| <= 1.9e-9 for either route at
+    # error < 1e-10), so 1e-7 holds both with a 50x margin and rejects a rim left open (an O(1) change).
+    for result in (full, restricted):
+        assert np.abs(result.r - exact.r).max() <= 1e-7 * np.abs(exact.r).max()
+
+
+def test_float32_sweeps_meet_the_tolerance(sphere_flat):
+    """float32 updates of x with float64 recomputations: the same stopping criterion on the whole problem,
+    the iterates differing by rounding only."""
+    W, xy = sphere_flat
+    q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.6)
+    exact = solve(W, q, 0.5, 3, tol=1e-14, max_iter=100000, working_set=False)
+    single = solve(W, q, 0.5, 3, tol=TOL, float32_sweeps=True)
+    assert single.converged
+    assert natural_map_error(W, q, single.r, 0.5, 3) < TOL
+    # The same bound as above: within the tolerance of the one solution.
+    assert np.abs(single.r - exact.r).max() <= 1e-7 * np.abs(exact.r).max()
