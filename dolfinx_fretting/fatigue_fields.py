@@ -12,7 +12,7 @@ points of a near-surface region and hands the histories to the pure kernels of :
   displacement;
 * the body evaluated (``body``): the slave (the body whose contact nodes the contact set holds; the only one
   against a rigid obstacle) or, with two deformable bodies, the master (the flat: on the fretting-fatigue rig the
-  specimen, where fretting-fatigue cracks start; Hills & Nowell 1994, Madge et al. 2008);
+  specimen, where fretting-fatigue cracks start; Hills & Nowell 1994, Madge et al. 2007);
 * the depth of a point: its distance below that body's contact surface. The slave: along the contact normal of
   the nearest contact node (exact for a flat surface; the candidate nodes of the problem's contact set). The
   master: along the outward normal of the closest point of the master's contact facets
