@@ -10,12 +10,21 @@ points of a near-surface region and hands the histories to the pure kernels of :
   and Hooke's law of ``material`` (plane strain in 2D: ``eps_zz = 0``, ``sigma_zz = nu (sigma_xx + sigma_yy)``);
   elastic–plastic bodies, the state's committed stress (``sigma_zz`` included) and the total strain of its
   displacement;
-* the depth of a point: its distance below the contact surface, measured along the contact normal of the nearest
-  contact node (exact for a flat surface; the candidate nodes of the problem's contact set, the slave's with
-  two bodies);
+* the body evaluated (``body``): the slave (the body whose contact nodes the contact set holds; the only one
+  against a rigid obstacle) or, with two deformable bodies, the master (the flat: on the fretting-fatigue rig the
+  specimen, where fretting-fatigue cracks start; Hills & Nowell 1994, Madge et al. 2007);
+* the depth of a point: its distance below that body's contact surface. The slave: along the contact normal of
+  the nearest contact node (exact for a flat surface; the candidate nodes of the problem's contact set). The
+  master: along the outward normal of the closest point of the master's contact facets
+  (:class:`~dolfinx_fretting.contact.MasterSurface`, every facet the pairing searched on). A depth region holds
+  the points at 0 <= depth <= region: the other body lies above the surface (negative depth) in the reference
+  configuration, so its points are left out;
 * Ruiz's parameter at the contact nodes, from each state's shear traction and relative tangential displacement
-  (:meth:`~dolfinx_fretting.problem.FrettingProblem.contact_fields`) and ``sigma_xx`` at the region's point
-  nearest to the node (a point of the first cells below the surface, not the surface itself).
+  (:meth:`~dolfinx_fretting.problem.FrettingProblem.contact_fields`: relative quantities, the same magnitudes on
+  both surfaces, so the slave nodes' values serve either body) and ``sigma_xx`` at the region's point nearest to
+  the node's place on the evaluated body (a point of the first cells below the surface, not the surface itself):
+  the slave node itself, or (master) its paired point on the master surface, whose coordinates are then
+  ``ruiz_coordinates`` and ``ruiz_x``.
 
 Collective: every rank calls it with the same arguments; each rank holds its own points' arrays, the summary (the
 largest SWT and where, ...) is the same on every rank.
@@ -38,7 +47,7 @@ from .fatigue import (POINT_COLUMNS, BasquinCoffinManson, CriticalDistance, Crit
                       critical_distance, critical_planes, depth_profile, mandel_to_tensor, ruiz_parameter)
 from .state import ContactState, CycleResult
 
-__all__ = ["FatigueResult", "fatigue_over_cycle", "cycle_states"]
+__all__ = ["BODIES", "FatigueResult", "fatigue_over_cycle", "cycle_states"]
 
 
 @dataclass(frozen=True)
@@ -57,7 +66,9 @@ class FatigueResult:
         fs, fs_angle: (P,) the Fatemi–Socie parameter and its plane (NaN without Fatemi–Socie constants).
         life: (P,) cycles to crack initiation by SWT (inf without ``strain_life`` constants).
         planes: The critical planes of this rank's points (:class:`~dolfinx_fretting.fatigue.CriticalPlanes`).
-        ruiz: (nc,) Ruiz's parameter at each contact node (every rank), ``ruiz_coordinates`` (nc, dim) the nodes.
+        ruiz: (nc,) Ruiz's parameter at each contact node (every rank), ``ruiz_coordinates`` (nc, dim) where it
+            is on the evaluated body's surface (the slave nodes, or their paired points on the master surface).
+        body: The body evaluated, ``"slave"`` or ``"master"``.
         summary: :data:`~dolfinx_fretting.fatigue.SUMMARY_FIELDS` (every rank the same; ``life_min`` None without
             constants, the others NaN where nothing was computed).
         times: The number of states of the cycle.
@@ -76,6 +87,7 @@ class FatigueResult:
     ruiz_coordinates: np.ndarray
     summary: dict[str, Any]
     times: int
+    body: str = "slave"
 
     def columns(self) -> dict[str, np.ndarray]:
         """This rank's points under the names of :data:`~dolfinx_fretting.fatigue.POINT_COLUMNS` (``x`` the
@@ -106,14 +118,23 @@ def cycle_states(problem, result: CycleResult) -> list[ContactState]:
             for i in range(forces.shape[0])]
 
 
-def _check_inputs(problem, states, region, material, quadrature_degree) -> tuple[list, Any]:
+#: The bodies :func:`fatigue_over_cycle` evaluates: the contact set's slave, or the deformable master body.
+BODIES = ("slave", "master")
+
+
+def _check_inputs(problem, states, region, material, quadrature_degree, body) -> tuple[list, Any]:
     """The states as a list and the elastic constants; every error before any work (the same on every rank)."""
+    if body not in BODIES:
+        raise ValueError(f"fatigue_over_cycle: body = {body!r}: one of {', '.join(map(repr, BODIES))}")
     if isinstance(states, CycleResult):
         states = cycle_states(problem, states)
     states = list(states)
     if not states or not all(isinstance(state, ContactState) for state in states):
         raise ValueError("fatigue_over_cycle: states must be a non-empty list of ContactState (the cycle's "
                          "committed states) or a CycleResult kept with keep=True")
+    if body == "master" and not problem.contact_set_of(states[0]).two_body:
+        raise ValueError("fatigue_over_cycle: body = 'master' needs a deformable master body (two bodies in "
+                         "contact); against a rigid obstacle the slave is the only body: body = 'slave'")
     if isinstance(region, tuple):
         if len(region) != 2 or not hasattr(region[0], "find"):
             raise ValueError(f"fatigue_over_cycle: region = {region!r}: a depth (> 0) or (cell_tags, marker)")
@@ -160,6 +181,20 @@ def _surface_depth(points: np.ndarray, contact_set) -> np.ndarray:
     return np.einsum("pi,pi->p", points[:, :dim] - contact_set.coords[nearest, :dim], normals)
 
 
+def _master_depth(points: np.ndarray, surface) -> np.ndarray:
+    """Depth below the master's contact facets: along the outward normal of each point's closest facet point
+    (module docstring). In chunks: the pairing is dense (points x facets)."""
+    dim = surface.dim
+    depth = np.zeros(points.shape[0])
+    chunk = max(1, 2_000_000 // max(1, surface.x.shape[0]))   # ~2e6 point-facet pairs at a time
+    for start in range(0, points.shape[0], chunk):
+        part = points[start:start + chunk, :dim]
+        paired = surface.pair(part)
+        depth[start:start + chunk] = -np.einsum("pi,pi->p", part - paired["point"][:, :dim],
+                                                paired["normal"][:, :dim])   # normal: out of the master
+    return depth
+
+
 def _best(comm: MPI.Comm, values: np.ndarray, extras: Sequence[np.ndarray], largest: bool = True):
     """The largest (``largest=False``: smallest) of ``values`` over every rank, and ``extras`` at that point (ties:
     the lowest rank, then the first point); NaN where no rank has a value that is not NaN. Collective."""
@@ -180,7 +215,7 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
                        material=None, *, fatemi_socie: FatemiSocie | None = None,
                        strain_life: BasquinCoffinManson | None = None, angle_step: float | None = None,
                        quadrature_degree: int | None = None,
-                       critical: CriticalDistance | None = None) -> FatigueResult:
+                       critical: CriticalDistance | None = None, body: str = "slave") -> FatigueResult:
     """The fatigue parameters of one load cycle at the points of a near-surface region (module docstring).
     Collective.
 
@@ -202,13 +237,17 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
             :data:`~dolfinx_fretting.fatigue.CRITICAL_DISTANCE_FIELDS`, SWT by its point or line method on the
             profile in depth below the SWT hot spot (:func:`~dolfinx_fretting.fatigue.depth_profile` of every
             rank's points within its band) and the life it gives.
+        body: The body evaluated: ``"slave"`` (default: the body of the contact set's nodes, the only one
+            against a rigid obstacle) or ``"master"`` (two deformable bodies: the master body, e.g. the
+            fretting-fatigue rig's specimen; the depth below its contact facets, Ruiz's parameter placed at the
+            slave nodes' paired points on its surface).
 
     Returns:
         The per-point arrays of this rank and the summary of all (:class:`FatigueResult`).
     """
     if critical is not None and not isinstance(critical, CriticalDistance):
         raise ValueError(f"fatigue_over_cycle: critical = {critical!r}: a fatigue.CriticalDistance or None")
-    states, elastic = _check_inputs(problem, states, region, material, quadrature_degree)
+    states, elastic = _check_inputs(problem, states, region, material, quadrature_degree, body)
     comm = problem.comm
     V = problem.V
     msh = V.mesh
@@ -223,7 +262,13 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
                                       cells).reshape(-1, gdim)
     coordinates = np.column_stack([coordinates, np.zeros((coordinates.shape[0], 3 - gdim))])
     contact_set = problem.contact_set_of(states[0])
-    depth = _surface_depth(coordinates, contact_set)
+    if body == "master":
+        depth = _master_depth(coordinates, contact_set.master_surface)
+        # where each contact's values sit on the master's surface: the slave node's paired point
+        surface_points = np.asarray(contact_set.master_points, dtype=float)[:, :contact_set.dim]
+    else:
+        depth = _surface_depth(coordinates, contact_set)
+        surface_points = contact_set.coords[:, :contact_set.dim]
     if isinstance(region, tuple):
         tags, marker = region
         chosen = np.repeat(np.isin(cells, tags.find(marker)), n_per_cell)
@@ -248,7 +293,7 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
     life = strain_life.life_swt(planes.swt) if strain_life is not None else np.full(planes.swt.shape, np.inf)
     points = coordinates[chosen]
     sigma_xx = stress_history[:, :, 0, 0].max(axis=0)
-    ruiz = _ruiz(comm, problem, states, contact_set, points, stress_history[:, :, 0, 0])
+    ruiz = _ruiz(comm, problem, states, surface_points, points, stress_history[:, :, 0, 0])
 
     swt_max, (swt_x, swt_depth, swt_angle) = _best(comm, planes.swt, (points[:, 0], depth[chosen],
                                                                       planes.swt_theta))
@@ -259,7 +304,7 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
     summary = {"swt_max": swt_max, "swt_x": swt_x, "swt_depth": swt_depth, "swt_angle": swt_angle,
                "fs_max": fs_max if fatemi_socie is not None else np.nan,
                "ruiz_max": float(ruiz[ruiz_index]) if ruiz_index is not None else np.nan,
-               "ruiz_x": float(contact_set.coords[ruiz_index, 0]) if ruiz_index is not None else np.nan,
+               "ruiz_x": float(surface_points[ruiz_index, 0]) if ruiz_index is not None else np.nan,
                "life_min": float(life_min) if strain_life is not None else None}
     if critical is not None:
         swt_critical = _swt_at_critical_distance(comm, critical, points[:, 0], depth[chosen], planes.swt, swt_x,
@@ -267,7 +312,7 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
         summary["swt_critical"] = swt_critical
         summary["life_critical"] = float(strain_life.life_swt(swt_critical)) if strain_life is not None else None
     return FatigueResult(points, depth[chosen], sigma_xx, planes.swt, planes.swt_theta, planes.fs,
-                         planes.fs_theta, life, planes, ruiz, contact_set.coords.copy(), summary, len(states))
+                         planes.fs_theta, life, planes, ruiz, surface_points.copy(), summary, len(states), body)
 
 
 def _swt_at_critical_distance(comm: MPI.Comm, critical: CriticalDistance, x: np.ndarray, depth: np.ndarray,
@@ -290,12 +335,12 @@ def _reduced(comm: MPI.Comm, values: np.ndarray, op) -> np.ndarray:
     return out
 
 
-def _ruiz(comm: MPI.Comm, problem, states, contact_set, points: np.ndarray, sigma_xx: np.ndarray) -> np.ndarray:
-    """Ruiz's parameter at the contact nodes: sigma_xx the mean over the region's points nearest to the node (all
-    those at the smallest distance, on every rank: a node midway between two cells' midpoints takes both, whatever
-    the partition), shear traction and relative tangential displacement of each state. Collective."""
-    dim = contact_set.dim
-    nodes = contact_set.coords[:, :dim]
+def _ruiz(comm: MPI.Comm, problem, states, nodes: np.ndarray, points: np.ndarray, sigma_xx: np.ndarray) -> np.ndarray:
+    """Ruiz's parameter at the contact nodes: sigma_xx the mean over the region's points nearest to the node's
+    place ``nodes`` (nc, dim) on the evaluated body (all those at the smallest distance, on every rank: a node
+    midway between two cells' midpoints takes both, whatever the partition), shear traction and relative
+    tangential displacement of each state. Collective."""
+    dim = nodes.shape[1]
     distance = np.full(nodes.shape[0], np.inf)
     tree = cKDTree(points[:, :dim]) if points.shape[0] else None
     if tree is not None:

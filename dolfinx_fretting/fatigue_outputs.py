@@ -33,6 +33,7 @@ from mpi4py import MPI
 from .fatigue import (CRITICAL_DISTANCE_FIELDS, MINER_FIELDS, POINT_COLUMNS, SUMMARY_FIELDS, BasquinCoffinManson,
                       CriticalDistance, FatemiSocie, MinerSum)
 from .fatigue_fields import FatigueResult, fatigue_over_cycle
+from .geometries import GEOMETRIES
 from .materials import LinearElastic
 from .outdir import check_resume_tables
 from .scenes import Scene
@@ -52,13 +53,15 @@ TABLE_COLUMNS = ("cycle", "equivalent_cycles", *POINT_COLUMNS, "damage")
 def fatigue_arguments(scene: Scene) -> dict[str, Any]:
     """The keyword arguments of :func:`~dolfinx_fretting.fatigue_fields.fatigue_over_cycle` a scene's
     ``[fatigue]`` gives (after the problem and the states): ``region``, ``material``, ``fatemi_socie``,
-    ``strain_life``, ``angle_step``, ``critical``."""
+    ``strain_life``, ``angle_step``, ``critical``, ``body`` (``fatigue.body``, or the geometry kind's
+    :attr:`~dolfinx_fretting.geometries.base.Geometry.fatigue_body`)."""
     f, m = scene.fatigue, scene.material
     return {"region": f.region, "material": LinearElastic(m.E, m.nu),
             "fatemi_socie": FatemiSocie(f.k, f.yield_stress) if f.k is not None else None,
             "strain_life": BasquinCoffinManson(f.sigma_f, f.b, f.eps_f, f.c, m.E) if f.strain_life else None,
             "angle_step": f.angle_step,
-            "critical": CriticalDistance(f.critical_distance, f.method) if f.critical_distance is not None else None}
+            "critical": CriticalDistance(f.critical_distance, f.method) if f.critical_distance is not None else None,
+            "body": f.body if f.body is not None else GEOMETRIES[scene.geometry.kind].fatigue_body}
 
 
 def evaluated(scene: Scene, cycle: int, last_evaluated: int) -> bool:
@@ -224,11 +227,12 @@ class FatigueOutputs:
                 "initiation_point": miner.initiation_point if miner is not None else -1}
 
     def summary(self) -> dict[str, Any]:
-        """``summary.json["fatigue"]``: the last evaluation's numbers (every rank the same), the evaluations made
-        and the time they took (wall and this rank's CPU, s; the runs resumed from included)."""
+        """``summary.json["fatigue"]``: the last evaluation's numbers (every rank the same), the body evaluated
+        (``"slave"`` or ``"master"``), the evaluations made and the time they took (wall and this rank's CPU, s; the runs resumed from included)."""
         fields = [*SUMMARY_FIELDS, *(CRITICAL_DISTANCE_FIELDS if self.arguments["critical"] is not None else ()),
                   *(MINER_FIELDS if self.arguments["strain_life"] is not None else ())]
         values = {"cycle": None, "equivalent_cycles": None, "points": 0, **{key: None for key in fields},
                   **self._summary}
-        return {**values, "evaluations": self.evaluations, "wall_time_s": round(self.wall_time, 6),
+        return {**values, "body": self.arguments["body"], "evaluations": self.evaluations,
+                "wall_time_s": round(self.wall_time, 6),
                 "cpu_time_s": round(self.cpu_time, 6)}

@@ -711,6 +711,10 @@ class FatigueSettings(_Section):
     #: Taylor's critical distance L (mm): SWT by the point or line method below the SWT hot spot.
     critical_distance: Length | None = None
     method: Literal["point", "line"] = "point"
+    #: The body evaluated: ``"slave"`` (the body of the contact nodes) or ``"master"`` (the deformable master
+    #: body, ``contact.obstacle = "elastic_flat"``). Default: the geometry kind's (``pad_specimen``: the master,
+    #: its specimen; every other kind: the slave).
+    body: Literal["slave", "master"] | None = None
 
     @model_validator(mode="after")
     def _given_together(self) -> FatigueSettings:
@@ -971,7 +975,8 @@ class Scene(_Section):
 
     @model_validator(mode="after")
     def _fatigue_fits(self) -> Scene:
-        """``[fatigue]`` needs cycles of an elastic body with a fixed pairing (a cycle's kept states are read)."""
+        """``[fatigue]`` needs cycles of an elastic body with a fixed pairing (a cycle's kept states are read), and a
+        deformable master body to evaluate the master."""
         if not self.fatigue.enabled:
             return self
         if self.loading.cycles < 1:
@@ -984,6 +989,10 @@ class Scene(_Section):
         if self.contact.sliding == "finite":
             raise range_error("contact.sliding", self.contact.sliding, "'small' with fatigue.enabled = true (a "
                               "cycle's kept states hold one pairing)")
+        if self.fatigue.body == "master" and self.contact.obstacle != "elastic_flat":
+            raise range_error("fatigue.body", self.fatigue.body, f"'slave' with contact.obstacle = "
+                              f"{self.contact.obstacle!r} (a rigid obstacle is no body; 'master' needs "
+                              "contact.obstacle = 'elastic_flat')")
         return self
 
     @model_validator(mode="after")

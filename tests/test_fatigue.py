@@ -316,6 +316,10 @@ def test_glue_region_by_cell_tag_and_its_input_checks():
         fatigue_over_cycle(problem, states, (cell_tags, 8), LinearElastic(E, NU))
     with pytest.raises(ValueError, match="states must be"):
         fatigue_over_cycle(problem, [], 0.5, LinearElastic(E, NU))
+    with pytest.raises(ValueError, match="body = 'specimen': one of 'slave', 'master'"):
+        fatigue_over_cycle(problem, states, 0.5, LinearElastic(E, NU), body="specimen")
+    with pytest.raises(ValueError, match="body = 'master' needs a deformable master body"):   # a rigid obstacle
+        fatigue_over_cycle(problem, states, 0.5, LinearElastic(E, NU), body="master")
     problem.destroy()
 
 

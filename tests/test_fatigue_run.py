@@ -75,6 +75,9 @@ def test_miner_sum_of_constant_and_of_two_blocks():
     (["fatigue.enabled=true", "fatigue.region=1.0", "fatigue.method='area'"], "fatigue.method = 'area'"),
     (["fatigue.enabled=true", "fatigue.region=1.0", "fatigue.regoin=1.0"], "unknown key 'fatigue.regoin'"),
     (["fatigue.enabled=true", "fatigue.region=1.0", "loading.cycles=0"], "loading.cycles = 0.*fatigue.enabled"),
+    (["fatigue.enabled=true", "fatigue.region=1.0", "fatigue.body='pad'"], "fatigue.body = 'pad'.*'slave', 'master'"),
+    (["fatigue.enabled=true", "fatigue.region=1.0", "fatigue.body='master'"],
+     "fatigue.body = 'master' is out of range; allowed: 'slave' with contact.obstacle = 'rigid_plane'"),
     (["fatigue.enabled=true", "fatigue.region=1.0", "material.model='elastoplastic'", "material.yield_stress=900.0",
       "material.hardening_modulus=0.0"], "material.model = 'elastoplastic'"),
 ])

@@ -199,7 +199,20 @@ def test_subsurface_sigma_xx_against_mcewen(rig):
         assert np.abs(difference - shift)[deep].max() <= 0.03 * mu * p0
 
 
-def test_the_scene_run_cyclic_in_phase(tmp_path):
+#: The built-in scene's first cycle with ``[fatigue]`` on, its default body (the specimen), within 0.1 mm (5 layers).
+FATIGUE = ["output.progress=false", "loading.cycles=1", "fatigue.enabled=true", "fatigue.region=0.1"]
+
+
+@pytest.fixture(scope="module")
+def cyclic(tmp_path_factory):
+    """The built-in scene's first cycle through the scene runner, ``[fatigue]`` evaluating it: (scene, summary,
+    output folder)."""
+    out = tmp_path_factory.mktemp("pad_specimen_cycle")
+    scene = load_scene("pad-specimen", FATIGUE)
+    return scene, run_scene(scene, out, quiet=True), out
+
+
+def test_the_scene_run_cyclic_in_phase(cyclic):
     """The built-in scene's run (its first cycle: sinusoidal, 16 increments, Q and sigma_B in phase) through the scene
     runner. At the first peak (t = 1/4: +Q, +sigma_B, reached proportionally from the preload) the stick zone is the
     monotonic one: half-width c, centred at e towards the leading edge. At the opposite peak (t = 3/4: -Q, -sigma_B)
@@ -210,14 +223,13 @@ def test_the_scene_run_cyclic_in_phase(tmp_path):
     Tolerances: the span, one element; the centroid, half an element at t = 1/4 (measured 0.23 h, as monotonic) and
     one element at t = 3/4 (measured 0.58 h): the finite bodies' supports (the grip on one end, the clamped pad)
     lock in a shear under P alone (up to 5 % of mu p0, antisymmetric), which does not reverse with Q."""
-    scene = load_scene("pad-specimen", ["output.progress=false", "loading.cycles=1"])
-    summary = run_scene(scene, tmp_path, quiet=True)
+    scene, summary, out = cyclic
     assert summary["converged"] is True and summary["cycles"] == 1
     a, p0, P, Q, mu, h = _reference(scene)
     c, e = stick_zone(a, p0, P, Q, mu, scene.loading.bulk_stress)
-    with open(tmp_path / "contact_profiles.csv") as f:
+    with open(out / "contact_profiles.csv") as f:
         rows = list(csv.DictReader(f))
-    with open(tmp_path / "history.csv") as f:
+    with open(out / "history.csv") as f:
         history = {int(r["increment"]): float(r["tangential_force"]) for r in csv.DictReader(f)}
     n = scene.loading.increments_per_cycle
     first = None
@@ -234,6 +246,53 @@ def test_the_scene_run_cyclic_in_phase(tmp_path):
         # in the monotonic test); the stick zone stays on that side at t = 3/4
         first = -np.sign(history[int(at[0]["increment"])]) if first is None else first
         assert abs(np.sum(x * corrective) / np.sum(corrective) - first * e) <= tolerance * h
+
+
+def test_fatigue_on_the_specimen_at_the_trailing_edge(cyclic):
+    """``[fatigue]`` on the rig evaluates the specimen (the master flat; Hills & Nowell, Madge et al.: fretting-
+    fatigue cracks start in the specimen, at the trailing edge of a partial-slip contact), its points the
+    specimen's cell midpoints (depth >= 0 below the flat's top, 5 layers of h within 0.1 mm).
+
+    - sigma_xx (the cycle's largest, fatigue.csv) in the top layer (depth h/2) against McEwen's closed form at the
+      cycle's first peak (t = 1/4: +Q, +sigma_B, the trailing edge at x = +a where the specimen's shear points
+      away from it, Q on the pad along +x; the bulk tension adds on that edge): the finite specimen's uniform
+      shift is taken beyond the contact on that side (a + h <= x <= 2a: the closed form smooth, the peak the
+      cycle's largest by > 250 MPa), within [0, 2 Q/t] as in the monotonic tests (measured 4.1 MPa); the largest
+      sigma_xx is in the closed form's cell, its value after the shift within 5 % of the trailing-edge surface
+      value 2 mu p0 [sqrt((a + e)^2 - c^2) - e] / a + sigma_B = 285.6 MPa (measured 2.9 %; 2.6 % monotonic:
+      one element resolves the edge's inverse-square-root gradient).
+    - SWT's largest at the surface (top layer) within one element of x = +a (measured x = 0.370 mm, a = 0.378
+      mm), its critical plane's normal within 10 degrees of the surface's direction x (measured -4: the crack
+      plane nearly normal to the surface, opened by sigma_xx, the trailing edge's uniaxial tension).
+    - Ruiz's parameter largest in the trailing slip zone, e + c <= x <= a (one element's slack: measured 0.340):
+      tension (sigma_xx) only on that side, slip (tau delta) only in the slip zones.
+    """
+    scene, summary, out = cyclic
+    a, p0, P, Q, mu, h = _reference(scene)
+    sigma_bulk = scene.loading.bulk_stress
+    c, e = stick_zone(a, p0, P, Q, mu, sigma_bulk)
+    fatigue = summary["fatigue"]
+    assert fatigue["body"] == "master" and fatigue["evaluations"] == 1
+    with open(out / "fatigue.csv") as f:
+        rows = list(csv.DictReader(f))
+    x, depth, sigma_xx = (np.array([float(r[k]) for r in rows]) for k in ("x", "depth", "sigma_xx"))
+    assert depth.min() >= 0 and depth.max() <= 0.1
+    top = (depth < h) & (np.abs(x) < 2 * a)
+    trailing = 1.0   # Q(1/4) = +Q on the pad: the specimen's shear along -x, its trailing edge at +a
+    # McEwen's frame: the shear on the body along +x, trailing edge at -a: mirror x
+    closed = sigma_xx_rig(-trailing * x[top], depth[top], a, p0, mu, c, e, sigma_bulk)
+    fe = sigma_xx[top]
+    beyond = (trailing * x[top] >= a + h) & (trailing * x[top] <= 2 * a)
+    shift = np.mean(fe[beyond] - closed[beyond])
+    assert 0 <= shift <= 2 * Q / scene.geometry.specimen_thickness
+    peak = np.argmax(fe)
+    assert peak == np.argmax(closed) and trailing * x[top][peak] > 0.9 * a
+    surface = trailing_edge_stress(a, p0, mu, c, e, sigma_bulk)
+    assert surface == pytest.approx(285.6, abs=0.1)
+    assert abs(fe[peak] - shift - closed[peak]) <= 0.05 * surface
+    assert fatigue["swt_depth"] < h and abs(fatigue["swt_x"] - trailing * a) <= h
+    assert abs(fatigue["swt_angle"]) <= 10
+    assert e + c - h <= trailing * fatigue["ruiz_x"] <= a + h
 
 
 def test_the_scene_runner_loads_as_the_api(rig, tmp_path):

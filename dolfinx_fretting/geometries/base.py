@@ -140,6 +140,10 @@ class Geometry(metaclass=ABCMeta):
     Hertz contact, the whole bodies.
     """
 
+    #: The body a scene's ``[fatigue]`` evaluates unless ``fatigue.body`` names one: the contact set's slave (the
+    #: body of the contact nodes, the only one against a rigid obstacle); the fretting-fatigue rig's is the master.
+    fatigue_body: str = "slave"
+
     def refuse_own_keys(self, geometry: GeometrySettings) -> None:
         """Refuse the ``[geometry]`` keys only this kind reads, set while another kind is chosen."""
 

@@ -37,6 +37,9 @@ _KIND = "pad_specimen"
 class PadSpecimen(HalfCylinder):
     """``geometry.kind = "pad_specimen"``."""
 
+    #: ``[fatigue]`` evaluates the specimen (the master flat), where fretting-fatigue cracks start.
+    fatigue_body = "master"
+
     def refuse_own_keys(self, geometry: GeometrySettings) -> None:
         """``specimen_thickness`` and ``specimen_length`` are the rig's."""
         for key in ("specimen_thickness", "specimen_length"):
