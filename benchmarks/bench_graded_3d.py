@@ -114,7 +114,8 @@ def two_body(a_over_h: float, options: dict, args) -> dict:
         rec["wear_peak"] = float(problem.contact_fields(state)["wear"].max())
         log(f"  Hertz peak/p0 {rec['peak_over_p0']:.5f}, (a_eq - a)/h {rec['a_eq_minus_a_over_h']:+.3f}, "
             f"(r_max - a)/h {rec['r_max_minus_a_over_h']:+.3f}; stick radius / c {rec['stick_radius_over_c']:.4f}; "
-            f"worn volume {rec['worn_volume']:.6e} mm^3 (peak depth {rec['wear_peak']:.4e} mm) in {rec['wear_s']:.1f} s")
+            f"worn volume {rec['worn_volume']:.6e} mm^3 (peak depth {rec['wear_peak']:.4e} mm) in "
+            f"{rec['wear_s']:.1f} s")
     problem.destroy()
     del problem, body
     gc.collect()
