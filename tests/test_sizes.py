@@ -60,6 +60,32 @@ def test_estimate_matches_the_built_model(name, overrides):
     assert size.total_bytes > sizes.BASELINE_BYTES * COMM.size
 
 
+@pytest.mark.parametrize("overrides", [["geometry.contact_mesh_size=0.04"],
+                                       ["geometry.contact_mesh_size=0.04", "contact.obstacle=rigid_plane"]])
+def test_estimate_counts_the_depth_graded_sphere(overrides, monkeypatch):
+    """The sphere's opt-in depth-graded mesh (meshes_3d.sphere_on_flat's depth_growth, coarsening, field_cell,
+    read through Sphere.mesh_options by both the estimate and the build): dofs and contacts exact, as the
+    tensor grid's."""
+    from dolfinx_fretting.geometries.sphere import Sphere
+    from dolfinx_fretting.simulation import ContactModel
+
+    today = Sphere.mesh_options
+    monkeypatch.setattr(Sphere, "mesh_options", lambda self, scene: {
+        **today(self, scene), "depth_growth": 1.5, "coarsening": 2, "field_cell": 0.25})
+    scene = load_scene("sphere-flat", overrides)
+    size = estimate(scene, COMM.size)
+    model = ContactModel(scene, COMM)
+    try:
+        dofs, contacts = model.problem.n_dofs, model.contact.nc
+    finally:
+        model.problem.destroy()
+    monkeypatch.setattr(Sphere, "mesh_options", today)
+    assert size.exact and size.dofs == dofs and size.contacts == contacts
+    # the options reached the estimate: not today's count (at this coarse h the zone, rounded up to 9 cubes for
+    # two coarsenings, makes the graded mesh the larger one)
+    assert size.dofs != estimate(scene, COMM.size).dofs
+
+
 @pytest.mark.parametrize("name", ["hertz", "cylinder-flat", "mccoll"])
 def test_estimate_does_not_depend_on_the_last_bit_of_a_sine(name, monkeypatch):
     """The half-cylinder's boundary samples lie on its arc up to the rounding of sin and cos, which differs between

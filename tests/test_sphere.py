@@ -138,6 +138,24 @@ def test_hertz_sphere_on_an_identical_flat():
     problem.destroy()
 
 
+@pytest.mark.parametrize("flat", [False, True], ids=["rigid_plane", "elastic_flat"])
+def test_hertz_sphere_on_the_depth_graded_mesh(flat):
+    """The opt-in depth-graded mesh (meshes_3d.sphere_on_flat with depth_growth 1.5, coarsening 2, field_cell
+    0.125: layers h thick at the contact face growing by 1.5, at most a/8 down to a, lateral 3:1 transitions
+    below), a/h = 6, extent 9 (20 k dofs rigid, 41 k two bodies). Measured: peak nodal pressure p0 + 0.016 %
+    (rigid plane), + 0.047 % (identical flat); equivalent radius a + 0.21 h, farthest loaded node a + 0.08 h.
+    Tolerances: 0.5 % on p0 (graded meshes measured within +0.4 % at a/h = 6-12 with field_cell <= 0.25, today's
+    within +0.2 %: benchmarks/results/contacts_3d.md; the issue asks 1 % of an a/16 reference), the radii within
+    one element, as today's mesh."""
+    body, problem, a, p0, h = sphere_model(6, 9.0, 1.5, flat=flat, depth_growth=1.5, coarsening=2)
+    state = pressed(problem, P / 2)
+    assert problem.total_force(state)[0] == pytest.approx(P / 2, rel=1e-8)  # LocalSolver.force_tol
+    a_eq, r_max, p_max = contact_radii(problem, state)
+    assert abs(a_eq - a) <= h and abs(r_max - a) <= h
+    assert p_max == pytest.approx(p0, rel=0.005)
+    problem.destroy()
+
+
 # Friction and wear -------------------------------------------------------------------------------------------
 def test_cattaneo_mindlin_stick_radius_and_slip_annulus():
     """Identical bodies (no normal-tangential coupling: Dundurs' beta = 0), mu = 0.5, then Q = phi mu P by force

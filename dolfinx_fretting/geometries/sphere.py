@@ -233,13 +233,14 @@ class Sphere(Geometry):
         return ZONE_OVER_CONTACT * self.worn_contact_radius(scene)
 
     def mesh_options(self, scene: Scene) -> dict[str, float]:
-        """The keyword arguments ``zone``, ``depth_zone``, ``extent``, ``growth`` of
+        """The keyword arguments ``zone``, ``depth_zone``, ``extent``, ``growth`` (and the depth grading's
+        ``depth_growth``, ``coarsening``, ``field_cell``, the mesher's defaults: off) of
         :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat` (lengths over Hertz's a): the mesher's defaults, with the
         uniform zone of :meth:`zone_half_width` and the bodies at least ``EXTENT_OVER_ZONE`` zones wide (the
         defaults' 1.5 and 9 a while Hertz's radius is the largest expected). The size estimate and the build both
         read them."""
         options = {name: mesher_default(meshes_3d.sphere_on_flat, name)
-                   for name in ("zone", "depth_zone", "extent", "growth")}
+                   for name in ("zone", "depth_zone", "extent", "growth", "depth_growth", "coarsening", "field_cell")}
         a = self.contact_size(scene)
         zone = self.zone_half_width(scene) / a
         options.update(zone=zone, extent=max(options["extent"], EXTENT_OVER_ZONE * zone))
@@ -265,15 +266,17 @@ class Sphere(Geometry):
         return text
 
     def mesh_size(self, scene: Scene) -> MeshSize:
-        """Exact: the tensor grid of :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat` (its axes from
-        :meth:`mesh_options`, as the build's), once per body; the candidates: the grid's points within the window."""
+        """Exact: the nodes of :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat` (``grid_node_count`` of
+        :meth:`mesh_options`, as the build's); the candidates: the contact face's grid points within the window."""
         geometry = scene.geometry
         a, h = self.contact_size(scene), self.element_size(scene)
         options = self.mesh_options(scene)
-        x, y, depth = meshes_3d._grid_axes(a, h, **options, half=geometry.half_model)
-        bodies = 2 if scene.contact.obstacle == "elastic_flat" else 1
-        nodes = bodies * x.size * y.size * depth.size
-        zone = math.ceil(options["zone"] * a / h - 1e-9) * h  # the uniform zone's half-width (sphere_on_flat_grid)
+        two_body = scene.contact.obstacle == "elastic_flat"
+        nodes = meshes_3d.grid_node_count(a, h, **options, half=geometry.half_model, flat=two_body)
+        x, y, _ = meshes_3d._grid_axes(a, h, **options, half=geometry.half_model)
+        # the uniform zone's half-width, as sphere_on_flat_grid rounds it
+        levels = options["coarsening"] if options["depth_growth"] is not None else 0
+        zone = meshes_3d.uniform_zone_steps(a, h, options["zone"], levels) * h
         window, _ = self.candidate_window(scene, zone, h)
         X, Y = np.meshgrid(x, y, indexing="ij")
         contacts = int(np.count_nonzero(np.hypot(X, Y) <= window * (1 + 1e-12)))

@@ -25,15 +25,18 @@ def elasticity(V):
 
 
 def sphere_model(a_over_h, extent, growth, *, flat, half=True, mu=0.0, wear=None, window=1.4, flat_mesh_size=None,
-                 comm=COMM, sliding="small", reach=None):
+                 comm=COMM, sliding="small", reach=None, depth_growth=None, coarsening=0, field_cell=0.125):
     """The sphere's cap (top clamped) on a rigid plane z = 0 or on an identical flat (bottom clamped), sized
     from Hertz's a for P; a half model has rollers (u_y = 0) on y = 0; ``sliding`` and ``reach`` (in units of a)
-    as :class:`~dolfinx_fretting.contact.ElasticBody`'s. Returns (body, problem, a, p0, h)."""
+    as :class:`~dolfinx_fretting.contact.ElasticBody`'s; ``depth_growth``, ``coarsening`` and ``field_cell`` as
+    :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat`'s (the depth-graded mesh). Returns (body, problem, a, p0,
+    h)."""
     E_star = E / (1 - NU**2) / (2.0 if flat else 1.0)
     a, p0 = hertz_sphere(P, R, E_star)
     h = a / a_over_h
     body = m3.sphere_on_flat(comm, R, a, h, extent=extent, growth=growth, half=half, flat=flat,
-                             flat_mesh_size=None if flat_mesh_size is None else a / flat_mesh_size)
+                             flat_mesh_size=None if flat_mesh_size is None else a / flat_mesh_size,
+                             depth_growth=depth_growth, coarsening=coarsening, field_cell=field_cell)
     V = dfx.vector_space(body.mesh, 1)
     clamp = [fem.dirichletbc(np.zeros(3), fem.locate_dofs_topological(V, 2, body.facets(name)), V)
              for name in (["top", "flat_bottom"] if flat else ["top"])]
