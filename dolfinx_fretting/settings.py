@@ -38,8 +38,8 @@ class LocalSolver:
         warm_start: ``"cycle"``: an increment of a compiled cycle starts from the same increment of the previous
             cycle; ``"increment"``: from the previous increment.
         pattern_reuse: 2D compiled cycles first try the previous cycle's contact pattern (an exact linear solve
-            accepted only if it meets ``tol``); not under force control (see :func:`~dolfinx_fretting.cycles.
-            compiled_cycle`).
+            accepted only if it meets ``tol``); not under force control (its root finder would move the answers
+            by the local tolerance's effect).
     """
 
     method: str = "uzawa"
