@@ -69,7 +69,9 @@ def main() -> None:
                 runs.setdefault(f"{route}|{cycles}", []).append(run(route, cycles, work))
     load = os.getloadavg()
     command = ("OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_force_cycles.py "
-               f"--cycles {args.cycles} --repeats {args.repeats}")
+               f"--cycles {args.cycles} --repeats {args.repeats}"
+               + (f" --work {args.work}" if args.work != parser.get_default("work") else "")
+               + (f" --out {args.out}" if args.out != parser.get_default("out") else ""))
     med = {key: {k: statistics.median(r[k] for r in rows) for k in ("cpu_s", "wall_s")} for key, rows in runs.items()}
     lines = [f"## Force-controlled cycles: compiled loop against increment by increment, McColl (fixed pairing), "
              f"{args.cycles} simulated cycles", "",

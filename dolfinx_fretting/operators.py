@@ -405,7 +405,8 @@ class ContactOperators:
     def force_maps(self) -> tuple[np.ndarray, np.ndarray]:
         """(T, A) of force-controlled compiled cycles: T (translation components, obstacle components) the obstacle
         translation per unit obstacle component, A (obstacle components, m) the total force along each component per
-        contact force (both linear: the contact's ``translations`` and ``obstacle_forces`` of unit vectors), made once per contact set."""
+        contact force (both linear: the contact's ``translations`` and ``obstacle_forces`` of unit vectors), made
+        once per contact set."""
         contact_set = self.contact.contact_set
         if self._force_maps is None or self._force_maps[0] is not contact_set:
             components = self.dim * len(self.contact.zones)
