@@ -135,7 +135,7 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
 
     def work():  # rank 0: the compiled loop; its result is broadcast, the warm start stays on rank 0
         nonlocal warm_new
-        Wc, rho, cache = operators.kernel_data(n)
+        Wc, rho, cache = operators.kernel_data(None if by_force else n)
         # Force control tries no cached contact pattern: an exact pattern solve instead of the Uzawa sweeps' answer
         # (to the local tolerance) moves the root finder's answers by up to ~4e-8 relative on the frozen 2D cases
         # (tests/test_reference_summaries.py, measured); without it the loop repeats the stepwise path's iteration.

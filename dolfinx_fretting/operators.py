@@ -391,15 +391,17 @@ class ContactOperators:
 
 
     # Compiled cycles, window --------------------------------------------------------------------------------
-    def kernel_data(self, n: int):
-        """W transposed, the Uzawa steps and the contact-pattern cache of cycles of ``n`` increments (rank 0)."""
+    def kernel_data(self, n: int | None):
+        """W transposed, the Uzawa steps and the contact-pattern cache of cycles of ``n`` increments (rank 0); ``n``
+        None: a loop that tries no pattern (force control), served by the cache held, or a one-row one (no
+        per-increment LU factors made for it)."""
         cache = None if self._kernel is None else self._kernel[2]
         # A 2D cache holds one row per increment (the compiled loop indexes it unchecked): only for cycles of its n.
         # The 3D one is an empty stand-in of one row, for any n.
-        if cache is None or (cache.enabled and cache.pattern.shape[0] != n):
+        if cache is None or (n is not None and cache.enabled and cache.pattern.shape[0] != n):
             contact_set = self.contact.contact_set
             self._kernel = (np.ascontiguousarray(self.W.T), self.block_steps,
-                            ActivePatternCache(n, contact_set.nc, contact_set.dim))
+                            ActivePatternCache(1 if n is None else n, contact_set.nc, contact_set.dim))
         return self._kernel
 
     def force_maps(self) -> tuple[np.ndarray, np.ndarray]:
