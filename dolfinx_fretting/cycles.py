@@ -1,5 +1,5 @@
 """One load cycle of the public problem: its path as per-increment targets, then either the compiled loop
-(:mod:`dolfinx_fretting.cycling`: elastic bodies, displacement and load control, Uzawa) or increment by
+(:mod:`dolfinx_fretting.cycling`: elastic bodies, displacement, load and force control, Uzawa) or increment by
 increment through :func:`~dolfinx_fretting.increments.advance`. Either way a failure raises before anything is
 committed.
 """
@@ -13,9 +13,12 @@ import numpy as np
 
 from . import friction, local_solvers
 from .commit import acceleration, wear_coefficients
-from .cycling import N_ROW, run_increments
-from .increments import on_rank0, per_zone, target_items
-from .loading import CyclePath, Displacement, Force
+from .cycling import (N_ROW, NOT_BRACKETED, SATURATED, SWEEPS_EXHAUSTED, TRIAL_NOT_FINITE, run_force_increments,
+                      run_increments)
+from .increments import (force_names, load_control_message, on_rank0, per_zone, sweeps_message, target_items,
+                         trial_not_finite_message)
+from .loading import (MAX_EVAL, CyclePath, Displacement, Force, not_bracketed_message, not_reached_message,
+                      saturated_message)
 from .operators import ContactOperators
 from .settings import LocalSolver
 from .state import INCREMENT_COLUMNS, ContactState, ConvergenceError, CycleResult, WindowError
@@ -102,9 +105,16 @@ def stepwise_cycle(operators: ContactOperators, advance: Callable[..., tuple[Con
 
 
 def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple, state: ContactState,
-                   obstacle: np.ndarray, factors: np.ndarray, keep: bool) -> CycleResult:
+                   obstacle: np.ndarray, factors: np.ndarray, keep: bool, forced: np.ndarray | None = None
+                   ) -> CycleResult:
     """The cycle in the compiled loop (rank 0, broadcast; the warm start of the next cycle stays on rank 0), with
     ``laws`` each zone's wear law. Collective.
+
+    ``forced`` (components,): which columns of ``obstacle`` are prescribed forces. With any, each increment finds
+    its obstacle displacement by the stepwise path's load control inside the loop
+    (:func:`~dolfinx_fretting.cycling.run_force_increments`: the same iteration, tolerance and warm starts, and its
+    failures raised with the stepwise path's messages); the increments' displacements are the result's
+    ``obstacle``.
 
     The friction coefficients are the state's (:func:`~dolfinx_fretting.friction.coefficients`): a friction law of
     the cycles holds them over the cycle (one compiled call); one of the dissipated energy changes them after every
@@ -112,16 +122,30 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
     law's rate, alpha mu) updated in between (``benchmarks/results/evolving_friction.md`` measures the cost)."""
     contact_set = operators.contact.contact_set
     n, m, dim = obstacle.shape[0], contact_set.nc * contact_set.dim, contact_set.dim
+    forced = np.zeros(obstacle.shape[1], dtype=bool) if forced is None else np.asarray(forced, dtype=bool)
+    by_force = bool(forced.any())
     # Each zone's translation against G's block of its contacts (one zone: G = its rigid modes).
-    D = np.ascontiguousarray(operators.contact.translations(obstacle))
+    D = None if by_force else np.ascontiguousarray(operators.contact.translations(obstacle))
+    targets = np.ascontiguousarray(obstacle, dtype=float)
+    found = targets.copy()   # the increments' obstacle displacements (found where forced)
+    failure, last_force = np.zeros(4), np.zeros(obstacle.shape[1])
     per_increment = friction.tracks_energy(operators.contact)
     scale = acceleration(laws)
     warm_new = None
 
     def work():  # rank 0: the compiled loop; its result is broadcast, the warm start stays on rank 0
         nonlocal warm_new
-        Wc, rho, cache = operators.kernel_data(n)
-        active = cache.enabled and solver.pattern_reuse
+        Wc, rho, cache = operators.kernel_data(None if by_force else n)
+        # Force control tries no cached contact pattern: an exact pattern solve instead of the Uzawa sweeps' answer
+        # (to the local tolerance) moves the root finder's answers by up to ~4e-8 relative on the frozen 2D cases
+        # (tests/test_reference_summaries.py, measured); without it the loop repeats the stepwise path's iteration.
+        active = cache.enabled and solver.pattern_reuse and not by_force
+        if by_force:
+            T, A = operators.force_maps()
+            # The load control's state, as the stepwise path's: the last increment's obstacle and the slopes
+            # (updated in place, on rank 0 as there).
+            d = state.obstacle.astype(float).copy()
+            stiffness = operators.stiffness
         warm = 1 if state.warm is not None and state.warm.shape == (n, m) and solver.warm_start == "cycle" else 0
         r_warm = state.warm.copy() if warm else np.zeros((n, m))
         wear_gap, y, r_last = state.wear_gap.copy(), state.positions.copy(), state.forces.copy()
@@ -129,6 +153,7 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
         out_r, out_x, out_y = np.zeros((n, m)), np.zeros((n, m)), np.zeros((n, m))
         out_wear, out_states = np.zeros((n, contact_set.nc)), np.zeros((n, contact_set.nc), dtype=np.int8)
         rows = np.zeros((n, N_ROW))
+        solves = np.ones(n, dtype=np.int64)
         G = np.ascontiguousarray(operators.contact.rigid_modes)
         Q = np.ascontiguousarray(operators.responses)
         S = np.ascontiguousarray(factors)
@@ -142,39 +167,73 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
                 stale = np.any(cache.factor_mu[part] != mu, axis=1)
                 cache.lu_ok[part][stale] = False
                 cache.factor_mu[part] = mu
-            done, status, err = run_increments(
-                Wc, rho, mu, dim, contact_set.gap0, wear_gap, G, D[part], Q, S[part], contact_set.tributary,
-                contact_set.abscissa, y, r_last, r_warm[part], warm, wear_coefficients(operators, laws, True, mu),
-                solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r[part], out_x[part], out_y[part],
-                out_wear[part], out_states[part], rows[part], active, cache.pattern[part], cache.lu[part],
-                cache.piv[part], cache.lu_ok[part], cache.counts)
+            k = wear_coefficients(operators, laws, True, mu)
+            if by_force:
+                done, status, err = run_force_increments(
+                    Wc, rho, mu, dim, contact_set.gap0, wear_gap, G, T, A, targets[part], forced, d, stiffness,
+                    solver.force_tol, MAX_EVAL, Q, S[part], contact_set.tributary, contact_set.abscissa, y, r_last,
+                    r_warm[part], k, solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r[part],
+                    out_x[part], out_y[part], out_wear[part], out_states[part], rows[part], found[part],
+                    solves[part], active, cache.pattern[part], cache.lu[part], cache.piv[part], cache.lu_ok[part],
+                    cache.counts, failure, last_force)
+            else:
+                done, status, err = run_increments(
+                    Wc, rho, mu, dim, contact_set.gap0, wear_gap, G, D[part], Q, S[part], contact_set.tributary,
+                    contact_set.abscissa, y, r_last, r_warm[part], warm, k, solver.tol, solver.max_iter,
+                    local_solvers._REFRESH, True, out_r[part], out_x[part], out_y[part], out_wear[part],
+                    out_states[part], rows[part], active, cache.pattern[part], cache.lu[part], cache.piv[part],
+                    cache.lu_ok[part], cache.counts)
             if done < part.stop - part.start:
+                step = part.start + done + 1
+                if status > 2:
+                    raise ConvergenceError(_load_control_failure(operators, status, failure, targets[step - 1],
+                                                                 forced, last_force, mu), step=step)
                 why = "non-finite values" if status == 2 else "max_iter reached"
                 raise ConvergenceError(f"local solver did not converge ({why}, error {err:.3e} >= tol "
-                                       f"{solver.tol:.1e} after {solver.max_iter} sweeps)", step=part.start + done + 1)
+                                       f"{solver.tol:.1e} after {solver.max_iter} sweeps)", step=step)
             if per_increment:
                 current = replace(current, friction_energy=friction.accumulated_energy(
                     operators.contact, current, out_r[part.start], out_x[part.start], scale))
         # Every increment of the cycle, not only the last: one product of the outside rows with the cycle's forces.
-        operators.check_window(out_r, obstacle, factors, solver.tol, cycle=True)
+        operators.check_window(out_r, found, factors, solver.tol, cycle=True)
         warm_new = r_warm  # the cycle's forces: the next cycle's warm start
         outs = (out_r, out_x, out_y, out_wear, out_states) if keep else (out_x[-1:], out_states[-1:])
-        return rows, wear_gap, y, r_last, outs, current.friction_energy
+        return rows, wear_gap, y, r_last, outs, current.friction_energy, found, solves
 
     result = on_rank0(operators.comm, work)
-    rows, wear_gap, y, r_last, outs, energy_new = result
+    rows, wear_gap, y, r_last, outs, energy_new, found, solves = result
     nf = len(ROW_FIELDS)
     records = {name: rows[:, i] for i, name in enumerate(ROW_FIELDS)}
     records.update(local_iterations=rows[:, nf].astype(int), local_error=rows[:, nf + 1],
-                   load_solves=np.ones(n, dtype=int), newton_iterations=np.ones(n, dtype=int),
+                   load_solves=solves.astype(int), newton_iterations=np.ones(n, dtype=int),
                    newton_delta_1=np.zeros(n), newton_delta_2=np.zeros(n), cutbacks=np.zeros(n, dtype=int),
                    yielded_points=np.zeros(n, dtype=int))
     slip, status = (outs[1][-1].copy(), outs[4][-1].copy()) if keep else (outs[0][-1].copy(), outs[1][-1].copy())
-    final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=wear_gap, obstacle=obstacle[-1].copy(),
-                    targets=obstacle[-1].copy(), force_controlled=np.zeros(obstacle.shape[1], dtype=bool),
+    final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=wear_gap, obstacle=found[-1].copy(),
+                    targets=obstacle[-1].copy(), force_controlled=forced.copy(),
                     load_factors=factors[-1].copy(), increment=state.increment + n,
                     dissipated_energy=state.dissipated_energy + float(rows[:, ROW["dissipated_energy"]].sum()),
                     local_iterations=state.local_iterations + int(rows[:, nf].sum()),
                     record={k: records[k][-1].item() for k in INCREMENT_COLUMNS},
                     status=status, warm=warm_new if operators.comm.rank == 0 else None, friction_energy=energy_new)
-    return CycleResult(records, obstacle, factors, final, outs if keep else None, True)
+    return CycleResult(records, found, factors, final, outs if keep else None, True)
+
+
+def _load_control_failure(operators: ContactOperators, status: int, failure: np.ndarray, targets: np.ndarray,
+                          forced: np.ndarray, forces: np.ndarray, mu: np.ndarray) -> str:
+    """The stepwise path's message for a load control failure of the compiled loop (``status``: one of
+    :mod:`~dolfinx_fretting.cycling`'s codes, ``failure`` its numbers; ``targets`` the increment's, ``forces`` the
+    total force of its last trial)."""
+    names = force_names(operators)
+    k = int(failure[0])
+    if status == TRIAL_NOT_FINITE:
+        return trial_not_finite_message(names[k], targets[k])
+    if status == SWEEPS_EXHAUSTED:
+        return sweeps_message(np.abs(forces - targets)[forced], failure[1])
+    if status == SATURATED:
+        message = saturated_message(names[k], failure[1], failure[2])
+    elif status == NOT_BRACKETED:
+        message = not_bracketed_message(names[k], failure[1], MAX_EVAL, failure[2], failure[3])
+    else:
+        message = not_reached_message(names[k], failure[1], MAX_EVAL, failure[2], failure[3])
+    return load_control_message(operators, k, targets, forced, forces, mu, message)

@@ -1,4 +1,4 @@
-"""Compiled loop over the increments of displacement- or pressure-controlled fretting cycles.
+"""Compiled loop over the increments of fretting cycles: displacement or pressure control, and force control.
 
 When no load is force controlled, an increment's right-hand side is known in advance:
 
@@ -27,19 +27,30 @@ is accepted only if it meets the same natural-map tolerance as the Uzawa iterati
 rounding); otherwise the Uzawa sweeps start from it. Patterns change rarely once the wear is under way,
 so most increments cost one triangular solve and one residual check.
 
+A prescribed force makes its obstacle component unknown: q is affine in the obstacle's components d,
+``q_abs(d) = q_abs(0) - G T d`` (T: the translation per unit component), and the total force along them is
+``F = A r``. :func:`run_force_increments` finds d per increment by the stepwise path's load control
+(``increments._local_with_control`` and :func:`~dolfinx_fretting.loading.find_displacement`: Gauss-Seidel sweeps
+over the controlled components, each a bracketing then an Illinois regula falsi, every trial one local solve warm
+started from the previous trial), step for step, so its answers are the stepwise path's to rounding. It tries no
+cached pattern: the root finder would stop on other trials and move the answers by the local tolerance's effect.
+
 A failed increment stops the loop: the converged increments before it are committed (their wear is
 legitimate), the failed one leaves no trace in ``wear_gap``, ``y`` or ``r_warm``.
 """
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
+from .loading import FORCE_SWEEPS
 from .local_solvers import NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _recompute_x, _restricted_kernel
 from .wear import ROW_FIELDS, commit_increment
 
-__all__ = ["run_increments", "ActivePatternCache", "N_ROW"]
+__all__ = ["run_increments", "run_force_increments", "ActivePatternCache", "N_ROW"]
 
 #: Number of columns of the per-increment output (the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then
 #: local iterations and local error).
@@ -164,6 +175,162 @@ def _pattern_rhs(q: np.ndarray, pattern: np.ndarray, b: np.ndarray) -> None:
 
 
 @numba.njit(cache=True)
+def _normal_rows(Wc: np.ndarray, mu: np.ndarray, dim: int) -> tuple[bool, np.ndarray]:
+    """(frictionless?, W_nn): without friction the Uzawa sweeps run on the normal rows alone (W_nn, transposed like
+    Wc), the iterates being those of the full sweep with mu = 0 (r_t stays 0; see local_solvers.solve)."""
+    nc = mu.size
+    normal_only = True
+    for a in range(nc):
+        if mu[a] != 0.0:
+            normal_only = False
+    nn = nc if normal_only else 1
+    Wn = np.empty((nn, nn))
+    if normal_only:
+        for b in range(nc):
+            for a in range(nc):
+                Wn[b, a] = Wc[b * dim, a * dim]
+    return normal_only, Wn
+
+
+@numba.njit(cache=True)
+def _rhs(g0: np.ndarray, wear_gap: np.ndarray, G: np.ndarray, D: np.ndarray, Q: np.ndarray, S: np.ndarray,
+         y: np.ndarray, dim: int, q_abs: np.ndarray, q: np.ndarray) -> None:
+    """q_abs and q (out) of an increment with translation ``D`` (gdim,) and load factors ``S`` (L,)."""
+    nc = g0.size
+    gdim = G.shape[1]
+    n_loads = Q.shape[0]
+    # q_abs = g0 + g_w - G D + sum_l S_l Q_l, term by term in this order (so that a plane frame with
+    # exact zeros gives g0 + g_w - d_n and -d_t exactly, as the Python path's increments do).
+    for a in range(nc):
+        o = a * dim
+        for c in range(dim):
+            v = g0[a] + wear_gap[a] if c == 0 else 0.0
+            for comp in range(gdim):   # (not k: that is the wear coefficient)
+                v += -G[o + c, comp] * D[comp]
+            for load in range(n_loads):
+                v += S[load] * Q[load, o + c]
+            q_abs[o + c] = v
+            q[o + c] = v if c == 0 else v - y[o + c]
+
+
+@numba.njit(cache=True)
+def _finish(j: int, r: np.ndarray, x: np.ndarray, q: np.ndarray, q_abs: np.ndarray, y: np.ndarray, mu: np.ndarray,
+            dim: int, tributary: np.ndarray, abscissa: np.ndarray, k: np.ndarray, wear_gap: np.ndarray,
+            states: np.ndarray, row: np.ndarray, its: int, err: float, rows: np.ndarray, r_warm: np.ndarray,
+            r_last: np.ndarray, keep: bool, out_r: np.ndarray, out_x: np.ndarray, out_y: np.ndarray,
+            out_wear: np.ndarray, out_states: np.ndarray, active: bool, pattern: np.ndarray, lu_ok: np.ndarray
+            ) -> None:
+    """Commit converged increment ``j`` (r, x of q; positions, wear, its row, the warm starts, the pattern)."""
+    m = r.size
+    nc = mu.size
+    nfields = row.size
+    # y = W r + q_abs = x + (q_abs - q)
+    for i in range(m):
+        y[i] = x[i] + q_abs[i] - q[i]
+    commit_increment(r, x, y, mu, dim, tributary, abscissa, k, wear_gap, states, row)
+    if active:
+        same = pattern[j, 0] >= 0
+        for a in range(nc):
+            code = states[a]
+            if code == 2 and r[a * dim + 1] < 0.0:
+                code = 3
+            if pattern[j, a] != code:
+                same = False
+                pattern[j, a] = code
+        if not same:
+            lu_ok[j] = False
+    for i in range(nfields):
+        rows[j, i] = row[i]
+    rows[j, nfields] = its
+    rows[j, nfields + 1] = err
+    for i in range(m):
+        r_warm[j, i] = r[i]
+        r_last[i] = r[i]
+    if keep:
+        for i in range(m):
+            out_r[j, i] = r[i]
+            out_x[j, i] = x[i]
+            out_y[j, i] = y[i]
+        for a in range(nc):
+            out_wear[j, a] = wear_gap[a]
+            out_states[j, a] = states[a]
+
+
+@numba.njit(cache=True)
+def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndarray, mu: np.ndarray, dim: int,
+                 q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, active: bool,
+                 j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray,
+                 xs: np.ndarray, qn: np.ndarray, rn: np.ndarray, xn: np.ndarray) -> tuple[int, float, int]:
+    """One local solve of increment ``j`` from the warm start ``r`` (in/out; ``x`` out): the exact answer when no
+    contact penetrates, else the cached contact pattern (``active``), else the Uzawa sweeps (on the normal rows
+    alone when ``normal_only``; ``Wn`` their W). ``xs``, ``qn``, ``rn``, ``xn``: work arrays. Returns (sweeps,
+    error, local status: 1 converged)."""
+    m = q.size
+    nc = mu.size
+    empty_i = np.zeros(1, dtype=np.int64)
+    empty_f = np.zeros(1)
+    empty_blocks = np.zeros((1, dim, dim))
+    working_stats = np.zeros(3, dtype=np.int64)
+    its = 0
+    err = 0.0
+    # No contact penetrates: r = 0 is an exact solution (x = q), as in local_solvers.solve.
+    exact = True
+    for a in range(nc):
+        if q[a * dim] < 0.0:
+            exact = False
+            break
+    if exact:
+        for i in range(m):
+            r[i] = 0.0
+            x[i] = q[i]
+        its = 0
+        err = 0.0
+    elif active and pattern[j, 0] >= 0:
+        if not lu_ok[j]:
+            _pattern_matrix(Wc, pattern[j], mu, lu[j])   # Wc = W^T = W
+            lu_ok[j] = _lu_factor(lu[j], piv[j])
+            counts[2] += 1
+        if lu_ok[j]:
+            for i in range(m):
+                xs[i] = r[i]
+            _pattern_rhs(q, pattern[j], r)
+            _lu_solve(lu[j], piv[j], r)
+            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
+            err = _error(r, x, mu, rho, dim, _force_scale(q, mu, rho, dim))
+            if err < tol:
+                exact = True
+                its = 0
+                counts[0] += 1
+            else:
+                counts[1] += 1
+                for i in range(m):     # back to the warm start: the pattern was wrong
+                    r[i] = xs[i]
+    if not exact and normal_only:
+        for a in range(nc):
+            qn[a] = q[a * dim]
+            rn[a] = r[a * dim]
+        _recompute_x(Wn, empty_i, empty_i, empty_f, False, qn, rn, xn)
+        its, err, change, status = _lcp_kernel(Wn, empty_i, empty_i, empty_f, False, qn, rho, False, 1.0, rho,
+                                               rn, xn, tol, max_iter, refresh)
+        if status != 1:
+            return its, err, status
+        for a in range(nc):
+            r[a * dim] = rn[a]
+            for c in range(1, dim):
+                r[a * dim + c] = 0.0
+        _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)  # the slip rows too
+    elif not exact:
+        _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
+        # Sweeps on the closed and nearly closed contacts, then a check on all (local_solvers.solve's default).
+        its, err, change, status = _restricted_kernel(Wc, False, empty_blocks, q, mu, rho, rho, dim, r, x, tol,
+                                                      max_iter, refresh, False, 1.0, empty_f, empty_f, NEAR_MARGIN,
+                                                      False, working_stats)
+        if status != 1:
+            return its, err, status
+    return its, err, 1
+
+
+@numba.njit(cache=True)
 def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0: np.ndarray,
                    wear_gap: np.ndarray, G: np.ndarray, D: np.ndarray, Q: np.ndarray, S: np.ndarray,
                    tributary: np.ndarray, abscissa: np.ndarray, y: np.ndarray, r_last: np.ndarray,
@@ -204,137 +371,252 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
     """
     n = D.shape[0]
     m = G.shape[0]
-    gdim = G.shape[1]
-    n_loads = Q.shape[0]
     nc = mu.size
-    q = np.empty(m)
-    q_abs = np.empty(m)
-    x = np.empty(m)
-    r = np.empty(m)
-    xs = np.empty(m)
-    its = 0
-    err = 0.0
+    q, q_abs, x, r, xs = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     states = np.empty(nc, dtype=np.int8)
-    empty_i = np.zeros(1, dtype=np.int64)
-    empty_f = np.zeros(1)
-    empty_blocks = np.zeros((1, dim, dim))
-    working_stats = np.zeros(3, dtype=np.int64)
-    nfields = N_ROW - 2
-    row = np.empty(nfields)
-    # Frictionless: the Uzawa sweeps run on the normal rows alone (W_nn, transposed like Wc), the iterates
-    # being those of the full sweep with mu = 0 (r_t stays 0; see local_solvers.solve).
-    normal_only = True
-    for a in range(nc):
-        if mu[a] != 0.0:
-            normal_only = False
-    nn = nc if normal_only else 1
-    Wn = np.empty((nn, nn))
+    row = np.empty(N_ROW - 2)
+    normal_only, Wn = _normal_rows(Wc, mu, dim)
+    nn = Wn.shape[0]
     qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
-    if normal_only:
-        for b in range(nc):
-            for a in range(nc):
-                Wn[b, a] = Wc[b * dim, a * dim]
     for j in range(n):
-        # q_abs = g0 + g_w - G D + sum_l S_l Q_l, term by term in this order (so that a plane frame with
-        # exact zeros gives g0 + g_w - d_n and -d_t exactly, as the Python path's increments do).
-        for a in range(nc):
-            o = a * dim
-            for c in range(dim):
-                v = g0[a] + wear_gap[a] if c == 0 else 0.0
-                for comp in range(gdim):   # (not k: that is the wear coefficient)
-                    v += -G[o + c, comp] * D[j, comp]
-                for load in range(n_loads):
-                    v += S[j, load] * Q[load, o + c]
-                q_abs[o + c] = v
-                q[o + c] = v if c == 0 else v - y[o + c]
+        _rhs(g0, wear_gap, G, D[j], Q, S[j], y, dim, q_abs, q)
         if warm == 1:
             for i in range(m):
                 r[i] = r_warm[j, i]
         else:
             for i in range(m):
                 r[i] = r_last[i]
-        # No contact penetrates: r = 0 is an exact solution (x = q), as in local_solvers.solve.
-        exact = True
-        for a in range(nc):
-            if q[a * dim] < 0.0:
-                exact = False
+        its, err, status = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh, active,
+                                        j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn)
+        if status != 1:
+            return j, status, err
+        _finish(j, r, x, q, q_abs, y, mu, dim, tributary, abscissa, k, wear_gap, states, row, its, err, rows,
+                r_warm, r_last, keep, out_r, out_x, out_y, out_wear, out_states, active, pattern, lu_ok)
+    return n, 1, 0.0
+
+
+#: Outcome codes of :func:`run_force_increments` beyond the local solver's (0: max_iter, 2: non-finite values):
+#: a trial obstacle displacement not finite, a force that saturates, one not bracketed or not reached by the root
+#: finder, forces not reached after ``FORCE_SWEEPS`` sweeps over the controlled components (the messages are
+#: :mod:`dolfinx_fretting.loading`'s, as the stepwise path raises them).
+TRIAL_NOT_FINITE, SATURATED, NOT_BRACKETED, NOT_REACHED, SWEEPS_EXHAUSTED = 3, 4, 5, 6, 7
+
+
+@numba.njit(cache=True)
+def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray, F: np.ndarray, Wc: np.ndarray,
+                 Wn: np.ndarray, normal_only: bool, rho: np.ndarray, mu: np.ndarray, dim: int, g0: np.ndarray,
+                 wear_gap: np.ndarray, G: np.ndarray, Q: np.ndarray, Sj: np.ndarray, y: np.ndarray,
+                 q_abs: np.ndarray, q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int,
+                 refresh: int, active: bool, j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray,
+                 lu_ok: np.ndarray, counts: np.ndarray, xs: np.ndarray, qn: np.ndarray, rn: np.ndarray,
+                 xn: np.ndarray, tally: np.ndarray) -> tuple[int, float, int]:
+    """One trial of the load control: the local problem with the obstacle at ``trial`` (its components), warm
+    started from ``r`` (the previous trial's forces, as the stepwise path), then ``F = A r`` (the total force along
+    each component). ``tally``: (solves, sweeps) so far, in/out. Returns (the first non-finite component or -1,
+    error, local status)."""
+    for c in range(trial.size):
+        if not math.isfinite(trial[c]):
+            return c, 0.0, 1
+    for g in range(Dj.size):   # D = T d, component by component (as ContactZone.translations)
+        v = 0.0
+        for c in range(trial.size):
+            v = v + trial[c] * T[g, c] if c > 0 else trial[c] * T[g, c]
+        Dj[g] = v
+    _rhs(g0, wear_gap, G, Dj, Q, Sj, y, dim, q_abs, q)
+    its, err, status = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh, active, j,
+                                    pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn)
+    tally[0] += 1
+    tally[1] += its
+    for c in range(F.size):
+        v = 0.0
+        for i in range(r.size):
+            v += A[c, i] * r[i]
+        F[c] = v
+    return -1, err, status
+
+
+@numba.njit(cache=True, error_model="numpy")
+def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0: np.ndarray,
+                         wear_gap: np.ndarray, G: np.ndarray, T: np.ndarray, A: np.ndarray, targets: np.ndarray,
+                         controlled: np.ndarray, d: np.ndarray, stiffness: np.ndarray, force_tol: float,
+                         max_eval: int, Q: np.ndarray, S: np.ndarray, tributary: np.ndarray, abscissa: np.ndarray,
+                         y: np.ndarray, r_last: np.ndarray, r_warm: np.ndarray, k: np.ndarray, tol: float,
+                         max_iter: int, refresh: int, keep: bool, out_r: np.ndarray, out_x: np.ndarray,
+                         out_y: np.ndarray, out_wear: np.ndarray, out_states: np.ndarray, rows: np.ndarray,
+                         out_d: np.ndarray, solves: np.ndarray, active: bool, pattern: np.ndarray, lu: np.ndarray,
+                         piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, failure: np.ndarray, F: np.ndarray
+                         ) -> tuple[int, int, float]:
+    """:func:`run_increments` with force-controlled obstacle components: each increment finds the obstacle
+    displacement whose total contact force meets the targets, by the stepwise path's load control
+    (``increments._local_with_control``: sweeps over the controlled components, each closed by
+    :func:`~dolfinx_fretting.loading.find_displacement`'s iteration, the same tolerance ``force_tol`` times the
+    largest target or first trial's force, every trial warm started from the previous one, the slope estimate
+    ``stiffness`` updated after each root find), then commits it. The obstacle of the cycle's increment ``j`` is
+    ``out_d[j]``.
+
+    Args:
+        T: (gdim, components) the obstacle translation per unit component (``translations`` of the unit vectors).
+        A: (components, m) the total force along each component per contact force (``obstacle_forces``).
+        targets: (n, components) the prescribed values (forces where ``controlled``, else displacements).
+        d: (components,) the obstacle of the last converged increment (in/out).
+        stiffness: (components,) the slope estimates of ``ContactOperators.stiffness`` (in/out).
+        max_eval: The root finder's bound on trials per component.
+        solves: (n,) out: local solves per increment.
+        failure: (4,) out on failure: the component, then the numbers of the message (see the codes above).
+        F: (components,) out: the total force of the last trial.
+        Others: as :func:`run_increments` (no cycle warm start: the stepwise path's warm starts).
+
+    Returns:
+        (converged increments, status of the first failure (1 if none: the local solver's, or a code above), the
+        local error).
+    """
+    n = targets.shape[0]
+    m = G.shape[0]
+    nc = mu.size
+    ncomp = d.size
+    q, q_abs, x, r, xs = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    states = np.empty(nc, dtype=np.int8)
+    row = np.empty(N_ROW - 2)
+    normal_only, Wn = _normal_rows(Wc, mu, dim)
+    nn = Wn.shape[0]
+    qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
+    Dj = np.empty(G.shape[1])
+    trial = np.empty(ncomp)
+    tally = np.zeros(2, dtype=np.int64)
+    for i in range(m):
+        r[i] = r_last[i]
+    for j in range(n):
+        tally[0] = 0
+        tally[1] = 0
+        for c in range(ncomp):
+            if not controlled[c]:
+                d[c] = targets[j, c]
+            trial[c] = d[c]
+        bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0, wear_gap, G, Q,
+                                        S[j], y, q_abs, q, r, x, tol, max_iter, refresh, active, j, pattern, lu,
+                                        piv, lu_ok, counts, xs, qn, rn, xn, tally)
+        if bad >= 0:
+            failure[0] = bad
+            return j, TRIAL_NOT_FINITE, 0.0
+        if status != 1:
+            return j, status, err
+        # Tolerance relative to the loads in play (as the stepwise path).
+        scale = 1e-300
+        for c in range(ncomp):
+            if controlled[c]:
+                scale = max(scale, abs(targets[j, c]))
+            scale = max(scale, abs(F[c]))
+        ftol = force_tol * scale
+        reached = False
+        for _sweep in range(FORCE_SWEEPS):
+            reached = True
+            for c in range(ncomp):
+                if controlled[c] and not abs(F[c] - targets[j, c]) <= ftol:
+                    reached = False
+            if reached:
                 break
-        if exact:
-            for i in range(m):
-                r[i] = 0.0
-                x[i] = q[i]
-            its = 0
-            err = 0.0
-        elif active and pattern[j, 0] >= 0:
-            if not lu_ok[j]:
-                _pattern_matrix(Wc, pattern[j], mu, lu[j])   # Wc = W^T = W
-                lu_ok[j] = _lu_factor(lu[j], piv[j])
-                counts[2] += 1
-            if lu_ok[j]:
-                for i in range(m):
-                    xs[i] = r[i]
-                _pattern_rhs(q, pattern[j], r)
-                _lu_solve(lu[j], piv[j], r)
-                _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-                err = _error(r, x, mu, rho, dim, _force_scale(q, mu, rho, dim))
-                if err < tol:
-                    exact = True
-                    its = 0
-                    counts[0] += 1
-                else:
-                    counts[1] += 1
-                    for i in range(m):     # back to the warm start: the pattern was wrong
-                        r[i] = xs[i]
-        if not exact and normal_only:
-            for a in range(nc):
-                qn[a] = q[a * dim]
-                rn[a] = r[a * dim]
-            _recompute_x(Wn, empty_i, empty_i, empty_f, False, qn, rn, xn)
-            its, err, change, status = _lcp_kernel(Wn, empty_i, empty_i, empty_f, False, qn, rho, False, 1.0, rho,
-                                                   rn, xn, tol, max_iter, refresh)
-            if status != 1:
-                return j, status, err
-            for a in range(nc):
-                r[a * dim] = rn[a]
-                for c in range(1, dim):
-                    r[a * dim + c] = 0.0
-            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)  # the slip rows too
-        elif not exact:
-            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-            # Sweeps on the closed and nearly closed contacts, then a check on all (local_solvers.solve's default).
-            its, err, change, status = _restricted_kernel(Wc, False, empty_blocks, q, mu, rho, rho, dim, r, x, tol,
-                                                          max_iter, refresh, False, 1.0, empty_f, empty_f,
-                                                          NEAR_MARGIN, False, working_stats)
-            if status != 1:
-                return j, status, err
-        # y = W r + q_abs = x + (q_abs - q)
-        for i in range(m):
-            y[i] = x[i] + q_abs[i] - q[i]
-        commit_increment(r, x, y, mu, dim, tributary, abscissa, k, wear_gap, states, row)
-        if active:
-            same = pattern[j, 0] >= 0
-            for a in range(nc):
-                code = states[a]
-                if code == 2 and r[a * dim + 1] < 0.0:
-                    code = 3
-                if pattern[j, a] != code:
-                    same = False
-                    pattern[j, a] = code
-            if not same:
-                lu_ok[j] = False
-        for i in range(nfields):
-            rows[j, i] = row[i]
-        rows[j, nfields] = its
-        rows[j, nfields + 1] = err
-        for i in range(m):
-            r_warm[j, i] = r[i]
-            r_last[i] = r[i]
-        if keep:
-            for i in range(m):
-                out_r[j, i] = r[i]
-                out_x[j, i] = x[i]
-                out_y[j, i] = y[i]
-            for a in range(nc):
-                out_wear[j, a] = wear_gap[a]
-                out_states[j, a] = states[a]
+            for kc in range(ncomp):
+                if not controlled[kc]:
+                    continue
+                d_old, F_old = d[kc], F[kc]
+                target = targets[j, kc]
+                # find_displacement (loading.py), step by step: each force(v) is a trial with d[kc] = v.
+                for c in range(ncomp):
+                    trial[c] = d[c]
+                a = b = fa = fb = 0.0
+                found = False
+                evals = 0
+                while True:   # a block to break out of: the bracketing, then the Illinois regula falsi
+                    trial[kc] = d[kc]
+                    bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
+                                                    wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
+                                                    refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
+                                                    rn, xn, tally)
+                    if bad >= 0 or status != 1:
+                        break
+                    f0 = F[kc] - target
+                    evals = 1
+                    if abs(f0) <= ftol:
+                        b = d[kc]
+                        found = True
+                        break
+                    step = -f0 / max(stiffness[kc], 1e-300)
+                    a, fa = d[kc], f0
+                    b = d[kc] + step
+                    trial[kc] = b
+                    bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
+                                                    wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
+                                                    refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
+                                                    rn, xn, tally)
+                    if bad >= 0 or status != 1:
+                        break
+                    fb = F[kc] - target
+                    evals += 1
+                    flat_steps = 0
+                    while fa * fb > 0:
+                        flat = abs(fb - fa) <= ftol and abs(fb + target) > ftol
+                        flat_steps = flat_steps + 1 if flat else 0
+                        if flat_steps >= 5:
+                            failure[0], failure[1], failure[2] = kc, target, fb + target
+                            return j, SATURATED, 0.0
+                        if evals >= max_eval:
+                            failure[0], failure[1], failure[2], failure[3] = kc, target, f0 + target, fb + target
+                            return j, NOT_BRACKETED, 0.0
+                        step *= 2.0
+                        a, fa = b, fb
+                        b = b + step
+                        trial[kc] = b
+                        bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim,
+                                                        g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
+                                                        refresh, active, j, pattern, lu, piv, lu_ok, counts, xs,
+                                                        qn, rn, xn, tally)
+                        if bad >= 0 or status != 1:
+                            break
+                        fb = F[kc] - target
+                        evals += 1
+                    if bad >= 0 or status != 1:
+                        break
+                    if abs(fb) <= ftol:
+                        found = True
+                        break
+                    while evals < max_eval:
+                        c_new = b - fb * (b - a) / (fb - fa)
+                        trial[kc] = c_new
+                        bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim,
+                                                        g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
+                                                        refresh, active, j, pattern, lu, piv, lu_ok, counts, xs,
+                                                        qn, rn, xn, tally)
+                        if bad >= 0 or status != 1:
+                            break
+                        fc = F[kc] - target
+                        evals += 1
+                        if abs(fc) <= ftol:
+                            b = c_new
+                            found = True
+                            break
+                        if fc * fb < 0:
+                            a, fa = b, fb
+                        else:
+                            fa = fa / 2.0   # the far end kept again: halve its value (Illinois)
+                        b, fb = c_new, fc
+                    break
+                if bad >= 0:
+                    failure[0] = bad
+                    return j, TRIAL_NOT_FINITE, 0.0
+                if status != 1:
+                    return j, status, err
+                if not found:
+                    failure[0], failure[1], failure[2], failure[3] = kc, target, fb, ftol
+                    return j, NOT_REACHED, 0.0
+                d[kc] = b
+                if d[kc] != d_old and F[kc] != F_old:
+                    stiffness[kc] = abs((F[kc] - F_old) / (d[kc] - d_old))
+        if not reached:
+            failure[0], failure[1] = -1, ftol
+            return j, SWEEPS_EXHAUSTED, 0.0
+        for c in range(ncomp):
+            out_d[j, c] = trial[c]
+        solves[j] = tally[0]
+        _finish(j, r, x, q, q_abs, y, mu, dim, tributary, abscissa, k, wear_gap, states, row, tally[1], err, rows,
+                r_warm, r_last, keep, out_r, out_x, out_y, out_wear, out_states, active, pattern, lu_ok)
     return n, 1, 0.0

@@ -15,7 +15,7 @@ import numpy as np
 from mpi4py import MPI
 
 from . import friction, local_solvers
-from .loading import Displacement, Force, LoadControlError, find_displacement, tangential_item
+from .loading import FORCE_SWEEPS, Displacement, Force, LoadControlError, find_displacement, tangential_item
 from .operators import ContactOperators
 from .plasticity import ElastoplasticBody, NewtonError
 from .settings import LocalSolver, finite
@@ -154,9 +154,7 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
             # no finite obstacle displacement gives (e.g. one so small that no contact closes) ends here, not in
             # the local solver's "q: contains non-finite values".
             k = int(np.flatnonzero(~np.isfinite(trial))[0])
-            raise ConvergenceError(f"{names[k]}: prescribed value {targets[k]:.6g} not reached: the load control's "
-                                   "trial obstacle displacement is not finite (the force did not change between its "
-                                   "trials): a load this far below the model's scale is degenerate")
+            raise ConvergenceError(trial_not_finite_message(names[k], targets[k]))
         q, q_abs = operators.q(trial, factors, state.positions, state.wear_gap, q_body)
         solved = local_solvers.solve(Wm, q, mu, dim, method=solver.method, tol=solver.tol,
                                   max_iter=solver.max_iter, r0=warm[0], block_steps=steps)
@@ -169,16 +167,13 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
         return last["F"]
 
     d[~controlled] = targets[~controlled]
-    names = ["normal force"] + [f"tangential force (t{k})" for k in range(1, dim)]
-    zones = len(operators.contact.zones)
-    if zones > 1:
-        names = [f"contact[{zone}] {name}" for zone in range(zones) for name in names]
+    names = force_names(operators)
     try:
         F = local(d)
         # Tolerance relative to the loads in play (a zero tangential target is held to the normal force).
         scale = max(np.abs(targets[controlled]).max(initial=0.0), np.abs(F).max(), 1e-300)
         ftol = solver.force_tol * scale
-        for _sweep in range(100):
+        for _sweep in range(FORCE_SWEEPS):
             if np.all(np.abs(F - targets)[controlled] <= ftol):
                 break
             for k in np.flatnonzero(controlled):
@@ -192,20 +187,48 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
                         d[k], _, _ = find_displacement(force_k, targets[k], d[k], operators.stiffness[k], ftol,
                                                        name=names[k])
                 except LoadControlError as exc:
-                    raise ConvergenceError(_beyond_friction(operators, k, targets, controlled, last["F"], mu)
-                                           or str(exc)) from None
+                    raise ConvergenceError(load_control_message(operators, k, targets, controlled, last["F"], mu,
+                                                                str(exc))) from None
                 F = last["F"]  # the root finder's last evaluation is at the returned d[k]
                 if d[k] != d_old and F[k] != F_old:
                     operators.stiffness[k] = abs((F[k] - F_old) / (d[k] - d_old))
         else:
-            raise ConvergenceError(f"prescribed forces not reached after 100 sweeps (residual "
-                                   f"{np.abs(F - targets)[controlled]}, tolerance {ftol:.3g})")
+            raise ConvergenceError(sweeps_message(np.abs(F - targets)[controlled], ftol))
     except LoadControlError as exc:
         raise ConvergenceError(str(exc)) from None
     solved = last["solved"]
     y = Wm @ solved.r + last["q_abs"]
     return IncrementResult(solved.r.copy(), solved.x.copy(), y, last["d"].copy(), factors.copy(), False,
                            count["iterations"], targets.copy(), controlled.copy(), solved.error, count["solves"])
+
+
+def force_names(operators: ContactOperators) -> list[str]:
+    """The name of each obstacle component's force in the load control's messages."""
+    dim = operators.dim
+    names = ["normal force"] + [f"tangential force (t{k})" for k in range(1, dim)]
+    zones = len(operators.contact.zones)
+    if zones > 1:
+        names = [f"contact[{zone}] {name}" for zone in range(zones) for name in names]
+    return names
+
+
+def trial_not_finite_message(name: str, target: float) -> str:
+    """The load control's message when a trial obstacle displacement is not finite."""
+    return (f"{name}: prescribed value {target:.6g} not reached: the load control's trial obstacle displacement is "
+            "not finite (the force did not change between its trials): a load this far below the model's scale is "
+            "degenerate")
+
+
+def sweeps_message(residual: np.ndarray, ftol: float) -> str:
+    """The load control's message when its sweeps over the controlled components did not meet the targets."""
+    return f"prescribed forces not reached after {FORCE_SWEEPS} sweeps (residual {residual}, tolerance {ftol:.3g})"
+
+
+def load_control_message(operators: ContactOperators, k: int, targets: np.ndarray, controlled: np.ndarray,
+                         forces: np.ndarray, mu: np.ndarray, message: str) -> str:
+    """A root finder's failure on component ``k``: the physical reason when a tangential force is beyond friction
+    (:func:`_beyond_friction`), else ``message``."""
+    return _beyond_friction(operators, k, targets, controlled, forces, mu) or message
 
 
 def _beyond_friction(operators: ContactOperators, k: int, targets: np.ndarray, controlled: np.ndarray,

@@ -17,7 +17,13 @@ from typing import Any, Mapping
 import numpy as np
 
 __all__ = ["Displacement", "Force", "CyclePath", "waveform", "find_displacement", "tangential_item",
-           "LoadControlError"]
+           "LoadControlError", "MAX_EVAL", "FORCE_SWEEPS", "saturated_message", "not_bracketed_message",
+           "not_reached_message"]
+
+#: The load control's bound on trials (local solves) per root find.
+MAX_EVAL = 200
+#: The load control's bound on sweeps over the force-controlled components of an increment (each a root find).
+FORCE_SWEEPS = 100
 
 
 class LoadControlError(RuntimeError):
@@ -173,7 +179,7 @@ def waveform(kind: str, n: int, phase: float = 0.0) -> np.ndarray:
 
 
 def find_displacement(force: Callable[[float], float], target: float, d0: float, stiffness: float,
-                      tol: float, max_eval: int = 200, name: str = "force") -> tuple[float, float, int]:
+                      tol: float, max_eval: int = MAX_EVAL, name: str = "force") -> tuple[float, float, int]:
     """Find d with ``force(d) = target`` for a continuous non-decreasing ``force`` (piecewise linear here).
 
     Brackets the root by steps that double from ``(target - force(d0)) / stiffness``, then closes it by
@@ -213,13 +219,9 @@ def find_displacement(force: Callable[[float], float], target: float, d0: float,
         flat = abs(fb - fa) <= tol and abs(fb + target) > tol
         flat_steps = flat_steps + 1 if flat else 0
         if flat_steps >= 5:
-            raise LoadControlError(
-                f"{name}: prescribed value {target:.6g} cannot be reached: the contact force saturates at "
-                f"{fb + target:.6g} (for a tangential force: it must stay below mu times the normal force)")
+            raise LoadControlError(saturated_message(name, target, fb + target))
         if evals >= max_eval:
-            raise LoadControlError(
-                f"{name}: prescribed value {target:.6g} not bracketed in {max_eval} local solves: the force "
-                f"moved from {f0 + target:.6g} to {fb + target:.6g} without crossing it")
+            raise LoadControlError(not_bracketed_message(name, target, max_eval, f0 + target, fb + target))
         step *= 2.0
         a, fa = b, fb
         b = b + step
@@ -239,7 +241,25 @@ def find_displacement(force: Callable[[float], float], target: float, d0: float,
             # The far end is kept again: halve its value (Illinois) so the bracket keeps shrinking.
             fa = fa / 2.0
         b, fb = c, fc
-    raise LoadControlError(f"{name}: target {target:.6g} not reached in {max_eval} local solves "
-                           f"(last residual {fb:.3g}, tolerance {tol:.3g}); if the residual stays near the "
-                           "tolerance, the local solver's noise exceeds it: tighten solver.local_tol or "
-                           "loosen solver.force_tol (about 100 x local_tol)")
+    raise LoadControlError(not_reached_message(name, target, max_eval, fb, tol))
+
+
+def saturated_message(name: str, target: float, force: float) -> str:
+    """:func:`find_displacement`'s message when the force stops at ``force`` short of ``target``."""
+    return (f"{name}: prescribed value {target:.6g} cannot be reached: the contact force saturates at "
+            f"{force:.6g} (for a tangential force: it must stay below mu times the normal force)")
+
+
+def not_bracketed_message(name: str, target: float, max_eval: int, first: float, last: float) -> str:
+    """:func:`find_displacement`'s message when ``max_eval`` trials moved the force from ``first`` to ``last``
+    without crossing ``target``."""
+    return (f"{name}: prescribed value {target:.6g} not bracketed in {max_eval} local solves: the force "
+            f"moved from {first:.6g} to {last:.6g} without crossing it")
+
+
+def not_reached_message(name: str, target: float, max_eval: int, residual: float, tol: float) -> str:
+    """:func:`find_displacement`'s message when the bracket did not close to ``tol`` in ``max_eval`` trials."""
+    return (f"{name}: target {target:.6g} not reached in {max_eval} local solves "
+            f"(last residual {residual:.3g}, tolerance {tol:.3g}); if the residual stays near the "
+            "tolerance, the local solver's noise exceeds it: tighten solver.local_tol or "
+            "loosen solver.force_tol (about 100 x local_tol)")

@@ -128,6 +128,7 @@ class ContactOperators:
         self.build()
         self.timings["delassus_s"] = time.perf_counter() - t0
         self._kernel = None
+        self._force_maps = None
         #: Finite sliding: the pairing of the reference configuration (the initial state's).
         self.reference_pairing = self.contact.contact_set
         #: The Contact of each zone as given (a zone rebuilt for a new window stays known by it).
@@ -390,16 +391,32 @@ class ContactOperators:
 
 
     # Compiled cycles, window --------------------------------------------------------------------------------
-    def kernel_data(self, n: int):
-        """W transposed, the Uzawa steps and the contact-pattern cache of cycles of ``n`` increments (rank 0)."""
+    def kernel_data(self, n: int | None):
+        """W transposed, the Uzawa steps and the contact-pattern cache of cycles of ``n`` increments (rank 0); ``n``
+        None: a loop that tries no pattern (force control), served by the cache held, or a one-row one (no
+        per-increment LU factors made for it)."""
         cache = None if self._kernel is None else self._kernel[2]
         # A 2D cache holds one row per increment (the compiled loop indexes it unchecked): only for cycles of its n.
         # The 3D one is an empty stand-in of one row, for any n.
-        if cache is None or (cache.enabled and cache.pattern.shape[0] != n):
+        if cache is None or (n is not None and cache.enabled and cache.pattern.shape[0] != n):
             contact_set = self.contact.contact_set
             self._kernel = (np.ascontiguousarray(self.W.T), self.block_steps,
-                            ActivePatternCache(n, contact_set.nc, contact_set.dim))
+                            ActivePatternCache(1 if n is None else n, contact_set.nc, contact_set.dim))
         return self._kernel
+
+    def force_maps(self) -> tuple[np.ndarray, np.ndarray]:
+        """(T, A) of force-controlled compiled cycles: T (translation components, obstacle components) the obstacle
+        translation per unit obstacle component, A (obstacle components, m) the total force along each component per
+        contact force (both linear: the contact's ``translations`` and ``obstacle_forces`` of unit vectors), made
+        once per contact set."""
+        contact_set = self.contact.contact_set
+        if self._force_maps is None or self._force_maps[0] is not contact_set:
+            components = self.dim * len(self.contact.zones)
+            T = np.ascontiguousarray(self.contact.translations(np.eye(components)).T)
+            unit = np.eye(contact_set.nc * contact_set.dim)
+            A = np.ascontiguousarray(np.column_stack([self.contact.obstacle_forces(e) for e in unit]))
+            self._force_maps = (contact_set, T, A)
+        return self._force_maps[1], self._force_maps[2]
 
     @property
     def pattern_counts(self) -> np.ndarray | None:

@@ -359,9 +359,9 @@ class FrettingProblem:
                   check: Callable[[ContactState], None] | None = None) -> CycleResult:
         """Solve the increments of one cycle from ``state`` (nothing committed: :meth:`commit` the result).
 
-        Elastic bodies with displacement-controlled obstacle and load factors run in the compiled loop
-        (:mod:`dolfinx_fretting.cycling`, the path the scenes use; the local method must be Uzawa); forces,
-        other local methods or plasticity run increment by increment. Either way a failure raises before
+        Elastic bodies run in the compiled loop (:mod:`dolfinx_fretting.cycling`, the path the scenes use; the
+        local method must be Uzawa), prescribed forces found inside it by the stepwise load control; other local
+        methods, plasticity or finite sliding run increment by increment. Either way a failure raises before
         anything is committed.
 
         Args:
@@ -385,8 +385,8 @@ class FrettingProblem:
         def attempt(start: ContactState) -> CycleResult:
             # Finite sliding pairs anew between increments: increment by increment.
             if (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
-                    and not forced.any() and operators.surface_compliance is None):
-                return compiled_cycle(operators, self.solver, self.wear_laws, start, obstacle, factors, keep)
+                    and operators.surface_compliance is None):
+                return compiled_cycle(operators, self.solver, self.wear_laws, start, obstacle, factors, keep, forced)
             return stepwise_cycle(operators, self._advance_once, start, obstacle, forced, factors, keep, check)
         # A growth solves the whole cycle again from ``state`` in the wider window (its increments then all refer
         # to one contact set); the result is still ``state``'s to commit (its final state is in the wider window).

@@ -34,11 +34,12 @@ class LocalSolver:
         tol: Natural-map tolerance (unit-free).
         max_iter: Sweeps per local solve.
         force_tol: Relative tolerance of a prescribed force.
-        compiled_cycles: Run displacement- and load-controlled elastic cycles in the compiled loop.
+        compiled_cycles: Run elastic cycles in the compiled loop (prescribed forces found inside it).
         warm_start: ``"cycle"``: an increment of a compiled cycle starts from the same increment of the previous
             cycle; ``"increment"``: from the previous increment.
         pattern_reuse: 2D compiled cycles first try the previous cycle's contact pattern (an exact linear solve
-            accepted only if it meets ``tol``).
+            accepted only if it meets ``tol``); not under force control (its root finder would move the answers
+            by the local tolerance's effect).
     """
 
     method: str = "uzawa"

@@ -7,8 +7,8 @@ from it, and the run walks the load path of the scene:
 
 1. the preload (and, without cycles, a monotonic tangential load), increment by increment
    (``problem.advance``: solve, commit; elastic–plastic increments are cut back on failure);
-2. the cycles, one ``problem.run_cycle`` each (the compiled loop for displacement- and pressure-controlled
-   elastic cycles), each checked (contact at the candidate window's edge, wear step) before it is committed;
+2. the cycles, one ``problem.run_cycle`` each (the compiled loop for elastic cycles, force-controlled
+   ones included), each checked (contact at the candidate window's edge, wear step) before it is committed;
    with ``wear.cycle_jump`` a simulated cycle is followed by a jump (:mod:`dolfinx_fretting.cycle_jump`);
 3. the outputs: tables and fields as the run goes, checkpoints, the summary, plots and pictures.
 

@@ -153,14 +153,14 @@ def test_resume_under_another_name(tmp_path):
 @pytest.mark.parametrize("tangential", ["tangential_force=60.0", "tangential_displacement=0.01"])
 def test_force_controlled_normal_load_during_cycles(tmp_path, tangential):
     """Cylinder under a constant normal force, cycled by a tangential force (partial slip, Q < mu P) or a
-    displacement (gross slip): the prescribed forces hold at every increment (Python path)."""
+    displacement (gross slip): the prescribed forces hold at every increment (in the compiled loop)."""
     P, mu = 199.24, 0.9
     scene = load_scene("hertz", ["geometry.contact_mesh_size=0.02", "loading.tangential_force=none",
                                  f"loading.{tangential}",
                                  "loading.cycles=2", "loading.increments_per_cycle=8", "wear.law='archard'",
                                  "wear.k=1e-6", "output.xdmf=false", "output.plots=false"])
     s = run_scene(scene, tmp_path, quiet=True)
-    assert s["cycle_path"] == "python" and s["cycles"] == 2
+    assert s["cycle_path"] == "compiled" and s["cycles"] == 2
     hist = read_table(tmp_path / "history.csv")
     cyc = hist["cycle"] > 0
     # Force control to solver.force_tol = 1e-8 relative.

@@ -513,3 +513,45 @@ def test_fatigue_over_cycle_matches_serial():
         serial_order = np.lexsort((serial_columns["depth"], serial_columns["x"]))
         for name, values in columns.items():
             assert values[order] == pytest.approx(serial_columns[name][serial_order], rel=1e-8, abs=1e-12), name
+
+
+def _force_cycle_run(comm: MPI.Comm) -> dict:
+    """Two blocks, zone A pressed by a held normal force, zone B by a displacement, rubbed two compiled cycles
+    (issue 26: A's approach found inside the loop); then a tangential force beyond mu P on A, which must fail."""
+    import dolfinx_fretting as dfr
+    from support.blocks import elasticity, plane_above, two_blocks
+
+    V, tags, bcs = two_blocks(comm=comm)
+    a = dfr.Contact(V, (tags, 1), plane_above(), mu=0.3, bcs=bcs)
+    b = dfr.Contact(V, (tags, 2), plane_above(), mu=0.3, bcs=bcs)
+    problem = dfr.FrettingProblem(elasticity(V), [a, b], bcs, wear=dfr.Archard(1e-6),
+                                  solver=dfr.LocalSolver(tol=1e-12))
+    state, _ = problem.advance(problem.initial_state(), normal={a: dfr.Force(100.0), b: 1e-3})
+    path = dfr.CyclePath.waveform(8, tangential={a: 3e-3, b: 3e-3})
+    for _ in range(2):
+        result = problem.run_cycle(state, path)
+        assert result.compiled
+        state = problem.commit(state, result)
+    failure = None
+    try:
+        problem.run_cycle(state, dfr.CyclePath.waveform(8, tangential={a: dfr.Force(60.0), b: 3e-3}))
+    except dfr.ConvergenceError as exc:
+        failure = (exc.step, str(exc))
+    out = {"wear": state.wear_gap, "obstacle": state.obstacle, "force": problem.total_force(state, a),
+           "failure": failure}
+    problem.destroy()
+    return out
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_force_controlled_compiled_cycles_match_serial():
+    """A held force in the compiled loop under MPI (the load control runs on rank 0, broadcast): every rank holds
+    the serial run's wear and obstacle (other factorisations' rounding only: 1e-8), and the failure of a force
+    beyond friction is raised on every rank at the serial run's step."""
+    parallel = _force_cycle_run(COMM)
+    serial = COMM.bcast(_force_cycle_run(MPI.COMM_SELF) if COMM.rank == 0 else None, root=0)
+    assert parallel["force"][0] == pytest.approx(100.0, rel=1e-7)   # force_tol 1e-8 of the largest force
+    assert parallel["wear"] == pytest.approx(serial["wear"], rel=1e-8, abs=1e-8 * serial["wear"].max())
+    assert parallel["obstacle"] == pytest.approx(serial["obstacle"], rel=1e-8)
+    assert parallel["failure"] is not None and parallel["failure"][0] == serial["failure"][0]
+    assert "cannot be reached" in parallel["failure"][1]

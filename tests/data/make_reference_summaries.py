@@ -88,17 +88,18 @@ PURPOSE = {
                              "contact inside, force-controlled preload",
     "cylinder-flat-partial-python": "solver.cycle_kernel=false: the per-increment Python path through "
                                     "cycles, two bodies, partial slip, wear acceleration x100",
-    "cylinder-flat-partial-force": "cyclic tangential force control (Python path), automatic window, two "
-                                   "bodies, partial slip",
+    "cylinder-flat-partial-force": "cyclic tangential force control (frozen on the Python path; the compiled "
+                                   "loop since issue 26), automatic window, two bodies, partial slip",
     "mccoll-grow": "two bodies with wear shares (k_slave, k_master), wear acceleration x25, force-controlled "
                    "preload, a small given window that grows once",
     "mccoll-finite-sliding": "finite sliding (contact.sliding = 'finite'): two bodies re-paired as they slide "
                              "(surface compliance, the master's wear carried on its nodes), both bodies wearing",
     "sphere-flat-3d": "3D: the half ball on an identical elastic flat (node-to-face pairing on hexahedra, a "
                       "symmetry plane, the whole contact's sums and radii), the normal force held through gross-slip "
-                      "cycles (increment by increment), wear",
+                      "cycles (frozen increment by increment; the compiled loop since issue 26), wear",
     "api-block": "the Python API without a scene: prescribed Dirichlet data press a block on a rigid plane, a "
-                 "named side load cycles with a tangential force (force control, increment by increment), wear",
+                 "named side load cycles with a tangential force (force control; frozen increment by increment, the "
+                 "compiled loop since issue 26), wear",
 }
 
 #: Cases whose answer is also stored as full Newton gives it (``"full_newton"``: these overrides added). The
