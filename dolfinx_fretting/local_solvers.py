@@ -869,6 +869,8 @@ def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.n
                 its, err, change, status = _uzawa_sweeps(Wc, Wc, empty_i, empty_i, empty_f, False, q, mu, rho,
                                                          rho_err, dim, r, x, tol, left, refresh, scale)
             stats[1] = nc
+            if status == 0:  # the sweeps update x step by step: a failed solve reports the x of its r, x = W r + q
+                _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
             return total + its, err, change, status
 
 
