@@ -22,11 +22,14 @@ TOL = 1e-12
 SOL = dict(rtol=1e-9, atol=1e-9)
 
 
-def full_dimension(W, q, dim, method, tol=TOL, max_iter=100000):
-    """The same problem through the full-dimension (frictional) code path, with mu = 0."""
+def full_dimension(W, q, dim, method, tol=TOL, max_iter=100000, working_set=False):
+    """The same problem through the full-dimension (frictional) code path, with mu = 0: by default its sweeps on
+    every contact (the iterates the normal rows' sweeps reproduce bit for bit); ``working_set``: the sweeps on the
+    closed and nearly closed contacts (solve's default for a dense W), another sequence of iterates."""
     W, q, mu, dim = ls._check_problem(W, q, 0.0, dim)
     counts = ls._Counts()
-    r, x, err, _, status = ls._solve_full(W, q, mu, dim, method, tol, max_iter, np.zeros(q.size), False, 1.0, counts)
+    r, x, err, _, status = ls._solve_full(W, q, mu, dim, method, tol, max_iter, np.zeros(q.size), False, 1.0, counts,
+                                          working_set=working_set)
     assert status == 1
     return r, x, counts.total
 
@@ -51,6 +54,10 @@ def test_normal_only_equals_full_dimension(method, dim, seed):
         assert res.iterations == its_f
         np.testing.assert_array_equal(res.r, r_f)
         np.testing.assert_array_equal(res.x, x_f)
+        # The full path's default (sweeps on the working set, then a check on all contacts): the same solution
+        r_w, x_w, _ = full_dimension(W, q, dim, method, working_set=True)
+        np.testing.assert_allclose(r_w, r_f, **SOL)
+        np.testing.assert_allclose(x_w, x_f, **SOL)
 
 
 def test_per_contact_zero_mu_and_mixed_mu():
