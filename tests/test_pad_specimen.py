@@ -212,6 +212,8 @@ def cyclic(tmp_path_factory):
     return scene, run_scene(scene, out, quiet=True), out
 
 
+# slow: the scene's first cycle at its default mesh (h = a/19), ~29 s a stack shared by the two tests
+@pytest.mark.slow
 def test_the_scene_run_cyclic_in_phase(cyclic):
     """The built-in scene's run (its first cycle: sinusoidal, 16 increments, Q and sigma_B in phase) through the scene
     runner. At the first peak (t = 1/4: +Q, +sigma_B, reached proportionally from the preload) the stick zone is the
@@ -248,6 +250,8 @@ def test_the_scene_run_cyclic_in_phase(cyclic):
         assert abs(np.sum(x * corrective) / np.sum(corrective) - first * e) <= tolerance * h
 
 
+# slow: the scene's first cycle at its default mesh (h = a/19), ~29 s a stack shared by the two tests
+@pytest.mark.slow
 def test_fatigue_on_the_specimen_at_the_trailing_edge(cyclic):
     """``[fatigue]`` on the rig evaluates the specimen (the master flat; Hills & Nowell, Madge et al.: fretting-
     fatigue cracks start in the specimen, at the trailing edge of a partial-slip contact), its points the
