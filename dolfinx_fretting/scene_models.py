@@ -184,11 +184,12 @@ def _pressure_load(V, body: BodyMesh, face: str):
 PAIRING = {"small": "fixed pairing", "finite": "paired anew as the bodies slide"}
 
 
-def pairing_text(contact, dim: int) -> str:
-    """How a scene's two bodies are paired, for the run's description: the formulation and the pairing."""
-    if contact.formulation == "mortar":
-        return f"dual mortar, {PAIRING[contact.sliding]}"
-    return f"{'node-to-face' if dim == 3 else 'node-to-segment'}, {PAIRING[contact.sliding]}"
+def pairing_text(obstacle: ElasticBody, dim: int) -> str:
+    """How the two bodies are paired, for the run's description: the built master body's formulation and pairing
+    (read from the object the contact uses, so the description cannot disagree with the model)."""
+    if obstacle.formulation == "mortar":
+        return f"dual mortar, {PAIRING[obstacle.sliding]}"
+    return f"{'node-to-face' if dim == 3 else 'node-to-segment'}, {PAIRING[obstacle.sliding]}"
 
 
 def elastic_flat(scene: Scene, body: BodyMesh, plane: RigidPlane, zone: float, h: float) -> ElasticBody:

@@ -193,7 +193,7 @@ class HalfCylinder(Geometry):
             obstacle = elastic_flat(scene, body, plane, zone, h)
             display_cells, elastic_cells = two_body_cells(scene, body, "cylinder")
             label = "two identical elastic bodies: E* = E/(2(1-nu^2))"
-            text = f", each paired with the elastic flat ({pairing_text(contact, 2)})"
+            text = f", each paired with the elastic flat ({pairing_text(obstacle, 2)})"
         else:
             obstacle, display_cells, elastic_cells = plane, None, None
             label = "rigid plane, frictionless: E* = E/(1-nu^2)"

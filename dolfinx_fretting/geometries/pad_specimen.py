@@ -144,10 +144,11 @@ class PadSpecimen(HalfCylinder):
         plane = rigid_plane(scene)
         window, automatic = self.candidate_window(scene, zone, h)
         display_cells, elastic_cells = two_body_cells(scene, body, "cylinder")
-        text = (f", each paired with the specimen ({pairing_text(scene.contact, 2)}); "
+        obstacle = elastic_flat(scene, body, plane, zone, h)
+        text = (f", each paired with the specimen ({pairing_text(obstacle, 2)}); "
                 "specimen: half its thickness, mid-plane and left end on rollers, bulk stress on its right end")
         return SceneModel(body=body, V=V, form=form, bcs=bcs, surface=contact_surface(scene, body),
-                          obstacle=elastic_flat(scene, body, plane, zone, h), loads=loads, element_size=h,
+                          obstacle=obstacle, loads=loads, element_size=h,
                           window=window, window_limit=zone, window_automatic=automatic, window_edges_matter=True,
                           elastic_cells=elastic_cells, display_cells=display_cells,
                           hertz=(geometry.radius, scene.contact_modulus,

@@ -311,7 +311,7 @@ class Sphere(Geometry):
         if two_body:
             obstacle = elastic_flat(scene, body, plane, zone, h)
             display_cells, elastic_cells = two_body_cells(scene, body, "sphere")
-            text = f", each paired with the elastic flat's faces ({pairing_text(contact, 3)})"
+            text = f", each paired with the elastic flat's faces ({pairing_text(obstacle, 3)})"
         else:
             obstacle, display_cells, elastic_cells = plane, None, None
             text = ", against a rigid plane"
