@@ -2,6 +2,8 @@
 
 Sources: K. L. Johnson, *Contact Mechanics* (CUP, 1985), sections 4.2 (Hertz line contact), 7.2 (Cattaneo-Mindlin
 partial slip of a cylinder and of a sphere) and 7.3 (Mindlin-Deresiewicz: the oscillating tangential force);
+M. Ciavarella, D. A. Hills and G. Monno, *The influence of rounded edges on indentation by a flat punch*, Proc.
+IMechE C 212 (1998) (the flat punch with rounded edges on a half-plane);
 R. D. Mindlin and H. Deresiewicz, *Elastic spheres in contact under varying oblique forces*, J. Appl. Mech. 20
 (1953) 327-344. The 3D forms hold for elastically similar bodies (Dundurs' beta = 0: the tangential traction does
 not change the pressure) and take the traction parallel to Q (Mindlin's approximation; exact for nu = 0).
@@ -14,9 +16,10 @@ import math
 import numpy as np
 
 __all__ = ["plane_strain_modulus", "hertz_line_contact", "hertz_pressure", "hertz_sphere",
-           "cattaneo_mindlin_stick_half_width", "mindlin_shear_modulus", "cattaneo_mindlin_stick_radius",
-           "mindlin_tangential_displacement", "mindlin_deresiewicz_energy", "worn_sphere_volume",
-           "worn_sphere_contact_radius"]
+           "cattaneo_mindlin_stick_half_width", "cattaneo_mindlin_shear", "rounded_punch_load",
+           "rounded_punch_half_width", "rounded_punch_pressure", "mindlin_shear_modulus",
+           "cattaneo_mindlin_stick_radius", "mindlin_tangential_displacement", "mindlin_deresiewicz_energy",
+           "worn_sphere_volume", "worn_sphere_contact_radius"]
 
 
 def plane_strain_modulus(E1: float, nu1: float, E2: float | None = None, nu2: float | None = None) -> float:
@@ -63,6 +66,80 @@ def cattaneo_mindlin_stick_half_width(a: float, Q: float, mu: float, P: float) -
     if not 0 <= Q < mu * P:
         raise ValueError(f"Q = {Q} must satisfy 0 <= Q < mu*P = {mu * P}")
     return float(a * np.sqrt(1.0 - Q / (mu * P)))
+
+
+def cattaneo_mindlin_shear(x: np.ndarray, P: float, R: float, E_star: float, Q: float, mu: float) -> np.ndarray:
+    """Magnitude of the shear traction of a cylinder under a tangential force ``0 <= Q < mu P`` grown from 0 at
+    constant P, elastically similar bodies (Johnson section 7.2): ``q(x) = mu p0 [sqrt(1 - x^2/a^2) - (c/a)
+    sqrt(1 - x^2/c^2)]``, the second term only inside the stick zone ``|x| < c``
+    (:func:`cattaneo_mindlin_stick_half_width`), zero outside ``|x| < a``; a and p0 of :func:`hertz_line_contact`. It
+    carries Q: its integral over x is Q."""
+    a, p0 = hertz_line_contact(P, R, E_star)
+    c = cattaneo_mindlin_stick_half_width(a, Q, mu, P)
+    x = np.asarray(x, dtype=float)
+    corrective = c / a * np.sqrt(np.clip(1.0 - (x / c) ** 2, 0.0, None)) if c > 0 else np.zeros_like(x)
+    return mu * p0 * (np.sqrt(np.clip(1.0 - (x / a) ** 2, 0.0, None)) - corrective)
+
+
+# Flat punch with rounded edges (line contact) -----------------------------------------------------------------
+def _punch_angle(a: float, b: float) -> float:
+    if not 0 <= b < a:
+        raise ValueError(f"rounded punch: the flat half-width b = {b} must satisfy 0 <= b < a = {a} (the contact "
+                         "half-width)")
+    return math.asin(b / a)
+
+
+def rounded_punch_load(a: float, b: float, R: float, E_star: float) -> float:
+    """Normal force per unit length that presses a flat punch with rounded edges (flat over ``|x| <= b``, edges of
+    radius R beyond, their profile ``(|x| - b)^2 / (2R)``) into a half-plane over ``|x| < a`` (frictionless;
+    Ciavarella, Hills & Monno 1998): ``P = (E* a^2 / (4R)) (pi - 2 phi0 - sin 2 phi0)``, ``sin phi0 = b/a``.
+    b = 0 is Hertz's cylinder (:func:`hertz_line_contact`)."""
+    phi0 = _punch_angle(a, b)
+    return E_star * a * a / (4.0 * R) * (math.pi - 2.0 * phi0 - math.sin(2.0 * phi0))
+
+
+def rounded_punch_half_width(P: float, b: float, R: float, E_star: float) -> float:
+    """Contact half-width a > b of the rounded punch under ``P > 0``: the root of :func:`rounded_punch_load`
+    ``= P`` (increasing in a from 0 at a = b), found by bisection to 1e-14 relative."""
+    if not (P > 0 and b >= 0 and R > 0 and E_star > 0):
+        raise ValueError(f"rounded_punch_half_width: P = {P} > 0, b = {b} >= 0, R = {R} > 0, E_star = {E_star} > 0 "
+                         "needed")
+    lower, upper = b, max(2.0 * b, hertz_line_contact(P, R, E_star)[0])   # Hertz's a (b = 0) is an upper bound
+    while rounded_punch_load(upper, b, R, E_star) < P:
+        upper *= 2.0
+    while upper - lower > 1e-14 * upper:
+        middle = 0.5 * (lower + upper)
+        lower, upper = (middle, upper) if rounded_punch_load(middle, b, R, E_star) < P else (lower, middle)
+    return 0.5 * (lower + upper)
+
+
+def rounded_punch_pressure(x: np.ndarray, P: float, b: float, R: float, E_star: float) -> np.ndarray:
+    """Pressure under the rounded punch of :func:`rounded_punch_load` (Ciavarella, Hills & Monno 1998), the
+    half-plane inversion of the gap's slope ``h'(t) = sign(t) max(|t| - b, 0) / R`` bounded at both ends, integrated
+    in closed form; with ``x = a sin phi``, ``b = a sin phi0``::
+
+        p = (E* a / (2 pi R)) [(pi - 2 phi0) cos phi
+                               + (sin phi - sin phi0) ln|cos((phi + phi0)/2) / sin((phi - phi0)/2)|
+                               - (sin phi + sin phi0) ln|cos((phi - phi0)/2) / sin((phi + phi0)/2)|],
+
+    zero outside ``|x| < a``; finite at ``x = +-b`` (the logarithms' poles are multiplied by zero there: the limit is
+    taken). b = 0 gives Hertz's pressure (:func:`hertz_pressure`)."""
+    a = rounded_punch_half_width(P, b, R, E_star)
+    phi0 = _punch_angle(a, b)
+    x = np.asarray(x, dtype=float)
+    inside = np.abs(x) < a
+    phi = np.arcsin(np.where(inside, x / a, 0.0))
+
+    def weighted_log(weight, numerator, denominator):
+        """weight * ln|numerator / denominator|, 0 where weight is 0 (the pole at |x| = b)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            value = weight * np.log(np.abs(numerator / denominator))
+        return np.where(weight == 0.0, 0.0, value)
+
+    bracket = ((math.pi - 2.0 * phi0) * np.cos(phi)
+               + weighted_log(np.sin(phi) - math.sin(phi0), np.cos((phi + phi0) / 2), np.sin((phi - phi0) / 2))
+               - weighted_log(np.sin(phi) + math.sin(phi0), np.cos((phi - phi0) / 2), np.sin((phi + phi0) / 2)))
+    return np.where(inside, E_star * a / (2.0 * math.pi * R) * bracket, 0.0)
 
 
 # Sphere (3D) ------------------------------------------------------------------------------------------------

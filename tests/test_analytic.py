@@ -1,12 +1,18 @@
-"""The sphere's closed forms of :mod:`dolfinx_fretting.analytic` against what they are defined by: the Mindlin-
-Deresiewicz energy is the area of the loop Masing's rule makes of Mindlin's load-displacement curve (integrated
-here numerically, branch by branch), its series for small loads, and G* the initial tangential stiffness 8 a G*."""
+"""Closed forms of :mod:`dolfinx_fretting.analytic` against what they are defined by: the Mindlin-Deresiewicz
+energy is the area of the loop Masing's rule makes of Mindlin's load-displacement curve (integrated here
+numerically, branch by branch), its series for small loads, and G* the initial tangential stiffness 8 a G*; the
+cylinder's Cattaneo-Mindlin shear carries Q and is mu p in the slip zone; the rounded punch's pressure is the
+half-plane inversion integral of its gap's slope (scipy's quadrature) and carries P."""
 
 import numpy as np
 import pytest
+from scipy.integrate import quad
 
-from dolfinx_fretting.analytic import (cattaneo_mindlin_stick_radius, mindlin_deresiewicz_energy,
-                                       mindlin_shear_modulus, mindlin_tangential_displacement)
+from dolfinx_fretting.analytic import (cattaneo_mindlin_shear, cattaneo_mindlin_stick_half_width,
+                                       cattaneo_mindlin_stick_radius, hertz_line_contact, hertz_pressure,
+                                       mindlin_deresiewicz_energy, mindlin_shear_modulus,
+                                       mindlin_tangential_displacement, plane_strain_modulus,
+                                       rounded_punch_half_width, rounded_punch_load, rounded_punch_pressure)
 
 E, NU, MU, P, A = 210000.0, 0.3, 0.8, 100.0, 0.1866  # MPa, -, -, N, mm (sphere-flat's steel and Hertz radius)
 
@@ -56,7 +62,6 @@ def test_worn_sphere_volume_is_the_integral_of_its_wear_profile():
     (Johnson eq. 3.32, E the complete elliptic integral of the second kind; scipy's ``ellipe`` takes m = (r/c)^2),
     and the wear depth closes the gap from the edge: w(r) = (c^2 - r^2)/(2R) + u(c) - u(r). Adaptive quadrature to
     1e-12: the two agree to 1e-9 (measured 1e-15)."""
-    from scipy.integrate import quad
     from scipy.special import ellipe
 
     from dolfinx_fretting.analytic import plane_strain_modulus, worn_sphere_volume
@@ -86,3 +91,67 @@ def test_worn_sphere_contact_radius_inverts_the_volume_and_starts_at_hertz():
     assert worn_sphere_contact_radius(10.0, P, R, E_star) == pytest.approx((4 * R * 10.0 / np.pi) ** 0.25, rel=2e-4)
     with pytest.raises(ValueError, match="volume = -1"):
         worn_sphere_contact_radius(-1.0, P, R, E_star)
+
+
+# Line contact: Cattaneo-Mindlin's shear, the rounded punch ---------------------------------------------------------
+#: Two identical bodies of the paper's material (MPa): E* = E / (2 (1 - nu^2)).
+E_PAIR = plane_strain_modulus(115000.0, 0.342, 115000.0, 0.342)
+
+
+@pytest.mark.parametrize("ratio", [0.0, 0.5, 0.9])
+def test_cattaneo_mindlin_shear_carries_Q(ratio):
+    """q(x) of a cylinder (R = 6, P = 199.24, mu = 0.9) under Q = ratio mu P: its integral is Q (the trapezoidal rule
+    on 2e5 intervals: 1e-6, the square-root ends' O(n^-1.5)), it is mu p outside the stick zone |x| < c (1e-12) and
+    below it inside, and 0 under no tangential force."""
+    R, P, mu = 6.0, 199.24, 0.9
+    Q = ratio * mu * P
+    a, _ = hertz_line_contact(P, R, E_PAIR)
+    c = cattaneo_mindlin_stick_half_width(a, Q, mu, P)
+    where = np.linspace(-a, a, 200001)
+    shear = cattaneo_mindlin_shear(where, P, R, E_PAIR, Q, mu)
+    friction = mu * hertz_pressure(where, P, R, E_PAIR)
+    assert np.sum((shear[1:] + shear[:-1]) / 2 * np.diff(where)) == pytest.approx(Q, rel=1e-6, abs=1e-9)
+    slip = np.abs(where) >= c
+    assert np.allclose(shear[slip], friction[slip], rtol=1e-12, atol=1e-12)
+    assert np.all(shear[~slip] < friction[~slip])
+    assert np.all(cattaneo_mindlin_shear(np.array([a, 1.1 * a]), P, R, E_PAIR, Q, mu) == 0.0)
+
+
+def test_rounded_punch_closed_form():
+    """:func:`~dolfinx_fretting.analytic.rounded_punch_pressure` against what defines it: it carries P (the
+    trapezoidal rule on 2e5 intervals: 1e-6, the square-root ends' O(n^-1.5)), vanishes at |x| = a, is Hertz's
+    pressure when b = 0 (1e-12) and equals the half-plane inversion integral of the gap's slope (the demo_plugin
+    quadrature, scipy's Cauchy weight; to 1e-9 at points in the flat, at x = b and on the rounded edges); the
+    half-width is the root of the load (1e-12)."""
+    b, R = 0.1, 6.0
+    P = rounded_punch_load(0.195, b, R, E_PAIR)
+    a = rounded_punch_half_width(P, b, R, E_PAIR)
+    assert a == pytest.approx(0.195, rel=1e-12)
+    where = np.linspace(-a, a, 200001)
+    pressure = rounded_punch_pressure(where, P, b, R, E_PAIR)
+    assert np.sum((pressure[1:] + pressure[:-1]) / 2 * np.diff(where)) == pytest.approx(P, rel=1e-6)
+    assert pressure[0] == 0.0 and pressure[-1] == 0.0 and pressure.min() >= 0.0
+    some = np.array([0.0, 0.05, 0.13, 0.19, 0.3])
+    assert np.allclose(rounded_punch_pressure(some, 150.0, 0.0, R, E_PAIR), hertz_pressure(some, 150.0, R, E_PAIR),
+                       rtol=1e-12, atol=1e-12)
+
+    def inversion(x):
+        """p(x) = (E*/(2 pi)) sqrt(a^2 - x^2) PV int h'(t) / (sqrt(a^2 - t^2) (t - x)) dt with t = a sin s."""
+        slope = lambda s: np.sign(s) * max(abs(a * np.sin(s)) - b, 0.0) / R  # noqa: E731
+        at = np.arcsin(x / a)
+        total = 0.0
+        kinks = [-np.pi / 2, -np.arcsin(b / a), np.arcsin(b / a), np.pi / 2]
+        for low, high in zip(kinks[:-1], kinks[1:]):
+            if low < at < high:   # 1/(a sin s - x) = [(s - at)/(a (sin s - sin at))] / (s - at)
+                regular = lambda s: slope(s) * ((s - at) / (a * (np.sin(s) - np.sin(at))) if s != at  # noqa: E731
+                                                else 1.0 / (a * np.cos(at)))
+                total += quad(regular, low, high, weight="cauchy", wvar=at, limit=200)[0]
+            else:
+                total += quad(lambda s: slope(s) / (a * np.sin(s) - x), low, high, limit=200)[0]
+        return E_PAIR / (2 * np.pi) * np.sqrt(a * a - x * x) * total
+
+    points = np.array([0.0, 0.04, b, -0.13, 0.17, 0.19])
+    assert np.allclose(rounded_punch_pressure(points, P, b, R, E_PAIR), [inversion(x) for x in points],
+                       rtol=1e-9, atol=0)
+    with pytest.raises(ValueError, match="b = 0.3 must satisfy 0 <= b < a = 0.2"):
+        rounded_punch_load(0.2, 0.3, R, E_PAIR)

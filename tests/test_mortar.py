@@ -10,10 +10,11 @@ import ufl  # noqa: E402
 from dolfinx import fem, mesh  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 from support.blocks import E_PLANE, TIGHT, component, elasticity  # noqa: E402
+from support.two_body_meshes import E_STAR, cylinder_on_graded_flat  # noqa: E402
+from support.two_body_meshes import elasticity as two_body_elasticity  # noqa: E402
 
 import dolfinx_fretting as dfr  # noqa: E402
-from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
-from dolfinx_fretting import compat, meshes, mortar  # noqa: E402
+from dolfinx_fretting import compat, mortar  # noqa: E402
 from dolfinx_fretting.analytic import hertz_line_contact, hertz_pressure  # noqa: E402
 
 
@@ -285,56 +286,6 @@ def test_a_mortar_zone_beside_a_node_to_segment_zone():
 
 
 # Two-body Hertz on non-matching meshes --------------------------------------------------------------------------------
-def graded_lines(h, fine, total, growth=1.2):
-    """Grid lines 0, h, 2h ... up to ``fine``, then steps growing by ``growth`` up to ``total``."""
-    lines = list(np.arange(0.0, fine + h / 2, h))
-    step = h
-    while lines[-1] < total:
-        step *= growth
-        lines.append(min(lines[-1] + step, total))
-    if total - lines[-2] < 0.3 * (lines[-2] - lines[-3]):   # no sliver at the end
-        del lines[-2]
-    return np.array(lines)
-
-
-def cylinder_on_graded_flat(h, flat_h, radius=6.0, width=20.0, height=10.0, comm=MPI.COMM_WORLD):
-    """The package's half-cylinder (quadrilaterals, h on the arc within 0.4 of its lowest point, the origin) on a
-    structured flat [-W/2, W/2] x [-H, 0] of its own, ``flat_h`` within 0.4 of the origin and graded away from it: the
-    two contact faces match only if flat_h = h. Tags: 1 the arc within |x| < 1 (slave), 2 the flat's top within
-    |x| < 1 (master). The cylinder's top and the flat's bottom clamped."""
-    cylinder = meshes.half_cylinder(MPI.COMM_SELF, radius, contact_mesh_size=h, contact_half_width=0.4,
-                                    coarse_mesh_size=0.6)
-    cylinder_points = cylinder.mesh.geometry.x[:, :2]
-    half = graded_lines(flat_h, 0.4, width / 2)
-    xs = np.concatenate([-half[:0:-1], half])
-    ys = -graded_lines(flat_h, 0.4, height)[::-1]
-    X, Y = np.meshgrid(xs, ys, indexing="ij")
-    index = lambda i, j: cylinder_points.shape[0] + i * ys.size + j  # noqa: E731
-    flat_cells = [[index(i, j), index(i + 1, j), index(i, j + 1), index(i + 1, j + 1)]
-                  for i in range(xs.size - 1) for j in range(ys.size - 1)]
-    points = np.vstack([cylinder_points, np.column_stack([X.ravel(), Y.ravel()])])
-    cells = np.vstack([dfx.geometry_dofmap(cylinder.mesh), flat_cells])
-    root = comm.rank == 0
-    msh = compat.create_mesh(comm, cells if root else np.zeros((0, 4), dtype=np.int64),
-                             points if root else np.zeros((0, 2)), "quadrilateral")
-    fdim = 1
-    msh.topology.create_connectivity(fdim, 2)
-    boundary = mesh.exterior_facet_indices(msh.topology)
-    middle = mesh.compute_midpoints(msh, fdim, boundary).reshape(-1, 3)
-    f_to_c = msh.topology.connectivity(fdim, 2)
-    cell_y = np.array([mesh.compute_midpoints(msh, 2, f_to_c.links(f))[0, 1] for f in boundary])
-    near = np.abs(middle[:, 0]) < 1.0
-    arc = (cell_y > 0) & (middle[:, 1] < radius - 1e-9) & near
-    flat_top = (cell_y < 0) & np.isclose(middle[:, 1], 0.0) & near
-    markers = np.select([arc, flat_top], [1, 2], 0).astype(np.int32)
-    keep = np.flatnonzero(markers > 0)
-    keep = keep[np.argsort(boundary[keep])]
-    tags = mesh.meshtags(msh, fdim, boundary[keep], markers[keep])
-    V = compat.vector_space(msh, 1)
-    clamped = lambda x: np.isclose(x[1], radius) | np.isclose(x[1], -height)  # noqa: E731
-    return V, tags, [component(V, 0, clamped), component(V, 1, clamped)]
-
-
 @pytest.mark.slow
 def test_two_body_hertz_on_non_matching_meshes():
     """A half-cylinder (R = 6) pressed by P = 199.24 N/mm on a flat of the same material (E = 115 GPa, nu = 0.342;
@@ -354,27 +305,19 @@ def test_two_body_hertz_on_non_matching_meshes():
     Asserted: mortar on every mesh within 0.5 % of p0 at the peak, RMS within 0.5 %, largest within 1 %; on matching
     faces its RMS within 0.05 % of p0 of node-to-segment's (as accurate, to the normals' tilt); node-to-segment on the
     non-matching meshes worse than 2 % at the peak (the contrast); the total force P to 1e-8 (force control)."""
-    R, P, E, NU = 6.0, 199.24, 115000.0, 0.342
-    e_star = E / (2 * (1 - NU ** 2))
-    a, p0 = hertz_line_contact(P, R, e_star)
+    R, P = 6.0, 199.24
+    a, p0 = hertz_line_contact(P, R, E_STAR)
     h = 0.01   # a / 15
-
-    def elasticity_of(V):   # the support module's elasticity has other constants
-        lmbda, mu_lame = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))
-        u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-        eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
-        sigma = lmbda * ufl.tr(eps(u)) * ufl.Identity(2) + 2 * mu_lame * eps(u)
-        return ufl.inner(sigma, eps(v)) * ufl.dx
 
     def errors(ratio, formulation):
         V, tags, bcs = cylinder_on_graded_flat(h, ratio * h)
         contact = dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 1.0], formulation=formulation), mu=0.0,
                               bcs=bcs, window=0.4)
-        problem = dfr.FrettingProblem(elasticity_of(V), contact, bcs, solver=dfr.LocalSolver(tol=1e-10))
+        problem = dfr.FrettingProblem(two_body_elasticity(V), contact, bcs, solver=dfr.LocalSolver(tol=1e-10))
         state, _ = problem.advance(problem.initial_state(), normal=dfr.Force(P))
         fields = problem.contact_fields(state)
         x, pressure = fields["coordinates"][:, 0], fields["pressure"]
-        error = (pressure - hertz_pressure(x, P, R, e_star)) / p0
+        error = (pressure - hertz_pressure(x, P, R, E_STAR)) / p0
         inner = np.abs(x) < 0.8 * a
         force = problem.total_force(state)[0]
         problem.destroy()
