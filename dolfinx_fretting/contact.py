@@ -556,7 +556,8 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
 
 
 def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords: np.ndarray, tributary: np.ndarray,
-                       abscissa: np.ndarray, faces: np.ndarray, weights: np.ndarray, n_dofs: int) -> ContactSet:
+                       abscissa: np.ndarray, faces: np.ndarray, weights: np.ndarray, n_dofs: int,
+                       surface_mass: sp.csr_matrix | None = None) -> ContactSet:
     """The contact set of slave nodes paired with points of ``surface`` (pure NumPy; the same on every rank).
 
     The pairing (each contact's facet and its weights on the facet's nodes) may have been searched in any
@@ -572,6 +573,7 @@ def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords:
             tributary measure, position along the surface), in the contacts' order.
         faces, weights: Each contact's facet of ``surface`` and its weights on the facet's nodes (0 on padding).
         n_dofs: Global number of displacement dofs (the columns of H).
+        surface_mass: The slave nodes' :attr:`ContactSet.surface_mass` (a pairing anew keeps the slave's).
     """
     dim = surface.dim
     faces = np.asarray(faces, dtype=np.int64)
@@ -599,7 +601,8 @@ def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords:
     return ContactSet(dim=dim, global_nodes=global_nodes, coords=coords, frames=frames, gap0=gaps,
                       tributary=tributary, abscissa=abscissa, H=H, master_nodes=masters,
                       master_weights=np.asarray(weights, dtype=float), master_points=point,
-                      master_sizes=surface.sizes[faces], master_faces=faces, master_surface=surface)
+                      master_sizes=surface.sizes[faces], master_faces=faces, master_surface=surface,
+                      surface_mass=surface_mass)
 
 
 def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
@@ -1541,7 +1544,6 @@ class Contact:
         if not (contact_set.two_body and np.array_equal(contact_set.global_nodes, self.contact_set.global_nodes)):
             raise ValueError("Contact.with_pairing: the pairing must be of the same slave nodes, in the same order")
         other = copy.copy(self)
-        contact_set.surface_mass = self.contact_set.surface_mass   # the same slave nodes: the same surface
         other._use(contact_set)
         return other
 

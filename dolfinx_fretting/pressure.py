@@ -18,10 +18,10 @@ them in one of two ways, :attr:`~dolfinx_fretting.contact.Contact.pressure_recov
   nodal ones; and ``sum_L D_L p_L = sum_L D_L q_L`` (the M-weighted integral is kept).
 
 Why: on unstructured tetrahedra the nodal forces of node-to-rigid contact scatter from node to node, and so does
-``r / A`` (a sphere on a rigid plane, a/h = 12-16: up to +5.7 % at the peak, 7-9 % at single nodes, RMS 2.6-4 %
-within 0.8a); the L2 projection with the consistent mass matrix, ``M^-1 r``, amplifies that scatter (+14 % at
-the peak), while the smoothing above gives the peak within 0.8 % and the RMS within 1 % of Hertz at a/h >= 12
-(``benchmarks/results/tet_pressure.md``). The wear law and the cycle jumps keep using the nodal ``r / A``
+``r / A`` (a sphere's cap on a rigid plane, a/h = 12-16: +4.0 ... +5.7 % at the peak, 7-10 % at single nodes, RMS
+2.6-4.0 % within 0.8a); the L2 projection with the consistent mass matrix, ``M^-1 r``, amplifies that scatter
+(+11 ... +25 % at the peak), while the smoothing above gives the peak within 0.4 % and the RMS within 1 % of Hertz at
+a/h >= 12 (``benchmarks/results/tet_pressure.md``). The wear law and the cycle jumps keep using the nodal ``r / A``
 (Archard's worn volume is the sum of the nodal ``A dg``, whatever is read).
 """
 
