@@ -1253,13 +1253,17 @@ def _facet_nodes(V, facets: np.ndarray) -> np.ndarray:
     """The global P1 nodes of the owned ones of ``facets``, gathered on every rank: (f, 2) segments in 2D, (f, 4)
     faces in 3D, a quadrilateral's in cyclic order (a triangle's fourth -1). Collective. Vectorised (what the
     smoothed recovery needs of :func:`_boundary_faces`, without its per-facet loop: 1 ms a facet)."""
+    from dolfinx import mesh as dmesh  # lazy: DOLFINx (see the note at the imports)
+
     from ._dolfinx import cell_dofmap, entities_to_geometry, geometry_dofmap  # lazy: DOLFINx (see the imports)
 
     msh, comm = V.mesh, V.mesh.comm
     fdim = msh.topology.dim - 1
     owned, f_to_c, _, _ = _owned_facet_topology(msh, facets)
     cells = np.array([f_to_c.links(f)[0] for f in owned], dtype=np.int64)
-    facet_geometry = entities_to_geometry(msh, fdim, owned).reshape(owned.size, -1)
+    vertices = 2 if fdim == 1 else (3 if msh.topology.cell_type == dmesh.CellType.tetrahedron else 4)
+    # (a rank may own none of the facets: the reshape keeps the width then)
+    facet_geometry = np.asarray(entities_to_geometry(msh, fdim, owned)).reshape(owned.size, vertices)
     cell_geometry, cell_dofs = geometry_dofmap(msh)[cells], cell_dofmap(V)[cells]
     # A P1 space and a first-order geometry number a cell's nodes alike (see _node_coordinates).
     slot = np.argmax(cell_geometry[:, None, :] == facet_geometry[:, :, None], axis=2)
