@@ -308,7 +308,7 @@ def _pairing_from(operators: ContactOperators, data: dict[str, np.ndarray],
     else:   # a checkpoint of an earlier release: facet indices and DOLFINx's node numbers, as they were saved
         faces, master_wear = data["pairing_faces"], data["master_wear"].copy()
     pairing = paired_contact_set(surface, ref.global_nodes, ref.coords, ref.tributary, ref.abscissa, faces, weights,
-                                 ref.H.shape[1])
+                                 ref.H.shape[1], ref.surface_mass)
     if "pairing_nodes" in data and (not np.array_equal(pairing.master_nodes, data["pairing_nodes"])
                                     or master_wear.shape != (compliance.nodes.size,)):
         raise ValueError(f"{path}: the saved pairing or master wear does not fit this problem's master surface (a "

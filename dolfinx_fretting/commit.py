@@ -100,6 +100,8 @@ def commit(operators: ContactOperators, laws: tuple, monitor: SlidingMonitor, st
     coefficients = wear_coefficients(operators, laws, result.in_cycle, mu)
     commit_increment(result.forces, result.slip, result.positions, mu, contact_set.dim,
                      contact_set.tributary, contact_set.abscissa, coefficients, wear_gap, states, row)
+    if contact_set.surface_mass is not None:   # the peak of the pressure read (pressure_recovery "smoothed")
+        row[ROW["max_pressure"]] = max(float(contact_set.tractions(result.forces)[:, 0].max(initial=0.0)), 0.0)
     friction_energy = friction.accumulated_energy(operators.contact, state, result.forces, result.slip,
                                                   acceleration(laws) if result.in_cycle else 1.0)
     master_wear = state.master_wear

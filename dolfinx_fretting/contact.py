@@ -28,6 +28,7 @@ from mpi4py import MPI
 
 from .laws import Coulomb, FrictionLaw
 from .mortar import MortarMatrices, mortar_matrices, weighted_gaps
+from .pressure import RECOVERIES, smoothed_tractions, surface_mass
 
 # DOLFINx, UFL and petsc4py are imported inside the functions that read the mesh: this module's value types
 # (ContactSet, MasterSurface, RigidPlane, ElasticBody and the pure pairing functions) are imported by modules that
@@ -187,6 +188,9 @@ class ContactSet:
     #: The candidate window's centre: the body point closest to the obstacle (the first point of contact), from
     #: which the window's half-width is measured in the tangent plane.
     window_centre: np.ndarray | None = None
+    #: The P1 mass matrix (nc, nc) of the contact surface's facets whose every node is a contact, when the
+    #: tractions read are the ``"smoothed"`` ones (:mod:`dolfinx_fretting.pressure`); None: ``"nodal"``.
+    surface_mass: sp.csr_matrix | None = None
 
     @property
     def two_body(self) -> bool:
@@ -210,6 +214,16 @@ class ContactSet:
         """Total contact force on the body in global coordinates."""
         return self.rigid_modes.T @ r
 
+    def tractions(self, forces: np.ndarray) -> np.ndarray:
+        """The traction read at each contact, (..., nc, dim) rows (pressure, shear t1[, t2]), of contact forces
+        ``forces`` (..., nc * dim): ``r / A`` (``"nodal"``), or the ``"smoothed"`` values of
+        :func:`~dolfinx_fretting.pressure.smoothed_tractions` when :attr:`surface_mass` is held."""
+        r = np.asarray(forces, dtype=float)
+        r = r.reshape(*r.shape[:-1], self.nc, self.dim)
+        if self.surface_mass is None:
+            return r / self.tributary[:, None]
+        return smoothed_tractions(r, self.tributary, self.surface_mass)
+
     def subset(self, contacts: np.ndarray) -> ContactSet:
         """The contacts ``contacts`` (indices, in that order) of this set: their rows of every array and of H."""
         contacts = np.asarray(contacts, dtype=np.int64)
@@ -218,7 +232,8 @@ class ContactSet:
         return ContactSet(self.dim, self.global_nodes[contacts], self.coords[contacts], self.frames[contacts],
                           self.gap0[contacts], self.tributary[contacts], self.abscissa[contacts], self.H[rows],
                           pick(self.master_nodes), pick(self.master_weights), pick(self.master_points),
-                          pick(self.master_sizes), pick(self.master_faces), self.master_surface, self.window_centre)
+                          pick(self.master_sizes), pick(self.master_faces), self.master_surface, self.window_centre,
+                          None if self.surface_mass is None else self.surface_mass[contacts][:, contacts].tocsr())
 
 
 def _tributary_measure(V, facets: np.ndarray, fdim: int) -> np.ndarray:
@@ -541,7 +556,8 @@ def find_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_widt
 
 
 def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords: np.ndarray, tributary: np.ndarray,
-                       abscissa: np.ndarray, faces: np.ndarray, weights: np.ndarray, n_dofs: int) -> ContactSet:
+                       abscissa: np.ndarray, faces: np.ndarray, weights: np.ndarray, n_dofs: int,
+                       surface_mass: sp.csr_matrix | None = None) -> ContactSet:
     """The contact set of slave nodes paired with points of ``surface`` (pure NumPy; the same on every rank).
 
     The pairing (each contact's facet and its weights on the facet's nodes) may have been searched in any
@@ -557,6 +573,7 @@ def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords:
             tributary measure, position along the surface), in the contacts' order.
         faces, weights: Each contact's facet of ``surface`` and its weights on the facet's nodes (0 on padding).
         n_dofs: Global number of displacement dofs (the columns of H).
+        surface_mass: The slave nodes' :attr:`ContactSet.surface_mass` (a pairing anew keeps the slave's).
     """
     dim = surface.dim
     faces = np.asarray(faces, dtype=np.int64)
@@ -584,7 +601,8 @@ def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords:
     return ContactSet(dim=dim, global_nodes=global_nodes, coords=coords, frames=frames, gap0=gaps,
                       tributary=tributary, abscissa=abscissa, H=H, master_nodes=masters,
                       master_weights=np.asarray(weights, dtype=float), master_points=point,
-                      master_sizes=surface.sizes[faces], master_faces=faces, master_surface=surface)
+                      master_sizes=surface.sizes[faces], master_faces=faces, master_surface=surface,
+                      surface_mass=surface_mass)
 
 
 def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
@@ -1207,6 +1225,58 @@ class ElasticBody(Obstacle):
                           reference_frame=self.frame)
 
 
+def _resolved_recovery(given: str, V, obstacle: Obstacle) -> str:
+    """``pressure_recovery`` with ``"auto"`` resolved: ``"smoothed"`` against a rigid plane on tetrahedra (the
+    case measured), ``"nodal"`` otherwise."""
+    from dolfinx import mesh as dmesh  # lazy: DOLFINx (see the note at the imports)
+
+    if given != "auto":
+        return given
+    tetrahedra = V.mesh.topology.cell_type == dmesh.CellType.tetrahedron
+    return "smoothed" if tetrahedra and isinstance(obstacle, RigidPlane) else "nodal"
+
+
+def _candidate_surface_mass(V, facets: np.ndarray, contact_set: ContactSet) -> sp.csr_matrix:
+    """The P1 mass matrix of the facets of ``facets`` whose every node is a contact of ``contact_set``, in its
+    contacts' order (the ``"smoothed"`` recovery's; :func:`~dolfinx_fretting.pressure.surface_mass`). Collective."""
+    nodes = _facet_nodes(V, facets)
+    order = np.argsort(contact_set.global_nodes)
+    sorted_nodes = contact_set.global_nodes[order]
+    where = np.clip(np.searchsorted(sorted_nodes, nodes), 0, max(sorted_nodes.size - 1, 0))
+    found = (nodes >= 0) & (sorted_nodes[where] == nodes)
+    keep = np.all(found | (nodes < 0), axis=1)
+    faces = np.where(nodes >= 0, order[where], -1)[keep]
+    return surface_mass(faces, contact_set.coords, contact_set.nc)
+
+
+def _facet_nodes(V, facets: np.ndarray) -> np.ndarray:
+    """The global P1 nodes of the owned ones of ``facets``, gathered on every rank: (f, 2) segments in 2D, (f, 4)
+    faces in 3D, a quadrilateral's in cyclic order (a triangle's fourth -1). Collective. Vectorised (what the
+    smoothed recovery needs of :func:`_boundary_faces`, without its per-facet loop: 1 ms a facet)."""
+    from dolfinx import mesh as dmesh  # lazy: DOLFINx (see the note at the imports)
+
+    from ._dolfinx import cell_dofmap, entities_to_geometry, geometry_dofmap  # lazy: DOLFINx (see the imports)
+
+    msh, comm = V.mesh, V.mesh.comm
+    fdim = msh.topology.dim - 1
+    owned, f_to_c, _, _ = _owned_facet_topology(msh, facets)
+    cells = np.array([f_to_c.links(f)[0] for f in owned], dtype=np.int64)
+    vertices = 2 if fdim == 1 else (3 if msh.topology.cell_type == dmesh.CellType.tetrahedron else 4)
+    # (a rank may own none of the facets: the reshape keeps the width then)
+    facet_geometry = np.asarray(entities_to_geometry(msh, fdim, owned)).reshape(owned.size, vertices)
+    cell_geometry, cell_dofs = geometry_dofmap(msh)[cells], cell_dofmap(V)[cells]
+    # A P1 space and a first-order geometry number a cell's nodes alike (see _node_coordinates).
+    slot = np.argmax(cell_geometry[:, None, :] == facet_geometry[:, :, None], axis=2)
+    local = np.take_along_axis(cell_dofs, slot, axis=1)
+    nodes = V.dofmap.index_map.local_to_global(local.ravel().astype(np.int32)).astype(np.int64).reshape(local.shape)
+    width = 2 if fdim == 1 else 4
+    if fdim == 2 and nodes.shape[1] == 4:   # DOLFINx's quadrilateral (tensor-product order) to the cyclic one
+        nodes = nodes[:, [0, 1, 3, 2]]
+    elif fdim == 2:                         # triangles: the fourth -1
+        nodes = np.column_stack([nodes, np.full(owned.size, -1, dtype=np.int64)])
+    return np.concatenate([g.reshape(-1, width) for g in comm.allgather(nodes.reshape(-1, width))])
+
+
 def _check_vector_p1(V) -> None:
     """Refuse a space that is not a vector P1 (Lagrange degree 1, one component per space dimension)."""
     from . import _dolfinx as dfx  # lazy: DOLFINx (see the note at the imports)
@@ -1345,6 +1415,14 @@ class Contact:
             :meth:`~dolfinx_fretting.problem.FrettingProblem.run_cycle` widen the window to the one needed and
             solve the increment (or cycle) again (a RuntimeWarning says so). Elastic bodies with a fixed pairing:
             an elastic-plastic or finite-sliding problem cannot change its window and raises.
+        pressure_recovery: How the pressure and shear a user reads (``contact_fields``, ``max_pressure``, the
+            profiles and maps) are recovered from the nodal contact forces (:mod:`dolfinx_fretting.pressure`):
+            ``"nodal"``, force over tributary measure; ``"smoothed"``, those nodal values of the loaded nodes
+            smoothed by two sweeps of the lumped L2 projection over the loaded facets; ``"auto"`` (default):
+            ``"smoothed"`` against a :class:`RigidPlane` on tetrahedra (where the nodal values scatter: measured,
+            ``benchmarks/results/tet_pressure.md``), ``"nodal"`` otherwise (hexahedra: within 0.1 % of Hertz;
+            2D and elastic bodies as validated). The contact problem, the wear and the total forces do not depend
+            on it.
 
     Attributes:
         contact_set: The :class:`ContactSet` (nodes, frames, gaps, tributary measures, H).
@@ -1355,6 +1433,7 @@ class Contact:
         friction: The friction law (``Coulomb(mu)`` when ``mu`` was a number).
         mu: Friction coefficient per contact (the law's; an evolving law's at the start: a state's are
             :func:`dolfinx_fretting.friction.coefficients`).
+        pressure_recovery: The recovery in use, ``"nodal"`` or ``"smoothed"`` (``"auto"`` resolved).
 
     Raises:
         TypeError: ``surface`` (or ``ElasticBody.surface``) is not ``(facet tags, integer marker)``, or the
@@ -1367,7 +1446,10 @@ class Contact:
     """
 
     def __init__(self, V, surface: tuple, obstacle: Obstacle, mu: float | np.ndarray | FrictionLaw,
-                 bcs=(), window: float | None = None, grow_window: bool = False):
+                 bcs=(), window: float | None = None, grow_window: bool = False, pressure_recovery: str = "auto"):
+        if not isinstance(pressure_recovery, str) or pressure_recovery not in RECOVERIES:
+            raise ValueError(f"Contact: pressure_recovery = {pressure_recovery!r}: allowed "
+                             f"{', '.join(map(repr, RECOVERIES))}")
         _check_vector_p1(V)
         if not isinstance(obstacle, Obstacle):
             raise TypeError(f"Contact: obstacle must be an Obstacle (a RigidPlane, an ElasticBody, or a shape of "
@@ -1395,6 +1477,8 @@ class Contact:
             raise TypeError(f"Contact: grow_window = {grow_window!r}: expected True or False")
         self.V, self.surface, self.obstacle, self.window = V, surface, obstacle, window
         self.grow_window = bool(grow_window)
+        self._recovery_given = pressure_recovery
+        self.pressure_recovery = _resolved_recovery(pressure_recovery, V, obstacle)
         self.bcs = list(bcs)
         self._mu_given = mu
         # The surfaces and their free vertices are checked (a few reductions) before any candidate search.
@@ -1410,6 +1494,8 @@ class Contact:
             return obstacle.candidates(V, self.facets, half_width, self.fixed_nodes)
 
         contact_set = search(window)
+        if self.pressure_recovery == "smoothed":
+            contact_set.surface_mass = _candidate_surface_mass(V, self.facets, contact_set)
         self._use(contact_set)
         #: The window's centre (kept here: a pairing made anew under finite sliding does not carry it).
         self.window_centre = contact_set.window_centre
@@ -1561,7 +1647,8 @@ class Contact:
         """The same contact with another candidate window (collective; ``zone`` must be 0, the only one)."""
         if zone != 0:
             raise ValueError(f"zone = {zone}: a single Contact is zone 0")
-        return Contact(self.V, self.surface, self.obstacle, self._mu_given, self.bcs, window, self.grow_window)
+        return Contact(self.V, self.surface, self.obstacle, self._mu_given, self.bcs, window, self.grow_window,
+                       self._recovery_given)
 
     def window_distance(self, contact_set: ContactSet) -> np.ndarray:
         """In-plane distance of ``contact_set``'s nodes from the window's centre, measured as the candidate search

@@ -196,6 +196,9 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
                     operators.contact, current, out_r[part.start], out_x[part.start], scale))
         # Every increment of the cycle, not only the last: one product of the outside rows with the cycle's forces.
         operators.check_window(out_r, found, factors, solver.tol, cycle=True)
+        if contact_set.surface_mass is not None:   # the peak of the pressure read (pressure_recovery "smoothed")
+            pressure = contact_set.tractions(out_r)[..., 0]
+            rows[:, ROW["max_pressure"]] = np.maximum(pressure.max(axis=1, initial=0.0), 0.0)
         warm_new = r_warm  # the cycle's forces: the next cycle's warm start
         outs = (out_r, out_x, out_y, out_wear, out_states) if keep else (out_x[-1:], out_states[-1:])
         return rows, wear_gap, y, r_last, outs, current.friction_energy, found, solves

@@ -360,7 +360,8 @@ def zone_records(problem, forces: np.ndarray, slip: np.ndarray, wear_gap: np.nda
 
     The force is :meth:`~dolfinx_fretting.problem.FrettingProblem.total_force`'s (the zone's contact forces along its
     obstacle's frame); the peak pressure, energy and worn area are those of the increment's bookkeeping
-    (:func:`~dolfinx_fretting.wear.commit_increment`) restricted to the zone's contacts: ``max r_n / A``,
+    (:func:`~dolfinx_fretting.wear.commit_increment`) restricted to the zone's contacts: ``max p`` (the pressure
+    read, :meth:`~dolfinx_fretting.contact.ContactSet.tractions`: ``r_n / A`` or the smoothed one),
     ``-sum r_t . x_t``, ``sum A g_w``. The sums over the zones are the totals of the zone-less columns.
 
     Args:
@@ -381,6 +382,7 @@ def zone_records(problem, forces: np.ndarray, slip: np.ndarray, wear_gap: np.nda
     n = forces.shape[0]
     r = forces.reshape(n, -1, dim)
     x = slip.reshape(n, -1, dim)
+    pressure = stacked.contact_set.tractions(forces)[..., 0]   # each zone's pressure_recovery
     totals = np.array([stacked.obstacle_forces(f) for f in forces]).reshape(n, len(contacts), dim)
     components = ("normal", "tangential", "tangential_2")[:dim]
     out: dict[str, np.ndarray] = {}
@@ -389,7 +391,7 @@ def zone_records(problem, forces: np.ndarray, slip: np.ndarray, wear_gap: np.nda
         area = tributary[rows]
         values = {f"{c}_displacement": obstacle[:, dim * i + k] for k, c in enumerate(components)}
         values.update({f"{c}_force": totals[:, i, k] for k, c in enumerate(components)})
-        values["max_pressure"] = np.maximum((r[:, rows, 0] / area).max(axis=1, initial=0.0), 0.0)
+        values["max_pressure"] = np.maximum(pressure[:, rows].max(axis=1, initial=0.0), 0.0)
         values["dissipated_energy"] = -np.einsum("nac,nac->n", r[:, rows, 1:], x[:, rows, 1:])
         values["wear_area"] = wear_gap[:, rows] @ area
         for name in zone_history_fields(dim):
@@ -594,11 +596,11 @@ class FrettingWriter:
         dim = contact_set.dim
         if status is None:
             status = np.zeros(contact_set.nc, dtype=np.int8)
-        tributary = contact_set.tributary
-        columns = [contact_set.abscissa, positions[0::dim], forces[0::dim] / tributary, forces[1::dim] / tributary,
+        traction = contact_set.tractions(forces)   # the contact's pressure_recovery
+        columns = [contact_set.abscissa, positions[0::dim], traction[:, 0], traction[:, 1],
                    slip[1::dim], positions[1::dim], wear_gap]
         if dim == 3:
-            columns += [np.einsum("ij,ij->i", contact_set.coords, contact_set.frames[:, 2]), forces[2::dim] / tributary,
+            columns += [np.einsum("ij,ij->i", contact_set.coords, contact_set.frames[:, 2]), traction[:, 2],
                         slip[2::dim], positions[2::dim]]
         zone = None
         if self.zones > 1:

@@ -75,13 +75,13 @@ def zone_index(operators: ContactOperators, contact, reader: str) -> int | None:
 
 
 def contact_fields(operators: ContactOperators, state: ContactState, contact=None) -> dict[str, np.ndarray]:
-    """Per contact node (replicated): ``coordinates``, ``global_node``, ``pressure`` and ``shear``
-    (force / tributary measure; shear has dim-1 components), ``gap``, ``slip`` (last increment's slip
-    increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip).
+    """Per contact node (replicated): ``coordinates``, ``global_node``, ``pressure`` and ``shear`` (the tractions
+    recovered from the contact forces as the contact's ``pressure_recovery`` says: force / tributary measure, or
+    the smoothed values, :meth:`~dolfinx_fretting.contact.ContactSet.tractions`; shear has dim-1 components),
+    ``gap``, ``slip`` (last increment's slip increments), ``relative_tangential`` (accumulated), ``wear`` and ``status`` (0 open, 1 stick, 2 slip).
     ``contact``: one zone's nodes only (default every zone's, in turn)."""
     contact_set = operators.contact_set_of(state)
     dim = contact_set.dim
-    r = state.forces.reshape(contact_set.nc, dim)
     y = state.positions.reshape(contact_set.nc, dim)
     x = state.slip.reshape(contact_set.nc, dim)
     status = state.status if state.status is not None else np.zeros(contact_set.nc, dtype=np.int8)
@@ -90,8 +90,9 @@ def contact_fields(operators: ContactOperators, state: ContactState, contact=Non
         rows = operators.contact.zone_slice(zone)
         fields = contact_fields(operators, state)
         return {name: values[rows].copy() for name, values in fields.items()}
+    traction = contact_set.tractions(state.forces)
     return {"coordinates": contact_set.coords.copy(), "global_node": contact_set.global_nodes.copy(),
-            "pressure": r[:, 0] / contact_set.tributary, "shear": r[:, 1:] / contact_set.tributary[:, None],
+            "pressure": traction[:, 0].copy(), "shear": traction[:, 1:].copy(),
             "gap": y[:, 0].copy(), "slip": x[:, 1:].copy(), "relative_tangential": y[:, 1:].copy(),
             "wear": state.wear_gap.copy(), "status": status.copy()}
 

@@ -246,6 +246,8 @@ class ContactSettings(_Section):
     #: Two bodies: ``"node"`` (each slave node paired with a master point) or ``"mortar"`` (dual mortar: the
     #: patch test passes on non-matching meshes; fixed pairing only): ``ElasticBody.formulation``.
     formulation: Literal["node", "mortar"] = "node"
+    #: The pressure read (profiles, ``max_pressure``, fields), every zone's: ``Contact(pressure_recovery=...)``.
+    pressure_recovery: Literal["auto", "nodal", "smoothed"] = "auto"
     #: A point of the rigid plane (mm) and its unit normal pointing from the plane into the body.
     plane_point: list[FiniteFloat] = Field(default_factory=lambda: [0.0, 0.0], min_length=2, max_length=3)
     plane_normal: list[FiniteFloat] = Field(default_factory=lambda: [0.0, 1.0], min_length=2, max_length=3)

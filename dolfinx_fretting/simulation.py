@@ -131,9 +131,12 @@ class ContactModel:
         self.half_width = s.window if window is None else window
         try:
             all_bcs = s.bcs + [bc for conditions in s.prescribed.values() for bc in conditions]
-            contact = Contact(s.V, s.surface, s.obstacle, scene.contact.friction_law(), all_bcs, self.half_width)
+            recovery = scene.contact.pressure_recovery
+            contact = Contact(s.V, s.surface, s.obstacle, scene.contact.friction_law(), all_bcs, self.half_width,
+                              pressure_recovery=recovery)
             # further zones (a mesh file's [[contact]] tables): each its surface, plane, friction and window
-            zones = [Contact(s.V, zone.surface, zone.obstacle, zone.mu, all_bcs, zone.window) for zone in s.zones]
+            zones = [Contact(s.V, zone.surface, zone.obstacle, zone.mu, all_bcs, zone.window, pressure_recovery=recovery)
+                     for zone in s.zones]
         except ValueError as exc:
             raise SimulationError(str(exc)) from None
         #: The zones as given to the problem (the API's keys of their targets), the scene's first table first.

@@ -263,7 +263,7 @@ def repair(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D:
                           surface.reference_frame).pair(slave)
     chosen = faces[pairs["face"]]
     return paired_contact_set(surface, pairing.global_nodes, pairing.coords, pairing.tributary, pairing.abscissa,
-                              chosen, pairs["weights"], pairing.H.shape[1])
+                              chosen, pairs["weights"], pairing.H.shape[1], pairing.surface_mass)
 
 
 def interpolate_master(pairing: ContactSet, compliance: SurfaceCompliance, master_wear: np.ndarray) -> np.ndarray:

@@ -32,7 +32,7 @@ __all__ = ["ROW", "ROW_FIELDS", "commit_increment", "wear_area"]
 ROW_FIELDS = (
     "normal_force",        # sum r_n (N/mm in 2D)
     "tangential_force",    # sum r_t1
-    "max_pressure",        # max r_n / A (MPa)
+    "max_pressure",        # max r_n / A (MPa); the smoothed pressure's peak with pressure_recovery "smoothed"
     "dissipated_energy",   # -sum r_t . dx_t in this increment (N mm / mm in 2D)
     "wear_area_increment",  # sum A dg_w in this increment (mm^2 in 2D)
     "max_wear_depth",      # max g_w after the increment (mm)

@@ -52,7 +52,16 @@ def concatenate(sets: Sequence[ContactSet]) -> ContactSet:
                       np.concatenate([s.tributary for s in sets]), np.concatenate([s.abscissa for s in sets]),
                       sp.vstack([s.H for s in sets], format="csr"),
                       join("master_nodes", -1), join("master_weights"), join("master_points"), join("master_sizes"),
-                      None, sets[0].master_surface if len(surfaces) == 1 else None, None)
+                      None, sets[0].master_surface if len(surfaces) == 1 else None, None, _joined_mass(sets))
+
+
+def _joined_mass(sets: Sequence[ContactSet]) -> sp.csr_matrix | None:
+    """The zones' surface mass matrices side by side (the zones' surfaces are apart), None when no zone smooths
+    its tractions; a ``"nodal"`` zone's is diag(A), which the smoothing leaves at ``r / A``."""
+    if all(s.surface_mass is None for s in sets):
+        return None
+    return sp.block_diag([sp.diags(s.tributary) if s.surface_mass is None else s.surface_mass for s in sets],
+                         format="csr")
 
 
 class ContactZones:
