@@ -42,7 +42,7 @@ from .contact_output import write_contact_xdmf
 from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, cycle_wear,
                          extrapolate_plastic_history, hertz_jump_limit, jump_error, local_jump_error,
                          plastic_jump_error, plastic_jump_limit, propagate_error, tolerance_jump_limit)
-from .fatigue_outputs import FATIGUE_TABLE, FatigueOutputs
+from .fatigue_outputs import FATIGUE_TABLE, FATIGUE_XDMF, FatigueOutputs
 from .interrupts import Interrupted, RunSignals, stage_hook
 from .io import non_finite_keys, write_json_atomic
 from .materials import J2Plasticity, elastic_stiffness
@@ -1120,6 +1120,7 @@ def _scene_outputs(scene: Scene) -> list[str]:
              *(["contact_profiles.csv"] if out.contact_profiles else []), *(["fields.xdmf"] if out.xdmf else []),
              *(["worn_profiles.csv"] if scene.wear.law != "none" else []),
              *([FATIGUE_TABLE] if scene.fatigue.enabled else []),
+             *([FATIGUE_XDMF] if scene.fatigue.enabled and out.xdmf else []),
              *(["contact.xdmf"] if out.xdmf and out.contact_profiles else []), *([PLOTS] if out.plots else []),
              *(PICTURES if out.plots and out.xdmf else ())]
     return names
@@ -1180,6 +1181,11 @@ def _finish_run(run: _Run, scene: Scene, out: Path, comm: MPI.Comm, signals: Run
         error = (f"interrupted by {signals.name} after increment {run.state.increment} (cycle {run.progress.cycle}); "
                  "continue with --resume")
         run.checkpoint()
+    if run.fatigue is not None and scene.output.xdmf:  # collective: before rank 0's further outputs
+        try:
+            run.fatigue.write_xdmf()
+        except (OSError, RuntimeError, ValueError) as exc:  # fatigue.csv, which it shows, is on disk
+            run.say(f"[{scene.name}] WARNING: {FATIGUE_XDMF} not written: {type(exc).__name__}: {exc}")
     run.check_folder(f"{run._done_so_far()}, before its summary")
     summary = run.summary(error)
     if error is None and non_finite_keys(summary):  # never a success with an inf or a NaN in it
