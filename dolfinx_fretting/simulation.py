@@ -44,7 +44,7 @@ from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, cho
                          plastic_jump_error, plastic_jump_limit, propagate_error, tolerance_jump_limit)
 from .fatigue_outputs import FATIGUE_TABLE, FATIGUE_XDMF, FatigueOutputs
 from .interrupts import Interrupted, RunSignals, stage_hook
-from .io import non_finite_keys, write_json_atomic
+from .io import FRICTION_CYCLE_FIELDS, non_finite_keys, write_json_atomic
 from .materials import J2Plasticity, elastic_stiffness
 from .output import FrettingWriter, RunDescription, contact_measures
 from .pictures import PICTURES, draw_in_subprocess
@@ -709,7 +709,7 @@ class _Run:
             self._check_small_sliding(result.records["mean_relative_tangential"])
             self.check_folder(f"after cycle {cycle}, before writing it")
             crow = self.writer.write_cycle(cycle, start, result, history=write_history, profiles=keep,
-                                           wall=time.perf_counter() - t0, jump=jump)
+                                           wall=time.perf_counter() - t0, jump=jump, end=new_state)
             if fatigue_due:
                 self.fatigue.write()
             self.note_written()
@@ -973,6 +973,10 @@ class _Run:
                     for i, name in enumerate(names)]
         if progress.last_cycle_row:
             summary["regime"] = progress.last_cycle_row["regime"]
+            if self.writer.description.evolving_friction:   # the coefficient at the last cycle's end (cycles.csv)
+                row = progress.last_cycle_row
+                summary["friction"] = {key: row[key] for key in row if key in FRICTION_CYCLE_FIELDS or (
+                    key.startswith("zone") and key.split("_", 1)[-1] in FRICTION_CYCLE_FIELDS)}
         if model.setup.hertz is not None and progress.last_row:
             radius, E_star, label = model.setup.hertz
             a, p0 = hertz_line_contact(progress.last_row["normal_force"], radius, E_star)
