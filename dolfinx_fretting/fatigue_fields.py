@@ -44,6 +44,7 @@ from dolfinx.io import XDMFFile
 from scipy.spatial import cKDTree
 
 from . import _dolfinx as dfx
+from . import readers
 from ._dolfinx import fem
 from .fatigue import (POINT_COLUMNS, BasquinCoffinManson, CriticalDistance, CriticalPlanes, FatemiSocie,
                       critical_distance, critical_planes, depth_profile, mandel_to_tensor, ruiz_parameter)
@@ -284,8 +285,15 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
     strain_expression = dfx.expression(ufl.sym(ufl.grad(displacement)), reference_points)
     stress_history = np.zeros((len(states), int(chosen.sum()), 3, 3))
     strain_history = np.zeros_like(stress_history)
+    # the states' displacements a batch at a time: one multiple right-hand-side solve each (elastic bodies),
+    # copied in turn into the function the strain expression reads
+    batch = readers.batch_size(problem.operators)
+    solved = [fem.Function(V) for _ in range(min(batch, len(states)))]
     for time, state in enumerate(states):
-        problem.displacement(state, out=displacement)   # collective: every rank, every state
+        if time % batch == 0:   # collective: every rank, every batch
+            part = states[time:time + batch]
+            problem.displacements(part, outs=solved[:len(part)])
+        displacement.x.array[:] = solved[time % batch].x.array
         strain = np.zeros((coordinates.shape[0], 3, 3))
         strain[:, :gdim, :gdim] = dfx.eval_expression(strain_expression, msh, cells).reshape(-1, gdim, gdim)
         strain_history[time] = strain[chosen]

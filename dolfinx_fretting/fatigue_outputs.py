@@ -40,7 +40,8 @@ from .scenes import Scene
 from .state import CycleResult
 from .tables import append_rows, read_rows, write_rows
 
-__all__ = ["FATIGUE_TABLE", "FATIGUE_XDMF", "TABLE_COLUMNS", "xdmf_fields", "FatigueOutputs", "fatigue_arguments", "evaluated"]
+__all__ = ["FATIGUE_TABLE", "FATIGUE_XDMF", "TABLE_COLUMNS", "xdmf_fields", "FatigueOutputs", "fatigue_arguments",
+           "evaluated"]
 
 #: The per-point table of the evaluated cycles.
 FATIGUE_TABLE = "fatigue.csv"
