@@ -40,7 +40,8 @@ __all__ = ["MPI", "PETSc", "fem", "dmesh", "ufl", "DOLFINX_VERSION", "LEGACY_API
            "basis_gradient_expression", "eval_basis_gradients",
            "element_degree", "element_family", "value_size", "vector_space", "scalar_space", "quadrature_space", "basix_cell", "petsc_vec", "vector_for_form",
            "set_bc", "interpolation_points", "expression", "eval_expression", "model_to_mesh", "create_mesh",
-           "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec", "write_meshtags"]
+           "entities_to_geometry", "geometry_dofmap", "cell_dofmap", "vtk_mesh", "mpiexec", "write_meshtags",
+           "cell_submesh"]
 
 #: (major, minor) of the DOLFINx in use.
 DOLFINX_VERSION: tuple[int, int] = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])  # type: ignore[assignment]
@@ -313,6 +314,29 @@ def write_meshtags(xdmf, tags, msh) -> None:
         xdmf.write_meshtags(tags)
     else:
         xdmf.write_meshtags(tags, msh.geometry)
+
+
+def cell_submesh(msh, cells: np.ndarray):
+    """The submesh of some of ``msh``'s cells and, for each of its local cells (ghosts included), the local index
+    of its cell in ``msh``. Collective.
+
+    0.11: ``create_submesh`` returns an ``EntityMap`` (``sub_topology_to_topology``); 0.5: an array.
+
+    Args:
+        msh: The mesh.
+        cells: Local indices of this rank's cells to keep (every rank calls, with its own).
+
+    Returns:
+        ``(submesh, parent_cells)``.
+    """
+    cells = np.asarray(cells, dtype=np.int32)
+    submesh, entity_map, _, _ = dmesh.create_submesh(msh, msh.topology.dim, cells)
+    count = submesh.topology.index_map(submesh.topology.dim)
+    local = count.size_local + count.num_ghosts
+    if LEGACY_API:
+        return submesh, np.asarray(entity_map, dtype=np.int32)[:local]
+    return submesh, np.asarray(entity_map.sub_topology_to_topology(np.arange(local, dtype=np.int32), False),
+                               dtype=np.int32)
 
 
 def vtk_mesh(msh, dim: int | None = None, entities: np.ndarray | None = None):

@@ -400,6 +400,43 @@ class DelassusOperator:
             raise DelassusError(f"MUMPS solve failed: {self._mumps_status()} ({exc})") from exc
         self.stats["solves"] += 1
 
+    def solve_many(self, rhs: np.ndarray) -> np.ndarray:
+        """Solve K X = B for k right-hand sides at once with the existing factor: one multiple right-hand-side
+        call (``MatMatSolve``; MUMPS solves the k columns in one pass over the factors). Collective.
+
+        Args:
+            rhs: (n_owned, k) this rank's rows of B (its rows of K, ``K.getOwnershipRange``).
+
+        Returns:
+            (n_owned, k) this rank's rows of X.
+
+        Raises:
+            DelassusError: on a PETSc/MUMPS failure.
+        """
+        self._require_factor()
+        rhs = np.asarray(rhs, dtype=PETSc.ScalarType)
+        comm_p = self.K.getComm()
+        nloc, N = self.K.getLocalSize()[0], self.K.getSize()[0]
+        if rhs.ndim != 2 or rhs.shape[0] != nloc:
+            raise ValueError(f"solve_many: rhs of shape {rhs.shape}: expected ({nloc}, k), this rank's rows of K")
+        k = rhs.shape[1]
+        B = PETSc.Mat().createDense(size=((nloc, N), (None, k)), comm=comm_p)
+        X = PETSc.Mat().createDense(size=((nloc, N), (None, k)), comm=comm_p)
+        try:
+            B.setUp()
+            X.setUp()
+            B.getDenseArray()[:] = rhs   # (n_owned, k): every column's owned rows
+            B.assemble()
+            self.factor.matSolve(B, X)
+            solution = X.getDenseArray().copy()
+        except PETSc.Error as exc:
+            raise DelassusError(f"MUMPS multiple-RHS solve failed: {self._mumps_status()} ({exc})") from exc
+        finally:
+            B.destroy()
+            X.destroy()
+        self.stats["solves"] += k
+        return solution
+
     # W ------------------------------------------------------------------------------------------------
     def build(self, H: sp.spmatrix, method: str | None = None) -> np.ndarray:
         """Dense W = H K^-1 H^T, identical on every rank. Collective.

@@ -33,21 +33,24 @@ largest SWT and where, ...) is the same on every rank.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from pathlib import Path
+from typing import Any, Mapping, Sequence
 
 import basix
 import numpy as np
 import ufl
 from mpi4py import MPI
+from dolfinx.io import XDMFFile
 from scipy.spatial import cKDTree
 
 from . import _dolfinx as dfx
+from . import readers
 from ._dolfinx import fem
 from .fatigue import (POINT_COLUMNS, BasquinCoffinManson, CriticalDistance, CriticalPlanes, FatemiSocie,
                       critical_distance, critical_planes, depth_profile, mandel_to_tensor, ruiz_parameter)
 from .state import ContactState, CycleResult
 
-__all__ = ["BODIES", "FatigueResult", "fatigue_over_cycle", "cycle_states"]
+__all__ = ["BODIES", "FatigueResult", "fatigue_over_cycle", "cycle_states", "write_fatigue_xdmf"]
 
 
 @dataclass(frozen=True)
@@ -68,10 +71,11 @@ class FatigueResult:
         planes: The critical planes of this rank's points (:class:`~dolfinx_fretting.fatigue.CriticalPlanes`).
         ruiz: (nc,) Ruiz's parameter at each contact node (every rank), ``ruiz_coordinates`` (nc, dim) where it
             is on the evaluated body's surface (the slave nodes, or their paired points on the master surface).
-        body: The body evaluated, ``"slave"`` or ``"master"``.
         summary: :data:`~dolfinx_fretting.fatigue.SUMMARY_FIELDS` (every rank the same; ``life_min`` None without
             constants, the others NaN where nothing was computed).
         times: The number of states of the cycle.
+        body: The body evaluated, ``"slave"`` or ``"master"``.
+        cells: (P,) the local index of the owned cell each point lies in (:func:`write_fatigue_xdmf`).
     """
 
     coordinates: np.ndarray
@@ -88,6 +92,7 @@ class FatigueResult:
     summary: dict[str, Any]
     times: int
     body: str = "slave"
+    cells: np.ndarray | None = None
 
     def columns(self) -> dict[str, np.ndarray]:
         """This rank's points under the names of :data:`~dolfinx_fretting.fatigue.POINT_COLUMNS` (``x`` the
@@ -280,8 +285,15 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
     strain_expression = dfx.expression(ufl.sym(ufl.grad(displacement)), reference_points)
     stress_history = np.zeros((len(states), int(chosen.sum()), 3, 3))
     strain_history = np.zeros_like(stress_history)
+    # the states' displacements a batch at a time: one multiple right-hand-side solve each (elastic bodies),
+    # copied in turn into the function the strain expression reads
+    batch = readers.batch_size(problem.operators)
+    solved = [fem.Function(V) for _ in range(min(batch, len(states)))]
     for time, state in enumerate(states):
-        problem.displacement(state, out=displacement)   # collective: every rank, every state
+        if time % batch == 0:   # collective: every rank, every batch
+            part = states[time:time + batch]
+            problem.displacements(part, outs=solved[:len(part)])
+        displacement.x.array[:] = solved[time % batch].x.array
         strain = np.zeros((coordinates.shape[0], 3, 3))
         strain[:, :gdim, :gdim] = dfx.eval_expression(strain_expression, msh, cells).reshape(-1, gdim, gdim)
         strain_history[time] = strain[chosen]
@@ -312,7 +324,8 @@ def fatigue_over_cycle(problem, states: Sequence[ContactState] | CycleResult, re
         summary["swt_critical"] = swt_critical
         summary["life_critical"] = float(strain_life.life_swt(swt_critical)) if strain_life is not None else None
     return FatigueResult(points, depth[chosen], sigma_xx, planes.swt, planes.swt_theta, planes.fs,
-                         planes.fs_theta, life, planes, ruiz, surface_points.copy(), summary, len(states), body)
+                         planes.fs_theta, life, planes, ruiz, surface_points.copy(), summary, len(states), body,
+                         np.repeat(cells, n_per_cell)[chosen])
 
 
 def _swt_at_critical_distance(comm: MPI.Comm, critical: CriticalDistance, x: np.ndarray, depth: np.ndarray,
@@ -361,3 +374,55 @@ def _ruiz(comm: MPI.Comm, problem, states, nodes: np.ndarray, points: np.ndarray
         shear.append(fields["shear"])
         slide.append(fields["relative_tangential"])
     return ruiz_parameter(surface_stress, np.array(shear), np.array(slide))
+
+
+def write_fatigue_xdmf(path: str | Path, problem, cells: np.ndarray,
+                       series: Sequence[tuple[float, Mapping[str, np.ndarray]]]) -> Path:
+    """Write fatigue fields over the near-surface region as ``path`` (XDMF + its ``.h5``), for ParaView: the
+    region's cells as a mesh of their own (a submesh of the problem's) and one piecewise-constant (DG0) field per
+    name, at each time of ``series``. Collective: every rank passes its own points (:attr:`FatigueResult.cells`)
+    and their values, the same names and times.
+
+    Args:
+        path: The ``.xdmf`` file (written anew).
+        problem: The :class:`~dolfinx_fretting.problem.FrettingProblem` the points are of.
+        cells: (P,) the owned cell of each of this rank's points (:attr:`FatigueResult.cells`); one point a cell
+            (the midpoint rule, ``quadrature_degree`` 1: a DG0 field holds one value a cell).
+        series: ``(time, {name: (P,) values})`` in time order, e.g. ``(cycle, result.columns())``.
+
+    Returns:
+        ``path``.
+
+    Raises:
+        ValueError: a cell holds several points, or the arrays do not match ``cells`` (on every rank).
+    """
+    comm = problem.comm
+    cells = np.asarray(cells, dtype=np.int32)
+    problem_text = None
+    if np.unique(cells).size != cells.size:
+        problem_text = ("a cell holds several points (quadrature_degree > 1): a DG0 field holds one value a cell; "
+                        "evaluate with quadrature_degree=1")
+    elif any(np.shape(values) != cells.shape for _, fields in series for values in fields.values()):
+        problem_text = f"every field needs one value per point ({cells.size} on rank {comm.rank})"
+    problems = [text for text in comm.allgather(problem_text) if text is not None]
+    if problems:
+        raise ValueError(f"write_fatigue_xdmf: {problems[0]}")
+    submesh, parent_cells = dfx.cell_submesh(problem.V.mesh, cells)
+    space = dfx.scalar_space(submesh, "DG", 0)
+    dofs = dfx.cell_dofmap(space)[:, 0]
+    # each submesh cell's point: the submesh holds exactly the points' cells (ghosts: filled by the scatter)
+    point_of_cell = {int(cell): point for point, cell in enumerate(cells)}
+    mine = np.array([i for i, parent in enumerate(parent_cells) if int(parent) in point_of_cell], dtype=np.int32)
+    points = np.array([point_of_cell[int(parent_cells[i])] for i in mine], dtype=np.int64)
+    names = list(series[0][1]) if series else []
+    functions = {name: fem.Function(space, name=name) for name in names}
+    path = Path(path)
+    with XDMFFile(comm, str(path), "w") as xdmf:
+        xdmf.write_mesh(submesh)
+        for time, fields in series:
+            for name in names:
+                function = functions[name]
+                function.x.array[dofs[mine]] = np.asarray(fields[name], dtype=float)[points]
+                function.x.scatter_forward()
+                xdmf.write_function(function, float(time))
+    return path

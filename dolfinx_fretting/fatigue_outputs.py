@@ -32,22 +32,33 @@ from mpi4py import MPI
 
 from .fatigue import (CRITICAL_DISTANCE_FIELDS, MINER_FIELDS, POINT_COLUMNS, SUMMARY_FIELDS, BasquinCoffinManson,
                       CriticalDistance, FatemiSocie, MinerSum)
-from .fatigue_fields import FatigueResult, fatigue_over_cycle
+from .fatigue_fields import FatigueResult, fatigue_over_cycle, write_fatigue_xdmf
 from .geometries import GEOMETRIES
 from .materials import LinearElastic
 from .outdir import check_resume_tables
 from .scenes import Scene
 from .state import CycleResult
-from .tables import append_rows, write_rows
+from .tables import append_rows, read_rows, write_rows
 
-__all__ = ["FATIGUE_TABLE", "TABLE_COLUMNS", "FatigueOutputs", "fatigue_arguments", "evaluated"]
+__all__ = ["FATIGUE_TABLE", "FATIGUE_XDMF", "TABLE_COLUMNS", "xdmf_fields", "FatigueOutputs", "fatigue_arguments",
+           "evaluated"]
 
 #: The per-point table of the evaluated cycles.
 FATIGUE_TABLE = "fatigue.csv"
+#: The same evaluations as fields over the region's cells, for ParaView (:meth:`FatigueOutputs.write_xdmf`).
+FATIGUE_XDMF = "fatigue.xdmf"
 #: Its columns: the cycle evaluated (simulated), the equivalent cycles reached (the end of its jump, times
 #: ``wear.acceleration``), the point's :data:`~dolfinx_fretting.fatigue.POINT_COLUMNS` and Miner's damage
 #: summed up to it (blank without strain-life constants).
 TABLE_COLUMNS = ("cycle", "equivalent_cycles", *POINT_COLUMNS, "damage")
+
+
+def xdmf_fields(scene: Scene) -> tuple[str, ...]:
+    """The fields of ``fatigue.xdmf`` (columns of :data:`TABLE_COLUMNS`): ``sigma_xx`` and ``swt``; ``fs`` with
+    Fatemi–Socie constants; ``life`` and ``damage`` with strain-life constants (without them they are blank)."""
+    f = scene.fatigue
+    return ("sigma_xx", "swt", *(("fs",) if f.k is not None else ()),
+            *(("life", "damage") if f.strain_life else ()))
 
 
 def fatigue_arguments(scene: Scene) -> dict[str, Any]:
@@ -116,7 +127,8 @@ class FatigueOutputs:
         self.acceleration = float(scene.wear.acceleration)
         started, cpu = time.perf_counter(), time.process_time()
         try:   # collective: the same error on every rank
-            fatigue_over_cycle(problem, [check], **self.arguments)
+            # the region's points and cells (fatigue.xdmf maps the table's rows back onto them)
+            self.region = fatigue_over_cycle(problem, [check], **self.arguments)
         except ValueError as exc:
             raise ValueError(f"fatigue: {exc}") from None
         saved = dict(saved or {})
@@ -214,6 +226,59 @@ class FatigueOutputs:
             append_rows(self.path, self._pending, TABLE_COLUMNS)
             self.table_bytes = self.path.stat().st_size
         self._pending = []
+
+    def write_xdmf(self) -> Path | None:
+        """Write ``fatigue.xdmf`` (+ ``.h5``) beside ``fatigue.csv``, from it: every evaluated cycle's rows as
+        DG0 fields (:func:`xdmf_fields`) on the region's cells, at time = its equivalent cycles (an infinite life,
+        blank in the table, is inf). Built anew from the whole table, so a resumed run's file holds every
+        evaluation once. Collective: rank 0 reads the table and sends each rank its points' values (the rows
+        of an evaluation are the points in :func:`_canonical_order`).
+
+        Returns:
+            Its path, or None when the table holds no evaluation yet.
+
+        Raises:
+            ValueError: an evaluation's rows are not the region's points (on every rank).
+        """
+        names = xdmf_fields(self.scene)
+        parts = self.comm.gather(self.region.coordinates, root=0)
+        chunks, error = None, None
+        if self.rank0:
+            try:
+                chunks = self._rank_values(parts, names)
+            except ValueError as exc:
+                error = str(exc)
+        if self.comm.size > 1:
+            error = self.comm.bcast(error, root=0)
+        if error is not None:
+            raise ValueError(f"fatigue: {FATIGUE_XDMF}: {error}")
+        times, values = self.comm.scatter(chunks, root=0) if self.comm.size > 1 else chunks[0]
+        if not times:
+            return None
+        series = [(time, {name: values[name][k] for name in names}) for k, time in enumerate(times)]
+        return write_fatigue_xdmf(self.path.with_name(FATIGUE_XDMF), self.problem, self.region.cells, series)
+
+    def _rank_values(self, parts, names) -> list[tuple[list[float], dict[str, np.ndarray]]]:
+        """Rank 0: ``fatigue.csv``'s evaluations split by rank: (times, {name: (evaluations, P_rank)}) each."""
+        counts = [part.shape[0] for part in parts]
+        order = _canonical_order(np.concatenate(parts))
+        evaluations: dict[int, list[dict[str, Any]]] = {}
+        for row in read_rows(self.path, integers=("cycle",)):
+            evaluations.setdefault(row["cycle"], []).append(row)
+        cycles = sorted(evaluations)
+        times, table = [], {name: np.zeros((len(cycles), order.size)) for name in names}
+        for k, cycle in enumerate(cycles):
+            mine = evaluations[cycle]
+            if len(mine) != order.size:
+                raise ValueError(f"cycle {cycle} has {len(mine)} rows, the region {order.size} points")
+            times.append(mine[0]["equivalent_cycles"])
+            for name in names:
+                canonical = np.array([row[name] for row in mine])
+                if name == "life":   # blank: an infinite life (strain-life constants given)
+                    canonical = np.where(np.isnan(canonical), np.inf, canonical)
+                table[name][k, order] = canonical   # row i of the table is point order[i] in rank order
+        ends = np.cumsum([0, *counts])
+        return [(times, {name: table[name][:, ends[r]:ends[r + 1]] for name in names}) for r in range(len(counts))]
 
     def saved(self) -> dict[str, Any]:
         """What a checkpoint holds to resume (JSON; the damage and table size rank 0's)."""

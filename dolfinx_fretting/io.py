@@ -29,7 +29,8 @@ from .units import Units
 __all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys", "TableError", "HISTORY_FIELDS",
            "CYCLE_FIELDS", "PROFILE_FIELDS", "PROFILE_FIELDS_3D", "profile_fields", "plot_profiles",
            "RUN_DESCRIPTION", "read_run_description", "ZONE_HISTORY_FIELDS", "ZONE_HISTORY_FIELDS_3D",
-           "ZONE_CYCLE_FIELDS", "zone_columns", "zone_history_fields", "history_fields", "cycle_fields"]
+           "ZONE_CYCLE_FIELDS", "FRICTION_CYCLE_FIELDS", "zone_columns", "zone_history_fields", "history_fields",
+           "cycle_fields"]
 
 #: The machine-readable description of a run in its output folder: what was modelled (obstacle, bodies,
 #: wear shares, dimension) and the columns of every table, for the readers (pictures, plots, compare).
@@ -71,6 +72,12 @@ ZONE_HISTORY_FIELDS_3D = ("tangential_displacement_2", "tangential_force_2")
 #: peak pressure at the end.
 ZONE_CYCLE_FIELDS = ("dissipated_energy", "wear_area", "normal_force_max", "normal_force_min",
                      "tangential_force_max", "tangential_force_min", "max_pressure_end")
+#: The friction coefficient at a cycle's end (the state after it and its jump) when a zone's friction evolves
+#: (:class:`~dolfinx_fretting.laws.EvolvingFriction`), over the contacts that carry a normal force then (none: every
+#: contact): ``mu_mean`` weighted by each contact's normal force, sum mu_i r_n,i / sum r_n,i, the ratio Q/P the
+#: contact carries in gross slip (what a rig measures), and the smallest and largest coefficient (equal to it for a
+#: law of the cycles, which is uniform over a zone; apart for a law of the energy, which follows each contact's).
+FRICTION_CYCLE_FIELDS = ("mu_mean", "mu_min", "mu_max")
 
 
 def zone_columns(fields: tuple[str, ...] | list[str], zones: int) -> list[str]:
@@ -90,10 +97,12 @@ def history_fields(zones: int = 1, dim: int = 2) -> list[str]:
     return [*HISTORY_FIELDS, *zone_columns(zone_history_fields(dim), zones)]
 
 
-def cycle_fields(zones: int = 1) -> list[str]:
-    """Columns of ``cycles.csv``: :data:`CYCLE_FIELDS`, then with several zones each zone's
-    (:data:`ZONE_CYCLE_FIELDS`)."""
-    return [*CYCLE_FIELDS, *zone_columns(ZONE_CYCLE_FIELDS, zones)]
+def cycle_fields(zones: int = 1, evolving_friction: bool = False) -> list[str]:
+    """Columns of ``cycles.csv``: :data:`CYCLE_FIELDS`, with an evolving friction law
+    :data:`FRICTION_CYCLE_FIELDS`, then with several zones each zone's (:data:`ZONE_CYCLE_FIELDS`, and
+    :data:`FRICTION_CYCLE_FIELDS` with an evolving law)."""
+    friction = FRICTION_CYCLE_FIELDS if evolving_friction else ()
+    return [*CYCLE_FIELDS, *friction, *zone_columns(ZONE_CYCLE_FIELDS + friction, zones)]
 
 
 def profile_fields(dim: int, zones: int = 1) -> list[str]:
@@ -239,11 +248,12 @@ class ResultWriter:
         dim: Dimension of the contact (the columns of ``contact_profiles.csv``, :func:`profile_fields`).
         zones: Contact zones of the problem (with several, each zone's columns: :func:`history_fields`,
             :func:`cycle_fields`, :func:`profile_fields`).
+        evolving_friction: A zone's friction evolves (``cycles.csv``: :data:`FRICTION_CYCLE_FIELDS`).
     """
 
     def __init__(self, out_dir: str | Path, comm: MPI.Comm, profiles: bool = True,
                  resume_sizes: dict[str, int] | None = None, xdmf_started: bool = False, dim: int = 2,
-                 flat_profiles: bool = False, zones: int = 1):
+                 flat_profiles: bool = False, zones: int = 1, evolving_friction: bool = False):
         self.out = Path(out_dir)
         self.comm = comm
         self.rank0 = comm.rank == 0
@@ -251,7 +261,8 @@ class ResultWriter:
             self.out.mkdir(parents=True, exist_ok=True)
         comm.barrier()
         self._files: dict[str, Any] = {}
-        self._columns = {**_TABLES, "history": history_fields(zones, dim), "cycles": cycle_fields(zones),
+        self._columns = {**_TABLES, "history": history_fields(zones, dim),
+                         "cycles": cycle_fields(zones, evolving_friction),
                          "contact_profiles": profile_fields(dim, zones)}
         names = ["history", "cycles"] + (["contact_profiles"] if profiles else []) + \
             (["flat_profiles"] if profiles and flat_profiles else [])

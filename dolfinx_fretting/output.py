@@ -42,7 +42,9 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from .io import (RUN_DESCRIPTION, ZONE_CYCLE_FIELDS, ResultWriter, cycle_fields, history_fields, profile_fields,
+from . import friction
+from .io import (FRICTION_CYCLE_FIELDS, RUN_DESCRIPTION, ZONE_CYCLE_FIELDS, ResultWriter, cycle_fields,
+                 history_fields, profile_fields,
                  write_json_atomic, zone_columns, zone_history_fields)
 from .loading import Displacement, Force
 from .obstacles import obstacle_kind
@@ -50,7 +52,7 @@ from .state import INCREMENT_COLUMNS
 from .units import Units
 
 __all__ = ["RunDescription", "ZoneDescription", "FrettingWriter", "cycle_row", "read_description", "OBSTACLE_TEXT",
-           "EXTENSIVE_COLUMNS", "contact_measures", "zone_records", "zone_cycle_columns"]
+           "EXTENSIVE_COLUMNS", "contact_measures", "zone_records", "zone_cycle_columns", "friction_columns"]
 
 #: What each kind of obstacle is, in words (pictures and ``compare`` label runs with it).
 OBSTACLE_TEXT = {"rigid_plane": "rigid plane",
@@ -140,6 +142,8 @@ class RunDescription:
             ``RunDescription.of(problem, name, units=Units.si())``.
         zones: With several contact zones, each one's :class:`ZoneDescription` in the problem's order (the
             attributes above describe the first, the zone a scene's ``[loading]`` drives); empty with one zone.
+        evolving_friction: A zone's friction evolves (:class:`~dolfinx_fretting.laws.EvolvingFriction`):
+            ``cycles.csv`` has the coefficient at each cycle's end (:data:`~dolfinx_fretting.io.FRICTION_CYCLE_FIELDS`).
     """
 
     name: str
@@ -161,6 +165,7 @@ class RunDescription:
     model_fraction: float = 1.0
     units: Units = field(default_factory=Units)
     zones: tuple[ZoneDescription, ...] = ()
+    evolving_friction: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.units, Units):
@@ -209,6 +214,7 @@ class RunDescription:
             "zones": (tuple(ZoneDescription.of(zone, name) for zone, name in zip(contacts, names))
                       if len(contacts) > 1 else ()),
             "cycles": cycles, "preload_increments": preload_increments,
+            "evolving_friction": bool(friction.evolving_laws(problem.contact)),
             "wear_acceleration": float(wear.acceleration) if wear is not None else 1.0}
         if path is not None:
             values["increments_per_cycle"] = path.increments
@@ -240,12 +246,13 @@ class RunDescription:
             head["zones"] = [zone.to_json(i) for i, zone in enumerate(self.zones)]
         return {**head, "slave_wear_share": self.slave_wear_share,
                 "units": self.units.to_json(self.dim),
-                "tables": {"history.csv": history_fields(zones, self.dim), "cycles.csv": cycle_fields(zones),
+                "tables": {"history.csv": history_fields(zones, self.dim),
+                           "cycles.csv": cycle_fields(zones, self.evolving_friction),
                            "contact_profiles.csv": profile_fields(self.dim, zones)},
                 "run": {k: data[k] for k in ("cycles", "preload_increments", "increments_per_cycle",
                                              "tangential_control", "tangential_amplitude", "pressure_face",
                                              "wear_acceleration", "hertz", "track_positions", "loop_cycles",
-                                             "model_fraction")}}
+                                             "model_fraction", "evolving_friction")}}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunDescription:
@@ -416,6 +423,33 @@ def zone_cycle_columns(records: dict[str, np.ndarray], zones: int) -> dict[str, 
     return out
 
 
+def friction_columns(problem, state) -> dict[str, float]:
+    """The friction coefficients of ``state`` (:func:`~dolfinx_fretting.friction.coefficients`: those its next
+    increment is solved with) as :data:`~dolfinx_fretting.io.FRICTION_CYCLE_FIELDS`, over every zone and, with
+    several, each zone's (``zone<i>_mu_mean`` ...): over the contacts with a normal force > 0 (none: every contact of
+    the zone, the mean unweighted), ``mu_mean`` weighted by that force."""
+    contact = problem.contact
+    mu = np.asarray(friction.coefficients(contact, state), dtype=float)
+    dim = contact.contact_set.dim
+    normal = np.asarray(state.forces, dtype=float).reshape(-1, dim)[:, 0]
+
+    def reduced(rows: slice) -> dict[str, float]:
+        values, weights = mu[rows], np.maximum(normal[rows], 0.0)
+        loaded = weights > 0
+        if loaded.any():
+            values, weights = values[loaded], weights[loaded]
+        else:
+            weights = np.ones_like(values)
+        return {"mu_mean": float(np.dot(values, weights) / weights.sum()), "mu_min": float(values.min()),
+                "mu_max": float(values.max())}
+
+    out = reduced(slice(0, mu.size))
+    zones = len(problem.contacts)
+    for zone in range(zones if zones > 1 else 0):
+        out.update({f"zone{zone}_{name}": value for name, value in reduced(contact.zone_slice(zone)).items()})
+    return out
+
+
 class FrettingWriter:
     """Writes a :class:`~dolfinx_fretting.problem.FrettingProblem`'s states into a folder. Collective.
 
@@ -456,7 +490,8 @@ class FrettingWriter:
         self.zones = len(problem.contacts)
         self.tables = ResultWriter(self.folder, self.comm, profiles=profiles, resume_sizes=resume.get("sizes"),
                                    xdmf_started=bool(resume.get("xdmf_started", False)), dim=problem.contact.dim,
-                                   flat_profiles=problem.operators.surface_compliance is not None, zones=self.zones)
+                                   flat_profiles=problem.operators.surface_compliance is not None, zones=self.zones,
+                                   evolving_friction=self.description.evolving_friction)
         self._functions = None
         if self.comm.rank == 0:
             write_json_atomic(self.folder / RUN_DESCRIPTION, self.description.to_json())
@@ -530,8 +565,8 @@ class FrettingWriter:
         return records
 
     def write_cycle(self, cycle: int, start, result, *, history: bool = True, profiles: bool = False,
-                    fields: bool | None = None, wall: float = 0.0, jump: dict[str, Any] | None = None
-                    ) -> dict[str, Any]:
+                    fields: bool | None = None, wall: float = 0.0, jump: dict[str, Any] | None = None,
+                    end=None) -> dict[str, Any]:
         """Append a committed cycle: its history block, its ``cycles.csv`` row, and with ``profiles`` the contact
         profile of every increment and the fields of its most loaded instant. Collective.
 
@@ -544,6 +579,8 @@ class FrettingWriter:
             fields: Write the fields (default: with the profiles).
             wall: Wall time of the cycle (s), for the table.
             jump: The cycle jump after it (see :func:`cycle_row`).
+            end: The state after the cycle and its jump, whose friction coefficients an evolving law's columns
+                give (:func:`friction_columns`; default ``result.final``, the cycle's own end).
 
         Returns:
             The ``cycles.csv`` row.
@@ -557,6 +594,8 @@ class FrettingWriter:
         row = cycle_row(cycle, records, displacement_controlled=self.description.displacement_controlled,
                         wear_acceleration=self.description.wear_acceleration, wall=wall, jump=jump)
         row.update(zone_cycle_columns(records, self.zones))
+        if self.description.evolving_friction:
+            row.update(friction_columns(self.problem, result.final if end is None else end))
         self.tables.rows("cycles", [row])
         if profiles:
             if result.kept is None:

@@ -417,6 +417,23 @@ class FrettingProblem:
         plastic_u = state.plastic.u if self.body is not None else None
         return readers.displacement(self.operators, state, out, plastic_u)
 
+    def displacements(self, states: Sequence[ContactState], outs: Sequence | None = None) -> list:
+        """The displacements of several states (``outs``: a ``fem.Function`` for each, or None: new ones).
+        Elastic bodies: the back-solves of :meth:`displacement` as one multiple right-hand-side solve per
+        :func:`~dolfinx_fretting.readers.batch_size` states (:func:`dolfinx_fretting.readers.displacements`: the
+        same answers, rounding apart); elastic–plastic bodies: each state's committed displacement. Collective."""
+        states = list(states)
+        outs = list(outs) if outs is not None else [None] * len(states)
+        if len(outs) != len(states):
+            raise ValueError(f"displacements: {len(states)} states, {len(outs)} functions in outs")
+        if self.body is not None:
+            return [self.displacement(state, out=u) for state, u in zip(states, outs)]
+        step = readers.batch_size(self.operators)
+        for first in range(0, len(states), step):
+            outs[first:first + step] = readers.displacements(self.operators, states[first:first + step],
+                                                             outs[first:first + step])
+        return outs
+
     def contact_fields(self, state: ContactState, contact: Contact | None = None) -> dict[str, np.ndarray]:
         """Per contact node (replicated): :func:`dolfinx_fretting.readers.contact_fields`; ``contact``: one zone's
         nodes (default every zone's, in turn)."""

@@ -14,7 +14,8 @@ from ._dolfinx import cell_dofmap, fem
 from .operators import ContactOperators
 from .state import ContactState
 
-__all__ = ["displacement", "contact_fields", "body_wear", "worn_measure", "total_force", "zone_index"]
+__all__ = ["displacement", "displacements", "batch_size", "contact_fields", "body_wear", "worn_measure", "total_force",
+           "zone_index"]
 
 
 def displacement(operators: ContactOperators, state: ContactState, out=None, plastic_u: np.ndarray | None = None):
@@ -30,6 +31,15 @@ def displacement(operators: ContactOperators, state: ContactState, out=None, pla
         u.x.array[:] = plastic_u
         u.x.scatter_forward()
         return _add_obstacle_motion(operators, u, state)
+    rhs = _right_hand_side(operators, state)
+    operators.delassus.solve(rhs, dfx.petsc_vec(u))
+    rhs.destroy()
+    u.x.scatter_forward()
+    return _add_obstacle_motion(operators, u, state)
+
+
+def _right_hand_side(operators: ContactOperators, state: ContactState) -> PETSc.Vec:
+    """K u = H^T r + sum_l s_l f_l of an elastic ``state`` (its pairing active), zero on the constrained dofs."""
     rhs = operators.K.createVecRight()
     rstart, rend = rhs.getOwnershipRange()
     R = operators.contact.H_free.T.tocsr() @ state.forces
@@ -39,10 +49,40 @@ def displacement(operators: ContactOperators, state: ContactState, out=None, pla
     for i, f in enumerate(operators.vectors):
         if state.load_factors[i] != 0.0:
             rhs.axpy(state.load_factors[i], f)
-    operators.delassus.solve(rhs, dfx.petsc_vec(u))
-    rhs.destroy()
-    u.x.scatter_forward()
-    return _add_obstacle_motion(operators, u, state)
+    return rhs
+
+
+def batch_size(operators: ContactOperators) -> int:
+    """How many states :func:`displacements` solves in one call: the dense blocks (right-hand sides, solutions
+    and their copies, ~4 of N values a state) within the factorisation's ``block_memory_mb``."""
+    dofs = max(operators.K.getSize()[0], 1)
+    return int(max(1, operators.delassus.block_memory_mb * 2**20 // (4 * 8 * dofs)))
+
+
+def displacements(operators: ContactOperators, states: list[ContactState], outs: list) -> list:
+    """The displacements of several elastic states into ``outs`` (a ``fem.Function`` or None: a new one, for each
+    state): the same
+    right-hand sides as :func:`displacement`, solved in one multiple right-hand-side call
+    (:meth:`~dolfinx_fretting.compliance.DelassusOperator.solve_many`) instead of one back-solve each; the
+    caller bounds ``len(states)`` (a dense block of that many columns). Collective."""
+    if len(states) != len(outs):
+        raise ValueError(f"displacements: {len(states)} states, {len(outs)} functions")
+    if not states:
+        return []
+    outs = [u if u is not None else fem.Function(operators.V, name="displacement") for u in outs]
+    columns = []
+    for state in states:
+        operators.activate(state)   # finite sliding: each state's own pairing (its H)
+        rhs = _right_hand_side(operators, state)
+        columns.append(rhs.getArray(readonly=True).copy())
+        rhs.destroy()
+    solution = operators.delassus.solve_many(np.column_stack(columns))
+    for j, (state, u) in enumerate(zip(states, outs)):
+        u.x.array[:solution.shape[0]] = solution[:, j]   # the owned dofs come first (then the ghosts)
+        u.x.scatter_forward()
+        operators.activate(state)
+        _add_obstacle_motion(operators, u, state)
+    return outs
 
 
 def _add_obstacle_motion(operators: ContactOperators, u, state: ContactState):

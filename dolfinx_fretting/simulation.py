@@ -42,9 +42,9 @@ from .contact_output import write_contact_xdmf
 from .cycle_jump import (PlasticCycle, analyse_cycle, analyse_plastic_cycle, choose_jump, cycle_wear,
                          extrapolate_plastic_history, hertz_jump_limit, jump_error, local_jump_error,
                          plastic_jump_error, plastic_jump_limit, propagate_error, tolerance_jump_limit)
-from .fatigue_outputs import FATIGUE_TABLE, FatigueOutputs
+from .fatigue_outputs import FATIGUE_TABLE, FATIGUE_XDMF, FatigueOutputs
 from .interrupts import Interrupted, RunSignals, stage_hook
-from .io import non_finite_keys, write_json_atomic
+from .io import FRICTION_CYCLE_FIELDS, non_finite_keys, write_json_atomic
 from .materials import J2Plasticity, elastic_stiffness
 from .output import FrettingWriter, RunDescription, contact_measures
 from .pictures import PICTURES, draw_in_subprocess
@@ -712,7 +712,7 @@ class _Run:
             self._check_small_sliding(result.records["mean_relative_tangential"])
             self.check_folder(f"after cycle {cycle}, before writing it")
             crow = self.writer.write_cycle(cycle, start, result, history=write_history, profiles=keep,
-                                           wall=time.perf_counter() - t0, jump=jump)
+                                           wall=time.perf_counter() - t0, jump=jump, end=new_state)
             if fatigue_due:
                 self.fatigue.write()
             self.note_written()
@@ -976,6 +976,10 @@ class _Run:
                     for i, name in enumerate(names)]
         if progress.last_cycle_row:
             summary["regime"] = progress.last_cycle_row["regime"]
+            if self.writer.description.evolving_friction:   # the coefficient at the last cycle's end (cycles.csv)
+                row = progress.last_cycle_row
+                summary["friction"] = {key: row[key] for key in row if key in FRICTION_CYCLE_FIELDS or (
+                    key.startswith("zone") and key.split("_", 1)[-1] in FRICTION_CYCLE_FIELDS)}
         if model.setup.hertz is not None and progress.last_row:
             radius, E_star, label = model.setup.hertz
             a, p0 = hertz_line_contact(progress.last_row["normal_force"], radius, E_star)
@@ -1123,6 +1127,7 @@ def _scene_outputs(scene: Scene) -> list[str]:
              *(["contact_profiles.csv"] if out.contact_profiles else []), *(["fields.xdmf"] if out.xdmf else []),
              *(["worn_profiles.csv"] if scene.wear.law != "none" else []),
              *([FATIGUE_TABLE] if scene.fatigue.enabled else []),
+             *([FATIGUE_XDMF] if scene.fatigue.enabled and out.xdmf else []),
              *(["contact.xdmf"] if out.xdmf and out.contact_profiles else []), *([PLOTS] if out.plots else []),
              *(PICTURES if out.plots and out.xdmf else ())]
     return names
@@ -1183,6 +1188,11 @@ def _finish_run(run: _Run, scene: Scene, out: Path, comm: MPI.Comm, signals: Run
         error = (f"interrupted by {signals.name} after increment {run.state.increment} (cycle {run.progress.cycle}); "
                  "continue with --resume")
         run.checkpoint()
+    if run.fatigue is not None and scene.output.xdmf:  # collective: before rank 0's further outputs
+        try:
+            run.fatigue.write_xdmf()
+        except (OSError, RuntimeError, ValueError) as exc:  # fatigue.csv, which it shows, is on disk
+            run.say(f"[{scene.name}] WARNING: {FATIGUE_XDMF} not written: {type(exc).__name__}: {exc}")
     run.check_folder(f"{run._done_so_far()}, before its summary")
     summary = run.summary(error)
     if error is None and non_finite_keys(summary):  # never a success with an inf or a NaN in it

@@ -151,3 +151,22 @@ def test_versions_name_this_stack():
     v = dfx.versions()
     assert v["dolfinx"].startswith(f"{dfx.DOLFINX_VERSION[0]}.{dfx.DOLFINX_VERSION[1]}.")
     assert v["numpy"] == np.__version__ and dfx.DOLFINX_VERSION in dfx.TESTED_VERSIONS
+
+
+def test_cell_submesh_maps_its_cells_to_the_parents(msh):
+    """The submesh of the owned cells left of x = 1 (half the 2 x 1 mm rectangle: 2 x 3 cells of 4 x 3, times 2 for
+    triangles): that many cells over the ranks, and each submesh cell's vertices are those of the parent cell its
+    map names (the same coordinates: 1e-14, the nodes are copied)."""
+    owned = msh.topology.index_map(2).size_local
+    geometry = dfx.geometry_dofmap(msh)
+    midpoints = msh.geometry.x[geometry[:owned]].mean(axis=1)
+    left = np.flatnonzero(midpoints[:, 0] < 1.0).astype(np.int32)
+    submesh, parent_cells = dfx.cell_submesh(msh, left)
+    sub_owned = submesh.topology.index_map(2).size_local
+    per_square = 2 if msh.topology.cell_type == dfx.dmesh.CellType.triangle else 1
+    assert COMM.allreduce(sub_owned) == 2 * 3 * per_square
+    assert parent_cells.size == sub_owned + submesh.topology.index_map(2).num_ghosts
+    assert np.array_equal(np.sort(parent_cells[:sub_owned]), np.sort(left))
+    sub_vertices = np.sort(submesh.geometry.x[dfx.geometry_dofmap(submesh)], axis=1)
+    parent_vertices = np.sort(msh.geometry.x[geometry[parent_cells]], axis=1)
+    assert sub_vertices == pytest.approx(parent_vertices, abs=1e-14)

@@ -264,6 +264,48 @@ def test_scene_run_with_jumps_holds_mu_over_each_jump(tmp_path):
         assert ratio == pytest.approx(mu, rel=1e-6)
         checked += int(rows.sum())
     assert checked >= 8
+    # cycles.csv: mu at each row's end (the cycle and its jump: equivalent_cycles), uniform over the zone, the table
+    # interpolated by hand (exact: the table's values at integer cycles)
+    table_mu = np.interp(cycles["equivalent_cycles"], [0.0, 3.0, 4.0], [0.5, 0.5, 0.9])
+    assert table_mu.tolist() == [0.5, 0.9, 0.9, 0.9]
+    for name in ("mu_mean", "mu_min", "mu_max"):
+        assert cycles[name] == pytest.approx(table_mu, rel=1e-12), name
+    assert summary["friction"] == pytest.approx({"mu_mean": 0.9, "mu_min": 0.9, "mu_max": 0.9}, rel=1e-12)
+
+
+def test_cycles_table_gives_mu_at_each_cycles_end(tmp_path):
+    """mu(E) through FrettingWriter: each cycles.csv row has the coefficients at its cycle's end, over the contacts
+    with a normal force: the table interpolated by hand at each contact's accumulated energy, their min, max and
+    mean weighted by the normal force (1e-9: the table's 10 digits); by default the cycle's own end (result.final,
+    the state commit returns). A constant law writes no mu column (its cycles.csv is unchanged)."""
+    table = [(0.0, 0.2), (0.1, 0.5), (0.3, 0.8)]
+    problem, _, state = pressed_block(dfr.EvolvingFriction(table, variable="energy"))
+    end, runs = rub(problem, state, 2)
+    writer = dfr.FrettingWriter(problem, tmp_path / "evolving", profiles=False, fields=False)
+    ends = [runs[1][0], end]
+    writer.write_cycle(1, *runs[0], end=ends[0])
+    writer.write_cycle(2, *runs[1])   # default: result.final
+    writer.close()
+    rows = np.genfromtxt(tmp_path / "evolving" / "cycles.csv", delimiter=",", names=True, dtype=None,
+                         encoding="utf-8")
+    x, mu = np.array(table).T
+    for row, state_at_end in zip(rows, ends):
+        normal = state_at_end.forces.reshape(-1, 2)[:, 0]
+        loaded = normal > 0
+        coefficients = np.interp(state_at_end.friction_energy, x, mu)[loaded]
+        assert loaded.any() and np.ptp(coefficients) > 0.01   # mu differs over the contact
+        assert row["mu_min"] == pytest.approx(coefficients.min(), rel=1e-9)
+        assert row["mu_max"] == pytest.approx(coefficients.max(), rel=1e-9)
+        assert row["mu_mean"] == pytest.approx((coefficients * normal[loaded]).sum() / normal[loaded].sum(), rel=1e-9)
+    problem.destroy()
+    problem, _, state = pressed_block(0.2)
+    end, runs = rub(problem, state, 1)
+    writer = dfr.FrettingWriter(problem, tmp_path / "constant", profiles=False, fields=False)
+    writer.write_cycle(1, *runs[0])
+    writer.close()
+    header = (tmp_path / "constant" / "cycles.csv").read_text().splitlines()[0]
+    assert "mu_mean" not in header
+    problem.destroy()
 
 
 def test_window_change_carries_the_energy_by_node():

@@ -7,16 +7,19 @@ import math
 import shutil
 import subprocess
 import sys
+import xml.etree.ElementTree as ElementTree
 
+import h5py
 import numpy as np
 import pytest
 from mpi4py import MPI
+from scipy.spatial import cKDTree
 
 from dolfinx_fretting import fatigue
 from dolfinx_fretting._dolfinx import mpiexec
 from dolfinx_fretting.fatigue import MinerSum
 from dolfinx_fretting.fatigue_fields import fatigue_over_cycle
-from dolfinx_fretting.fatigue_outputs import TABLE_COLUMNS, fatigue_arguments
+from dolfinx_fretting.fatigue_outputs import FATIGUE_XDMF, TABLE_COLUMNS, fatigue_arguments, xdmf_fields
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.output import read_description
 from dolfinx_fretting.plots import plot_fatigue_map
@@ -35,6 +38,8 @@ FATIGUE = ["fatigue.enabled=true", "fatigue.region=10.0", "fatigue.cycles=1", "f
            "fatigue.yield_stress=800.0", "fatigue.sigma_f=1.0", "fatigue.b=-0.1", "fatigue.eps_f=3.6e-3",
            "fatigue.c=-0.6"]
 ACCELERATION = 10.0
+#: fatigue.xdmf (and fields.xdmf at the snapshot cycles 1 and 2) written: output.xdmf, after SMALL's false.
+WITH_XDMF = ["output.xdmf=true"]
 
 
 def test_miner_sum_of_constant_and_of_two_blocks():
@@ -105,9 +110,10 @@ def runs(tmp_path_factory):
     """A straight 2-cycle run; a 1-cycle run (its checkpoint kept) resumed to 2 cycles, with a row appended to its
     fatigue.csv after the checkpoint (what a run killed after an evaluation, before its next checkpoint, leaves)."""
     root = tmp_path_factory.mktemp("fatigue_run")
-    two = load_scene("stromberg-block", SMALL + FATIGUE + ["loading.cycles=2"])
+    two = load_scene("stromberg-block", SMALL + FATIGUE + WITH_XDMF + ["loading.cycles=2"])
     straight = run_scene(two, root / "straight", quiet=True)
-    one = run_scene(load_scene("stromberg-block", SMALL + FATIGUE + ["loading.cycles=1"]), root / "cut", quiet=True)
+    one = run_scene(load_scene("stromberg-block", SMALL + FATIGUE + WITH_XDMF + ["loading.cycles=1"]), root / "cut",
+                    quiet=True)
     shutil.copy(root / "cut" / CHECKPOINT, root / "cycle1.npz")
     with open(root / "cut" / "fatigue.csv", "a") as table:
         table.write("2,20" + ",1" * (len(TABLE_COLUMNS) - 2) + "\n")
@@ -189,6 +195,67 @@ def test_a_resumed_run_neither_loses_nor_repeats_a_row(runs):
     assert on_disk["fatigue"]["evaluations"] == 2
 
 
+def _read_fatigue_xdmf(folder):
+    """fatigue.xdmf through its XML and h5py (independent of DOLFINx's reader): the region's cell midpoints and,
+    per time, each field's cell values {time: {name: (cells,)}}."""
+    root = ElementTree.parse(folder / FATIGUE_XDMF).getroot()
+    data = {}
+    with h5py.File(folder / "fatigue.h5", "r") as h5:
+        def dataset(item):
+            return np.asarray(h5[item.text.strip().split(":", 1)[1]])
+        mesh = next(grid for grid in root.iter("Grid") if grid.find("Topology") is not None
+                    and grid.find("Topology").find("DataItem") is not None)
+        topology = dataset(mesh.find("Topology").find("DataItem")).astype(int)
+        geometry = dataset(mesh.find("Geometry").find("DataItem"))
+        midpoints = geometry[topology].mean(axis=1)
+        for grid in root.iter("Grid"):
+            time, attribute = grid.find("Time"), grid.find("Attribute")
+            if time is None or attribute is None:
+                continue
+            assert attribute.get("Center") == "Cell"
+            values = dataset(attribute.find("DataItem")).reshape(-1)
+            data.setdefault(float(time.get("Value")), {})[attribute.get("Name")] = values
+    return midpoints, data
+
+
+def test_the_fatigue_xdmf_holds_the_tables_values_at_its_points(runs):
+    """fatigue.xdmf, read back with h5py: one cell per point of the region, one time per evaluated cycle (its
+    equivalent cycles: 10, 20), SWT, FS, sigma_xx, life and damage; each cell's values are fatigue.csv's at the point
+    of that cell (its midpoint's x and depth are the row's: 6 digits, 5e-6 of the region's size), the values the
+    table's (parsed from it: 1e-12) and the API's of cycle 2 (the table's 6 digits: 5e-6). The resumed run's file
+    is the straight run's (the same two times, no repeated one)."""
+    folder = runs["root"] / "straight"
+    midpoints, data = _read_fatigue_xdmf(folder)
+    names = xdmf_fields(runs["scene"])
+    assert names == ("sigma_xx", "swt", "fs", "life", "damage")
+    assert sorted(data) == [10.0, 20.0] and all(sorted(fields) == sorted(names) for fields in data.values())
+    assert midpoints.shape[0] == runs["straight"]["fatigue"]["points"]
+    api, problem = _api_cycle_two(runs["scene"], runs["root"] / "cycle1.npz")
+    problem.destroy()
+    size = np.ptp(api.coordinates, axis=0).max()
+    distance, nearest = cKDTree(api.coordinates[:, :2]).query(midpoints[:, :2])
+    assert distance.max() < 1e-9 * size and np.unique(nearest).size == nearest.size
+    order = np.lexsort((api.coordinates[:, 1], api.coordinates[:, 0]))   # the table's row order (x, then y)
+    row_of_point = np.argsort(order)
+    rows = _table(folder)
+    for time, cycle in ((10.0, 1), (20.0, 2)):
+        mine = [rows_ for rows_ in rows if rows_["cycle"] == cycle]
+        table_rows = [mine[i] for i in row_of_point[nearest]]   # the row of each cell's point
+        assert np.array([r["x"] for r in table_rows]) == pytest.approx(midpoints[:, 0], rel=0, abs=5e-6 * size)
+        assert np.array([r["depth"] for r in table_rows]) == pytest.approx(api.depth[nearest], rel=0, abs=5e-6 * size)
+        for name in names:
+            table = np.array([r[name] for r in table_rows])
+            assert data[time][name] == pytest.approx(table, rel=1e-12, abs=0), (time, name)
+    for name in ("sigma_xx", "swt", "fs", "life"):
+        assert data[20.0][name] == pytest.approx(api.columns()[name][nearest], rel=5e-6, abs=1e-12), name
+    resumed_midpoints, resumed = _read_fatigue_xdmf(runs["root"] / "cut")
+    assert sorted(resumed) == [10.0, 20.0]
+    match = cKDTree(resumed_midpoints).query(midpoints)[1]
+    for time in data:
+        for name in names:
+            assert resumed[time][name][match] == pytest.approx(data[time][name], rel=1e-12, abs=0), (time, name)
+
+
 def test_the_fatigue_picture_is_drawn_from_the_table(runs, tmp_path):
     """fatigue.png from fatigue.csv (the last cycle's rows: SWT and, with constants, the damage); an empty table
     gives no picture."""
@@ -227,10 +294,11 @@ def test_two_ranks_write_the_serial_fatigue_outputs(runs, tmp_path, mpirun_env):
     """The 2-cycle run under mpirun -n 2 (the CLI): the fatigue summary is the serial run's (the same contact
     states to the factorisation's rounding: 1e-8, as tests/test_mpi.py), fatigue.csv has every point once per
     evaluation, in the serial order (the points sorted by their coordinates, not by rank), its values the serial
-    ones to their 6 digits (a last digit may round the other way: 2e-5)."""
+    ones to their 6 digits (a last digit may round the other way: 2e-5); fatigue.xdmf the serial one's, cell by
+    cell (2e-5 likewise)."""
     cmd = [*mpiexec(2), sys.executable, "-m", "mpi4py", "-m", "dolfinx_fretting", "run", "stromberg-block",
            "--out", str(tmp_path), "--quiet"]
-    for override in SMALL + FATIGUE + ["loading.cycles=2"]:
+    for override in SMALL + FATIGUE + WITH_XDMF + ["loading.cycles=2"]:
         cmd += ["--set", override]
     proc = subprocess.run(cmd, capture_output=True, text=True, env=mpirun_env, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -244,3 +312,13 @@ def test_two_ranks_write_the_serial_fatigue_outputs(runs, tmp_path, mpirun_env):
     for name in TABLE_COLUMNS:
         assert np.array([r[name] for r in mine]) == pytest.approx(np.array([r[name] for r in theirs]), rel=2e-5,
                                                                    abs=1e-12), name
+    # fatigue.xdmf: each rank's cells get their own rows (rank order is not the table's): the serial file's values
+    # at the same cells
+    midpoints, fields = _read_fatigue_xdmf(tmp_path)
+    serial_midpoints, serial_fields = _read_fatigue_xdmf(runs["root"] / "straight")
+    distance, match = cKDTree(serial_midpoints).query(midpoints)
+    assert midpoints.shape == serial_midpoints.shape and distance.max() < 1e-9 * np.ptp(midpoints, axis=0).max()
+    assert sorted(fields) == sorted(serial_fields) == [10.0, 20.0]
+    for time in fields:
+        for name in xdmf_fields(runs["scene"]):
+            assert fields[time][name] == pytest.approx(serial_fields[time][name][match], rel=2e-5, abs=1e-12), name

@@ -486,6 +486,29 @@ def _rubbed_block_fatigue(comm: MPI.Comm):
 
 
 @pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_batched_displacements_match_one_back_solve_each():
+    """problem.displacements under MPI (one distributed multiple right-hand-side MUMPS solve, what the fatigue
+    glue reads) gives each rank the owned and ghost values of problem.displacement's one back-solve per state,
+    in batches of 3 (the same factors and right-hand sides: 1e-12 of the largest displacement)."""
+    from dolfinx_fretting import readers
+    from support.fatigue_block import pulled_block, rubbed_cycle
+
+    problem = pulled_block(COMM, n=8, gap=0.0, graded=True)
+    states = rubbed_cycle(problem)
+    singles = [problem.displacement(state).x.array.copy() for state in states]
+    scale = COMM.allreduce(max(np.abs(u).max(initial=0.0) for u in singles), op=MPI.MAX)
+    batch_size = readers.batch_size
+    readers.batch_size = lambda operators: 3
+    try:
+        batched = problem.displacements(states)
+    finally:
+        readers.batch_size = batch_size
+    worst = max(np.abs(u.x.array - single).max(initial=0.0) for u, single in zip(batched, singles))
+    problem.destroy()
+    assert scale > 0 and COMM.allreduce(worst, op=MPI.MAX) <= 1e-12 * scale
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
 def test_fatigue_over_cycle_matches_serial():
     """The fatigue glue under MPI (issue 24): the maxima, their places and planes, Ruiz's parameter at the contact
     nodes and every point's columns equal the serial run's (other factorisations' rounding only: 1e-8; the
