@@ -52,9 +52,9 @@ def cpu(function, *args, **kwargs):
 
 
 def measure(model, formulation: str, increments: int, repeats: int, h: float) -> dict:
-    obstacle = dataclasses.replace(model.obstacle, sliding="finite", reach=0.3, formulation=formulation,
+    obstacle = dataclasses.replace(model.obstacle, sliding="finite", reach=0.4, formulation=formulation,
                                    repair_slip=0.1)
-    contact = Contact(model.V, model.surface, obstacle, MU, model.bcs, 0.35)
+    contact = Contact(model.V, model.surface, obstacle, MU, model.bcs, 0.45)
     problem = dfr.FrettingProblem(model.form, contact, model.bcs, solver=dfr.LocalSolver(tol=1e-10))
     problem.sliding.warn = False
     state = problem.initial_state()

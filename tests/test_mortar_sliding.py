@@ -24,8 +24,9 @@ from petsc4py import PETSc  # noqa: E402
 from support.blocks import E, E_PLANE, MU_LAME, NU, TIGHT, component, elasticity  # noqa: E402
 
 import dolfinx_fretting as dfr  # noqa: E402
-from dolfinx_fretting import compat  # noqa: E402
-from dolfinx_fretting.contact import Contact  # noqa: E402
+from dolfinx_fretting import compat, mortar  # noqa: E402
+from dolfinx_fretting.contact import Contact, MasterSurface, mortar_contact_set, mortar_paired_set  # noqa: E402
+from dolfinx_fretting.contact import tangent_frame  # noqa: E402
 from dolfinx_fretting.scenes import load_scene  # noqa: E402
 from dolfinx_fretting.simulation import run_scene  # noqa: E402
 from support.finite_sliding import P, cylinder_on_flat, pressed  # noqa: E402
@@ -240,3 +241,37 @@ def test_the_scene_runs_mortar_with_finite_sliding(tmp_path):
     assert "dual mortar, paired anew" in s["modelled"]["contact"]
     assert s["sliding"] == "finite" and s["repairs"] > 0
     assert s["wear_area"] == pytest.approx(s["wear_k_effective"] / 0.9 * s["dissipated_energy"], rel=1e-9)
+
+
+def _flat_surface(xs, y, first_label, above):
+    """A flat polyline at height y, nodes ``first_label``, ... (the body above or below) as a MasterSurface."""
+    n = len(xs) - 1
+    nodes = first_label + np.column_stack([np.arange(n), np.arange(1, n + 1)])
+    x = np.stack([np.column_stack([xs[:-1], np.full(n, y)]), np.column_stack([xs[1:], np.full(n, y)])], axis=1)
+    inside = x.mean(axis=1) + [0.0, 0.1 if above else -0.1]
+    return MasterSurface(nodes, x, np.full(n, 2), inside, tangent_frame([0.0, 1.0]))
+
+
+def test_a_re_pairing_keeps_the_reference_frames_and_refuses_a_node_off_the_master():
+    """Pure: a slave of 3 segments over a wider master, paired anew with the master moved by 0.25 along x: the
+    contacts keep their slave nodes, reference frames and coordinates; each row's weights sum to one and its
+    weighted master point is the slave node's shifted by -0.25 (a flat interface: exact, 1e-14); D_jj is the slave
+    hat's measure (1e-14). Moved by 0.8, the first slave node's hat faces no master any more: refused, naming it."""
+    slave = _flat_surface(np.array([0.0, 0.3, 0.7, 1.0]), 0.0, 0, above=True)
+    master = _flat_surface(np.linspace(-0.5, 1.5, 6), 0.0, 100, above=False)
+    reference = mortar.mortar_matrices(slave.nodes, slave.x, slave.inside, master.nodes, master.x, master.inside)
+    pairing = mortar_contact_set(reference, slave.nodes, slave.x, master, 300, slave_surface=slave)
+    shift = np.array([0.25, 0.0])
+    moved = mortar.mortar_matrices(slave.nodes, slave.x, slave.inside, master.nodes, master.x + shift,
+                                   master.inside + shift, slave_reference_x=slave.x)
+    new = mortar_paired_set(pairing, moved)
+    assert np.array_equal(new.global_nodes, pairing.global_nodes) and np.array_equal(new.frames, pairing.frames)
+    assert np.allclose(new.master_weights.sum(axis=1), 1.0, rtol=0, atol=1e-14)
+    assert np.allclose(new.master_points, pairing.coords - shift, rtol=0, atol=1e-14)
+    assert np.allclose(new.tributary, [0.15, 0.35, 0.35, 0.15], rtol=0, atol=1e-14)
+    assert np.allclose(new.gap0, 0.0, rtol=0, atol=1e-14)
+    off = np.array([1.3, 0.0])
+    beyond = mortar.mortar_matrices(slave.nodes, slave.x, slave.inside, master.nodes, master.x + off,
+                                    master.inside + off, slave_reference_x=slave.x)
+    with pytest.raises(ValueError, match=r"contact 0 \(at \[0.0, 0.0\].*no longer faces the master"):
+        mortar_paired_set(pairing, beyond)
