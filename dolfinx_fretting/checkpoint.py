@@ -34,7 +34,7 @@ from scipy.spatial import cKDTree
 
 from . import _dolfinx as dfx
 from . import friction
-from .contact import ContactSet, paired_contact_set
+from .contact import ContactSet, mortar_rows_set, paired_contact_set
 from .increments import on_rank0
 from .io import _jsonable
 from .laws import EvolvingFriction, WearLaw
@@ -294,10 +294,13 @@ def _pairing_from(operators: ContactOperators, data: dict[str, np.ndarray],
     ref = operators.reference_pairing
     surface, compliance = ref.master_surface, operators.surface_compliance
     weights = data["pairing_weights"]
-    if "pairing_facet_nodes" in data:
+    if "pairing_facet_nodes" in data or "pairing_master_nodes" in data:
         here = _input_indices(operators, surface.nodes)
         wear_nodes = _input_indices(operators, compliance.nodes)
-        faces, weights = _find_facets(data["pairing_facet_nodes"], weights, here, path)
+        if "pairing_master_nodes" in data:   # mortar
+            pairing = _mortar_pairing_from(ref, data, surface.nodes, here, path)
+        else:
+            faces, weights = _find_facets(data["pairing_facet_nodes"], weights, here, path)
         order = _match_keys(data["master_wear_nodes"], wear_nodes)
         if order is None or data["master_wear_nodes"].size != wear_nodes.size:
             raise ValueError(f"{path}: the saved master wear is on {data['master_wear_nodes'].size} surface nodes, "
@@ -305,6 +308,8 @@ def _pairing_from(operators: ContactOperators, data: dict[str, np.ndarray],
                              "input mesh nodes: load it into the mesh it was written with and the same "
                              "ElasticBody.reach")
         master_wear = data["master_wear"][order].copy()
+        if "pairing_master_nodes" in data:
+            return pairing, master_wear
     else:   # a checkpoint of an earlier release: facet indices and DOLFINx's node numbers, as they were saved
         faces, master_wear = data["pairing_faces"], data["master_wear"].copy()
     pairing = paired_contact_set(surface, ref.global_nodes, ref.coords, ref.tributary, ref.abscissa, faces, weights,
@@ -317,6 +322,34 @@ def _pairing_from(operators: ContactOperators, data: dict[str, np.ndarray],
     return pairing, master_wear
 
 
+def _mortar_pairing_from(ref: ContactSet, data: dict[str, np.ndarray], surface_nodes: np.ndarray,
+                         surface_keys: np.ndarray, path: str | Path) -> ContactSet:
+    """A saved mortar pairing (each contact's master nodes by input mesh index, weights, ``D_jj``, master sizes) as
+    a contact set of this problem (:func:`~dolfinx_fretting.contact.mortar_rows_set`).
+
+    Raises:
+        ValueError: a saved master node is not on this problem's master surface, or the saved rows are not of this
+            problem's contacts.
+    """
+    saved = data["pairing_master_nodes"]
+    if saved.shape[0] != ref.nc or data["pairing_weights"].shape != saved.shape:
+        raise ValueError(f"{path}: the saved mortar pairing has {saved.shape[0]} contacts, this problem {ref.nc}: "
+                         "load it into the problem it was written with")
+    real = surface_nodes >= 0
+    keys, nodes = surface_keys[real], surface_nodes[real]
+    order = np.argsort(keys)
+    keys, nodes = keys[order], nodes[order]
+    where = np.minimum(np.searchsorted(keys, np.maximum(saved, 0)), keys.size - 1)
+    missing = (saved >= 0) & (keys[where] != saved)
+    if missing.any():
+        raise ValueError(f"{path}: the saved mortar pairing holds master node {int(saved[missing][0])} (input mesh "
+                         "index), which is not on this problem's master surface: load it into the mesh it was "
+                         "written with")
+    master_nodes = np.where(saved >= 0, nodes[where], -1)
+    return mortar_rows_set(ref, master_nodes, data["pairing_weights"].copy(), data["pairing_measures"].copy(),
+                           data["pairing_master_sizes"].copy())
+
+
 def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState, path: str | Path,
                meta: Mapping[str, Any] | None = None, wear_laws: Sequence[WearLaw | None] | None = None,
                plastic_points: np.ndarray | None = None) -> None:
@@ -327,7 +360,10 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
     parameters = contact_parameters(operators, wear_laws or (None,) * len(operators.contact.zones))
     plastic = None
     pairing_keys = wear_keys = None
-    if state.pairing is not None:   # (collective: every rank holds the same pairing)
+    if state.pairing is not None and state.pairing.master_faces is None:   # mortar: each contact's master nodes
+        pairing_keys = _input_indices(operators, state.pairing.master_nodes)
+        wear_keys = _input_indices(operators, operators.surface_compliance.nodes)
+    elif state.pairing is not None:   # (collective: every rank holds the same pairing)
         pairing_keys = _input_indices(operators, state.pairing.master_surface.nodes[state.pairing.master_faces])
         wear_keys = _input_indices(operators, operators.surface_compliance.nodes)
     if state.plastic is not None:
@@ -346,7 +382,12 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
         arrays["force_controlled"] = (state.force_controlled if state.force_controlled is not None
                                       else np.zeros(state.obstacle.size, dtype=bool))
         if state.pairing is not None:  # finite sliding: the pairing and the master's wear, by input node indices
-            arrays["pairing_facet_nodes"] = pairing_keys
+            if state.pairing.master_faces is None:   # mortar: the rows of D^-1 M, D_jj and the master sizes
+                arrays["pairing_master_nodes"] = pairing_keys
+                arrays["pairing_measures"] = state.pairing.tributary
+                arrays["pairing_master_sizes"] = state.pairing.master_sizes
+            else:
+                arrays["pairing_facet_nodes"] = pairing_keys
             arrays["pairing_weights"] = state.pairing.master_weights
             arrays["master_wear"] = state.master_wear
             arrays["master_wear_nodes"] = wear_keys
@@ -433,7 +474,7 @@ def load_state(operators: ContactOperators, monitor: SlidingMonitor, path: str |
         plastic = PlasticHistory(*(data[f"plastic_{k}_{i}"].copy() for k in PLASTIC_ARRAYS))
     warm = data["warm"] if data["warm"].size and operators.comm.rank == 0 else None
     pairing = master_wear = None
-    sliding = "pairing_facet_nodes" in data or "pairing_faces" in data
+    sliding = "pairing_facet_nodes" in data or "pairing_faces" in data or "pairing_master_nodes" in data
     if sliding != (operators.surface_compliance is not None):
         raise ValueError(f"{path}: a state saved with{'' if sliding else 'out'} finite sliding "
                          f"loads into a problem with{'' if operators.surface_compliance is not None else 'out'} it")

@@ -111,8 +111,14 @@ def commit(operators: ContactOperators, laws: tuple, monitor: SlidingMonitor, st
         master_share = (1.0 - wear.slave_share) * (wear_gap - state.wear_gap)
         added = sliding.spread_wear(contact_set, operators.surface_compliance, master_share)
         master_wear = state.master_wear + added
-        wear_gap = (wear_gap - master_share
-                    + sliding.interpolate_master(contact_set, operators.surface_compliance, added))
+        if contact_set.slave_areas is not None:
+            # Mortar: the slave's worn measure (Archard's on the weighted slip, depth x D_jj) over the node's own
+            # measure, which stays the node's whatever part of its hat faces the master after a re-pairing.
+            slave_share = (wear_gap - state.wear_gap - master_share) * contact_set.tributary / contact_set.slave_areas
+            wear_gap = state.wear_gap + slave_share
+        else:
+            wear_gap = wear_gap - master_share
+        wear_gap = wear_gap + sliding.interpolate_master(contact_set, operators.surface_compliance, added)
         # the worn area of both bodies: the flat's wear left behind by the slide is no longer under a contact
         row[ROW["wear_area"]] = worn_measure(operators, replace(state, wear_gap=wear_gap, master_wear=master_wear))
     record = {**dict(zip(ROW_FIELDS, row.tolist())), **solver_columns(result)}
@@ -150,9 +156,7 @@ def _repair(operators: ContactOperators, monitor: SlidingMonitor, state: Contact
                           "one): it was solved on a pairing that no longer faced its nodes; take smaller "
                           "increments", RuntimeWarning, stacklevel=4)
     new = sliding.repair(contact_set, operators.surface_compliance, u, D)
-    if np.array_equal(new.master_faces, contact_set.master_faces) and np.allclose(new.master_weights,
-                                                                                  contact_set.master_weights,
-                                                                         rtol=0.0, atol=1e-12):
+    if _same_pairing(contact_set, new):
         return state   # e.g. a node facing past the master's end: its closest point does not move
     carried = sliding.carry_state(contact_set, new, operators.surface_compliance, u, D, state.forces, state.slip,
                                   state.wear_gap, state.master_wear)
@@ -168,6 +172,15 @@ def _repair(operators: ContactOperators, monitor: SlidingMonitor, state: Contact
                           "closest master point within reach: it has slid beyond ElasticBody.reach (or off the "
                           "master surface)", RuntimeWarning, stacklevel=4)
     return replace(state, pairing=new, **carried)
+
+
+def _same_pairing(old, new) -> bool:
+    """The same master facets (mortar: master nodes) and weights to 1e-12."""
+    if new.master_faces is None:   # mortar
+        return (new.master_nodes.shape == old.master_nodes.shape and np.array_equal(new.master_nodes, old.master_nodes)
+                and np.allclose(new.master_weights, old.master_weights, rtol=0.0, atol=1e-12))
+    return np.array_equal(new.master_faces, old.master_faces) and np.allclose(new.master_weights,
+                                                                              old.master_weights, rtol=0.0, atol=1e-12)
 
 
 def relative_slip_ratio(operators: ContactOperators, state: ContactState) -> float:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import copy
 import functools
 from abc import ABCMeta, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numba
@@ -38,7 +38,8 @@ from .pressure import RECOVERIES, smoothed_tractions, surface_mass
 __all__ = ["Obstacle", "RigidPlane", "ElasticBody", "Contact", "ContactSet", "MasterSurface", "find_candidates",
            "find_pairs",
            "tangent_frame", "constrained_dofs", "constrained_global_dofs", "pair_with_faces", "pair_with_segments",
-           "paired_contact_set", "find_mortar_pairs", "mortar_contact_set"]
+           "paired_contact_set", "find_mortar_pairs", "mortar_contact_set", "mortar_paired_set",
+           "mortar_rows_set"]
 
 
 def tangent_frame(normal: np.ndarray) -> np.ndarray:
@@ -191,6 +192,13 @@ class ContactSet:
     #: The P1 mass matrix (nc, nc) of the contact surface's facets whose every node is a contact, when the
     #: tractions read are the ``"smoothed"`` ones (:mod:`dolfinx_fretting.pressure`); None: ``"nodal"``.
     surface_mass: sp.csr_matrix | None = None
+    #: Mortar (:func:`mortar_contact_set`): the slave surface's segments (3D: faces) in the reference configuration,
+    #: from which a finite-sliding re-pairing recomputes the mortar matrices; None for node pairing.
+    slave_surface: MasterSurface | None = None
+    #: Mortar: each contact's slave node's own measure (its hat's integral over the whole slave surface,
+    #: :meth:`MasterSurface.node_measures`), where finite sliding keeps the slave's share of the wear, whatever part
+    #: of the hat faces the master (``tributary``, ``D_jj``); None for node pairing (the tributary is that measure).
+    slave_areas: np.ndarray | None = None
 
     @property
     def two_body(self) -> bool:
@@ -233,7 +241,8 @@ class ContactSet:
                           self.gap0[contacts], self.tributary[contacts], self.abscissa[contacts], self.H[rows],
                           pick(self.master_nodes), pick(self.master_weights), pick(self.master_points),
                           pick(self.master_sizes), pick(self.master_faces), self.master_surface, self.window_centre,
-                          None if self.surface_mass is None else self.surface_mass[contacts][:, contacts].tocsr())
+                          None if self.surface_mass is None else self.surface_mass[contacts][:, contacts].tocsr(),
+                          self.slave_surface, pick(self.slave_areas))
 
 
 def _tributary_measure(V, facets: np.ndarray, fdim: int) -> np.ndarray:
@@ -637,9 +646,10 @@ def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, ha
         slave_nodes_of, slave_x, slave_inside = _boundary_segments(V, slave_facets)
         master_nodes_of, master_x, master_inside = _boundary_segments(V, master_facets)
         master_nv = np.full(master_nodes_of.shape[0], 2)
+        slave_nv = np.full(slave_nodes_of.shape[0], 2)
         coordinates = V.tabulate_dof_coordinates()[:, :gdim]
     else:
-        slave_nodes_of, slave_x, _, slave_inside = _boundary_faces(V, slave_facets)
+        slave_nodes_of, slave_x, slave_nv, slave_inside = _boundary_faces(V, slave_facets)
         master_nodes_of, master_x, master_nv, master_inside = _boundary_faces(V, master_facets)
         coordinates = _node_coordinates(V)
     if master_nodes_of.shape[0] == 0 or slave_nodes_of.shape[0] == 0:
@@ -653,7 +663,8 @@ def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, ha
     contacts = np.flatnonzero(np.isin(mortar.slave_nodes, free) & (mortar.D.diagonal() > 0))
     if contacts.size == 0:
         raise ValueError("contact: no free slave node faces the master surface (mortar: every D_jj = 0)")
-    contact_set = mortar_contact_set(mortar, slave_nodes_of, slave_x, surface, imap.size_global * gdim)
+    contact_set = mortar_contact_set(mortar, slave_nodes_of, slave_x, surface, imap.size_global * gdim,
+                                     slave_surface=MasterSurface(slave_nodes_of, slave_x, slave_nv, slave_inside, ref))
     gaps, coords = contact_set.gap0[contacts], contact_set.coords[contacts]
     if gdim == 2:
         abscissa = contact_set.abscissa[contacts]
@@ -680,7 +691,7 @@ def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, ha
 
 
 def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, slave_x: np.ndarray,
-                       surface: MasterSurface, n_dofs: int) -> ContactSet:
+                       surface: MasterSurface, n_dofs: int, slave_surface: MasterSurface | None = None) -> ContactSet:
     """The contact set of every slave node of ``mortar`` (pure NumPy; the same on every rank), rows in
     ``mortar.slave_nodes``' order (a node with ``D_jj = 0`` gets an empty row: select the others with
     :meth:`ContactSet.subset`). Dual multipliers only (D diagonal).
@@ -703,6 +714,9 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
             (f, 4) the slave faces' (a triangle's fourth -1) and (f, 4, 3) their vertices.
         surface: The master surface (its nodes the columns of ``mortar.M``).
         n_dofs: Global number of displacement dofs (the columns of H).
+        slave_surface: The slave segments (faces) as a surface (their nodes, reference points, vertex counts and
+            inside points): held by the set (:attr:`ContactSet.slave_surface`, with each node's own measure) for
+            finite sliding's re-pairing; None: not held.
     """
     if mortar.multipliers != "dual":
         raise ValueError(f"mortar_contact_set: multipliers = {mortar.multipliers!r}: the nodal contact solvers need "
@@ -721,16 +735,38 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
     weights.sort_indices()
     gaps = weighted_gaps(mortar, coords, master_coords) * scale
     frames = mortar.frames                                                          # (s, dim, dim) rows n, t1[, t2]
-    # Each contact's master nodes and weights, padded with -1 and 0 to the widest row.
+    master_nodes, master_weights = _padded_rows(weights, mortar.master_nodes)
+    return ContactSet(dim=dim, global_nodes=nodes, coords=coords, frames=frames, gap0=gaps, tributary=measure,
+                      abscissa=coords @ surface.reference_frame[1] if dim == 3 else np.einsum("ij,ij->i", coords,
+                                                                                              mortar.tangents),
+                      H=_mortar_rows(nodes, frames, master_nodes, master_weights, measure, n_dofs),
+                      master_nodes=master_nodes,
+                      master_weights=master_weights, master_points=np.asarray(weights @ master_coords),
+                      master_sizes=mortar.master_sizes, master_faces=None, master_surface=surface,
+                      slave_surface=slave_surface,
+                      slave_areas=None if slave_surface is None else slave_surface.node_measures(nodes))
+
+
+def _padded_rows(weights: sp.csr_matrix, master_nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each row's master nodes (``master_nodes`` at the columns of ``weights``, sorted rows) and weights, padded with
+    -1 and 0 to the widest row."""
+    rows = weights.shape[0]
     counts = np.diff(weights.indptr)
     width = max(int(counts.max(initial=0)), 1)
-    master_nodes = np.full((nodes.size, width), -1, dtype=np.int64)
-    master_weights = np.zeros((nodes.size, width))
+    nodes = np.full((rows, width), -1, dtype=np.int64)
+    values = np.zeros((rows, width))
     slot = np.arange(weights.indices.size) - np.repeat(weights.indptr[:-1], counts)
-    row = np.repeat(np.arange(nodes.size), counts)
-    master_nodes[row, slot] = mortar.master_nodes[weights.indices]
-    master_weights[row, slot] = weights.data
-    # H: rows (n, t) of contact j; the slave node's columns, then each master node's with -w_jl.
+    row = np.repeat(np.arange(rows), counts)
+    nodes[row, slot] = master_nodes[weights.indices]
+    values[row, slot] = weights.data
+    return nodes, values
+
+
+def _mortar_rows(nodes: np.ndarray, frames: np.ndarray, master_nodes: np.ndarray, master_weights: np.ndarray,
+                 measure: np.ndarray, n_dofs: int) -> sp.csr_matrix:
+    """H of mortar contacts: rows (n, t1[, t2]) of contact j; the slave node's columns, then each master node's with
+    -w_jl (a row of a node with ``measure`` 0 is empty)."""
+    dim = frames.shape[1]
     node_cols = np.column_stack([nodes, np.where(master_nodes >= 0, master_nodes, nodes[:, None])])
     node_coef = np.column_stack([np.where(measure > 0, 1.0, 0.0), -master_weights])
     vals = frames[:, :, None, :] * node_coef[:, None, :, None]                       # (s, dim, nodes, dim)
@@ -738,12 +774,62 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
     rws = np.broadcast_to(np.arange(nodes.size * dim).reshape(nodes.size, dim, 1, 1), vals.shape)
     H = sp.csr_matrix((vals.ravel(), (rws.ravel(), cols.ravel())), shape=(nodes.size * dim, n_dofs))
     H.eliminate_zeros()
-    return ContactSet(dim=dim, global_nodes=nodes, coords=coords, frames=frames, gap0=gaps, tributary=measure,
-                      abscissa=coords @ surface.reference_frame[1] if dim == 3 else np.einsum("ij,ij->i", coords,
-                                                                                              mortar.tangents),
-                      H=H, master_nodes=master_nodes,
-                      master_weights=master_weights, master_points=np.asarray(weights @ master_coords),
-                      master_sizes=mortar.master_sizes, master_faces=None, master_surface=surface)
+    return H
+
+
+def mortar_paired_set(pairing: ContactSet, mortar: MortarMatrices) -> ContactSet:
+    """The contacts of the mortar contact set ``pairing`` paired anew by the mortar matrices ``mortar`` (finite
+    sliding: D and M integrated in the current configuration, :func:`dolfinx_fretting.sliding.repair`). Pure NumPy.
+
+    As :func:`paired_contact_set` does for node pairing, the pairing (each contact's weights ``M_jl / D_jj``, its
+    measure ``D_jj`` and master size) is the current configuration's, and everything else is the reference
+    configuration's: the slave nodes, their frames (the slave's averaged normals of the reference configuration,
+    so a re-pairing does not turn the forces) and the gap ``g0_j = n_j . (X_j - sum_l w_jl X_l)``, so that
+    ``x = H u + g0`` is the linearised weighted gap and weighted relative displacement over ``D_jj``.
+
+    Args:
+        pairing: A mortar contact set (:func:`find_mortar_pairs`): its slave nodes are kept, in order.
+        mortar: The mortar matrices of ``pairing.slave_surface`` and (part of) ``pairing.master_surface``
+            (dual multipliers), rows every slave node of the segments.
+
+    Raises:
+        ValueError: a contact's slave node no longer faces the master (``D_jj = 0``: it has slid off the master's end
+            or beyond the sliding reach).
+    """
+    position = np.searchsorted(mortar.slave_nodes, pairing.global_nodes)
+    position = np.minimum(position, mortar.slave_nodes.size - 1)
+    measure = np.zeros(pairing.nc)
+    found = mortar.slave_nodes[position] == pairing.global_nodes
+    measure[found] = mortar.D.diagonal()[position[found]]
+    if np.any(measure <= 0):
+        c = int(np.flatnonzero(measure <= 0)[0])
+        raise ValueError(f"finite sliding (mortar): the slave node of contact {c} (at {pairing.coords[c].tolist()} "
+                         "in the reference configuration) no longer faces the master: it has slid off the master "
+                         "surface's end or beyond ElasticBody.reach; allowed: a master surface (and reach) that "
+                         "covers the whole stroke")
+    weights = sp.csr_matrix(sp.diags(1.0 / measure) @ mortar.M[position])
+    weights.sort_indices()
+    master_nodes, master_weights = _padded_rows(weights, mortar.master_nodes)
+    return mortar_rows_set(pairing, master_nodes, master_weights, measure, mortar.master_sizes[position])
+
+
+def mortar_rows_set(pairing: ContactSet, master_nodes: np.ndarray, master_weights: np.ndarray, measure: np.ndarray,
+                    master_sizes: np.ndarray) -> ContactSet:
+    """The contacts of the mortar contact set ``pairing`` with the master rows given (each contact's master nodes,
+    padded with -1, their weights ``M_jl / D_jj``, ``D_jj`` and the master size): :func:`mortar_paired_set`'s set,
+    also what a checkpoint's saved pairing is read back into. Pure NumPy."""
+    surface = pairing.master_surface
+    labels, first = np.unique(surface.nodes.ravel(), return_index=True)
+    first, labels = first[labels >= 0], labels[labels >= 0]
+    master_x = surface.x.reshape(-1, surface.dim)[first]
+    where = np.searchsorted(labels, np.maximum(master_nodes, 0))
+    points = np.einsum("cl,clj->cj", master_weights, master_x[np.minimum(where, labels.size - 1)])
+    gaps = np.einsum("cj,cj->c", pairing.coords - points, pairing.frames[:, 0])
+    return replace(pairing, gap0=gaps, tributary=measure,
+                   H=_mortar_rows(pairing.global_nodes, pairing.frames, master_nodes, master_weights, measure,
+                                  pairing.H.shape[1]),
+                   master_nodes=master_nodes, master_weights=master_weights, master_points=points,
+                   master_sizes=master_sizes)
 
 
 def pair_with_segments(points: np.ndarray, segments_x: np.ndarray,
@@ -858,6 +944,26 @@ class MasterSurface:
         flip = np.einsum("ij,ij->i", self.inside[faces] - point, normal) > 0
         normal[flip] *= -1
         return point, normal
+
+    def node_measures(self, nodes: np.ndarray) -> np.ndarray:
+        """Tributary measure (length in 2D, area in 3D) of each of ``nodes`` on the whole surface: a share of each
+        facet's measure per vertex (half a segment; a third of a triangle; a quadrilateral's area by its two
+        triangles, a quarter each). 0 for a node of no facet. ``nodes`` sorted."""
+        X = self.x
+        if self.dim == 2:
+            measure = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+        else:
+            tri = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1)
+            quad = tri + 0.5 * np.linalg.norm(np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0]), axis=1)
+            measure = np.where(self.nv == 4, quad, tri)
+        share = measure / self.nv
+        valid = self.nodes >= 0
+        owners = self.nodes[valid]
+        where = np.searchsorted(nodes, owners)
+        inside = (where < nodes.size) & (nodes[np.minimum(where, nodes.size - 1)] == owners)
+        areas = np.zeros(nodes.size)
+        np.add.at(areas, where[inside], np.broadcast_to(share[:, None], self.nodes.shape)[valid][inside])
+        return areas
 
     def frames(self, normal: np.ndarray) -> np.ndarray:
         """The contacts' frames (n, t1[, t2]) for unit normals: 2D ``t1 = (n_y, -n_x)``; 3D the reference
@@ -1161,13 +1267,16 @@ class ElasticBody(Obstacle):
             compliance. None: every facet of the master surface. A pairing that would need a facet beyond it
             raises an error.
         formulation: ``"node"`` (default): each slave node paired with the closest master point (above);
-            ``"mortar"`` (2D and 3D, small sliding): the segment-to-segment (2D) or face-to-face (3D: triangles
-            and quadrilaterals, clipped in each slave face's plane) mortar integrals with dual Lagrange multipliers
-            (:mod:`dolfinx_fretting.mortar`, :func:`find_mortar_pairs`): each slave node facing the master is a
-            contact whose gap and relative tangential displacement are the weighted ones divided by ``D_jj``, its
-            frame the slave's averaged nodal normal and tangent(s), its tributary measure ``D_jj``; the pressure
-            read is the multiplier. It passes the contact patch test on non-matching meshes, which node-to-segment
-            and node-to-face pairing do not.
+            ``"mortar"`` (2D and 3D, small or finite sliding): the segment-to-segment (2D) or face-to-face (3D:
+            triangles and quadrilaterals, clipped in each slave face's plane) mortar integrals with dual Lagrange
+            multipliers (:mod:`dolfinx_fretting.mortar`, :func:`find_mortar_pairs`): each slave node facing the
+            master is a contact whose gap and relative tangential displacement are the weighted ones divided by
+            ``D_jj``, its frame the slave's averaged nodal normal and tangent(s), its tributary measure ``D_jj``; the
+            pressure read is the multiplier. It passes the contact patch test on non-matching meshes, which
+            node-to-segment and node-to-face pairing do not. With ``sliding = "finite"`` a re-pairing recomputes D
+            and M in the current configuration (:func:`dolfinx_fretting.sliding.repair`, no refactorisation); the
+            slave's share of the wear is kept on its nodes by their own measure, the master's on the master's
+            nodes.
     """
 
     surface: tuple
@@ -1195,9 +1304,6 @@ class ElasticBody(Obstacle):
         if self.formulation not in FORMULATIONS:
             raise ValueError(f"ElasticBody.formulation = {self.formulation!r}: allowed "
                              f"{', '.join(map(repr, FORMULATIONS))}")
-        if self.formulation == "mortar" and self.sliding == "finite":
-            raise ValueError("ElasticBody.formulation = 'mortar' with sliding = 'finite': allowed sliding = 'small' "
-                             "only (re-pairing by recomputing the mortar matrices is not implemented)")
 
     @property
     def finite_sliding(self) -> bool:

@@ -163,7 +163,8 @@ def _overlaps(slave_x: np.ndarray, slave_out: np.ndarray, master_x: np.ndarray,
 
 def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_inside: np.ndarray,
                     master_segment_nodes: np.ndarray, master_x: np.ndarray, master_inside: np.ndarray,
-                    multipliers: str = "dual", reference_tangent: np.ndarray | None = None) -> MortarMatrices:
+                    multipliers: str = "dual", reference_tangent: np.ndarray | None = None,
+                    slave_reference_x: np.ndarray | None = None) -> MortarMatrices:
     """The mortar matrices D and M of two surfaces: 2D of linear segments, 3D of triangles and bilinear
     quadrilaterals (see the module; 3D when the points have three coordinates).
 
@@ -177,6 +178,10 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
         reference_tangent: 3D: the direction whose projection on each slave node's tangent plane is its first
             tangent (the second ``n x t1``), as the node-to-face frames
             (:meth:`~dolfinx_fretting.contact.MasterSurface.frames`); default x. 2D: unused.
+        slave_reference_x: The slave segments' (faces') points in the reference configuration, shaped as
+            ``slave_x``, or None (``slave_x``). Finite sliding places the surfaces where they are now (``slave_x``,
+            ``master_x``: which parts face each other) and measures the integrals with each slave segment's length
+            (face's area) here, so that D and M are of the reference configuration's measure, as the stiffness is.
 
     Returns:
         The matrices, rows the slave nodes of every segment given (a node facing no master has an empty row and
@@ -195,7 +200,8 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
         return _mortar_matrices_3d(np.asarray(slave_segment_nodes, dtype=np.int64), np.asarray(slave_x, dtype=float),
                                    np.asarray(slave_inside, dtype=float),
                                    np.asarray(master_segment_nodes, dtype=np.int64), np.asarray(master_x, dtype=float),
-                                   np.asarray(master_inside, dtype=float), multipliers, tangent)
+                                   np.asarray(master_inside, dtype=float), multipliers, tangent,
+                                   None if slave_reference_x is None else np.asarray(slave_reference_x, dtype=float))
     slave_segment_nodes = np.asarray(slave_segment_nodes, dtype=np.int64)
     master_segment_nodes = np.asarray(master_segment_nodes, dtype=np.int64)
     slave_x, master_x = np.asarray(slave_x, dtype=float), np.asarray(master_x, dtype=float)
@@ -207,13 +213,17 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
                              f"inside points, f > 0; got {labels.shape}, {x.shape}, {np.shape(inside)}")
         if np.any(np.linalg.norm(x[:, 1] - x[:, 0], axis=1) == 0):
             raise ValueError(f"mortar: a {name} segment has zero length")
+    if slave_reference_x is not None and np.shape(slave_reference_x) != slave_x.shape:
+        raise ValueError(f"mortar: slave_reference_x has the shape {np.shape(slave_reference_x)}, slave_x "
+                         f"{slave_x.shape}: expected the same")
     slave_nodes = np.unique(slave_segment_nodes)
     master_nodes = np.unique(master_segment_nodes)
     slave_out = _segment_normals(slave_x, np.asarray(slave_inside, dtype=float))
     master_out = _segment_normals(master_x, np.asarray(master_inside, dtype=float))
     seg, mseg, low, high = _overlaps(slave_x, slave_out, master_x, master_out)
 
-    slave_length = np.linalg.norm(slave_x[:, 1] - slave_x[:, 0], axis=1)
+    reference = slave_x if slave_reference_x is None else np.asarray(slave_reference_x, dtype=float)
+    slave_length = np.linalg.norm(reference[:, 1] - reference[:, 0], axis=1)   # the measure integrated with
     master_length = np.linalg.norm(master_x[:, 1] - master_x[:, 0], axis=1)
     # Gauss points of every overlap: slave parameter xi, weight (length units), the slave and master hats there.
     xi = low[:, None] + (high - low)[:, None] * GAUSS_POINTS[None, :]                      # (p, g)
@@ -410,9 +420,13 @@ def _check_faces(name: str, labels: np.ndarray, x: np.ndarray, inside: np.ndarra
 
 def _mortar_matrices_3d(slave_labels: np.ndarray, slave_x: np.ndarray, slave_inside: np.ndarray,
                         master_labels: np.ndarray, master_x: np.ndarray, master_inside: np.ndarray,
-                        multipliers: str, reference_tangent: np.ndarray) -> MortarMatrices:
+                        multipliers: str, reference_tangent: np.ndarray,
+                        slave_reference_x: np.ndarray | None = None) -> MortarMatrices:
     """:func:`mortar_matrices` for faces (see the module's 3D section)."""
     slave_quad = _check_faces("slave", slave_labels, slave_x, slave_inside)
+    if slave_reference_x is not None and slave_reference_x.shape != slave_x.shape:
+        raise ValueError(f"mortar: slave_reference_x has the shape {slave_reference_x.shape}, slave_x "
+                         f"{slave_x.shape}: expected the same")
     master_quad = _check_faces("master", master_labels, master_x, master_inside)
     slave_nodes = np.unique(slave_labels[slave_labels >= 0])
     master_nodes = np.unique(master_labels[master_labels >= 0])
@@ -481,6 +495,9 @@ def _mortar_matrices_3d(slave_labels: np.ndarray, slave_x: np.ndarray, slave_ins
     p_s, p_t = _face_tangents(slave_plane[point_slave], slave_params, quad_s)
     weight = weight * np.linalg.norm(np.cross(d_s, d_t), axis=1) \
         / np.abs(p_s[:, 0] * p_t[:, 1] - p_s[:, 1] * p_t[:, 0])
+    if slave_reference_x is not None:   # measured with the faces' reference areas (finite sliding)
+        weight = weight * (_face_areas(slave_reference_x, slave_quad) / _face_areas(slave_x, slave_quad))[point_slave]
+        slave_x = slave_reference_x
 
     # Each slave face's facing part: its mass matrix there; faces facing too little are dropped.
     mass = np.zeros((n_slave_faces, 4, 4))

@@ -169,7 +169,9 @@ def worn_measure(operators: ContactOperators, state: ContactState) -> float:
     if operators.surface_compliance is None:
         return float(state.wear_gap @ contact_set.tributary)
     slave = state.wear_gap - sliding.interpolate_master(contact_set, operators.surface_compliance, state.master_wear)
-    return float(slave @ contact_set.tributary + state.master_wear @ operators.surface_compliance.master_areas)
+    # mortar: the slave's depth over its nodes' own measures (the tributary D_jj changes with the pairing)
+    slave_areas = contact_set.tributary if contact_set.slave_areas is None else contact_set.slave_areas
+    return float(slave @ slave_areas + state.master_wear @ operators.surface_compliance.master_areas)
 
 def total_force(operators: ContactOperators, state: ContactState, contact=None) -> np.ndarray:
     """Total contact force on the body in the obstacle frame (n, t1[, t2]); with several zones the force of zone

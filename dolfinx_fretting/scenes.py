@@ -244,7 +244,8 @@ class ContactSettings(_Section):
     #: Finite sliding: re-pair past this many contact elements of offset (0 < repair_slip <= 1).
     repair_slip: float = Field(0.25, gt=0, le=1)
     #: Two bodies: ``"node"`` (each slave node paired with a master point) or ``"mortar"`` (dual mortar: the
-    #: patch test passes on non-matching meshes; fixed pairing only): ``ElasticBody.formulation``.
+    #: patch test passes on non-matching meshes; with ``sliding = "finite"`` the mortar matrices are recomputed at
+    #: each re-pairing): ``ElasticBody.formulation``.
     formulation: Literal["node", "mortar"] = "node"
     #: The pressure read (profiles, ``max_pressure``, fields), every zone's: ``Contact(pressure_recovery=...)``.
     pressure_recovery: Literal["auto", "nodal", "smoothed"] = "auto"
@@ -920,9 +921,6 @@ class Scene(_Section):
         if c.formulation == "mortar" and c.obstacle != "elastic_flat":
             raise range_error("contact.formulation", c.formulation, "'node' unless contact.obstacle = 'elastic_flat' "
                               "(mortar pairs two deformable bodies; against a rigid plane it is not built)")
-        if c.formulation == "mortar" and c.sliding == "finite":
-            raise range_error("contact.formulation", c.formulation, "'node' with contact.sliding = 'finite' "
-                              "(mortar's pairing is fixed: finite sliding with mortar is not built)")
         if c.sliding == "finite" and self.wear.cycle_jump:
             raise range_error("contact.sliding", c.sliding, "'small' with wear.cycle_jump = true (a jump extrapolates "
                               "each contact's wear gap; with finite sliding the flat's wear lives on its own nodes "

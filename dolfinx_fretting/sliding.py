@@ -15,6 +15,13 @@ faces the node. Here the slave nodes are paired again, in the current configurat
   (:func:`~dolfinx_fretting.contact.paired_contact_set`); :func:`carry_state` expresses a state in it.
 - The master's share of the wear lives on the master's nodes (:func:`master_node_areas`, :func:`spread_wear`)
   and is interpolated at each pairing, so the scar on the master stays where it was worn.
+- Mortar (``ElasticBody(formulation="mortar")``): a re-pairing integrates D and M anew
+  (:func:`~dolfinx_fretting.mortar.mortar_matrices`) between the slave segments (faces) holding a contact's node and
+  the master facets within reach, placed where they are now (their motion in the contact plane) and measured in the
+  reference configuration, and forms the contacts' rows from them
+  (:func:`~dolfinx_fretting.contact.mortar_paired_set`); a contact's "paired point" is its weighted master point
+  ``sum_l w_jl X_l``. The slave's share of the wear is kept by each slave node's own measure
+  (:attr:`~dolfinx_fretting.contact.ContactSet.slave_areas`), since ``D_jj`` changes with the pairing.
 
 Nothing here touches DOLFINx or MPI: every rank holds the same arrays and computes the same pairing.
 """
@@ -27,7 +34,8 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
-from .contact import ContactSet, MasterSurface, paired_contact_set
+from .contact import ContactSet, MasterSurface, mortar_paired_set, paired_contact_set
+from .mortar import mortar_matrices
 
 __all__ = ["SurfaceCompliance", "surface_nodes", "master_node_areas", "offsets", "repair", "carry_state",
            "interpolate_master", "spread_wear"]
@@ -59,28 +67,17 @@ def surface_nodes(pairing: ContactSet, reach: float | None) -> tuple[np.ndarray,
         faces = np.flatnonzero(nearest - radius <= reach)
     masters = surface.nodes[faces].ravel()
     nodes = np.union1d(pairing.global_nodes, masters[masters >= 0])
+    if pairing.slave_surface is not None:   # mortar: the nodes of the slave segments the contacts' rows integrate
+        slaves = pairing.slave_surface.nodes[_contact_segments(pairing)].ravel()
+        nodes = np.union1d(nodes, slaves[slaves >= 0])
     return faces, nodes
 
 
 def master_node_areas(surface: MasterSurface, nodes: np.ndarray) -> np.ndarray:
-    """Tributary measure (length in 2D, area in 3D) of each of ``nodes`` on the whole master surface: a share
-    of each facet's measure per vertex (half a segment; a third of a triangle; a quadrilateral's area by its
-    two triangles, a quarter each). 0 for a node of no master facet."""
-    X = surface.x
-    if surface.dim == 2:
-        measure = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
-    else:
-        tri = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1)
-        quad = tri + 0.5 * np.linalg.norm(np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0]), axis=1)
-        measure = np.where(surface.nv == 4, quad, tri)
-    share = measure / surface.nv
-    valid = surface.nodes >= 0
-    owners = surface.nodes[valid]
-    where = np.searchsorted(nodes, owners)
-    inside = (where < nodes.size) & (nodes[np.minimum(where, nodes.size - 1)] == owners)
-    areas = np.zeros(nodes.size)
-    np.add.at(areas, where[inside], np.broadcast_to(share[:, None], surface.nodes.shape)[valid][inside])
-    return areas
+    """Tributary measure (length in 2D, area in 3D) of each of ``nodes`` on the whole master surface
+    (:meth:`~dolfinx_fretting.contact.MasterSurface.node_measures`): a share of each facet's measure per vertex.
+    0 for a node of no master facet."""
+    return surface.node_measures(nodes)
 
 
 @dataclass(frozen=True)
@@ -226,7 +223,11 @@ def offsets(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D
     slave_rows, master_rows = compliance.pairing_rows(pairing)
     slave = pairing.coords + u[slave_rows]
     moved = _master_motion(compliance, u, D, master_rows)
-    master = np.einsum("ci,cij->cj", pairing.master_weights, pairing.master_surface.x[pairing.master_faces] + moved)
+    if pairing.master_faces is None:   # mortar: the weighted master point sum_l w_jl X_l (the weights sum to one)
+        master = pairing.master_points + np.einsum("ci,cij->cj", pairing.master_weights, moved)
+    else:
+        master = np.einsum("ci,cij->cj", pairing.master_weights,
+                           pairing.master_surface.x[pairing.master_faces] + moved)
     tangential = np.einsum("ckj,cj->ck", pairing.frames[:, 1:], slave - master)
     return np.linalg.norm(tangential, axis=1) / pairing.master_sizes
 
@@ -236,7 +237,8 @@ def repair(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D:
     by their displacement in the contact plane (surface displacement ``u``, the master translated by ``D``;
     their components along the obstacle's normal are left out). A node that has
     slid beyond the reach pairs with the nearest facet within it; its :func:`offsets` then stay large (the
-    problem reports it).
+    problem reports it). A mortar pairing (``pairing.slave_surface`` set) is made anew by integrating D and M
+    between the surfaces so placed (see the module).
 
     Args:
         pairing: The current pairing (its slave nodes are kept, in order).
@@ -245,7 +247,11 @@ def repair(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D:
         D: The master's rigid translation.
 
     Returns:
-        The new pairing's contact set (:func:`~dolfinx_fretting.contact.paired_contact_set`).
+        The new pairing's contact set (:func:`~dolfinx_fretting.contact.paired_contact_set`, or for mortar
+        :func:`~dolfinx_fretting.contact.mortar_paired_set`).
+
+    Raises:
+        ValueError: mortar: a contact's slave node no longer faces the master (slid off its end or beyond reach).
     """
     surface = pairing.master_surface
     # The motion in the contact plane only (the obstacle frame's tangents): the approach along n is micrometres
@@ -258,12 +264,41 @@ def repair(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D:
     faces = compliance.faces
     rows = compliance.rows(surface.nodes[faces])
     current = surface.x[faces] + _master_motion(compliance, u, D, rows)
+    if pairing.slave_surface is not None:
+        return _repair_mortar(pairing, compliance, u, D, current)
     slave = pairing.coords + u[compliance.pairing_rows(pairing)[0]]
     pairs = MasterSurface(surface.nodes[faces], current, surface.nv[faces], surface.inside[faces] + D,
                           surface.reference_frame).pair(slave)
     chosen = faces[pairs["face"]]
     return paired_contact_set(surface, pairing.global_nodes, pairing.coords, pairing.tributary, pairing.abscissa,
                               chosen, pairs["weights"], pairing.H.shape[1], pairing.surface_mass)
+
+
+def _contact_segments(pairing: ContactSet) -> np.ndarray:
+    """Mortar: which slave segments (faces) hold a contact's node, the only ones its rows of D and M integrate."""
+    nodes = pairing.slave_surface.nodes
+    return np.isin(nodes, pairing.global_nodes).any(axis=1)
+
+
+def _repair_mortar(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray,
+                   master_x: np.ndarray) -> ContactSet:
+    """:func:`repair` of a mortar pairing: D and M integrated anew between the slave segments (faces) and the master
+    facets within reach (``master_x``), both at their current positions in the contact plane (``u``, ``D`` without
+    their normal components), then :func:`~dolfinx_fretting.contact.mortar_paired_set`. Only the surface
+    compliance's arrays are read: no solve, no factorisation."""
+    surface = pairing.master_surface
+    segments = _contact_segments(pairing)
+    slave = MasterSurface(*(getattr(pairing.slave_surface, name)[segments] for name in ("nodes", "x", "nv", "inside")),
+                          pairing.slave_surface.reference_frame)
+    faces = compliance.faces
+    moved = _master_motion(compliance, u, np.zeros(compliance.dim), compliance.rows(slave.nodes))
+    valid = (slave.nodes >= 0)[:, :, None]
+    mean_motion = (moved * valid).sum(axis=1) / valid.sum(axis=1)   # a triangle's padding not counted
+    matrices = mortar_matrices(slave.nodes, slave.x + moved,
+                               slave.inside + mean_motion, surface.nodes[faces], master_x, surface.inside[faces] + D,
+                               reference_tangent=surface.reference_frame[1] if surface.dim == 3 else None,
+                               slave_reference_x=slave.x)
+    return mortar_paired_set(pairing, matrices)
 
 
 def interpolate_master(pairing: ContactSet, compliance: SurfaceCompliance, master_wear: np.ndarray) -> np.ndarray:

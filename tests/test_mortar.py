@@ -144,8 +144,6 @@ def test_bad_input_is_refused():
         mortar.mortar_matrices(*slave, *flat([0.5, 0.5], 0.0, 10, above=False))
     with pytest.raises(ValueError, match="formulation = 'segment'"):
         dfr.ElasticBody(None, [0.0, 1.0], formulation="segment")
-    with pytest.raises(ValueError, match="sliding = 'small' only"):
-        dfr.ElasticBody(None, [0.0, 1.0], formulation="mortar", sliding="finite")
 
 
 # The patch test on non-matching meshes -------------------------------------------------------------------------------
@@ -334,32 +332,60 @@ def test_two_body_hertz_on_non_matching_meshes():
         assert errors(ratio, "node")[0] > 2e-2
 
 
-@pytest.mark.parametrize("compiled", [True, False])
-def test_mortar_wear_energy_identity_and_checkpoint(compiled, tmp_path):
+@pytest.mark.parametrize("compiled, sliding", [(True, "small"), (False, "small"), (False, "finite")])
+def test_mortar_wear_energy_identity_and_checkpoint(compiled, sliding, tmp_path):
     """The 3:5 blocks with mortar, mu = 0.3, Fouvry's energy law, pressed then rubbed one gross-slip cycle (in the
     compiled loop and increment by increment): each contact dissipates r_t . dx_t, the multiplier's work on the
     weighted slip, and wears alpha mu p |dx_t| over its tributary D_jj, so the worn area is alpha times the energy
-    (to 1e-10: rounding of sums over 6 contacts and 9 increments). The state saved and loaded back is the same."""
+    (to 1e-10: rounding of sums over 6 contacts and 9 increments). The state saved and loaded back is the same.
+
+    Finite sliding (a stroke of 0.03, re-pairing past 0.001 master elements; the blocks are as wide
+    as each other, so the slave's end segment hangs off the master's end and its end node's D_jj changes with the
+    pairing): the slave's worn measure (depth over its nodes' own measures) plus the master's (alpha_master: on its
+    own nodes) is (alpha_slave + alpha_master) mu x the energy, the two in the ratio of the coefficients, to 1e-10;
+    the checkpoint holds the pairing's rows (master nodes, weights, D_jj): the pairing read back is the same, H
+    included, and so is the master's wear."""
     alpha = 2e-6
     msh, tags = stacked_blocks(*MESHES["3:5"])
     V = compat.vector_space(msh, 1)
     ends = lambda x: np.isclose(x[1], 0.0) | np.isclose(x[1], 2.0)  # noqa: E731
     bcs = [component(V, 1, ends), component(V, 0, lambda x: ends(x) & np.isclose(x[0], 0.0))]
-    contact = dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 1.0], formulation="mortar"), mu=0.3,
-                          bcs=bcs)
-    problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=dfr.EnergyWear(alpha),
+    finite = sliding == "finite"
+    body = dfr.ElasticBody((tags, 2), [0.0, 1.0], formulation="mortar", sliding=sliding, repair_slip=0.001)
+    contact = dfr.Contact(V, (tags, 1), body, mu=0.3, bcs=bcs)
+    wear = dfr.EnergyWear(alpha_slave=alpha, alpha_master=1.5 * alpha) if finite else dfr.EnergyWear(alpha)
+    problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=wear,
                                   solver=dfr.LocalSolver(tol=1e-12, compiled_cycles=compiled))
     state, _ = problem.advance(problem.initial_state(), normal=6e-4)
-    state = problem.commit(state, problem.run_cycle(state, dfr.CyclePath.waveform(8, tangential=3e-3)))
+    stroke = 3e-2 if finite else 3e-3   # finite: a tenth of an element, re-paired as it goes
+    state = problem.commit(state, problem.run_cycle(state, dfr.CyclePath.waveform(8, tangential=stroke)))
     assert np.any(state.status == 2)   # the cycle slid
-    area = float(state.wear_gap @ contact.contact_set.tributary)
-    assert state.dissipated_energy > 0 and area > 0
-    assert area == pytest.approx(alpha * state.dissipated_energy, rel=1e-10)
+    if finite:
+        pairing = problem.contact_set_of(state)
+        assert problem.sliding.repairs >= 3
+        assert not np.allclose(pairing.tributary, problem.operators.reference_pairing.tributary, rtol=0, atol=1e-6)
+        worn = problem.body_wear(state)
+        slave = float(worn["slave"] @ pairing.slave_areas)
+        master = float(state.master_wear @ problem.operators.surface_compliance.master_areas)
+        assert slave == pytest.approx(master / 1.5, rel=1e-10)
+        assert slave + master == pytest.approx(2.5 * alpha * state.dissipated_energy, rel=1e-10)
+        assert problem.worn_measure(state) == pytest.approx(slave + master, rel=1e-12)
+    else:
+        area = float(state.wear_gap @ contact.contact_set.tributary)
+        assert state.dissipated_energy > 0 and area > 0
+        assert area == pytest.approx(alpha * state.dissipated_energy, rel=1e-10)
     path = MPI.COMM_WORLD.bcast(str(tmp_path / "state.npz"), root=0)
     problem.save_state(state, path)
     back, _ = problem.load_state(path)
     for name in ("forces", "positions", "slip", "wear_gap", "obstacle"):
         assert np.array_equal(getattr(back, name), getattr(state, name))
+    if finite:
+        for name in ("master_nodes", "master_weights", "tributary", "gap0", "master_sizes"):
+            assert np.array_equal(getattr(back.pairing, name), getattr(state.pairing, name)), name
+        assert (back.pairing.H != state.pairing.H).nnz == 0
+        assert np.array_equal(back.master_wear, state.master_wear)
+        problem.destroy()
+        return
     # the same nodes under the node-to-segment formulation: the state means other forces (multipliers against
     # nodal forces), so the checkpoint's formulation is checked (before, it loaded)
     node = dfr.FrettingProblem(elasticity(V), dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 1.0]),

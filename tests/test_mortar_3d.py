@@ -432,13 +432,19 @@ def test_the_mortar_formulation_passes_the_shear_patch_test(boxes):
     assert errors["mortar"] < 1e-8 and errors["node"] > 1e-2, errors
 
 
-@pytest.mark.parametrize("compiled", [True, False])
-def test_mortar_wear_energy_identity_and_checkpoint(compiled, tmp_path):
+@pytest.mark.parametrize("compiled, sliding", [(True, "small"), (False, "small"), (False, "finite")])
+def test_mortar_wear_energy_identity_and_checkpoint(compiled, sliding, tmp_path):
     """The hexahedral 3x3-on-4x5 boxes with mortar, mu = 0.3, Fouvry's energy law, pressed then rubbed one gross-slip
     cycle along t1 (in the compiled loop and increment by increment): each contact dissipates r_t . dx_t, the
     multiplier's work on the weighted slip (both tangents), and wears alpha mu p |dx_t| over its tributary D_jj, so
     the worn volume is alpha times the energy (to 1e-10: rounding of sums over 16 contacts and 9 increments). The
-    state saved and loaded back is the same."""
+    state saved and loaded back is the same.
+
+    Finite sliding (a stroke of 0.03, re-pairing past 0.001 master elements; the boxes are as wide as each other,
+    so the slave's edge faces hang off the master's and their nodes' D_jj change with the pairing): the slave's worn
+    volume (depth over its nodes' own areas) plus the master's (on its own nodes) is (alpha_slave + alpha_master) mu x
+    the energy, in the ratio of the coefficients, to 1e-10; the last pairing's W = L C L^T is the factorisation's for
+    that pairing (1e-9 of its largest entry) with K factorised once; the checkpoint holds the pairing."""
     alpha = 2e-6
     msh, tags = stacked_boxes(*BOXES["hexahedra 3x3 on 4x5"])
     V = compat.vector_space(msh, 1)
@@ -446,21 +452,50 @@ def test_mortar_wear_energy_identity_and_checkpoint(compiled, tmp_path):
     origin = lambda x: ends(x) & np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0)  # noqa: E731
     on_x = lambda x: ends(x) & np.isclose(x[1], 0.0) & (np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0))  # noqa: E731
     bcs = [component(V, 2, ends), component(V, 0, origin), component(V, 1, on_x)]
-    contact = dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 0.0, 1.0], formulation="mortar"), mu=0.3,
-                          bcs=bcs)
-    problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=dfr.EnergyWear(alpha),
-                                  solver=dfr.LocalSolver(tol=1e-12, compiled_cycles=compiled))
+    finite = sliding == "finite"
+
+    def problem_of(sliding):
+        body = dfr.ElasticBody((tags, 2), [0.0, 0.0, 1.0], formulation="mortar", sliding=sliding, repair_slip=0.001)
+        contact = dfr.Contact(V, (tags, 1), body, mu=0.3, bcs=bcs)
+        wear = dfr.EnergyWear(alpha_slave=alpha, alpha_master=1.5 * alpha) if finite else dfr.EnergyWear(alpha)
+        return dfr.FrettingProblem(elasticity(V), contact, bcs, wear=wear,
+                                   solver=dfr.LocalSolver(tol=1e-12, compiled_cycles=compiled)), contact
+
+    problem, contact = problem_of(sliding)
     state, _ = problem.advance(problem.initial_state(), normal=6e-4)
-    state = problem.commit(state, problem.run_cycle(state, dfr.CyclePath.waveform(8, tangential=3e-3)))
+    stroke = 3e-2 if finite else 3e-3   # finite: a tenth of an element, re-paired as it goes
+    state = problem.commit(state, problem.run_cycle(state, dfr.CyclePath.waveform(8, tangential=stroke)))
     assert np.any(state.status == 2)   # the cycle slid
-    volume = float(state.wear_gap @ contact.contact_set.tributary)
-    assert state.dissipated_energy > 0 and volume > 0
-    assert volume == pytest.approx(alpha * state.dissipated_energy, rel=1e-10)
+    if finite:
+        pairing = problem.contact_set_of(state)
+        assert problem.sliding.repairs >= 3
+        assert not np.allclose(pairing.tributary, problem.operators.reference_pairing.tributary, rtol=0, atol=1e-6)
+        worn = problem.body_wear(state)
+        slave = float(worn["slave"] @ pairing.slave_areas)
+        master = float(state.master_wear @ problem.operators.surface_compliance.master_areas)
+        assert slave == pytest.approx(master / 1.5, rel=1e-10)
+        assert slave + master == pytest.approx(2.5 * alpha * state.dissipated_energy, rel=1e-10)
+        stats = problem.operators.delassus.stats
+        assert (stats["factorizations"], stats["refactorizations"]) == (1, 0)
+        problem.operators.activate(state)
+        direct, _ = problem_of("small")
+        direct.operators.contact = direct.contact.with_pairing(pairing)
+        direct.operators.build()
+        assert np.abs(problem.operators.W - direct.operators.W).max() <= 1e-9 * np.abs(direct.operators.W).max()
+        direct.destroy()
+    else:
+        volume = float(state.wear_gap @ contact.contact_set.tributary)
+        assert state.dissipated_energy > 0 and volume > 0
+        assert volume == pytest.approx(alpha * state.dissipated_energy, rel=1e-10)
     path = MPI.COMM_WORLD.bcast(str(tmp_path / "state.npz"), root=0)
     problem.save_state(state, path)
     back, _ = problem.load_state(path)
     for name in ("forces", "positions", "slip", "wear_gap", "obstacle"):
         assert np.array_equal(getattr(back, name), getattr(state, name))
+    if finite:
+        for name in ("master_nodes", "master_weights", "tributary", "gap0"):
+            assert np.array_equal(getattr(back.pairing, name), getattr(state.pairing, name)), name
+        assert np.array_equal(back.master_wear, state.master_wear)
     problem.destroy()
 
 

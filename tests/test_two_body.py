@@ -186,8 +186,6 @@ def test_per_body_wear_coefficients(tmp_path):
      ["wear.k_master", "rigid plane does not wear"]),
     (["geometry.flat_width=0.5"], ["geometry.flat_width", "> 2 x the refined half-width"]),
     (["contact.plane_point=[0.0, 1.0]"], ["contact.plane_point", "y = 0"]),
-    (["contact.formulation='mortar'", "contact.sliding='finite'"],
-     ["contact.formulation = 'mortar'", "'node' with contact.sliding = 'finite'"]),
     (["contact.formulation='mortar'", "contact.obstacle='rigid_plane'"],
      ["contact.formulation = 'mortar'", "'node' unless contact.obstacle = 'elastic_flat'"]),
     (["contact.formulation='dual'"], ["contact.formulation"]),
