@@ -1,7 +1,7 @@
 """The fretting-fatigue life against the slip amplitude on the rig (``pad-specimen``, issue 24): it falls through
 partial slip, is shortest where gross slip begins and rises again in gross slip, where wear flattens the contact
-edge's stress concentration (the trend Madge, Leen, McColl & Shipway report for Ti-6Al-4V, Wear 262 (2007)
-1159-1170; IJF 30 (2008) 1509-1528).
+edge's stress concentration (the trend reported for Ti-6Al-4V by Madge, Leen, McColl & Shipway, Wear 262 (2007)
+1159-1170, and Madge, Leen & Shipway, IJF 30 (2008) 1509-1528).
 
 NOT the published comparison: the papers' inputs (P, sigma_B, R, mu, k, slip amplitudes, strain-life constants) and
 their lives could not be read in a source here (benchmarks/results/fatigue_slip.md says what was searched). The
@@ -9,7 +9,9 @@ inputs are benchmarks/bench_fatigue_slip.py's (its ``RIG`` and ``FATIGUE``): the
 mesh (h = 0.04 mm = a/9.5), rubbed by a displacement amplitude without bulk stress, Archard wear on both bodies
 (k = 2.75e-8 1/MPa), cycle jumps, SWT on the specimen with representative Al 2024-like constants, 10^4 cycles. The
 life is the run's cycles over the largest Miner's sum (no point reaches 1: the run's damage rate held), which ranks
-the amplitudes; its absolute value is no prediction.
+the amplitudes by their first 10^4 cycles' damage; its absolute value is no prediction: run on at 10 um (1.96e6
+cycles, benchmarks/results/fatigue_slip.md) the sum stalls at 1.21e-3 after ~3e5 cycles as wear flattens the edge
+(the largest SWT from 0.333 to 0.05 MPa), so with these constants that run never initiates.
 """
 
 import tempfile
