@@ -17,9 +17,9 @@ import numpy as np
 
 __all__ = ["plane_strain_modulus", "hertz_line_contact", "hertz_pressure", "hertz_sphere",
            "cattaneo_mindlin_stick_half_width", "cattaneo_mindlin_shear", "rounded_punch_load",
-           "rounded_punch_half_width", "rounded_punch_pressure", "mindlin_shear_modulus",
-           "cattaneo_mindlin_stick_radius", "mindlin_tangential_displacement", "mindlin_deresiewicz_energy",
-           "worn_sphere_volume", "worn_sphere_contact_radius"]
+           "rounded_punch_half_width", "rounded_punch_pressure", "hertz_sphere_pressure", "mindlin_shear_modulus",
+           "cattaneo_mindlin_stick_radius", "cattaneo_mindlin_sphere_traction", "mindlin_tangential_displacement",
+           "mindlin_deresiewicz_energy", "worn_sphere_volume", "worn_sphere_contact_radius"]
 
 
 def plane_strain_modulus(E1: float, nu1: float, E2: float | None = None, nu2: float | None = None) -> float:
@@ -59,6 +59,13 @@ def hertz_sphere(P: float, R: float, E_star: float) -> tuple[float, float]:
     """
     a = (3.0 * P * R / (4.0 * E_star)) ** (1.0 / 3.0)
     return a, 3.0 * P / (2.0 * math.pi * a * a)
+
+
+def hertz_sphere_pressure(r: np.ndarray, P: float, R: float, E_star: float) -> np.ndarray:
+    """Hertz's pressure of a sphere on a flat at distances ``r`` from the centre (Johnson eq. 3.39):
+    ``p = p0 sqrt(1 - r^2/a^2)`` inside the contact radius a, zero outside; a and p0 of :func:`hertz_sphere`."""
+    a, p0 = hertz_sphere(P, R, E_star)
+    return p0 * np.sqrt(np.clip(1.0 - (np.asarray(r, dtype=float) / a) ** 2, 0.0, None))
 
 
 def cattaneo_mindlin_stick_half_width(a: float, Q: float, mu: float, P: float) -> float:
@@ -165,6 +172,20 @@ def cattaneo_mindlin_stick_radius(a: float, Q: float, mu: float, P: float) -> fl
     """Stick radius c = a (1 - Q/(mu P))^(1/3) of a sphere under a tangential force ``|Q| < mu P`` growing from 0 at
     constant P (Johnson §7.2)."""
     return float(a * (1.0 - _load_ratio(Q, mu, P)) ** (1.0 / 3.0))
+
+
+def cattaneo_mindlin_sphere_traction(r: np.ndarray, Q: float, mu: float, P: float, R: float,
+                                     E_star: float) -> np.ndarray:
+    """The tangential traction (along Q, magnitude) of a sphere under a tangential force ``|Q| < mu P`` growing from
+    0 at constant P (Johnson eqs 7.38-7.40, Mindlin's approximation): ``mu p0 sqrt(1 - r^2/a^2)`` in the slip
+    annulus ``c <= r < a``, less ``mu p0 (c/a) sqrt(1 - r^2/c^2)`` inside the stick radius c
+    (:func:`cattaneo_mindlin_stick_radius`); a and p0 of :func:`hertz_sphere`. Its integral over the contact is
+    ``mu P (1 - (c/a)^3) = |Q|``."""
+    a, p0 = hertz_sphere(P, R, E_star)
+    c = cattaneo_mindlin_stick_radius(a, Q, mu, P)
+    r = np.asarray(r, dtype=float)
+    stick = np.sqrt(np.clip(1.0 - (r / c) ** 2, 0.0, None)) if c > 0 else np.zeros_like(r)
+    return mu * (hertz_sphere_pressure(r, P, R, E_star) - p0 * (c / a) * stick)
 
 
 def mindlin_tangential_displacement(Q: float, mu: float, P: float, a: float, G_star: float) -> float:

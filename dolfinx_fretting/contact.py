@@ -114,6 +114,14 @@ class Obstacle(metaclass=ABCMeta):
         """The candidate contacts of the body's ``facets`` (within ``half_width`` of the window's centre, all if
         None; ``exclude_nodes`` never: their every dof is fixed), with frames, gaps and H. Collective."""
 
+    def candidates_held(self, V, facets: np.ndarray, half_width: float | None, exclude_nodes: np.ndarray | None,
+                        held_dofs: np.ndarray) -> ContactSet:
+        """:meth:`candidates`, told the global dofs the conditions fix (``bs * global node + component``, the same on
+        every rank): what :class:`Contact` calls. A shape whose frames follow the body's own surface (mortar's
+        averaged normals) reads them to keep a roller's direction in the frame of a node on a symmetry plane; by
+        default they are not needed. Collective."""
+        return self.candidates(V, facets, half_width, exclude_nodes)
+
 
 @dataclass(frozen=True)
 class RigidPlane(Obstacle):
@@ -615,8 +623,8 @@ def paired_contact_set(surface: MasterSurface, global_nodes: np.ndarray, coords:
 
 
 def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, half_width: float | None = None,
-                      exclude_nodes: np.ndarray | None = None,
-                      reference_frame: np.ndarray | None = None) -> ContactSet:
+                      exclude_nodes: np.ndarray | None = None, reference_frame: np.ndarray | None = None,
+                      held_dofs: np.ndarray | None = None) -> ContactSet:
     """Mortar contact of the slave surface with the master surface, in the reference configuration (2D segments,
     3D triangles and quadrilaterals). Collective.
 
@@ -634,6 +642,11 @@ def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, ha
         exclude_nodes: Local block indices with prescribed displacement (never candidates).
         reference_frame: The obstacle frame (n, t1[, t2]); held by the master surface; in 3D its t1 projected on
             each slave node's tangent plane is the contact's t1 (as node-to-face projects it on the master facet).
+        held_dofs: Global dofs (``gdim * global node + component``) the conditions fix. A slave node with some but
+            not all of its components held is taken to lie on a symmetry plane normal to each held axis (a roller):
+            its averaged normal drops those components (the mortar module's ``symmetry_axes``), as the whole
+            model's mirrored faces would cancel them, so its frame holds the roller's direction (as node-to-face's
+            flat master frame does).
 
     Raises:
         ValueError: if the mesh is neither 2D nor 3D, or no slave node faces the master.
@@ -657,14 +670,29 @@ def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, ha
     ref = tangent_frame(np.eye(gdim)[-1 if gdim == 3 else 1]) if reference_frame is None \
         else np.asarray(reference_frame, dtype=float)
     surface = MasterSurface(master_nodes_of, master_x, master_nv, master_inside, ref)
+    symmetry_axes = np.zeros((0, 2), dtype=np.int64)
+    if held_dofs is not None:
+        labels = np.unique(slave_nodes_of[slave_nodes_of >= 0])
+        held = np.isin(gdim * labels[:, None] + np.arange(gdim), np.asarray(held_dofs, dtype=np.int64))
+        partly = np.flatnonzero(held.any(axis=1) & ~held.all(axis=1))
+        node_of, axis = np.nonzero(held[partly])
+        symmetry_axes = np.column_stack([labels[partly[node_of]], axis])
     mortar = mortar_matrices(slave_nodes_of, slave_x, slave_inside, master_nodes_of, master_x, master_inside,
-                             reference_tangent=ref[1] if gdim == 3 else None)
+                             reference_tangent=ref[1] if gdim == 3 else None, symmetry_axes=symmetry_axes)
     free, _, _ = _slave_nodes(V, slave_facets, exclude_nodes, coordinates)
     contacts = np.flatnonzero(np.isin(mortar.slave_nodes, free) & (mortar.D.diagonal() > 0))
     if contacts.size == 0:
         raise ValueError("contact: no free slave node faces the master surface (mortar: every D_jj = 0)")
     contact_set = mortar_contact_set(mortar, slave_nodes_of, slave_x, surface, imap.size_global * gdim,
                                      slave_surface=MasterSurface(slave_nodes_of, slave_x, slave_nv, slave_inside, ref))
+    if symmetry_axes.size:
+        # A node on a symmetry plane: the mirrored master faces would cancel its rows' components along the plane's
+        # normal (the master's antisymmetric displacement there), so they are dropped; its row along that axis (a
+        # frame direction now) then touches held dofs only, a held row as node-to-face's (Contact.held_rows).
+        H = contact_set.H.tocoo()
+        along = np.isin(contact_set.global_nodes[H.row // gdim] * gdim + H.col % gdim,
+                        symmetry_axes[:, 0] * gdim + symmetry_axes[:, 1])
+        contact_set.H = sp.csr_matrix((H.data[~along], (H.row[~along], H.col[~along])), shape=H.shape)
     gaps, coords = contact_set.gap0[contacts], contact_set.coords[contacts]
     if gdim == 2:
         abscissa = contact_set.abscissa[contacts]
@@ -1323,10 +1351,16 @@ class ElasticBody(Obstacle):
                    exclude_nodes: np.ndarray | None) -> ContactSet:
         """:func:`find_pairs` (or :func:`find_mortar_pairs`): each slave node of ``facets`` paired with the master
         surface. Collective."""
+        return self.candidates_held(V, facets, half_width, exclude_nodes, None)
+
+    def candidates_held(self, V, facets: np.ndarray, half_width: float | None, exclude_nodes: np.ndarray | None,
+                        held_dofs: np.ndarray | None) -> ContactSet:
+        """:meth:`candidates`; mortar's frames keep the rollers' directions (:func:`find_mortar_pairs`'s
+        ``held_dofs``). Collective."""
         master_facets = _tagged_facets(self.surface, V.mesh, "ElasticBody.surface")
         if self.formulation == "mortar":
             return find_mortar_pairs(V, facets, master_facets, half_width, exclude_nodes=exclude_nodes,
-                                     reference_frame=self.frame)
+                                     reference_frame=self.frame, held_dofs=held_dofs)
         return find_pairs(V, facets, master_facets, half_width, exclude_nodes=exclude_nodes,
                           reference_frame=self.frame)
 
@@ -1597,7 +1631,7 @@ class Contact:
         _refuse_fixed_surface(V, self.facets, self.fixed_nodes, int(surface[1]))
         self.fixed_global = constrained_global_dofs(V, self.bcs)
         def search(half_width: float | None) -> ContactSet:
-            return obstacle.candidates(V, self.facets, half_width, self.fixed_nodes)
+            return obstacle.candidates_held(V, self.facets, half_width, self.fixed_nodes, self.fixed_global)
 
         contact_set = search(window)
         if self.pressure_recovery == "smoothed":

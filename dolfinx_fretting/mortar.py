@@ -145,6 +145,27 @@ def slave_normals(segment_nodes: np.ndarray, segment_x: np.ndarray, inside: np.n
     return -total / length[:, None]
 
 
+def _on_symmetry_planes(normals: np.ndarray, nodes: np.ndarray, symmetry: np.ndarray) -> np.ndarray:
+    """``normals`` (rows: ``nodes``, sorted) with each (node, axis) pair of ``symmetry``'s component along the axis
+    dropped and the row normalised again: the unit normal of the sum of the faces' normals and their mirror images'
+    (the whole model's averaged normal)."""
+    if symmetry.size == 0:
+        return normals
+    rows = np.minimum(np.searchsorted(nodes, symmetry[:, 0]), nodes.size - 1)
+    found = nodes[rows] == symmetry[:, 0]
+    out = normals.copy()
+    out[rows[found], symmetry[found, 1]] = 0.0
+    changed = np.unique(rows[found])
+    length = np.linalg.norm(out[changed], axis=1)
+    if np.any(length < 1e-8):
+        node = int(nodes[changed[np.flatnonzero(length < 1e-8)[0]]])
+        raise ValueError(f"mortar: slave node {node}'s normal lies along its symmetry axis (the surface meets its "
+                         "symmetry plane at a right angle there, not along it): a roller there cannot be a symmetry "
+                         "condition of the contact")
+    out[changed] /= length[:, None]
+    return out
+
+
 def _overlaps(slave_x: np.ndarray, slave_out: np.ndarray, master_x: np.ndarray,
               master_out: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The facing (slave segment, master segment) pairs and their overlap on the slave segment: ``(slave, master,
@@ -164,7 +185,8 @@ def _overlaps(slave_x: np.ndarray, slave_out: np.ndarray, master_x: np.ndarray,
 def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_inside: np.ndarray,
                     master_segment_nodes: np.ndarray, master_x: np.ndarray, master_inside: np.ndarray,
                     multipliers: str = "dual", reference_tangent: np.ndarray | None = None,
-                    slave_reference_x: np.ndarray | None = None) -> MortarMatrices:
+                    slave_reference_x: np.ndarray | None = None,
+                    symmetry_axes: np.ndarray | None = None) -> MortarMatrices:
     """The mortar matrices D and M of two surfaces: 2D of linear segments, 3D of triangles and bilinear
     quadrilaterals (see the module; 3D when the points have three coordinates).
 
@@ -182,6 +204,10 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
             ``slave_x``, or None (``slave_x``). Finite sliding places the surfaces where they are now (``slave_x``,
             ``master_x``: which parts face each other) and measures the integrals with each slave segment's length
             (face's area) here, so that D and M are of the reference configuration's measure, as the stiffness is.
+        symmetry_axes: (k, 2) integer pairs (slave node label, coordinate axis): the node lies on a symmetry plane
+            normal to that axis (a roller holds its displacement along it); its averaged normal drops its component
+            along the axis, as the mirrored faces of the whole model would cancel it, so that its frame holds the
+            axis (a half model's nodes on the plane). Pairs naming no slave node are ignored.
 
     Returns:
         The matrices, rows the slave nodes of every segment given (a node facing no master has an empty row and
@@ -189,10 +215,17 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
 
     Raises:
         ValueError: ``multipliers`` not one of :data:`MULTIPLIERS`, arrays of the wrong shapes, a segment of zero
-            length or a face of zero area, or (3D) a reference tangent along a slave node's normal.
+            length or a face of zero area, a slave node's normal along its symmetry axis, or (3D) a reference
+            tangent along a slave node's normal.
     """
     if multipliers not in MULTIPLIERS:
         raise ValueError(f"mortar: multipliers = {multipliers!r}: allowed {', '.join(map(repr, MULTIPLIERS))}")
+    symmetry = np.zeros((0, 2), dtype=np.int64) if symmetry_axes is None else np.asarray(symmetry_axes)
+    dim = np.shape(slave_x)[-1]
+    if symmetry.ndim != 2 or symmetry.shape[1] != 2 or (symmetry.size and (
+            symmetry.dtype.kind not in "iu" or symmetry[:, 1].min() < 0 or symmetry[:, 1].max() >= dim)):
+        raise ValueError(f"mortar: symmetry_axes of shape {symmetry.shape}: expected (k, 2) integer pairs (slave node, "
+                         f"axis 0 .. {dim - 1})")
     if np.shape(slave_x)[-1:] == (3,):
         tangent = np.asarray(reference_tangent if reference_tangent is not None else [1.0, 0.0, 0.0], dtype=float)
         if tangent.shape != (3,) or not np.all(np.isfinite(tangent)):
@@ -200,7 +233,7 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
         return _mortar_matrices_3d(np.asarray(slave_segment_nodes, dtype=np.int64), np.asarray(slave_x, dtype=float),
                                    np.asarray(slave_inside, dtype=float),
                                    np.asarray(master_segment_nodes, dtype=np.int64), np.asarray(master_x, dtype=float),
-                                   np.asarray(master_inside, dtype=float), multipliers, tangent,
+                                   np.asarray(master_inside, dtype=float), multipliers, tangent, symmetry,
                                    None if slave_reference_x is None else np.asarray(slave_reference_x, dtype=float))
     slave_segment_nodes = np.asarray(slave_segment_nodes, dtype=np.int64)
     master_segment_nodes = np.asarray(master_segment_nodes, dtype=np.int64)
@@ -279,7 +312,8 @@ def mortar_matrices(slave_segment_nodes: np.ndarray, slave_x: np.ndarray, slave_
         np.add.at(size_sum, row_of[seg[keep], end], facing_length * master_length[mseg[keep]])
         np.add.at(size_weight, row_of[seg[keep], end], facing_length)
     sizes = np.divide(size_sum, size_weight, out=np.zeros(n_slave), where=size_weight > 0)
-    normals = slave_normals(slave_segment_nodes, slave_x, np.asarray(slave_inside, dtype=float), slave_nodes)
+    normals = _on_symmetry_planes(slave_normals(slave_segment_nodes, slave_x, np.asarray(slave_inside, dtype=float),
+                                                slave_nodes), slave_nodes, symmetry)
     tangents = np.column_stack([normals[:, 1], -normals[:, 0]])
     return MortarMatrices(slave_nodes, master_nodes, D, M, normals, tangents, sizes, multipliers)
 
@@ -420,7 +454,7 @@ def _check_faces(name: str, labels: np.ndarray, x: np.ndarray, inside: np.ndarra
 
 def _mortar_matrices_3d(slave_labels: np.ndarray, slave_x: np.ndarray, slave_inside: np.ndarray,
                         master_labels: np.ndarray, master_x: np.ndarray, master_inside: np.ndarray,
-                        multipliers: str, reference_tangent: np.ndarray,
+                        multipliers: str, reference_tangent: np.ndarray, symmetry: np.ndarray,
                         slave_reference_x: np.ndarray | None = None) -> MortarMatrices:
     """:func:`mortar_matrices` for faces (see the module's 3D section)."""
     slave_quad = _check_faces("slave", slave_labels, slave_x, slave_inside)
@@ -560,7 +594,7 @@ def _mortar_matrices_3d(slave_labels: np.ndarray, slave_x: np.ndarray, slave_ins
     if np.any(length == 0):
         raise ValueError("mortar: a slave node joins faces whose outward normals cancel (the slave surface folds "
                          "back on itself there)")
-    normals = -total / length[:, None]
+    normals = _on_symmetry_planes(-total / length[:, None], slave_nodes, symmetry)
     first = reference_tangent[None, :] - (normals @ reference_tangent)[:, None] * normals
     first_length = np.linalg.norm(first, axis=1)
     if np.any(first_length < 1e-8):

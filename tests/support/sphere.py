@@ -11,7 +11,7 @@ from dolfinx import fem  # noqa: E402
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 from dolfinx_fretting import meshes_3d as m3  # noqa: E402
-from dolfinx_fretting.analytic import hertz_sphere  # noqa: E402
+from dolfinx_fretting.analytic import hertz_sphere, plane_strain_modulus  # noqa: E402
 
 COMM = MPI.COMM_WORLD
 E, NU, R, P = 210000.0, 0.3, 10.0, 100.0   # MPa, -, mm, N (the whole sphere's load)
@@ -24,14 +24,20 @@ def elasticity(V):
     return ufl.inner(lmbda * ufl.tr(eps(u)) * ufl.Identity(3) + 2 * G * eps(u), eps(v)) * ufl.dx
 
 
+def contact_modulus(flat):
+    """E* of the sphere on an identical flat (``flat``) or on a rigid plane: the package's declaration."""
+    return plane_strain_modulus(E, NU, E, NU) if flat else plane_strain_modulus(E, NU)
+
+
 def sphere_model(a_over_h, extent, growth, *, flat, half=True, mu=0.0, wear=None, window=1.4, flat_mesh_size=None,
-                 comm=COMM, sliding="small", reach=None, depth_growth=None, coarsening=0, field_cell=0.125):
+                 comm=COMM, sliding="small", reach=None, depth_growth=None, coarsening=0, field_cell=0.125,
+                 formulation="node", solver=None):
     """The sphere's cap (top clamped) on a rigid plane z = 0 or on an identical flat (bottom clamped), sized
     from Hertz's a for P; a half model has rollers (u_y = 0) on y = 0; ``sliding`` and ``reach`` (in units of a)
     as :class:`~dolfinx_fretting.contact.ElasticBody`'s; ``depth_growth``, ``coarsening`` and ``field_cell`` as
-    :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat`'s (the depth-graded mesh). Returns (body, problem, a, p0,
-    h)."""
-    E_star = E / (1 - NU**2) / (2.0 if flat else 1.0)
+    :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat`'s (the depth-graded mesh); ``formulation`` the elastic flat's
+    (``"node"`` or ``"mortar"``); ``solver`` a LocalSolver (None: the default). Returns (body, problem, a, p0, h)."""
+    E_star = contact_modulus(flat)
     a, p0 = hertz_sphere(P, R, E_star)
     h = a / a_over_h
     body = m3.sphere_on_flat(comm, R, a, h, extent=extent, growth=growth, half=half, flat=flat,
@@ -48,10 +54,10 @@ def sphere_model(a_over_h, extent, growth, *, flat, half=True, mu=0.0, wear=None
                                        V.sub(1))]
     surface = (body.facet_tags, body.tags["surface"])
     obstacle = (dfr.ElasticBody((body.facet_tags, body.tags["flat_top"]), [0.0, 0.0, 1.0], sliding=sliding,
-                                reach=None if reach is None else reach * a) if flat
+                                reach=None if reach is None else reach * a, formulation=formulation) if flat
                 else dfr.RigidPlane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
     contact = dfr.Contact(V, surface, obstacle, mu=mu, bcs=bcs, window=window * a + h)
-    problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=wear)
+    problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=wear, solver=solver)
     return body, problem, a, p0, h
 
 
