@@ -27,7 +27,7 @@ import scipy.sparse as sp
 from mpi4py import MPI
 
 from .laws import Coulomb, FrictionLaw
-from .mortar import MortarMatrices, mortar_matrices, weighted_gaps
+from .mortar import MortarMatrices, mortar_matrices, weighted_relative_displacement
 from .pressure import RECOVERIES, smoothed_tractions, surface_mass
 
 # DOLFINx, UFL and petsc4py are imported inside the functions that read the mesh: this module's value types
@@ -117,9 +117,9 @@ class Obstacle(metaclass=ABCMeta):
     def candidates_held(self, V, facets: np.ndarray, half_width: float | None, exclude_nodes: np.ndarray | None,
                         held_dofs: np.ndarray) -> ContactSet:
         """:meth:`candidates`, told the global dofs the conditions fix (``bs * global node + component``, the same on
-        every rank): what :class:`Contact` calls. A shape whose frames follow the body's own surface (mortar's
-        averaged normals) reads them to keep a roller's direction in the frame of a node on a symmetry plane; by
-        default they are not needed. Collective."""
+        every rank): what :class:`Contact` calls. A shape whose rows reach the body's own surface (mortar: a node on a
+        symmetry plane has its H columns along the roller's axis dropped, as the whole model's mirrored faces would
+        cancel them) reads them; by default they are not needed. Collective."""
         return self.candidates(V, facets, half_width, exclude_nodes)
 
 
@@ -641,12 +641,12 @@ def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, ha
         half_width: Candidate window half-width (length units), or None for every slave node.
         exclude_nodes: Local block indices with prescribed displacement (never candidates).
         reference_frame: The obstacle frame (n, t1[, t2]); held by the master surface; in 3D its t1 projected on
-            each slave node's tangent plane is the contact's t1 (as node-to-face projects it on the master facet).
+            the master facet at each slave node's closest point is the contact's t1 (as node-to-face's).
         held_dofs: Global dofs (``gdim * global node + component``) the conditions fix. A slave node with some but
             not all of its components held is taken to lie on a symmetry plane normal to each held axis (a roller):
-            its averaged normal drops those components (the mortar module's ``symmetry_axes``), as the whole
-            model's mirrored faces would cancel them, so its frame holds the roller's direction (as node-to-face's
-            flat master frame does).
+            its averaged normal (the mortar module's ``symmetry_axes``: the facing check) drops those components, as
+            the whole model's mirrored faces would cancel them, and its H columns along the held axis are dropped, so
+            its frame holds the roller's direction (as node-to-face's flat master frame does).
 
     Raises:
         ValueError: if the mesh is neither 2D nor 3D, or no slave node faces the master.
@@ -725,13 +725,17 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
     :meth:`ContactSet.subset`). Dual multipliers only (D diagonal).
 
     Contact j's relative position is the weighted gap and the weighted relative tangential displacement divided by
-    ``D_jj``, in the node's averaged frame (n_j, t_j) (3D: (n_j, t1_j, t2_j), the tangents of
-    :class:`~dolfinx_fretting.mortar.MortarMatrices`; the abscissa is then the position along the reference frame's
-    t1, as node-to-face's):
+    ``D_jj``, in the master's frame at the slave node (n_j, t_j) (3D: (n_j, t1_j, t2_j); the abscissa is then the
+    position along the reference frame's t1, as node-to-face's): n_j the master's unit outward normal at the node's
+    closest master point and t_j as :meth:`MasterSurface.frames` makes it, the frame node-to-segment/face pairing
+    gives the node (:func:`find_pairs`). Not the slave's averaged normal (``MortarMatrices.normals``): on a curved
+    slave it tilts by x/R from the contact plane, and the Coulomb law applied about it is off by O(a/R) (row 58 of
+    the validation page). The gap is weighted along the same n_j:
 
-        x^j = [n_j; t_j] (u_j - sum_l w_jl u_l) + g0_j,    w_jl = M_jl / D_jj,    g0_j = g_j / D_jj,
+        x^j = [n_j; t_j] (u_j - sum_l w_jl u_l) + g0_j,    w_jl = M_jl / D_jj,    g0_j = (x_j - sum_l w_jl x_l) . n_j,
 
-    with ``sum_l w_jl = 1``. The contact force r_j is then ``D_jj`` times the multiplier (a nodal force, as with
+    with ``sum_l w_jl = 1`` (so a rigid translation of both bodies leaves x^j unchanged whatever n_j: the patch
+    test). The contact force r_j is then ``D_jj`` times the multiplier (a nodal force, as with
     node-to-segment pairing), the slave node gets ``r_j`` and master node l ``-w_jl r_j``: the nodal forces of the
     traction ``sum_j lambda_j psi_j``. The tributary measure is ``D_jj`` (the slave hat's measure over the part facing
     the master), so the pressure read, force over tributary, is the multiplier ``lambda_j`` itself.
@@ -745,6 +749,10 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
         slave_surface: The slave segments (faces) as a surface (their nodes, reference points, vertex counts and
             inside points): held by the set (:attr:`ContactSet.slave_surface`, with each node's own measure) for
             finite sliding's re-pairing; None: not held.
+
+    Raises:
+        ValueError: if ``mortar`` is not dual, or a facing slave node's closest master point has a normal opposed to
+            the slave's (the master folds back over it).
     """
     if mortar.multipliers != "dual":
         raise ValueError(f"mortar_contact_set: multipliers = {mortar.multipliers!r}: the nodal contact solvers need "
@@ -761,12 +769,22 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
     scale = np.divide(1.0, measure, out=np.zeros_like(measure), where=measure > 0)
     weights = sp.csr_matrix(sp.diags(scale) @ mortar.M)
     weights.sort_indices()
-    gaps = weighted_gaps(mortar, coords, master_coords) * scale
-    frames = mortar.frames                                                          # (s, dim, dim) rows n, t1[, t2]
+    # The frames are the master's, as node-to-segment/face pairing's (find_pairs): n the master's outward normal at
+    # the slave node's closest point. The slave's averaged reference normals would tilt every frame of a curved slave
+    # by x/R from the contact plane (an O(a/R) error of the Coulomb law that meshes do not reduce); the gap is
+    # weighted along the same n, so that x = H u + g0 is one relative position.
+    normals = surface.pair(coords)["normal"]
+    facing = np.einsum("ij,ij->i", normals, mortar.normals)
+    if np.any((measure > 0) & (facing <= 0)):
+        node = int(nodes[np.flatnonzero((measure > 0) & (facing <= 0))[0]])
+        raise ValueError(f"mortar_contact_set: slave node {node}'s closest master point has a normal that does not "
+                         "face the slave's (the master surface folds back there)")
+    frames = surface.frames(normals)                                                # (s, dim, dim) rows n, t1[, t2]
+    gaps = weighted_relative_displacement(mortar, coords, master_coords, normals) * scale
     master_nodes, master_weights = _padded_rows(weights, mortar.master_nodes)
     return ContactSet(dim=dim, global_nodes=nodes, coords=coords, frames=frames, gap0=gaps, tributary=measure,
                       abscissa=coords @ surface.reference_frame[1] if dim == 3 else np.einsum("ij,ij->i", coords,
-                                                                                              mortar.tangents),
+                                                                                              frames[:, 1]),
                       H=_mortar_rows(nodes, frames, master_nodes, master_weights, measure, n_dofs),
                       master_nodes=master_nodes,
                       master_weights=master_weights, master_points=np.asarray(weights @ master_coords),
@@ -811,8 +829,8 @@ def mortar_paired_set(pairing: ContactSet, mortar: MortarMatrices) -> ContactSet
 
     As :func:`paired_contact_set` does for node pairing, the pairing (each contact's weights ``M_jl / D_jj``, its
     measure ``D_jj`` and master size) is the current configuration's, and everything else is the reference
-    configuration's: the slave nodes, their frames (the slave's averaged normals of the reference configuration,
-    so a re-pairing does not turn the forces) and the gap ``g0_j = n_j . (X_j - sum_l w_jl X_l)``, so that
+    configuration's: the slave nodes, their frames (the first pairing's: the master's normals at the nodes' closest
+    points in the reference configuration, so a re-pairing does not turn the forces) and the gap ``g0_j = n_j . (X_j - sum_l w_jl X_l)``, so that
     ``x = H u + g0`` is the linearised weighted gap and weighted relative displacement over ``D_jj``.
 
     Args:
@@ -1295,15 +1313,17 @@ class ElasticBody(Obstacle):
             compliance. None: every facet of the master surface. A pairing that would need a facet beyond it
             raises an error.
         formulation: ``"node"`` (default): each slave node paired with the closest master point (above);
-            ``"mortar"`` (2D and 3D, small or finite sliding): the segment-to-segment (2D) or face-to-face (3D:
-            triangles and quadrilaterals, clipped in each slave face's plane) mortar integrals with dual Lagrange
-            multipliers (:mod:`dolfinx_fretting.mortar`, :func:`find_mortar_pairs`): each slave node facing the
-            master is a contact whose gap and relative tangential displacement are the weighted ones divided by
-            ``D_jj``, its frame the slave's averaged nodal normal and tangent(s), its tributary measure ``D_jj``; the
-            pressure read is the multiplier. It passes the contact patch test on non-matching meshes, which
-            node-to-segment and node-to-face pairing do not. With ``sliding = "finite"`` a re-pairing recomputes D
-            and M in the current configuration (:func:`dolfinx_fretting.sliding.repair`, no refactorisation); the
-            slave's share of the wear is kept on its nodes by their own measure, the master's on the master's
+            ``"mortar"`` (2D and 3D, small or finite sliding): the segment-to-segment (2D) or face-to-face (3D: triangles
+            and quadrilaterals, clipped in each slave face's plane) mortar integrals with dual Lagrange multipliers
+            (:mod:`dolfinx_fretting.mortar`, :func:`find_mortar_pairs`): each slave node facing the master is a
+            contact whose gap and relative tangential displacement are the weighted ones divided by ``D_jj``, its
+            frame the master's at the node's closest point (as node-to-segment/face pairing's, above; not the
+            slave's normals, which on a curved slave tilt by x/R from the contact plane), its tributary measure
+            ``D_jj``; the pressure read is the multiplier. It passes the contact patch test on non-matching
+            meshes, which node-to-segment and node-to-face pairing do not. With friction make the flatter surface
+            the master, in both formulations. With ``sliding = "finite"`` a re-pairing recomputes D and M in the
+            current configuration (:func:`dolfinx_fretting.sliding.repair`, no refactorisation), the frames kept;
+            the slave's share of the wear is kept on its nodes by their own measure, the master's on the master's
             nodes.
     """
 

@@ -87,8 +87,9 @@ class MortarMatrices:
         master_nodes: (m,) the master nodes (sorted): the columns of M.
         D: (s, s) sparse; diagonal for dual multipliers.
         M: (s, m) sparse.
-        normals: (s, dim) each slave node's unit contact normal, pointing from the master into the slave (minus the
-            average of the unit outward normals of the slave segments or faces meeting at the node).
+        normals: (s, dim) each slave node's unit normal, pointing from the master into the slave (minus the
+            average of the unit outward normals of the slave segments or faces meeting at the node). The package's
+            contact frames are the master's instead (:func:`~dolfinx_fretting.contact.mortar_contact_set`).
         tangents: 2D (s, 2) ``t = (n_y, -n_x)``; 3D (s, 2, 3) ``t1`` the reference tangent projected on the node's
             tangent plane, ``t2 = n x t1`` (the package's frames,
             :meth:`~dolfinx_fretting.contact.MasterSurface.frames`).
