@@ -54,6 +54,7 @@ def one_case(a_over_h: float, field_cell: float, route: str, save_W: str) -> dic
                schur_factorize_s=stats.get("schur_factorize_time"), schur_size=stats.get("schur_size"),
                mumps_mb=stats["mumps_memory_mb"], schur_mumps_mb=stats.get("schur_memory_mb"),
                peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+               operator_timings={k: round(v, 3) for k, v in problem.operators.timings.items()},  # wall (s)
                load_end=round(os.getloadavg()[0], 2))
     np.save(save_W, problem.operators.W)
     return rec

@@ -75,8 +75,11 @@ METHODS = ROUTES + ("auto",)
 # shared distributed selected inverse, even counting its extra factorisation.
 _AUTO_SERIAL = "selected_inverse"
 _AUTO_PARALLEL = "owned"
-#: Serial "auto" builds W by the Schur complement route from this many rows of H (contacts x dimension) up
-#: (benchmarks/results/schur_setup.md: CPU time of the two routes on 3D sphere-flat models).
+#: Serial "auto" builds W by the Schur complement route from this many rows of H (contacts x dimension) up.
+#: benchmarks/results/schur_setup.md, CPU time of W on the two-body sphere-flat (depth-graded mesh): the selected
+#: inverse 2.3x / 1.5x faster at 747 / 1110 rows, the Schur route 1.3x / 1.9x faster at 1536 / 2658 rows (the
+#: crossover ~1350 rows); from 1500 rows, since near the crossover the selected inverse needs less memory (the
+#: Schur route's own factor is 1.2-2.5x K's). Measured in 3D only.
 AUTO_SCHUR_ROWS = 1500
 
 
