@@ -154,7 +154,8 @@ def test_schur_route_on_two_bodies_in_3d(monkeypatch):
     """Two bodies in 3D (sphere on an identical flat, half model: a/h = 2, extent 4, 6 x 11 contacts): each row of
     H touches the dofs of both surfaces' nodes, so the Schur complement of [[K, H^T], [H, 0]] on H's rows is
     -W itself. W by the Schur route, by the selected inverse and by SciPy's SuperLU agree; ``auto`` takes the
-    Schur route from AUTO_SCHUR_ROWS rows of H up and the selected inverse below."""
+    Schur route from AUTO_SCHUR_ROWS rows of H up on a K of at most AUTO_SCHUR_DOFS_PER_ROW dofs per row, else the
+    selected inverse."""
     _, problem, *_ = sphere_model(2, 4.0, 1.6, flat=True, mu=0.5)
     try:
         d, H = problem.operators.delassus, problem.contact.H_free
@@ -169,20 +170,27 @@ def test_schur_route_on_two_bodies_in_3d(monkeypatch):
         W_si = d.build(H, method="selected_inverse")
         assert np.abs(W_schur - W_si).max() <= 1e-10 * scale
         assert d.method == "auto"  # serially "auto" stays, resolved for each H
+        dofs = problem.operators.K.getSize()[0]
         monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0])
+        monkeypatch.setattr(compliance, "AUTO_SCHUR_DOFS_PER_ROW", dofs / H.shape[0])
         d.build(H)
         assert d.stats["last_build_route"] == "schur"
         monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0] + 1)
         d.build(H)
-        assert d.stats["last_build_route"] == "selected_inverse"
+        assert d.stats["last_build_route"] == "selected_inverse"  # too few rows
+        monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0])
+        monkeypatch.setattr(compliance, "AUTO_SCHUR_DOFS_PER_ROW", 0.99 * dofs / H.shape[0])
+        d.build(H)
+        assert d.stats["last_build_route"] == "selected_inverse"  # too many dofs per row
     finally:
         problem.destroy()
 
 
 def test_auto_route():
-    """``auto``: the selected inverse below AUTO_SCHUR_ROWS rows, the Schur route from there up (serial); the
-    owned route under MPI at any size (the Schur route is serial only)."""
-    rows = compliance.AUTO_SCHUR_ROWS
-    assert auto_route(1, rows - 1) == "selected_inverse"
-    assert auto_route(1, rows) == "schur"
-    assert auto_route(2, 10 * rows) == "owned" and auto_route(3, 1) == "owned"
+    """``auto``: the Schur route from AUTO_SCHUR_ROWS rows on a K of at most AUTO_SCHUR_DOFS_PER_ROW dofs per row, else
+    the selected inverse (serial); the owned route under MPI at any size (the Schur route is serial only)."""
+    rows, per_row = compliance.AUTO_SCHUR_ROWS, compliance.AUTO_SCHUR_DOFS_PER_ROW
+    assert auto_route(1, rows - 1, per_row * rows) == "selected_inverse"
+    assert auto_route(1, rows, per_row * rows) == "schur"
+    assert auto_route(1, rows, per_row * rows + 1) == "selected_inverse"
+    assert auto_route(2, 10 * rows, rows) == "owned" and auto_route(3, 1, 1) == "owned"
