@@ -34,8 +34,7 @@ for route in ("schur", "selected_inverse"):
     print(route, f"wall {d.last_build_time:.1f} s, CPU {time.process_time() - c0:.1f} s",
           d.stats.get("schur_factorize_time"), flush=True)
     if route == "schur":
-        d._schur.destroy()  # its own factor of K: free it before the next route
-        d._schur = None
+        d._drop_schur()  # its own factorisation: free it before the next route
     if ref is None:
         ref = W
     else:

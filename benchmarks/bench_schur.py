@@ -6,9 +6,9 @@ bottom node a candidate) the package's objects are built (``ContactModel``), the
 
 * ``factorize``: K's MUMPS Cholesky, symbolic + numeric (median of ``--repeat``), the unit of time;
 * ``selected_inverse``: W from MUMPS entries of the inverse on the existing factor (median build time);
-* ``schur (new)``: the ``schur`` route's first build for a contact set: its own factorisation of K with the
-  contact dofs kept for last (symbolic + numeric), the Schur complement S_K and a dense Cholesky of it;
-* ``schur (reuse)``: a later build on the same contact dofs (S_K taken again from the kept factor);
+* ``schur (new)``: the ``schur`` route's first build for a contact set: its own factorisation of [[K, H^T],
+  [H, 0]] with H's rows kept for last (symbolic + numeric) and the Schur complement, -W;
+* ``schur (reuse)``: a later build with the same H (the Schur complement read again from the kept factor);
 * after ``refactorize`` (K's values changed, as in a Newton iteration with the consistent tangent): the
   selected inverse's build on the refreshed factor, and the Schur route's build, which first refactorises its
   own factor numerically.
@@ -101,9 +101,7 @@ def run_case(case: dict, repeat: int) -> dict:
     new, reuse = [], []
     W_schur = None
     for _ in range(repeat):
-        if getattr(d, "_schur", None) is not None:  # drop the kept factor: time a first build
-            d._schur.destroy()
-            d._schur = None
+        d._drop_schur()  # drop the kept factor: time a first build
         W_schur = d.build(H, method="schur")
         new.append(d.last_build_time)
         d.build(H, method="schur")
@@ -157,8 +155,8 @@ def markdown_one(data: dict) -> str:
                      f"{cell('selected_inverse_s')} | {cell('schur_new_s')} | {cell('schur_reuse_s')} | "
                      f"{cell('refactorize_s')} | {cell('selected_inverse_after_refactorize_s')} | "
                      f"{cell('schur_after_refactorize_s')} | {r['max_rel_diff']:.1e} |")
-    lines += ["", "`schur (new)`: first build for a contact set (its own symbolic + numeric factorisation with the "
-              "contact dofs last, S_K, dense Cholesky); `schur (reuse)`: the same dofs again; `… after`: the build "
+    lines += ["", "`schur (new)`: first build for a contact set (its own symbolic + numeric factorisation of "
+              "[[K, H^T], [H, 0]] with H's rows last, its Schur complement -W); `schur (reuse)`: the same dofs again; `… after`: the build "
               "after `refactorize()` (the Schur route then refactorises its own factor numerically; the main "
               "refactorisation, column `refactorise`, is paid by both). `max rel diff`: max|W_schur - W_si| / "
               "max|W_si|. Raw times of every repeat are in the .json file next to this one."]

@@ -23,16 +23,19 @@ solves ``K x = b`` and the construction of the small dense W by one of three rou
     distributed factor is still the one used for the displacement solves.
 
 ``"schur"``
-    Serial only. A second MUMPS factorisation of K, told to keep the dofs S for last (PETSc's
-    ``MatFactorSetSchurIS``, MUMPS ICNTL(19); not wrapped by petsc4py 3.18 or 3.25, so through ctypes), returns
-    the dense Schur complement S_K = K_SS - K_SR K_RR^-1 K_RS; since (K^-1)_SS = S_K^-1,
-    ``W = H_S S_K^-1 H_S^T`` by a dense Cholesky of S_K. The factorisation is kept for later builds with the
-    same S (numeric refactorisation after :meth:`DelassusOperator.refactorize`). PETSc has no distributed
-    Schur complement for MUMPS: under MPI the route is refused when the operator is made. Measured against
-    the selected inverse in ``benchmarks/results/schur.md``.
+    Serial only. A second MUMPS factorisation, of the saddle-point matrix A = [[K, H^T], [H, 0]] told to keep
+    H's m rows for last (PETSc's ``MatFactorSetSchurIS``, MUMPS ICNTL(19); not wrapped by petsc4py 3.18 or 3.25,
+    so through ctypes): MUMPS eliminates the K block only (SPD, so LDL^T without pivoting holds) and returns the
+    dense Schur complement of A on those rows, 0 - H K^-1 H^T = -W, W itself whatever number of dofs each row of
+    H touches (two bodies: both surfaces' nodes). No entries of the inverse, no dense factorisation. The
+    factorisation is kept for later builds with the same H (numeric refactorisation of the K block's new values
+    after :meth:`DelassusOperator.refactorize`). PETSc has no distributed Schur complement for MUMPS: under MPI
+    the route is refused when the operator is made. Measured in ``benchmarks/results/schur_setup.md``.
 
-``"auto"`` picks ``"selected_inverse"`` serially and ``"owned"`` under MPI (measured fastest in each:
-``benchmarks/results/delassus.md``, ``benchmarks/results/delassus_owned_np2.md``).
+``"auto"`` picks, serially, ``"schur"`` for an H of at least :data:`AUTO_SCHUR_ROWS` rows on a K of at most
+:data:`AUTO_SCHUR_DOFS_PER_ROW` dofs per row and ``"selected_inverse"`` otherwise (the measured crossover:
+``benchmarks/results/schur_setup.md``), and ``"owned"`` under MPI (``benchmarks/results/delassus.md``,
+``benchmarks/results/delassus_owned_np2.md``).
 
 Dirichlet conditions: DOLFINx assembles K with the constrained rows and columns zeroed and 1 on the
 diagonal, so (K^-1)_{dd} = 1 at a constrained dof d, in the wrong units and unrelated to the mechanics.
@@ -59,7 +62,8 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
-__all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs", "ROUTES", "METHODS"]
+__all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs", "auto_route", "ROUTES", "METHODS",
+           "AUTO_SCHUR_ROWS", "AUTO_SCHUR_DOFS_PER_ROW"]
 
 #: Routes that build W.
 ROUTES = ("columns", "block", "selected_inverse", "owned", "schur")
@@ -72,6 +76,27 @@ METHODS = ROUTES + ("auto",)
 # shared distributed selected inverse, even counting its extra factorisation.
 _AUTO_SERIAL = "selected_inverse"
 _AUTO_PARALLEL = "owned"
+#: Serial "auto" builds W by the Schur complement route from this many rows of H (contacts x dimension) up ...
+#: benchmarks/results/schur_setup.md, CPU time of W on the two-body sphere-flat, depth-graded mesh (28-40 dofs of
+#: K per row of H): the selected inverse 2.3x / 1.5x faster at 747 / 1110 rows, the Schur route 1.3x / 1.9x
+#: faster at 1536 / 2658 rows (the crossover ~1350 rows); from 1500, since near the crossover the selected inverse
+#: needs less memory (the Schur route's own factor is 1.2-2.9x K's). Measured in 3D only.
+AUTO_SCHUR_ROWS = 1500
+#: ... and when K has at most this many dofs per row of H: on today's uniform sphere-flat mesh (123 dofs per row at
+#: 1536 rows) the selected inverse is 1.8x faster than the Schur route (36 against 65 s CPU), on the graded mesh
+#: (38 dofs per row, the same rows) 1.3x slower. Between the two, not measured: the bound is ~their geometric
+#: mean (68).
+AUTO_SCHUR_DOFS_PER_ROW = 70
+
+
+def auto_route(comm_size: int, rows: int, dofs: int) -> str:
+    """The route ``"auto"`` takes for an H of ``rows`` rows and a K of ``dofs`` dofs on ``comm_size`` ranks."""
+    if comm_size > 1:
+        return _AUTO_PARALLEL
+    if rows >= AUTO_SCHUR_ROWS and dofs <= AUTO_SCHUR_DOFS_PER_ROW * rows:
+        return "schur"
+    return _AUTO_SERIAL
+
 
 # MUMPS INFOG(1) codes worth a sentence of their own.
 _MUMPS_HINTS = {
@@ -223,7 +248,7 @@ class DelassusOperator:
         K: Assembled stiffness matrix (symmetric; SPD once Dirichlet conditions are applied).
         comm: Communicator of K (default: K's).
         method: Route for :meth:`build`: ``"columns"``, ``"block"``, ``"selected_inverse"``, ``"owned"``,
-            ``"schur"`` (serial only) or ``"auto"``.
+            ``"schur"`` (serial only) or ``"auto"`` (by :func:`auto_route` for each H).
         petsc_options: Options for the KSP/PC/MUMPS (without the prefix).
         options_prefix: Options prefix of the KSP.
         spd: Declare K SPD so that Cholesky uses MUMPS SYM=1 (set False for a symmetric indefinite K:
@@ -233,7 +258,8 @@ class DelassusOperator:
         symmetrize: Return (W + W^T)/2 (the raw asymmetry is recorded in ``stats``).
 
     Attributes:
-        method: Route actually used by :meth:`build` ("auto" resolved).
+        method: The route of :meth:`build`: as given, except ``"auto"`` under MPI, resolved to ``"owned"``
+            (serially ``"auto"`` stays: the route depends on H's size; ``stats["last_build_route"]`` says which).
         factorization: ``"cholesky"`` or ``"lu"`` (after options).
         last_build_time: Wall time (s) of the last :meth:`build`.
         last_factorize_time: Wall time (s) of the last :meth:`factorize` or :meth:`refactorize`.
@@ -252,8 +278,8 @@ class DelassusOperator:
             raise ValueError("comm must be the communicator of K")
         self.requested_method = method
         _check_route_fits(method, self.comm)
-        if method == "auto":
-            method = _AUTO_SERIAL if self.comm.size == 1 else _AUTO_PARALLEL
+        if method == "auto" and self.comm.size > 1:
+            method = _AUTO_PARALLEL
         self.method: str = method
         self.petsc_options = dict(petsc_options or {})
         self.options_prefix = options_prefix
@@ -304,6 +330,7 @@ class DelassusOperator:
     def factorize(self) -> None:
         """Symbolic and numeric factorisation of K (a fresh KSP; any previous factor is dropped)."""
         t0 = time.perf_counter()
+        cpu0 = time.process_time()
         self._drop_own_factor()
         if self.ksp is not None:
             self.ksp.destroy()
@@ -338,6 +365,8 @@ class DelassusOperator:
         self.last_factorize_time = time.perf_counter() - t0
         self.stats["factorizations"] += 1
         self.stats["factorize_time"] = self.last_factorize_time
+        # CPU time of this process (MUMPS on one thread): on a shared machine less sensitive than the wall time
+        self.stats["factorize_cpu_time"] = time.process_time() - cpu0
 
     def refactorize(self) -> None:
         """Numeric-only refactorisation after K's values changed (same sparsity pattern).
@@ -454,18 +483,18 @@ class DelassusOperator:
             DelassusError: on a PETSc/MUMPS failure.
         """
         self._require_factor()
-        route = self.method if method is None or method == "auto" else method
-        if method == "auto":
-            route = _AUTO_SERIAL if self.comm.size == 1 else _AUTO_PARALLEL
+        route = self.method if method is None else method
+        if route == "auto":
+            route = auto_route(self.comm.size, H.shape[0], self.K.getSize()[0])  # H is replicated: same on every rank
         if route not in ROUTES:
-            raise ValueError(f"unknown Delassus route {route!r}; choose one of {', '.join(ROUTES)}")
+            raise ValueError(f"unknown Delassus route {route!r}; choose one of {', '.join(METHODS)}")
         _check_route_fits(route, self.comm)
         H = sp.csr_matrix(H, dtype=np.float64)
         N = self.K.getSize()[1]
         if H.shape[1] != N:
             raise ValueError(f"H has {H.shape[1]} columns, K has {N} (global) dofs")
         H.eliminate_zeros()
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), time.process_time()
         m = H.shape[0]
         S = np.unique(H.indices).astype(np.int64)  # the few dofs touched by H
         if m == 0 or S.size == 0:
@@ -477,7 +506,7 @@ class DelassusOperator:
             elif route == "owned":
                 W = self._build_owned(H, HS, S)
             elif route == "schur":
-                W = self._build_schur(HS, S)
+                W = self._build_schur(H)
             else:
                 Y = self._solve_columns(H, S) if route == "columns" else self._solve_block(H, S)
                 W = HS @ Y if self.comm.rank == 0 else None
@@ -485,6 +514,7 @@ class DelassusOperator:
         self.last_build_time = time.perf_counter() - t0
         self.stats["builds"] += 1
         self.stats["last_build_time"] = self.last_build_time
+        self.stats["last_build_cpu_time"] = time.process_time() - cpu0
         self.stats["last_build_route"] = route
         return W
 
@@ -799,43 +829,67 @@ class DelassusOperator:
             lib.MatDestroy(ctypes.byref(Smat))
         return columns.T
 
-    def _schur_factor(self, S: np.ndarray) -> DelassusOperator:
-        """A factorisation of K with the dofs S kept for last: made for a new S, refreshed numerically
-        after :meth:`refactorize`, else reused."""
+    def _augmented(self, H: sp.csr_matrix) -> sp.csr_matrix:
+        """The saddle-point matrix [[K, H^T], [H, 0]] (serial), its (2, 2) block an explicit zero diagonal."""
+        ai, aj, av = self.K.getValuesCSR()
+        N, m = self.K.getSize()[0], H.shape[0]
+        K = sp.csr_matrix((av, aj, ai), shape=(N, N))
+        zero = sp.csr_matrix((np.zeros(m), np.arange(m), np.arange(m + 1)), shape=(m, m))
+        A = sp.bmat([[K, H.T], [H, zero]], format="csr")  # COO concatenation keeps the explicit zeros
+        A.sort_indices()
+        return A
+
+    def _schur_factor(self, H: sp.csr_matrix) -> DelassusOperator:
+        """A factorisation of [[K, H^T], [H, 0]] with H's rows kept for last: made for a new H, refreshed
+        numerically (the K block's values) after :meth:`refactorize`, else reused."""
         op = getattr(self, "_schur", None)
-        if op is not None and not np.array_equal(op._schur_dofs, S):
-            op.destroy()
-            op = self._schur = None
+        key = (H.shape, H.indptr.tobytes(), H.indices.tobytes(), H.data.tobytes())
+        if op is not None and self._schur_key != key:
+            self._drop_schur()
+            op = None
         if op is None:
-            op = DelassusOperator(self.K, self.comm, method="selected_inverse", petsc_options=self.petsc_options,
+            A = self._augmented(H)
+            n = A.shape[0]
+            matrix = PETSc.Mat().createAIJ(size=(n, n), csr=(A.indptr.astype(PETSc.IntType),
+                                                               A.indices.astype(PETSc.IntType), A.data),
+                                           comm=PETSc.COMM_SELF)
+            matrix.assemble()
+            matrix.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+            # MUMPS eliminates the K block only (SPD): LDL^T without pivoting (SYM=1) holds, as for K itself.
+            op = DelassusOperator(matrix, MPI.COMM_SELF, method="selected_inverse", petsc_options=self.petsc_options,
                                   options_prefix=self.options_prefix, spd=self.spd, symmetrize=False)
-            op._schur_dofs = np.asarray(S, dtype=np.int64).copy()
+            op._schur_dofs = np.arange(n - H.shape[0], n, dtype=np.int64)
+            self._schur, self._schur_key = op, key
             op.factorize()
-            self._schur = op
         elif getattr(self, "_schur_stale", False):
+            A = self._augmented(H)  # the same pattern: K's new values in place, then a numeric refactorisation
+            op.K.setValuesCSR(A.indptr.astype(PETSc.IntType), A.indices.astype(PETSc.IntType), A.data)
+            op.K.assemble()
             op.refactorize()
         self._schur_stale = False
         self.stats["schur_factorize_time"] = op.last_factorize_time
+        self.stats["schur_memory_mb"] = op.stats["mumps_memory_mb"]
         return op
 
-    def _build_schur(self, HS: sp.csr_matrix, S: np.ndarray) -> np.ndarray:
-        """W = H_S S_K^-1 H_S^T, S_K the Schur complement of K on the dofs S (serial)."""
-        SK = self._schur_factor(S)._schur_complement()
-        self.stats["schur_size"] = int(SK.shape[0])
-        try:
-            cho = sla.cho_factor(0.5 * (SK + SK.T), lower=True)
-        except np.linalg.LinAlgError as exc:
-            raise DelassusError(f"the Schur complement of K on the {S.size} contact dofs is not positive "
-                                f"definite ({exc}): is K constrained against rigid-body motion?") from exc
-        return HS @ sla.cho_solve(cho, HS.T.toarray())
+    def _drop_schur(self) -> None:
+        op = getattr(self, "_schur", None)
+        if op is not None:
+            matrix = op.K
+            op.destroy()
+            matrix.destroy()
+        self._schur = None
+
+    def _build_schur(self, H: sp.csr_matrix) -> np.ndarray:
+        """W = -(Schur complement of [[K, H^T], [H, 0]] on H's rows) = H K^-1 H^T (serial)."""
+        W = self._schur_factor(H)._schur_complement()
+        np.negative(W, out=W)  # in place: W is the largest array of the build (m^2)
+        self.stats["schur_size"] = int(W.shape[0])
+        return W
 
     # ------------------------------------------------------------------------------------------------
     def destroy(self) -> None:
         """Free the KSP and the factor (K belongs to the caller)."""
-        schur = getattr(self, "_schur", None)
-        if schur is not None:
-            schur.destroy()
-            self._schur = None
+        self._drop_schur()
         self._drop_own_factor()
         if self.ksp is not None:
             self.ksp.destroy()

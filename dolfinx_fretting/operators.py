@@ -58,6 +58,8 @@ class ContactOperators:
             prescribe non-zero values, then the keys of ``loads``, ``prescribed``.
         surface_compliance: Finite sliding: K^-1 on both contact surfaces' dofs, else None.
         timings: Wall times (s) of the assembly, the factorisation and W (with the load responses).
+        delassus_route: The route that built W (``delassus_method`` "auto" resolved for its size), under finite
+            sliding the surface compliance's.
     """
 
     def __init__(self, a, contact: Contact | ContactZones, bcs: Sequence = (), *,
@@ -182,6 +184,7 @@ class ContactOperators:
             self.W, self.responses = self.surface_compliance.operators(contact_set)
         else:
             W = self.delassus.build(self.contact.H_free)
+            self.delassus_route = self.delassus.stats["last_build_route"]
             self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
             self.responses = np.zeros((len(self.vectors), contact_set.nc * contact_set.dim))
             outside = self.contact.outside
@@ -317,6 +320,7 @@ class ContactOperators:
         S_free = sp.csr_matrix(S @ sp.diags(free))
         S_free.eliminate_zeros()
         C = self.delassus.build(S_free)
+        self.delassus_route = self.delassus.stats["last_build_route"]
         C = self.comm.bcast(C if self.comm.rank == 0 else None, root=0)
         responses = np.array([self.local_response(f, S) for f in self.vectors]).reshape(len(self.vectors),
                                                                                           dofs.size)

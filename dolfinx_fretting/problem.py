@@ -95,8 +95,8 @@ class FrettingProblem:
         prescribed: Named lists of Dirichlet conditions with non-zero values (``fem.Function`` or
             ``fem.Constant`` data): each set is applied times its factor.
         petsc_options: Options of the factorisation (MUMPS Cholesky by default; keys without prefix).
-        delassus_method: Route for W: ``"auto"``, ``"selected_inverse"``, ``"owned"``, ``"block"``, ``"columns"``,
-            ``"schur"`` (serial only).
+        delassus_method: Route for W: ``"auto"`` (by W's size: :func:`~dolfinx_fretting.compliance.auto_route`),
+            ``"selected_inverse"``, ``"owned"``, ``"block"``, ``"columns"``, ``"schur"`` (serial only).
         solver: :class:`~dolfinx_fretting.settings.LocalSolver` settings.
         plasticity: :class:`~dolfinx_fretting.settings.Plasticity` for an elastic–plastic body, else None.
         options_prefix: PETSc options prefix of the factorisation (unique per problem by default).

@@ -394,7 +394,7 @@ class _Run:
         self.resumed_from_cycle = self.progress.cycle if meta is not None else None
         self.last_checkpoint = time.perf_counter()
         self.say(f"[{scene.name}] {self.problem.n_dofs} dofs, {self.model.contact.nc} contact candidates, "
-                 f"W by {self.problem.operators.delassus.method} in {self.model.timings['delassus_s']:.3f} s"
+                 f"W by {self.problem.operators.delassus_route} in {self.model.timings['delassus_s']:.3f} s"
                  + (f"; resumed after increment {self.state.increment} (cycle {self.progress.cycle})"
                     if meta is not None else ""))
 
@@ -915,7 +915,7 @@ class _Run:
         problem = self.problem
         summary: dict[str, Any] = {
             "scene": scene.name, "dofs": problem.n_dofs, "contacts": model.contact.nc,
-            "delassus_method": problem.operators.delassus.method, **{k: round(v, 6) for k, v in model.timings.items()},
+            "delassus_method": problem.operators.delassus_route, **{k: round(v, 6) for k, v in model.timings.items()},
             "increments": state.increment, "cycles": progress.cycle, "converged": error is None,
             "resumed_from_cycle": self.resumed_from_cycle,
             "cycles_this_run": progress.cycle - (self.resumed_from_cycle or 0),

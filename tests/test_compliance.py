@@ -13,9 +13,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from mpi4py import MPI
 
-from dolfinx_fretting.compliance import DelassusOperator, check_no_constrained_dofs
+from dolfinx_fretting import compliance
+from dolfinx_fretting.compliance import DelassusOperator, auto_route, check_no_constrained_dofs
 from dolfinx_fretting.scenes import load_scene
 from dolfinx_fretting.simulation import ContactModel
+
+from support.sphere import sphere_model
 
 serial_only = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="SciPy reference needs the whole K")
 
@@ -134,7 +137,7 @@ def test_schur_route_reuses_its_factor_and_follows_refactorize(model):
         own = op._schur
         assert np.abs(op.build(H) - W1).max() == 0.0 and op._schur is own  # reused, not refactorised
         assert own.stats["factorizations"] == 1 and own.stats["refactorizations"] == 0
-        assert op.stats["schur_size"] == np.unique(H.indices).size
+        assert op.stats["schur_size"] == H.shape[0]  # the Schur complement is W's own size
         p.operators.K.scale(2.0)
         op.refactorize()
         W2 = op.build(H)
@@ -144,3 +147,50 @@ def test_schur_route_reuses_its_factor_and_follows_refactorize(model):
     finally:
         p.operators.K.scale(0.5)
         op.destroy()
+
+
+@serial_only
+def test_schur_route_on_two_bodies_in_3d(monkeypatch):
+    """Two bodies in 3D (sphere on an identical flat, half model: a/h = 2, extent 4, 6 x 11 contacts): each row of
+    H touches the dofs of both surfaces' nodes, so the Schur complement of [[K, H^T], [H, 0]] on H's rows is
+    -W itself. W by the Schur route, by the selected inverse and by SciPy's SuperLU agree; ``auto`` takes the
+    Schur route from AUTO_SCHUR_ROWS rows of H up on a K of at most AUTO_SCHUR_DOFS_PER_ROW dofs per row, else the
+    selected inverse."""
+    _, problem, *_ = sphere_model(2, 4.0, 1.6, flat=True, mu=0.5)
+    try:
+        d, H = problem.operators.delassus, problem.contact.H_free
+        assert np.unique(H.indices).size > H.shape[0]  # several dofs per row: not a selection of dofs
+        Kd = _scipy_K(problem.operators.K).tocsc()
+        W_ref = H @ spla.splu(Kd).solve(H.T.toarray())
+        scale = np.abs(W_ref).max()
+        W_schur = d.build(H, method="schur")
+        assert d.stats["schur_size"] == H.shape[0]
+        # Two direct solvers (MUMPS, SuperLU) on a K of condition ~1e6: 1e-10 of max|W| (measured 1e-15).
+        assert np.abs(W_schur - W_ref).max() <= 1e-10 * scale
+        W_si = d.build(H, method="selected_inverse")
+        assert np.abs(W_schur - W_si).max() <= 1e-10 * scale
+        assert d.method == "auto"  # serially "auto" stays, resolved for each H
+        dofs = problem.operators.K.getSize()[0]
+        monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0])
+        monkeypatch.setattr(compliance, "AUTO_SCHUR_DOFS_PER_ROW", dofs / H.shape[0])
+        d.build(H)
+        assert d.stats["last_build_route"] == "schur"
+        monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0] + 1)
+        d.build(H)
+        assert d.stats["last_build_route"] == "selected_inverse"  # too few rows
+        monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0])
+        monkeypatch.setattr(compliance, "AUTO_SCHUR_DOFS_PER_ROW", 0.99 * dofs / H.shape[0])
+        d.build(H)
+        assert d.stats["last_build_route"] == "selected_inverse"  # too many dofs per row
+    finally:
+        problem.destroy()
+
+
+def test_auto_route():
+    """``auto``: the Schur route from AUTO_SCHUR_ROWS rows on a K of at most AUTO_SCHUR_DOFS_PER_ROW dofs per row, else
+    the selected inverse (serial); the owned route under MPI at any size (the Schur route is serial only)."""
+    rows, per_row = compliance.AUTO_SCHUR_ROWS, compliance.AUTO_SCHUR_DOFS_PER_ROW
+    assert auto_route(1, rows - 1, per_row * rows) == "selected_inverse"
+    assert auto_route(1, rows, per_row * rows) == "schur"
+    assert auto_route(1, rows, per_row * rows + 1) == "selected_inverse"
+    assert auto_route(2, 10 * rows, rows) == "owned" and auto_route(3, 1, 1) == "owned"

@@ -139,6 +139,25 @@ def test_delassus_routes_agree_in_parallel():
 
 
 @pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_auto_route_stays_owned_under_mpi(monkeypatch):
+    """Above AUTO_SCHUR_ROWS rows serial ``auto`` takes the Schur route, which PETSc cannot run distributed: under
+    MPI ``auto`` keeps the owned route at any size, on every rank (no rank left waiting in another route)."""
+    from dolfinx_fretting import compliance
+    from dolfinx_fretting.simulation import ContactModel
+
+    model = ContactModel(load_scene("hertz", ["geometry.contact_mesh_size=0.04", "output.xdmf=false",
+                                              "output.plots=false"]), COMM)
+    d, H = model.problem.operators.delassus, model.contact.H
+    monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", 1)  # every H is "large"
+    W = d.build(H)
+    routes = COMM.allgather(d.stats["last_build_route"])
+    assert routes == ["owned"] * COMM.size
+    # the same W as the owned route's asked by name: same factor, same route, same bits
+    assert np.array_equal(W, d.build(H, method="owned"))
+    model.problem.destroy()
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
 def test_output_folder_errors_are_collective(shared_dir):
     """Rank 0 checks and locks the folder, every rank raises the same error (none hangs), before any mesh."""
     from dolfinx_fretting.outdir import LOCK_NAME, OutputFolderError, claim_output_folder

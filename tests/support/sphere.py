@@ -31,12 +31,13 @@ def contact_modulus(flat):
 
 def sphere_model(a_over_h, extent, growth, *, flat, half=True, mu=0.0, wear=None, window=1.4, flat_mesh_size=None,
                  comm=COMM, sliding="small", reach=None, depth_growth=None, coarsening=0, field_cell=0.125,
-                 formulation="node", solver=None):
+                 formulation="node", solver=None, delassus_method="auto"):
     """The sphere's cap (top clamped) on a rigid plane z = 0 or on an identical flat (bottom clamped), sized
     from Hertz's a for P; a half model has rollers (u_y = 0) on y = 0; ``sliding`` and ``reach`` (in units of a)
     as :class:`~dolfinx_fretting.contact.ElasticBody`'s; ``depth_growth``, ``coarsening`` and ``field_cell`` as
     :func:`~dolfinx_fretting.meshes_3d.sphere_on_flat`'s (the depth-graded mesh); ``formulation`` the elastic flat's
-    (``"node"`` or ``"mortar"``); ``solver`` a LocalSolver (None: the default). Returns (body, problem, a, p0, h)."""
+    (``"node"`` or ``"mortar"``); ``solver`` a LocalSolver (None: the default); ``delassus_method`` as
+    :class:`~dolfinx_fretting.FrettingProblem`'s. Returns (body, problem, a, p0, h)."""
     E_star = contact_modulus(flat)
     a, p0 = hertz_sphere(P, R, E_star)
     h = a / a_over_h
@@ -57,7 +58,8 @@ def sphere_model(a_over_h, extent, growth, *, flat, half=True, mu=0.0, wear=None
                                 reach=None if reach is None else reach * a, formulation=formulation) if flat
                 else dfr.RigidPlane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
     contact = dfr.Contact(V, surface, obstacle, mu=mu, bcs=bcs, window=window * a + h)
-    problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=wear, solver=solver)
+    problem = dfr.FrettingProblem(elasticity(V), contact, bcs, wear=wear, solver=solver,
+                                  delassus_method=delassus_method)
     return body, problem, a, p0, h
 
 
