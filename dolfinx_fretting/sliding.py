@@ -612,7 +612,7 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
     of the wear spread on its nodes (:func:`spread_wear`, ``master_share`` its fraction, < 0 without wear), the
     window's outside rows watched, then the re-pairing when a paired point has moved more than ``repair_slip``
     master elements (:func:`offsets`, :func:`repair`, :func:`carry_state`) with the new pairing's W, load responses,
-    rigid modes, force map and Uzawa steps (:func:`_pairing_operators`).
+    rigid modes, force map and Uzawa steps (``_pairing_operators``).
 
     The pairing (``fl`` indices into the facets within reach, ``weights``, ``frames``, ``gap0``, ``W``, ``Q``,
     ``G``, ``A``, ``rho``) and the state (``d``, ``stiffness``, ``wear_gap``, ``master_wear``, ``y``, ``r_last``)
@@ -620,7 +620,7 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
     ``status`` out. ``translations``: (n, 2) each increment's obstacle translation (displacement control).
 
     Returns:
-        (increments done, 0 or the code of what stopped the loop (:data:`SOLVE_FAILED` ...), re-pairings).
+        (increments done, 0 or the code of what stopped the loop (``SOLVE_FAILED`` ...), re-pairings).
     """
     n, nc = targets.shape[0], fl.size
     m, M = 2 * nc, C.shape[0]
