@@ -65,6 +65,8 @@ def main() -> None:
         for tree in trees:
             for sliding in ("finite", "small"):
                 runs.setdefault(f"{tree}|{sliding}", []).append(run(tree, sliding, args.cycles, work))
+            for sliding in ("finite", "small"):   # the set-up and one cycle, to read the cycles' own cost
+                runs.setdefault(f"{tree}|{sliding}|1", []).append(run(tree, sliding, 1, work))
     load = os.getloadavg()
     command = ("OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sliding_speed.py "
                f"--cycles {args.cycles} --repeats {args.repeats}"
@@ -73,19 +75,24 @@ def main() -> None:
              f"Command: `{command}`", "",
              f"Date: {datetime.datetime.now().isoformat(timespec='seconds')}; machine: {platform.machine()}, "
              f"{os.cpu_count()} cores; load average at the end {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}. "
-             f"Runs alternated (tree by tree, finite then fixed), {args.repeats} of each after one untimed run of "
-             "each (1 cycle); medians.", "",
+             f"Runs alternated (tree by tree, finite then fixed, then the same with 1 cycle), {args.repeats} of each "
+             "after one untimed run of each (1 cycle); medians. The cycles' CPU: the run's median minus the 1-cycle "
+             "runs' (the set-up and one cycle).", "",
              "| tree | CPU finite (s) | CPU fixed (s) | finite / fixed (CPU) | wall finite (s) | wall fixed (s) | "
-             "finite / fixed (wall) | per-repeat CPU ratios | repairs |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: |"]
+             "finite / fixed (wall) | per-repeat CPU ratios | repairs | CPU 1-cycle runs finite / fixed (s) | "
+             f"the {args.cycles - 1} cycles' CPU finite / fixed (s) | their ratio |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: |"]
     for tree in trees:
         finite, small = runs[f"{tree}|finite"], runs[f"{tree}|small"]
+        one = [statistics.median(r["cpu_s"] for r in runs[f"{tree}|{s}|1"]) for s in ("finite", "small")]
         med = {k: (statistics.median(r[k] for r in finite), statistics.median(r[k] for r in small))
                for k in ("cpu_s", "wall_s")}
         ratios = ", ".join(f"{a['cpu_s'] / b['cpu_s']:.2f}" for a, b in zip(finite, small))
+        cycles = (med["cpu_s"][0] - one[0], med["cpu_s"][1] - one[1])
         lines.append(f"| `{tree}` | {med['cpu_s'][0]:.1f} | {med['cpu_s'][1]:.1f} | "
                      f"{med['cpu_s'][0] / med['cpu_s'][1]:.2f} | {med['wall_s'][0]:.1f} | {med['wall_s'][1]:.1f} | "
-                     f"{med['wall_s'][0] / med['wall_s'][1]:.2f} | {ratios} | {finite[0]['repairs']} |")
+                     f"{med['wall_s'][0] / med['wall_s'][1]:.2f} | {ratios} | {finite[0]['repairs']} | "
+                     f"{one[0]:.2f} / {one[1]:.2f} | {cycles[0]:.1f} / {cycles[1]:.1f} | {cycles[0] / cycles[1]:.2f} |")
     if len(trees) == 2:
         here, there = runs[f"{trees[0]}|finite"], runs[f"{trees[1]}|finite"]
         same = all(a[k] == b[k] for a, b in zip(here, there)

@@ -12,7 +12,8 @@ from typing import Any, Callable
 import numpy as np
 
 from . import friction, local_solvers
-from .commit import acceleration, wear_coefficients
+from .commit import SlidingMonitor, acceleration, wear_coefficients
+from .contact import paired_contact_set
 from .cycling import (N_ROW, NOT_BRACKETED, SATURATED, SWEEPS_EXHAUSTED, TRIAL_NOT_FINITE, run_force_increments,
                       run_increments)
 from .increments import (force_names, load_control_message, on_rank0, per_zone, sweeps_message, target_items,
@@ -21,10 +22,11 @@ from .loading import (MAX_EVAL, CyclePath, Displacement, Force, not_bracketed_me
                       saturated_message)
 from .operators import ContactOperators
 from .settings import LocalSolver
+from .sliding import run_sliding_increments
 from .state import INCREMENT_COLUMNS, ContactState, ConvergenceError, CycleResult, WindowError
 from .wear import ROW, ROW_FIELDS
 
-__all__ = ["cycle_targets", "stepwise_cycle", "compiled_cycle"]
+__all__ = ["cycle_targets", "stepwise_cycle", "compiled_cycle", "sliding_cycle"]
 
 
 def cycle_targets(operators: ContactOperators, state: ContactState, path: CyclePath
@@ -206,11 +208,7 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
     result = on_rank0(operators.comm, work)
     rows, wear_gap, y, r_last, outs, energy_new, found, solves = result
     nf = len(ROW_FIELDS)
-    records = {name: rows[:, i] for i, name in enumerate(ROW_FIELDS)}
-    records.update(local_iterations=rows[:, nf].astype(int), local_error=rows[:, nf + 1],
-                   load_solves=solves.astype(int), newton_iterations=np.ones(n, dtype=int),
-                   newton_delta_1=np.zeros(n), newton_delta_2=np.zeros(n), cutbacks=np.zeros(n, dtype=int),
-                   yielded_points=np.zeros(n, dtype=int))
+    records = _records(rows, solves)
     slip, status = (outs[1][-1].copy(), outs[4][-1].copy()) if keep else (outs[0][-1].copy(), outs[1][-1].copy())
     final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=wear_gap, obstacle=found[-1].copy(),
                     targets=obstacle[-1].copy(), force_controlled=forced.copy(),
@@ -220,6 +218,96 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
                     record={k: records[k][-1].item() for k in INCREMENT_COLUMNS},
                     status=status, warm=warm_new if operators.comm.rank == 0 else None, friction_energy=energy_new)
     return CycleResult(records, found, factors, final, outs if keep else None, True)
+
+
+def _records(rows: np.ndarray, solves: np.ndarray) -> dict[str, np.ndarray]:
+    """The per-increment columns of a compiled cycle from the loop's rows and each increment's local solves."""
+    n, nf = rows.shape[0], len(ROW_FIELDS)
+    records = {name: rows[:, i] for i, name in enumerate(ROW_FIELDS)}
+    records.update(local_iterations=rows[:, nf].astype(int), local_error=rows[:, nf + 1],
+                   load_solves=solves.astype(int), newton_iterations=np.ones(n, dtype=int),
+                   newton_delta_1=np.zeros(n), newton_delta_2=np.zeros(n), cutbacks=np.zeros(n, dtype=int),
+                   yielded_points=np.zeros(n, dtype=int))
+    return records
+
+
+def sliding_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple, monitor: SlidingMonitor,
+                  state: ContactState, obstacle: np.ndarray, forced: np.ndarray, factors: np.ndarray
+                  ) -> CycleResult | None:
+    """A finite-sliding cycle in the compiled loop (:func:`~dolfinx_fretting.sliding.run_sliding_increments`: the
+    increments solved, committed and re-paired as :func:`stepwise_cycle` does them, with the same decisions), on
+    rank 0, broadcast. Collective.
+
+    None, with nothing changed, when the loop does not apply (3D or mortar pairings, a friction law of the dissipated energy, directions held by the
+    conditions) or stops before the cycle's end: a failed increment, a node outside the window that may penetrate,
+    a warning due (a stride over one master element, a contact beyond the reach), a singular contact compliance;
+    the caller then solves the cycle increment by increment, which raises or warns with its own messages."""
+    pairing = state.pairing
+    contact = operators.contact
+    if (pairing.dim != 2 or pairing.master_faces is None or friction.tracks_energy(contact)
+            or contact.held_rows.size or len(contact.zones) != 1):
+        return None
+    data = operators.sliding_kernel_data()
+    faces = data.local_faces(pairing)
+    if faces is None:
+        return None
+    compliance = operators.surface_compliance
+    n = obstacle.shape[0]
+    by_force = bool(forced.any())
+    mu = friction.coefficients(contact, state)
+    k = wear_coefficients(operators, laws, True, mu)
+    wear = laws[0]
+    master_share = 1.0 - wear.slave_share if wear is not None else -1.0
+    translations = np.ascontiguousarray(contact.translations(obstacle))
+    # The obstacle's translation per unit component, and the total force along each component per contact force (the
+    # pairing's frames): force_maps' T and A, without its loop over the contacts (a new pairing at every cycle)
+    T = np.ascontiguousarray(contact.translations(np.eye(contact.obstacle_size)).T)
+    A = contact.rigid_modes @ contact.frame.T
+    warn_stride = monitor.warn and not monitor.stride_warned
+    warn_reach = monitor.warn and not monitor.reach_warned
+    copy = np.array   # every array the loop writes in place is a copy (the states and the operators keep theirs)
+
+    def work():
+        weights, frames, gap0 = copy(pairing.master_weights, dtype=float), copy(pairing.frames), copy(pairing.gap0)
+        W, Q = copy(operators.W), copy(operators.responses)
+        G, A_now, rho = copy(contact.rigid_modes), copy(A.T), copy(operators.block_steps)
+        d, wear_gap, master_wear = state.obstacle.astype(float), copy(state.wear_gap), copy(state.master_wear)
+        y, r_last = copy(state.positions), copy(state.forces)
+        rows, found, solves = np.zeros((n, N_ROW)), copy(obstacle, dtype=float), np.ones(n, dtype=np.int64)
+        slip, status = np.zeros(pairing.nc * 2), np.zeros(pairing.nc, dtype=np.int8)
+        fl, stiffness = copy(faces), copy(operators.stiffness)
+        _done, code, repairs = run_sliding_increments(
+            fl, weights, frames, gap0, W, Q, G, A_now, rho, data.face_rows, data.face_x, data.face_inside,
+            data.face_sizes, data.slave_rows, pairing.coords, pairing.tributary, pairing.abscissa, compliance.C,
+            data.compliance_columns, compliance.responses, compliance.master_areas, contact.frame, T, data.on_surfaces, data.out_responses,
+            data.out_motion, data.out_gap0, by_force, np.ascontiguousarray(obstacle, dtype=float), forced,
+            translations, np.ascontiguousarray(factors), solver.force_tol, MAX_EVAL, stiffness, d,
+            wear_gap, master_wear, y, r_last, mu, k, master_share, solver.tol, solver.max_iter,
+            local_solvers._REFRESH, float(contact.obstacle.repair_slip), warn_stride, warn_reach, rows, found, solves, slip,
+            status, ROW["wear_area"])
+        if code:
+            return None
+        operators.stiffness[:] = stiffness   # the slopes learnt, as the stepwise load control keeps them (rank 0)
+        return rows, found, solves, fl, weights, wear_gap, master_wear, y, r_last, slip, status, repairs
+
+    result = on_rank0(operators.comm, work)
+    if result is None:
+        return None
+    rows, found, solves, fl, weights, wear_gap, master_wear, y, r_last, slip, status, repairs = result
+    monitor.repairs += repairs
+    final_pairing = pairing if not repairs else paired_contact_set(
+        pairing.master_surface, pairing.global_nodes, pairing.coords, pairing.tributary, pairing.abscissa,
+        data.faces[fl], weights, pairing.H.shape[1])
+    records = _records(rows, solves)
+    nf = len(ROW_FIELDS)
+    final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=wear_gap, obstacle=found[-1].copy(),
+                    targets=obstacle[-1].copy(), force_controlled=forced.copy(), load_factors=factors[-1].copy(),
+                    increment=state.increment + n,
+                    dissipated_energy=state.dissipated_energy + float(rows[:, ROW["dissipated_energy"]].sum()),
+                    local_iterations=state.local_iterations + int(rows[:, nf].sum()),
+                    record={k: records[k][-1].item() for k in INCREMENT_COLUMNS}, status=status,
+                    master_wear=master_wear, pairing=final_pairing)
+    return CycleResult(records, found, factors, final, None, True)
 
 
 def _load_control_failure(operators: ContactOperators, status: int, failure: np.ndarray, targets: np.ndarray,

@@ -131,6 +131,7 @@ class ContactOperators:
         self.timings["delassus_s"] = time.perf_counter() - t0
         self._kernel = None
         self._force_maps = None
+        self._sliding_data: sliding.SlidingKernelData | None = None
         #: Finite sliding: the pairing of the reference configuration (the initial state's).
         self.reference_pairing = self.contact.contact_set
         #: The Contact of each zone as given (a zone rebuilt for a new window stays known by it).
@@ -421,6 +422,15 @@ class ContactOperators:
             A = np.ascontiguousarray(np.column_stack([self.contact.obstacle_forces(e) for e in unit]))
             self._force_maps = (contact_set, T, A)
         return self._force_maps[1], self._force_maps[2]
+
+    def sliding_kernel_data(self) -> sliding.SlidingKernelData:
+        """Finite sliding: what its compiled loop reads of the surfaces and the window's outside rows, made once."""
+        if self._sliding_data is None:
+            outside = self.contact.outside
+            self._sliding_data = sliding.SlidingKernelData.of(
+                self.reference_pairing, self.surface_compliance, outside, self._surface_outside,
+                None if outside is None else self.contact.outside_motion(), len(self.load_names))
+        return self._sliding_data
 
     @property
     def pattern_counts(self) -> np.ndarray | None:

@@ -56,7 +56,7 @@ from . import checkpoint, friction, readers
 from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficients
 from .compliance import METHODS
 from .contact import Contact, ContactSet
-from .cycles import compiled_cycle, cycle_targets, stepwise_cycle
+from .cycles import compiled_cycle, cycle_targets, sliding_cycle, stepwise_cycle
 from .increments import advance, increment_targets, load_plastic, on_rank0, solve_contact, solve_plastic
 from .laws import Archard, WearLaw
 from .loading import CyclePath, Displacement, Force
@@ -360,9 +360,10 @@ class FrettingProblem:
         """Solve the increments of one cycle from ``state`` (nothing committed: :meth:`commit` the result).
 
         Elastic bodies run in the compiled loop (:mod:`dolfinx_fretting.cycling`, the path the scenes use; the
-        local method must be Uzawa), prescribed forces found inside it by the stepwise load control; other local
-        methods, plasticity or finite sliding run increment by increment. Either way a failure raises before
-        anything is committed.
+        local method must be Uzawa), prescribed forces found inside it by the stepwise load control; finite sliding
+        (2D node-to-segment, ``keep=False``) in its own compiled loop that pairs anew between increments
+        (:func:`~dolfinx_fretting.cycles.sliding_cycle`); other local methods, plasticity and the rest of finite
+        sliding run increment by increment. Either way a failure raises before anything is committed.
 
         Args:
             state: The committed state.
@@ -383,10 +384,17 @@ class FrettingProblem:
         operators.check_held(obstacle, forced)
 
         def attempt(start: ContactState) -> CycleResult:
-            # Finite sliding pairs anew between increments: increment by increment.
-            if (self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None
-                    and operators.surface_compliance is None):
-                return compiled_cycle(operators, self.solver, self.wear_laws, start, obstacle, factors, keep, forced)
+            if self.solver.compiled_cycles and self.solver.method == "uzawa" and self.body is None:
+                if operators.surface_compliance is None:
+                    return compiled_cycle(operators, self.solver, self.wear_laws, start, obstacle, factors, keep,
+                                          forced)
+                # Finite sliding pairs anew between increments, in its own compiled loop (the pairings of the kept
+                # increments and what the loop does not cover: increment by increment).
+                if not keep:
+                    result = sliding_cycle(operators, self.solver, self.wear_laws, self.sliding, start, obstacle,
+                                           forced, factors)
+                    if result is not None:
+                        return result
             return stepwise_cycle(operators, self._advance_once, start, obstacle, forced, factors, keep, check)
         # A growth solves the whole cycle again from ``state`` in the wider window (its increments then all refer
         # to one contact set); the result is still ``state``'s to commit (its final state is in the wider window).

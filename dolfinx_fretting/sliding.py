@@ -28,17 +28,19 @@ Nothing here touches DOLFINx or MPI: every rank holds the same arrays and comput
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numba
 import numpy as np
 import scipy.sparse as sp
 
-from .contact import ContactSet, MasterSurface, mortar_paired_set, paired_contact_set
+from .contact import ContactSet, MasterSurface, _closest_segments, mortar_paired_set, paired_contact_set
+from .cycling import run_force_increments, run_increments
 from .mortar import mortar_matrices
 
 __all__ = ["SurfaceCompliance", "surface_nodes", "master_node_areas", "offsets", "repair", "carry_state",
-           "interpolate_master", "spread_wear"]
+           "interpolate_master", "spread_wear", "SlidingKernelData", "run_sliding_increments"]
 
 
 def surface_nodes(pairing: ContactSet, reach: float | None) -> tuple[np.ndarray, np.ndarray]:
@@ -361,3 +363,448 @@ def carry_state(old: ContactSet, new: ContactSet, compliance: SurfaceCompliance,
     positions = np.asarray(compliance.restrict(new) @ u.ravel()) - new.rigid_modes @ D
     positions[0::dim] += new.gap0 + wear
     return {"forces": turned(forces), "slip": turned(slip), "wear_gap": wear, "positions": positions}
+
+
+# The compiled loop of finite sliding (2D node-to-segment) ------------------------------------------------------
+#: Why :func:`run_sliding_increments` stopped before the cycle's end (0: it did not): a local solve or the load
+#: control failed, a node outside the window may penetrate, an increment moved a paired point more than one master
+#: element (a warning), a loaded contact slid beyond the reach (a warning), a re-paired contact's compliance is
+#: singular, the master's wear reached a node of no master facet. The caller then solves the cycle increment by
+#: increment, which raises or warns with its own messages.
+SOLVE_FAILED, WINDOW_SUSPECT, LONG_STRIDE, BEYOND_REACH, SINGULAR_BLOCK, WEAR_OFF_MASTER = 1, 2, 3, 4, 5, 6
+
+
+@dataclass(frozen=True)
+class SlidingKernelData:
+    """What the compiled loop of finite sliding reads of a problem, array only (2D node-to-segment pairings).
+
+    Attributes:
+        faces: The master facets within reach (:attr:`SurfaceCompliance.faces`); a pairing's facets are indices into
+            them in the loop.
+        face_rows: (F, 2) each facet's nodes' rows in :attr:`SurfaceCompliance.nodes`.
+        face_x, face_inside, face_sizes: (F, 2, 2), (F, 2), (F,) the facets' reference end points, a point inside the
+            master behind each, their lengths.
+        slave_rows: (nc,) the slave nodes' rows in :attr:`SurfaceCompliance.nodes`.
+        compliance_columns: ``C^T`` contiguous (C's columns: a surface displacement adds those of the loaded dofs).
+        on_surfaces, out_responses, out_motion, out_gap0: the window's outside rows: ``H_out K^-1 S^T`` (k, M), the
+            loads' normal responses (L, k), the normal displacement per obstacle component (k, components) and the
+            gaps (k,) at the k nodes outside the window (k = 0 without).
+    """
+
+    faces: np.ndarray
+    face_rows: np.ndarray
+    face_x: np.ndarray
+    face_inside: np.ndarray
+    face_sizes: np.ndarray
+    slave_rows: np.ndarray
+    compliance_columns: np.ndarray
+    on_surfaces: np.ndarray
+    out_responses: np.ndarray
+    out_motion: np.ndarray
+    out_gap0: np.ndarray
+
+    @classmethod
+    def of(cls, pairing: ContactSet, compliance: SurfaceCompliance, outside: ContactSet | None,
+           surface_outside: tuple[np.ndarray, np.ndarray] | None, out_motion: np.ndarray | None,
+           n_loads: int) -> SlidingKernelData:
+        """The data of ``pairing``'s master surface and slave nodes (any pairing of them), ``outside`` the nodes
+        outside the window (None: none), ``surface_outside`` their ``(H_out K^-1 S^T, the loads' responses)``
+        (:func:`~dolfinx_fretting.window_check.outside_on_surfaces`) and ``out_motion`` their normal displacement per
+        obstacle component."""
+        surface, faces = pairing.master_surface, compliance.faces
+        contiguous = np.ascontiguousarray
+        if outside is None:
+            on_surfaces, out_responses = np.zeros((0, compliance.C.shape[0])), np.zeros((n_loads, 0))
+            out_motion, out_gap0 = np.zeros((0, surface.dim)), np.zeros(0)
+        else:
+            on_surfaces, out_responses = surface_outside
+            out_gap0 = outside.gap0
+        out_responses = np.reshape(out_responses, (n_loads, on_surfaces.shape[0]))
+        return cls(faces, contiguous(compliance.rows(surface.nodes[faces])), contiguous(surface.x[faces]),
+                   contiguous(surface.inside[faces]), contiguous(surface.sizes[faces]),
+                   contiguous(compliance.rows(pairing.global_nodes)), contiguous(compliance.C.T),
+                   contiguous(on_surfaces, dtype=float),
+                   contiguous(out_responses, dtype=float), contiguous(out_motion, dtype=float),
+                   contiguous(out_gap0, dtype=float))
+
+    def local_faces(self, pairing: ContactSet) -> np.ndarray | None:
+        """``pairing``'s facets as indices into :attr:`faces` (None if one is not within reach)."""
+        where = np.minimum(np.searchsorted(self.faces, pairing.master_faces), self.faces.size - 1)
+        return where if np.array_equal(self.faces[where], pairing.master_faces) else None
+
+
+@numba.njit(cache=True)
+def _pairing_arrays(fl: np.ndarray, weights: np.ndarray, face_x: np.ndarray, face_inside: np.ndarray,
+                    coords: np.ndarray, frames: np.ndarray, gap0: np.ndarray) -> None:
+    """A 2D pairing's frames (nc, 2, 2) and gaps (nc,) (out), as :func:`~dolfinx_fretting.contact.paired_contact_set`
+    forms them: the reference master point at the facet ``fl`` and weights, the facet's outward unit normal n and
+    ``t = (n_y, -n_x)``, ``g0 = (X_s - point) . n``."""
+    for c in range(fl.size):
+        f = fl[c]
+        px = weights[c, 0] * face_x[f, 0, 0] + weights[c, 1] * face_x[f, 1, 0]
+        py = weights[c, 0] * face_x[f, 0, 1] + weights[c, 1] * face_x[f, 1, 1]
+        tx = face_x[f, 1, 0] - face_x[f, 0, 0]
+        ty = face_x[f, 1, 1] - face_x[f, 0, 1]
+        length = math.sqrt(tx * tx + ty * ty)
+        nx, ny = -ty / length, tx / length
+        if (face_inside[f, 0] - px) * nx + (face_inside[f, 1] - py) * ny > 0:
+            nx, ny = -nx, -ny
+        frames[c, 0, 0], frames[c, 0, 1], frames[c, 1, 0], frames[c, 1, 1] = nx, ny, ny, -nx
+        gap0[c] = (coords[c, 0] - px) * nx + (coords[c, 1] - py) * ny
+
+
+@numba.njit(cache=True)
+def _pairing_operators(fl: np.ndarray, weights: np.ndarray, frames: np.ndarray, face_rows: np.ndarray,
+                       slave_rows: np.ndarray, C: np.ndarray, surface_responses: np.ndarray, obstacle_frame: np.ndarray,
+                       W: np.ndarray, Q: np.ndarray, G: np.ndarray, A: np.ndarray, rho: np.ndarray) -> bool:
+    """A 2D pairing's operators (out): ``W = L C L^T``, the load responses ``Q = L S K^-1 f_l``, the rigid modes G
+    (the frames' rows), the total force along each obstacle component per contact force A, and the Uzawa steps
+    ``rho = 1 / ||W_aa||_2`` (:func:`~dolfinx_fretting.local_solvers.block_rho`). False if a contact's block of W
+    is singular (as ``ContactOperators._hold_directions`` refuses it).
+
+    L's rows of contact c are its frame times ``e_s - w_0 e_m0 - w_1 e_m1`` (slave node s, the facet's nodes): so
+    ``N_c = (e_s - w_0 e_m0 - w_1 e_m1)^T C`` (two rows) is formed once per contact, and each 2 x 2 block of W is ``F_c (N_c's columns of contact e's nodes, weighted) F_e^T``, the upper
+    triangle mirrored (W exactly symmetric, as the factorised W)."""
+    nc = fl.size
+    M, n_loads = C.shape[0], Q.shape[0]
+    nodes, coefs = np.empty((nc, 3), dtype=np.int64), np.empty((nc, 3))
+    for c in range(nc):
+        f = fl[c]
+        nodes[c, 0], nodes[c, 1], nodes[c, 2] = slave_rows[c], face_rows[f, 0], face_rows[f, 1]
+        coefs[c, 0], coefs[c, 1], coefs[c, 2] = 1.0, -weights[c, 0], -weights[c, 1]
+    N = np.zeros((nc, 2, M))
+    for c in range(nc):
+        for a in range(3):
+            coef = coefs[c, a]
+            if coef == 0.0:
+                continue
+            for j in range(2):
+                row = 2 * nodes[c, a] + j
+                for col in range(M):
+                    N[c, j, col] += coef * C[row, col]
+    block = np.empty((2, 2))
+    for c in range(nc):
+        for e in range(c, nc):
+            for j in range(2):
+                for jj in range(2):
+                    v = 0.0
+                    for b in range(3):
+                        if coefs[e, b] != 0.0:
+                            v += coefs[e, b] * N[c, j, 2 * nodes[e, b] + jj]
+                    block[j, jj] = v
+            for k in range(2):
+                for kk in range(2):
+                    v = 0.0
+                    for j in range(2):
+                        v += frames[c, k, j] * (block[j, 0] * frames[e, kk, 0] + block[j, 1] * frames[e, kk, 1])
+                    W[2 * c + k, 2 * e + kk] = v
+                    W[2 * e + kk, 2 * c + k] = v
+        off = 0.5 * (W[2 * c, 2 * c + 1] + W[2 * c + 1, 2 * c])
+        W[2 * c, 2 * c + 1] = off
+        W[2 * c + 1, 2 * c] = off
+        for k in range(2):
+            for load in range(n_loads):
+                v = 0.0
+                for a in range(3):
+                    for j in range(2):
+                        v += coefs[c, a] * frames[c, k, j] * surface_responses[load, 2 * nodes[c, a] + j]
+                Q[load, 2 * c + k] = v
+            for g in range(2):
+                G[2 * c + k, g] = frames[c, k, g]
+    for comp in range(A.shape[0]):
+        for i in range(2 * nc):
+            A[comp, i] = G[i, 0] * obstacle_frame[comp, 0] + G[i, 1] * obstacle_frame[comp, 1]
+    top = 0.0
+    regular = True
+    for c in range(nc):
+        a, b, d = W[2 * c, 2 * c], W[2 * c, 2 * c + 1], W[2 * c + 1, 2 * c + 1]
+        mean, half = 0.5 * (a + d), math.sqrt((0.5 * (a - d)) ** 2 + b * b)
+        high, low = mean + half, mean - half
+        if not low > 1e-10 * high:
+            regular = False
+        rho[c] = max(abs(high), abs(low))
+        top = max(top, rho[c])
+    for c in range(nc):
+        if top == 0.0:
+            rho[c] = 1.0
+        else:
+            rho[c] = 1.0 / (rho[c] if rho[c] > 1e-14 * top else top)
+    return regular
+
+
+@numba.njit(cache=True)
+def _surface_motion(fl: np.ndarray, weights: np.ndarray, frames: np.ndarray, face_rows: np.ndarray,
+                    slave_rows: np.ndarray, C_columns: np.ndarray, surface_responses: np.ndarray, r: np.ndarray,
+                    factors: np.ndarray, s: np.ndarray, u: np.ndarray) -> None:
+    """``s = L^T r`` and the surface displacement ``u = C s + sum_l s_l S K^-1 f_l`` (flat, (M,)) of contact forces
+    ``r`` of a 2D pairing (:meth:`SurfaceCompliance.displacement`); ``C_columns`` is ``C^T`` (C's columns, contiguous):
+    only the columns of the loaded contacts' dofs are added (the open contacts' forces are zero)."""
+    M = C_columns.shape[0]
+    for i in range(M):
+        s[i] = 0.0
+        u[i] = 0.0
+    for load in range(factors.size):
+        for i in range(M):
+            u[i] += factors[load] * surface_responses[load, i]
+    for c in range(fl.size):
+        if r[2 * c] == 0.0 and r[2 * c + 1] == 0.0:
+            continue
+        f = fl[c]
+        nodes = (slave_rows[c], face_rows[f, 0], face_rows[f, 1])
+        coefs = (1.0, -weights[c, 0], -weights[c, 1])
+        for a in range(3):
+            for j in range(2):
+                v = coefs[a] * frames[c, 0, j] * r[2 * c] + coefs[a] * frames[c, 1, j] * r[2 * c + 1]
+                col = 2 * nodes[a] + j
+                s[col] += v
+                if v != 0.0:
+                    for i in range(M):
+                        u[i] += v * C_columns[col, i]
+
+
+@numba.njit(cache=True)
+def _offsets_2d(fl: np.ndarray, weights: np.ndarray, frames: np.ndarray, face_rows: np.ndarray, face_x: np.ndarray,
+                face_sizes: np.ndarray, slave_rows: np.ndarray, coords: np.ndarray, u: np.ndarray, D: np.ndarray,
+                out: np.ndarray) -> None:
+    """:func:`offsets` of a 2D pairing (out, (nc,)); ``u`` flat (M,)."""
+    for c in range(fl.size):
+        f = fl[c]
+        sr = slave_rows[c]
+        t = 0.0
+        for j in range(2):
+            master = 0.0
+            for i in range(2):
+                master += weights[c, i] * (face_x[f, i, j] + u[2 * face_rows[f, i] + j] + D[j])
+            t += frames[c, 1, j] * (coords[c, j] + u[2 * sr + j] - master)
+        out[c] = abs(t) / face_sizes[f]
+
+
+@numba.njit(cache=True)
+def _interpolate_2d(fl: np.ndarray, weights: np.ndarray, face_rows: np.ndarray, values: np.ndarray,
+                    out: np.ndarray) -> None:
+    """:func:`interpolate_master` of a 2D pairing (out)."""
+    for c in range(fl.size):
+        out[c] = weights[c, 0] * values[face_rows[fl[c], 0]] + weights[c, 1] * values[face_rows[fl[c], 1]]
+
+
+@numba.njit(cache=True)
+def _repair_2d(fl: np.ndarray, weights: np.ndarray, face_rows: np.ndarray, face_x: np.ndarray,
+               slave_rows: np.ndarray, coords: np.ndarray, u: np.ndarray, D: np.ndarray, normal: np.ndarray,
+               new_fl: np.ndarray, new_weights: np.ndarray) -> bool:
+    """:func:`repair`'s search for a 2D pairing: each slave node's closest point of the facets within reach, both
+    moved in the contact plane (``normal``: the obstacle's; ``u`` flat (M,)). Writes the new facets and weights;
+    False when they are the pairing's own (the same facets, weights within 1e-12)."""
+    F, nc = face_x.shape[0], fl.size
+    un = np.empty(u.size)
+    for node in range(u.size // 2):
+        along = u[2 * node] * normal[0] + u[2 * node + 1] * normal[1]
+        un[2 * node] = u[2 * node] - along * normal[0]
+        un[2 * node + 1] = u[2 * node + 1] - along * normal[1]
+    Dn = D[0] * normal[0] + D[1] * normal[1]
+    Dt = np.array([D[0] - Dn * normal[0], D[1] - Dn * normal[1]])
+    start, direction, length2 = np.empty((F, 2)), np.empty((F, 2)), np.empty(F)
+    for f in range(F):
+        for j in range(2):
+            start[f, j] = face_x[f, 0, j] + un[2 * face_rows[f, 0] + j] + Dt[j]
+            direction[f, j] = face_x[f, 1, j] + un[2 * face_rows[f, 1] + j] + Dt[j] - start[f, j]
+        length2[f] = direction[f, 0] ** 2 + direction[f, 1] ** 2
+    slave = np.empty((nc, 2))
+    for c in range(nc):
+        for j in range(2):
+            slave[c, j] = coords[c, j] + un[2 * slave_rows[c] + j]
+    xi, distance = np.empty(nc), np.empty(nc)
+    _closest_segments(slave, start, direction, length2, new_fl, xi, distance)
+    changed = False
+    for c in range(nc):
+        new_weights[c, 0] = 1.0 - xi[c]
+        new_weights[c, 1] = xi[c]
+        if new_fl[c] != fl[c] or abs(new_weights[c, 0] - weights[c, 0]) > 1e-12 \
+                or abs(new_weights[c, 1] - weights[c, 1]) > 1e-12:
+            changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarray, gap0: np.ndarray,
+                           W: np.ndarray, Q: np.ndarray, G: np.ndarray, A: np.ndarray, rho: np.ndarray,
+                           face_rows: np.ndarray, face_x: np.ndarray, face_inside: np.ndarray,
+                           face_sizes: np.ndarray, slave_rows: np.ndarray, coords: np.ndarray,
+                           tributary: np.ndarray, abscissa: np.ndarray, C: np.ndarray, C_columns: np.ndarray,
+                           surface_responses: np.ndarray, master_areas: np.ndarray, obstacle_frame: np.ndarray,
+                           T: np.ndarray, on_surfaces: np.ndarray, out_responses: np.ndarray,
+                           out_motion: np.ndarray, out_gap0: np.ndarray, by_force: bool, targets: np.ndarray,
+                           controlled: np.ndarray, translations: np.ndarray, factors: np.ndarray, force_tol: float,
+                           max_eval: int, stiffness: np.ndarray, d: np.ndarray, wear_gap: np.ndarray,
+                           master_wear: np.ndarray, y: np.ndarray, r_last: np.ndarray, mu: np.ndarray,
+                           k: np.ndarray, master_share: float, tol: float, max_iter: int, refresh: int,
+                           repair_slip: float, warn_stride: bool, warn_reach: bool, rows: np.ndarray,
+                           found: np.ndarray, solves: np.ndarray, slip: np.ndarray, status: np.ndarray,
+                           wear_area_column: int) -> tuple[int, int, int]:
+    """The increments of a cycle under finite sliding (2D node-to-segment), each solved on the pairing of the state
+    it starts from and committed as :func:`~dolfinx_fretting.commit.commit` commits it: the compiled loop's local
+    solve and load control (:func:`~dolfinx_fretting.cycling.run_force_increments` or
+    :func:`~dolfinx_fretting.cycling.run_increments`, one increment per call), Archard's law, the master's share
+    of the wear spread on its nodes (:func:`spread_wear`, ``master_share`` its fraction, < 0 without wear), the
+    window's outside rows watched, then the re-pairing when a paired point has moved more than ``repair_slip``
+    master elements (:func:`offsets`, :func:`repair`, :func:`carry_state`) with the new pairing's W, load responses,
+    rigid modes, force map and Uzawa steps (``_pairing_operators``).
+
+    The pairing (``fl`` indices into the facets within reach, ``weights``, ``frames``, ``gap0``, ``W``, ``Q``,
+    ``G``, ``A``, ``rho``) and the state (``d``, ``stiffness``, ``wear_gap``, ``master_wear``, ``y``, ``r_last``)
+    are in/out; ``rows``, ``found`` (each increment's obstacle), ``solves``, the last increment's ``slip`` and
+    ``status`` out. ``translations``: (n, 2) each increment's obstacle translation (displacement control).
+
+    Returns:
+        (increments done, 0 or the code of what stopped the loop (``SOLVE_FAILED`` ...), re-pairings).
+    """
+    n, nc = targets.shape[0], fl.size
+    m, M = 2 * nc, C.shape[0]
+    n_out = out_gap0.size
+    out_r, out_x, out_y = np.zeros((1, m)), np.zeros((1, m)), np.zeros((1, m))
+    out_wear, out_states = np.zeros((1, nc)), np.zeros((1, nc), dtype=np.int8)
+    r_warm = np.zeros((1, m))
+    pattern, lu, piv = np.full((1, 1), -1, dtype=np.int8), np.zeros((1, 1, 1)), np.zeros((1, 1), dtype=np.int64)
+    lu_ok, counts = np.zeros(1, dtype=np.bool_), np.zeros(3, dtype=np.int64)
+    failure, force = np.zeros(4), np.zeros(d.size)
+    before, moved = np.empty(nc), np.empty(nc)
+    s, u = np.empty(M), np.empty(M)
+    D = np.empty(2)
+    volume, added, interpolated = np.empty(master_areas.size), np.empty(master_areas.size), np.empty(nc)
+    new_fl, new_weights = np.empty(nc, dtype=np.int64), np.empty((nc, 2))
+    new_frames, new_gap0 = np.empty((nc, 2, 2)), np.empty(nc)
+    old_interp, new_interp = np.empty(nc), np.empty(nc)
+    normal = obstacle_frame[0]
+    repairs = 0
+    for j in range(n):
+        for c in range(nc):
+            before[c] = wear_gap[c]
+        if by_force:
+            done, code, err = run_force_increments(
+                W, rho, mu, 2, gap0, wear_gap, G, T, A, targets[j:j + 1], controlled, d, stiffness, force_tol,
+                max_eval, Q, factors[j:j + 1], tributary, abscissa, y, r_last, r_warm, k, tol, max_iter, refresh,
+                True, out_r, out_x, out_y, out_wear, out_states, rows[j:j + 1], found[j:j + 1], solves[j:j + 1],
+                False, pattern, lu, piv, lu_ok, counts, failure, force)
+        else:
+            done, code, err = run_increments(
+                W, rho, mu, 2, gap0, wear_gap, G, translations[j:j + 1], Q, factors[j:j + 1], tributary, abscissa,
+                y, r_last, r_warm, 0, k, tol, max_iter, refresh, True, out_r, out_x, out_y, out_wear, out_states,
+                rows[j:j + 1], False, pattern, lu, piv, lu_ok, counts)
+        if done < 1:
+            return j, SOLVE_FAILED, repairs
+        for c in range(nc):
+            status[c] = out_states[0, c]
+        for i in range(m):
+            slip[i] = out_x[0, i]
+        # the master's share of the wear on the master's nodes (commit.commit)
+        if master_share >= 0.0:
+            for node in range(volume.size):
+                volume[node] = 0.0
+            for c in range(nc):
+                depth = master_share * (wear_gap[c] - before[c])
+                before[c] = depth
+                for i in range(2):
+                    volume[face_rows[fl[c], i]] += weights[c, i] * (depth * tributary[c])
+            for node in range(volume.size):
+                if volume[node] != 0.0 and not master_areas[node] > 0.0:
+                    return j, WEAR_OFF_MASTER, repairs
+                added[node] = volume[node] / master_areas[node] if master_areas[node] > 0.0 else 0.0
+                master_wear[node] += added[node]
+            _interpolate_2d(fl, weights, face_rows, added, interpolated)
+            for c in range(nc):
+                wear_gap[c] = wear_gap[c] - before[c] + interpolated[c]
+            _interpolate_2d(fl, weights, face_rows, master_wear, interpolated)
+            worn = 0.0
+            for c in range(nc):
+                worn += (wear_gap[c] - interpolated[c]) * tributary[c]
+            on_master = 0.0
+            for node in range(master_areas.size):
+                on_master += master_wear[node] * master_areas[node]
+            rows[j, wear_area_column] = worn + on_master
+        obstacle = found[j]
+        for g in range(2):
+            D[g] = obstacle[0] * T[g, 0]
+            for comp in range(1, obstacle.size):
+                D[g] += obstacle[comp] * T[g, comp]
+        _surface_motion(fl, weights, frames, face_rows, slave_rows, C_columns, surface_responses, r_last, factors[j], s,
+                        u)
+        if n_out:   # the nodes outside the window (window_check.check_window), with half its tolerance: a doubt
+            norm_r, largest_gap, moved_out = 0.0, 0.0, 0.0
+            for i in range(m):
+                norm_r += r_last[i] * r_last[i]
+            low = np.inf
+            for c in range(nc):
+                low = min(low, rho[c])
+            gaps = np.empty(n_out)
+            for i in range(n_out):
+                g = 0.0
+                for col in range(M):
+                    g += on_surfaces[i, col] * s[col]
+                for comp in range(obstacle.size):
+                    g -= out_motion[i, comp] * obstacle[comp]
+                for load in range(factors.shape[1]):
+                    g += factors[j, load] * out_responses[load, i]
+                gaps[i] = g + out_gap0[i]
+                moved_out = max(moved_out, abs(gaps[i] - out_gap0[i]))
+                largest_gap = max(largest_gap, abs(out_gap0[i]))
+            terms = max(max(moved_out, largest_gap), math.sqrt(D[0] * D[0] + D[1] * D[1]))
+            load_terms = 0.0
+            for load in range(factors.shape[1]):
+                largest = 0.0
+                for i in range(n_out):
+                    largest = max(largest, abs(out_responses[load, i]))
+                load_terms += abs(factors[j, load]) * largest
+            terms = max(terms, load_terms)
+            bound = tol * math.sqrt(norm_r) / low + 1e-12 * terms
+            for i in range(n_out):
+                if gaps[i] < -0.5 * bound:
+                    return j, WINDOW_SUSPECT, repairs
+        _offsets_2d(fl, weights, frames, face_rows, face_x, face_sizes, slave_rows, coords, u, D, moved)
+        largest_move = 0.0
+        for c in range(nc):
+            largest_move = max(largest_move, moved[c])
+        if largest_move <= repair_slip:
+            continue
+        if largest_move > 1.0 and warn_stride:
+            return j, LONG_STRIDE, repairs
+        if not _repair_2d(fl, weights, face_rows, face_x, slave_rows, coords, u, D, normal, new_fl, new_weights):
+            continue
+        _pairing_arrays(new_fl, new_weights, face_x, face_inside, coords, new_frames, new_gap0)
+        if warn_reach:
+            _offsets_2d(new_fl, new_weights, new_frames, face_rows, face_x, face_sizes, slave_rows, coords, u, D,
+                        moved)
+            for c in range(nc):
+                if r_last[2 * c] > 0.0 and moved[c] > repair_slip:
+                    return j, BEYOND_REACH, repairs
+        # carry_state: the forces and the slip turned into the new frames, the wear gap with the master's share read
+        # at the new points, the positions of the committed configuration as the new pairing measures them
+        _interpolate_2d(fl, weights, face_rows, master_wear, old_interp)
+        _interpolate_2d(new_fl, new_weights, face_rows, master_wear, new_interp)
+        for c in range(nc):
+            for vector in (r_last, slip):
+                gx = frames[c, 0, 0] * vector[2 * c] + frames[c, 1, 0] * vector[2 * c + 1]
+                gy = frames[c, 0, 1] * vector[2 * c] + frames[c, 1, 1] * vector[2 * c + 1]
+                vector[2 * c] = new_frames[c, 0, 0] * gx + new_frames[c, 0, 1] * gy
+                vector[2 * c + 1] = new_frames[c, 1, 0] * gx + new_frames[c, 1, 1] * gy
+            wear_gap[c] = wear_gap[c] - old_interp[c] + new_interp[c]
+            f = new_fl[c]
+            nodes = (slave_rows[c], face_rows[f, 0], face_rows[f, 1])
+            coefs = (1.0, -new_weights[c, 0], -new_weights[c, 1])
+            for kk in range(2):
+                v = 0.0
+                for a in range(3):
+                    for jj in range(2):
+                        v += coefs[a] * new_frames[c, kk, jj] * u[2 * nodes[a] + jj]
+                y[2 * c + kk] = v - (new_frames[c, kk, 0] * D[0] + new_frames[c, kk, 1] * D[1])
+            y[2 * c] += new_gap0[c] + wear_gap[c]
+        for c in range(nc):
+            fl[c] = new_fl[c]
+            gap0[c] = new_gap0[c]
+            for i in range(2):
+                weights[c, i] = new_weights[c, i]
+                for jj in range(2):
+                    frames[c, i, jj] = new_frames[c, i, jj]
+        repairs += 1
+        if not _pairing_operators(fl, weights, frames, face_rows, slave_rows, C, surface_responses, obstacle_frame,
+                                  W, Q, G, A, rho):
+            return j, SINGULAR_BLOCK, repairs
+    return n, 0, repairs

@@ -12,6 +12,7 @@ References:
 """
 
 import copy
+import dataclasses
 
 import numpy as np
 import pytest
@@ -24,6 +25,7 @@ from dolfinx_fretting.checkpoint import _find_facets
 from dolfinx_fretting.contact import MasterSurface, pair_with_segments, paired_contact_set, tangent_frame
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import run_scene
+from dolfinx_fretting.state import ConvergenceError
 from support import finite_sliding as support_sliding
 from support.finite_sliding import MU, P, pressed, sliding_problem
 
@@ -591,3 +593,64 @@ def test_the_free_contact_operator_drops_the_fixed_columns(cylinder_on_flat):
     free[contact.fixed_global] = 0.0
     assert np.abs(H[:, contact.fixed_global]).max() > 0
     assert np.array_equal(contact.H_free.toarray(), H * free)
+
+
+# The compiled loop of finite sliding against increment by increment (issue 26) -------------------------------------
+def _both_paths(problem, state, path):
+    """The cycle from ``state`` in the compiled loop and increment by increment (LocalSolver(compiled_cycles=
+    False), the reference), each committed; the repairs each made."""
+    out = {}
+    for compiled in (True, False):
+        problem.solver = dataclasses.replace(problem.solver, compiled_cycles=compiled)
+        before = problem.sliding.repairs
+        result = problem.run_cycle(state, path)
+        out[compiled] = (result, problem.commit(state, result), problem.sliding.repairs - before)
+    return out
+
+
+@pytest.mark.parametrize("normal", ["force", "displacement"])
+def test_the_compiled_finite_sliding_cycle_is_the_stepwise_one(cylinder_on_flat, normal):
+    """Two reciprocating gross-slip cycles of 3 elements' stroke (both bodies wearing, a re-pairing at most
+    increments), the normal force held (force control, as McColl's scene) or the approach held: the compiled loop
+    (sliding.run_sliding_increments) gives the stepwise path's increments, re-pairings and final state (forces,
+    positions, slip, both bodies' wear, the pairing) to 1e-8 of each quantity's scale. Both paths make the same
+    decisions and differ by the order of their sums only (measured: 1e-14 of the forces); 1e-8 is the issue's
+    bound."""
+    problem = sliding_problem(cylinder_on_flat, "finite", wear=dfr.Archard(k_slave=2e-6, k_master=3e-6))
+    state = pressed(problem)
+    held = dfr.Force(P) if normal == "force" else dfr.Displacement(float(state.obstacle[0]))
+    path = dfr.CyclePath.waveform(24, normal=held, tangential=0.06)
+    for _ in range(2):
+        runs = _both_paths(problem, state, path)
+        (compiled, fast, repairs), (stepwise, slow, repairs_slow) = runs[True], runs[False]
+        assert compiled.compiled and not stepwise.compiled
+        assert repairs == repairs_slow and repairs >= 12     # a 3-element stroke, re-paired every 0.25 element
+        assert np.array_equal(fast.pairing.master_faces, slow.pairing.master_faces)
+        for name in ("forces", "positions", "slip", "wear_gap", "master_wear", "obstacle"):
+            a, b = getattr(fast, name), getattr(slow, name)
+            assert np.abs(a - b).max() <= 1e-8 * np.abs(b).max(), name
+        assert np.abs(fast.pairing.master_weights - slow.pairing.master_weights).max() <= 1e-8
+        for name in ("normal_force", "tangential_force", "max_pressure", "dissipated_energy", "wear_area",
+                     "max_wear_depth"):
+            a, b = compiled.records[name], stepwise.records[name]
+            assert np.abs(a - b).max() <= 1e-8 * np.abs(b).max(), name
+        assert np.abs(compiled.obstacle - stepwise.obstacle).max() <= 1e-8 * np.abs(stepwise.obstacle).max()
+        state = slow
+
+
+def test_a_failed_compiled_finite_sliding_cycle_raises_the_stepwise_message(cylinder_on_flat):
+    """A tangential force beyond mu P fails in the compiled loop, which then solves the cycle increment by
+    increment: the same message and step as the stepwise path."""
+    problem = sliding_problem(cylinder_on_flat, "finite")
+    state = pressed(problem)
+    path = dfr.CyclePath.waveform(8, normal=dfr.Force(P), tangential=dfr.Force(1.5 * MU * P))
+    messages = {}
+    for compiled in (True, False):
+        problem.solver = dataclasses.replace(problem.solver, compiled_cycles=compiled)
+        stiffness = problem.operators.stiffness.copy()
+        with pytest.raises(ConvergenceError) as failure:
+            problem.run_cycle(state, path)
+        messages[compiled] = (str(failure.value), failure.value.step)
+        problem.operators.stiffness[:] = stiffness
+    assert messages[True] == messages[False]
+    assert "cannot be reached" in messages[True][0]
