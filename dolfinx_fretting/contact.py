@@ -207,6 +207,10 @@ class ContactSet:
     #: :meth:`MasterSurface.node_measures`), where finite sliding keeps the slave's share of the wear, whatever part
     #: of the hat faces the master (``tributary``, ``D_jj``); None for node pairing (the tributary is that measure).
     slave_areas: np.ndarray | None = None
+    #: Mortar: (k, 2) integer pairs (slave node label, coordinate axis) of the slave nodes on a symmetry plane normal
+    #: to that axis (:func:`find_mortar_pairs`' ``held_dofs``), whose H columns along the axis every pairing drops
+    #: (the same function at every pairing); None for node pairing.
+    symmetry_axes: np.ndarray | None = None
 
     @property
     def two_body(self) -> bool:
@@ -250,7 +254,7 @@ class ContactSet:
                           pick(self.master_nodes), pick(self.master_weights), pick(self.master_points),
                           pick(self.master_sizes), pick(self.master_faces), self.master_surface, self.window_centre,
                           None if self.surface_mass is None else self.surface_mass[contacts][:, contacts].tocsr(),
-                          self.slave_surface, pick(self.slave_areas))
+                          self.slave_surface, pick(self.slave_areas), self.symmetry_axes)
 
 
 def _tributary_measure(V, facets: np.ndarray, fdim: int) -> np.ndarray:
@@ -685,14 +689,8 @@ def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, ha
         raise ValueError("contact: no free slave node faces the master surface (mortar: every D_jj = 0)")
     contact_set = mortar_contact_set(mortar, slave_nodes_of, slave_x, surface, imap.size_global * gdim,
                                      slave_surface=MasterSurface(slave_nodes_of, slave_x, slave_nv, slave_inside, ref))
-    if symmetry_axes.size:
-        # A node on a symmetry plane: the mirrored master faces would cancel its rows' components along the plane's
-        # normal (the master's antisymmetric displacement there), so they are dropped; its row along that axis (a
-        # frame direction now) then touches held dofs only, a held row as node-to-face's (Contact.held_rows).
-        H = contact_set.H.tocoo()
-        along = np.isin(contact_set.global_nodes[H.row // gdim] * gdim + H.col % gdim,
-                        symmetry_axes[:, 0] * gdim + symmetry_axes[:, 1])
-        contact_set.H = sp.csr_matrix((H.data[~along], (H.row[~along], H.col[~along])), shape=H.shape)
+    contact_set.symmetry_axes = symmetry_axes
+    contact_set.H = _drop_symmetry_columns(contact_set.H, contact_set.global_nodes, gdim, symmetry_axes)
     gaps, coords = contact_set.gap0[contacts], contact_set.coords[contacts]
     if gdim == 2:
         abscissa = contact_set.abscissa[contacts]
@@ -716,6 +714,25 @@ def find_mortar_pairs(V, slave_facets: np.ndarray, master_facets: np.ndarray, ha
     contact_set = contact_set.subset(order)
     contact_set.window_centre = closest
     return contact_set
+
+
+def _drop_symmetry_columns(H: sp.csr_matrix, global_nodes: np.ndarray, dim: int,
+                           symmetry_axes: np.ndarray | None) -> sp.csr_matrix:
+    """H of mortar contacts (rows ``dim c + k`` of contact c's slave node ``global_nodes[c]``) without, in the rows of
+    a slave node on a symmetry plane (a pair (node, axis) of ``symmetry_axes``), the columns of the dofs along that
+    axis: the first pairing's (:func:`find_mortar_pairs`) and every re-pairing's (:func:`mortar_rows_set`) alike.
+    Pure NumPy.
+
+    The whole model's mirrored master faces would cancel those components (the master's antisymmetric displacement
+    on the plane), so they are dropped; the node's row along the axis (a frame direction: its averaged normal lies
+    in the plane) then touches held dofs only, a held row as node-to-face's (:attr:`Contact.held_rows`).
+    """
+    if symmetry_axes is None or symmetry_axes.size == 0:
+        return H
+    entries = H.tocoo()
+    along = np.isin(global_nodes[entries.row // dim] * dim + entries.col % dim,
+                    symmetry_axes[:, 0] * dim + symmetry_axes[:, 1])
+    return sp.csr_matrix((entries.data[~along], (entries.row[~along], entries.col[~along])), shape=H.shape)
 
 
 def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, slave_x: np.ndarray,
@@ -871,9 +888,9 @@ def mortar_rows_set(pairing: ContactSet, master_nodes: np.ndarray, master_weight
     where = np.searchsorted(labels, np.maximum(master_nodes, 0))
     points = np.einsum("cl,clj->cj", master_weights, master_x[np.minimum(where, labels.size - 1)])
     gaps = np.einsum("cj,cj->c", pairing.coords - points, pairing.frames[:, 0])
+    H = _mortar_rows(pairing.global_nodes, pairing.frames, master_nodes, master_weights, measure, pairing.H.shape[1])
     return replace(pairing, gap0=gaps, tributary=measure,
-                   H=_mortar_rows(pairing.global_nodes, pairing.frames, master_nodes, master_weights, measure,
-                                  pairing.H.shape[1]),
+                   H=_drop_symmetry_columns(H, pairing.global_nodes, pairing.dim, pairing.symmetry_axes),
                    master_nodes=master_nodes, master_weights=master_weights, master_points=points,
                    master_sizes=master_sizes)
 

@@ -299,7 +299,10 @@ def _repair_mortar(pairing: ContactSet, compliance: SurfaceCompliance, u: np.nda
     matrices = mortar_matrices(slave.nodes, slave.x + moved,
                                slave.inside + mean_motion, surface.nodes[faces], master_x, surface.inside[faces] + D,
                                reference_tangent=surface.reference_frame[1] if surface.dim == 3 else None,
-                               slave_reference_x=slave.x)
+                               slave_reference_x=slave.x, symmetry_axes=pairing.symmetry_axes)
+    # mortar_paired_set keeps the reference pairing's frames and drops the H columns along a symmetry axis as the
+    # first pairing did (pairing.symmetry_axes): the matrices' own normals are given the same axes only so that
+    # they are the same as the frames kept.
     return mortar_paired_set(pairing, matrices)
 
 
