@@ -160,7 +160,8 @@ def cell_dofmap(V) -> np.ndarray:
     dm = V.dofmap.list
     if LEGACY_API:  # an AdjacencyList with a constant number of links
         n = dm.num_nodes
-        return dm.array.reshape(n, -1) if n else np.zeros((0, 0), dtype=np.int32)
+        # a rank holding no cell (a submesh's empty part) still gets the row width, as the current API gives it
+        return dm.array.reshape(n, -1) if n else np.zeros((0, V.dofmap.dof_layout.num_dofs), dtype=np.int32)
     return dm
 
 
@@ -169,7 +170,8 @@ def geometry_dofmap(msh) -> np.ndarray:
     dm = msh.geometry.dofmap
     if LEGACY_API:
         n = dm.num_nodes
-        return dm.array.reshape(n, -1) if n else np.zeros((0, 0), dtype=np.int32)
+        # a rank holding no cell (a submesh's empty part) still gets the row width, as the current API gives it
+        return dm.array.reshape(n, -1) if n else np.zeros((0, V.dofmap.dof_layout.num_dofs), dtype=np.int32)
     return dm
 
 

@@ -28,7 +28,7 @@ from mpi4py import MPI
 
 from .laws import Coulomb, FrictionLaw
 from .mortar import MortarMatrices, mortar_matrices, weighted_relative_displacement
-from .pressure import RECOVERIES, smoothed_tractions, surface_mass
+from .pressure import RECOVERIES, check_surface_cells, smoothed_tractions, surface_mass
 
 # DOLFINx, UFL and petsc4py are imported inside the functions that read the mesh: this module's value types
 # (ContactSet, MasterSurface, RigidPlane, ElasticBody and the pure pairing functions) are imported by modules that
@@ -1618,7 +1618,8 @@ class Contact:
         ValueError: before any candidate search, on every rank alike: tags that are not of facets; a marker
             (the body's, or the master's of an :class:`ElasticBody`) that tags no facet on any rank, the message
             naming the markers the tags hold; a surface with no free vertex (every component of every node fixed
-            by ``bcs``); a non-P1 space, a normal of the wrong dimension, a bad ``mu`` or ``window``. After it: no
+            by ``bcs``); a non-P1 space, a normal of the wrong dimension, a bad ``mu`` or ``window``, a bad
+            ``pressure_recovery`` or a mesh whose facets are not of one type (prisms, pyramids). After it: no
             candidate within ``window``, or a contact whose normal direction ``bcs`` fix entirely.
     """
 
@@ -1627,6 +1628,9 @@ class Contact:
         if not isinstance(pressure_recovery, str) or pressure_recovery not in RECOVERIES:
             raise ValueError(f"Contact: pressure_recovery = {pressure_recovery!r}: allowed "
                              f"{', '.join(map(repr, RECOVERIES))}")
+        # Facets of one type the surface mass and the tributary measures integrate (a prism mesh would fail later in
+        # a reshape or in DOLFINx's facet integrals)
+        check_surface_cells(V.mesh.topology.cell_type.name, pressure_recovery)
         _check_vector_p1(V)
         if not isinstance(obstacle, Obstacle):
             raise TypeError(f"Contact: obstacle must be an Obstacle (a RigidPlane, an ElasticBody, or a shape of "

@@ -7,10 +7,10 @@ script makes) and :class:`FatigueOutputs`:
 * appends one row per point of the near-surface region to ``fatigue.csv`` (:data:`TABLE_COLUMNS`: the cycle, its
   equivalent cycles, :data:`~dolfinx_fretting.fatigue.POINT_COLUMNS`, Miner's damage), rank 0, the points in one
   order whatever the partition (by their coordinates);
-* with strain-life constants, adds the block of cycles since the previous evaluation to Miner's sum
-  (:class:`~dolfinx_fretting.fatigue.MinerSum`): the block runs from the cycle after the previous evaluation's to
-  the end of this cycle's jump (with cycle jumps: the jump's physical cycles), times ``wear.acceleration`` (each
-  simulated cycle stands for that many), at the life this cycle gives;
+* with strain-life constants, adds (once those rows are written) the block of cycles since the previous
+  evaluation to Miner's sum (:class:`~dolfinx_fretting.fatigue.MinerSum`): the block runs from the cycle after the
+  previous evaluation's to the end of this cycle's jump (with cycle jumps: the jump's physical cycles), times
+  ``wear.acceleration`` (each simulated cycle stands for that many), at the life this cycle gives;
 * keeps the summary (``summary.json["fatigue"]``: :data:`~dolfinx_fretting.fatigue.SUMMARY_FIELDS`, with a
   critical distance :data:`~dolfinx_fretting.fatigue.CRITICAL_DISTANCE_FIELDS`, with constants
   :data:`~dolfinx_fretting.fatigue.MINER_FIELDS`; a value that is not finite, such as an infinite life, is null).
@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -101,6 +102,18 @@ def _canonical_order(coordinates: np.ndarray) -> np.ndarray:
     return np.lexsort((key[:, 2], key[:, 1], key[:, 0]))
 
 
+@dataclass(frozen=True)
+class _Evaluation:
+    """An evaluated cycle not yet written: its rows (rank 0's; empty elsewhere), Miner's sum with its block (rank
+    0's; None without strain-life constants) and the summary it gives."""
+
+    cycle: int
+    cycle_end: int
+    rows: list[dict[str, Any]]
+    miner: MinerSum | None
+    summary: dict[str, Any]
+
+
 class FatigueOutputs:
     """A run's fatigue evaluations, its ``fatigue.csv``, Miner's sum and summary (module docstring). Collective.
 
@@ -161,7 +174,8 @@ class FatigueOutputs:
             raise ValueError(f"--resume: {problem_text}")
         self.wall_time += time.perf_counter() - started
         self.cpu_time += time.process_time() - cpu
-        self._pending: list[dict[str, Any]] = []
+        #: The last evaluation, until :meth:`write` has written its rows (then counted).
+        self._pending: _Evaluation | None = None
 
     def due(self, cycle: int) -> bool:
         """Whether simulated cycle ``cycle`` is evaluated (:func:`evaluated`)."""
@@ -169,29 +183,31 @@ class FatigueOutputs:
 
     def evaluate(self, cycle: int, result: CycleResult, cycle_end: int) -> FatigueResult:
         """Evaluate simulated cycle ``cycle`` (its result kept, ``run_cycle(..., keep=True)``), whose jump ends at
-        cycle ``cycle_end``: its rows (written by :meth:`write`), Miner's sum and the summary. Collective."""
+        cycle ``cycle_end``: its rows, Miner's sum and the summary, held until :meth:`write` has written the rows
+        (a cycle that fails, or rows that are not written, leave no damage in the summary or a checkpoint).
+        Collective."""
         started, cpu = time.perf_counter(), time.process_time()
         result = fatigue_over_cycle(self.problem, result, **self.arguments)
         parts = self.comm.gather((result.coordinates, result.columns()), root=0)
-        summary, error = None, None
+        summary, miner, rows, error = None, None, [], None
         if self.rank0:
             try:
-                summary = self._on_root(parts, result.summary, cycle, cycle_end)
+                summary, miner, rows = self._on_root(parts, result.summary, cycle, cycle_end)
             except ValueError as exc:   # (a resumed damage of another size): raised on every rank below
                 error = str(exc)
         if self.comm.size > 1:
             summary, error = self.comm.bcast((summary, error), root=0)
         if error is not None:
             raise ValueError(f"fatigue, cycle {cycle}: {error}")
-        self._summary = summary
-        self.last_evaluated, self.covered = cycle, cycle_end
-        self.evaluations += 1
+        self._pending = _Evaluation(cycle, cycle_end, rows, miner, summary)
         self.wall_time += time.perf_counter() - started
         self.cpu_time += time.process_time() - cpu
         return result
 
-    def _on_root(self, parts, api_summary: dict[str, Any], cycle: int, cycle_end: int) -> dict[str, Any]:
-        """Rank 0: the points gathered in their canonical order, Miner's sum, the rows and the summary."""
+    def _on_root(self, parts, api_summary: dict[str, Any], cycle: int,
+                 cycle_end: int) -> tuple[dict[str, Any], MinerSum | None, list[dict[str, Any]]]:
+        """Rank 0: the points gathered in their canonical order; the summary, Miner's sum with this block and the
+        rows (none of them kept yet: :meth:`write`)."""
         coordinates = np.concatenate([part[0] for part in parts])
         columns = {name: np.concatenate([part[1][name] for part in parts]) for name in POINT_COLUMNS}
         order = _canonical_order(coordinates)
@@ -201,31 +217,38 @@ class FatigueOutputs:
         if self.arguments["critical"] is not None:
             summary.update({key: _finite(api_summary[key]) for key in CRITICAL_DISTANCE_FIELDS})
         damage = np.full(order.size, np.nan)
+        miner = None
         if self.arguments["strain_life"] is not None:
-            if self.miner is None:
-                self.miner = MinerSum.start(order.size)
-            if self.miner.damage.size != order.size:
-                raise ValueError(f"{order.size} points in the region, {self.miner.damage.size} in the damage "
+            miner = self.miner if self.miner is not None else MinerSum.start(order.size)
+            if miner.damage.size != order.size:
+                raise ValueError(f"{order.size} points in the region, {miner.damage.size} in the damage "
                                  "resumed from the checkpoint (another mesh or partition rounding)")
-            self.miner = self.miner.add(columns["life"], (cycle_end - self.covered) * self.acceleration)
-            damage = self.miner.damage
-            found = math.isfinite(self.miner.initiation)
-            at = self.miner.initiation_point
+            miner = miner.add(columns["life"], (cycle_end - self.covered) * self.acceleration)
+            damage = miner.damage
+            found = math.isfinite(miner.initiation)
+            at = miner.initiation_point
             summary.update({"miner_damage_max": float(damage.max(initial=0.0)),
-                            "initiation_cycles": self.miner.initiation if found else None,
+                            "initiation_cycles": miner.initiation if found else None,
                             "initiation_x": float(columns["x"][at]) if found else None,
                             "initiation_depth": float(columns["depth"][at]) if found else None})
-        self._pending = [{"cycle": cycle, "equivalent_cycles": cycle_end * self.acceleration,
-                          **{name: columns[name][i] for name in POINT_COLUMNS}, "damage": damage[i]}
-                         for i in range(order.size)]
-        return summary
+        rows = [{"cycle": cycle, "equivalent_cycles": cycle_end * self.acceleration,
+                 **{name: columns[name][i] for name in POINT_COLUMNS}, "damage": damage[i]} for i in range(order.size)]
+        return summary, miner, rows
 
     def write(self) -> None:
-        """Rank 0: append the last evaluation's rows to ``fatigue.csv`` (after the runner's folder check)."""
-        if self.rank0 and self._pending:
-            append_rows(self.path, self._pending, TABLE_COLUMNS)
+        """Append the last evaluation's rows to ``fatigue.csv`` (rank 0; after the runner's folder check), then
+        count the evaluation: Miner's sum, the summary and what a checkpoint saves include it from here on, so
+        they never report damage for rows that were not written. Every rank calls it."""
+        pending, self._pending = self._pending, None
+        if pending is None:
+            return
+        if self.rank0:
+            append_rows(self.path, pending.rows, TABLE_COLUMNS)   # an OSError: the previous evaluation stays counted
             self.table_bytes = self.path.stat().st_size
-        self._pending = []
+            self.miner = pending.miner if pending.miner is not None else self.miner
+        self._summary = pending.summary
+        self.last_evaluated, self.covered = pending.cycle, pending.cycle_end
+        self.evaluations += 1
 
     def write_xdmf(self) -> Path | None:
         """Write ``fatigue.xdmf`` (+ ``.h5``) beside ``fatigue.csv``, from it: every evaluated cycle's rows as

@@ -4,8 +4,9 @@ Tables are written by rank 0 only and flushed after each increment (monotonic ru
 runs), so an interrupted run leaves every finished row readable; ``summary.json`` and checkpoints are
 replaced atomically (write to a temporary file, then rename). On resume the tables are truncated back to
 the sizes recorded in the checkpoint, so rows written after it do not appear twice; a table shorter than
-recorded (rows the checkpoint counts are gone) is refused with :class:`TableError`, never padded. XDMF output
-is collective (every rank calls it). ``summary.json`` is always valid JSON (:func:`write_json_atomic`).
+recorded (rows the checkpoint counts are gone) is refused with :class:`TableError`, never padded. ``fields.xdmf``
+likewise keeps the time steps the checkpoint counts (:func:`keep_field_steps`). XDMF output is collective (every
+rank calls it). ``summary.json`` is always valid JSON (:func:`write_json_atomic`).
 """
 
 from __future__ import annotations
@@ -15,7 +16,9 @@ import errno
 import json
 import math
 import os
+import re
 import shutil
+import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +33,7 @@ __all__ = ["ResultWriter", "write_json_atomic", "finite_json", "non_finite_keys"
            "CYCLE_FIELDS", "PROFILE_FIELDS", "PROFILE_FIELDS_3D", "profile_fields", "plot_profiles",
            "RUN_DESCRIPTION", "read_run_description", "ZONE_HISTORY_FIELDS", "ZONE_HISTORY_FIELDS_3D",
            "ZONE_CYCLE_FIELDS", "FRICTION_CYCLE_FIELDS", "zone_columns", "zone_history_fields", "history_fields",
-           "cycle_fields"]
+           "cycle_fields", "keep_field_steps"]
 
 #: The machine-readable description of a run in its output folder: what was modelled (obstacle, bodies,
 #: wear shares, dimension) and the columns of every table, for the readers (pictures, plots, compare).
@@ -234,6 +237,70 @@ class TableError(ValueError):
     """A table cannot be resumed: missing, or shorter than the checkpoint records (the message names it)."""
 
 
+def _temporal_collections(root: ElementTree.Element) -> list[ElementTree.Element]:
+    """The XDMF's time series: one ``Grid`` of ``CollectionType="Temporal"`` per function written."""
+    return [grid for grid in root.iter("Grid") if grid.get("CollectionType") == "Temporal"]
+
+
+def keep_field_steps(xdmf_path: str | Path, steps: int | None) -> tuple[int, str | None]:
+    """Cut an XDMF file of fields back to its first ``steps`` time steps (rank 0, on resume).
+
+    A run killed after a fields write and before its checkpoint would otherwise show that step twice once the
+    resumed run writes it again. Each function's time series keeps its first ``steps`` grids; the HDF5 datasets
+    of the grids dropped are deleted from the ``.h5`` (unlinked: DOLFINx cannot write a dataset of a name that
+    exists, and the resumed run writes the same names again; HDF5 does not give their bytes back, ``h5repack``
+    does). The XDMF is replaced atomically.
+
+    Args:
+        xdmf_path: ``fields.xdmf``.
+        steps: The time steps the checkpoint counts; ``None`` (a checkpoint of an older version, which did not
+            count them): the file is kept as it is.
+
+    Returns:
+        (the time steps the file now holds, ``None``), or (0, a message) if it cannot be cut: missing, unreadable,
+        or holding fewer steps than ``steps``; nothing is changed then.
+    """
+    xdmf_path = Path(xdmf_path)
+    try:
+        tree = ElementTree.parse(xdmf_path)
+    except (OSError, ElementTree.ParseError) as exc:
+        return 0, (f"{xdmf_path} does not load ({type(exc).__name__}: {exc}) but the checkpoint counts time "
+                   "steps of it; restore it, or start afresh with --overwrite")
+    collections = _temporal_collections(tree.getroot())
+    if steps is None:
+        return max((len(collection.findall("Grid")) for collection in collections), default=0), None
+    dropped: list[str] = []
+    for collection in collections:
+        grids = collection.findall("Grid")
+        if len(grids) < steps:
+            return 0, (f"{xdmf_path} holds {len(grids)} time steps of {collection.get('Name')!r}, fewer than the "
+                       f"{steps} the checkpoint counts: steps it relies on are gone; restore it, or start afresh "
+                       "with --overwrite")
+        for grid in grids[steps:]:
+            dropped += [item.text.strip() for item in grid.iter("DataItem") if item.text and ":" in item.text]
+            collection.remove(grid)
+    if not dropped:
+        return steps, None
+    # Lazy: not a declared dependency (installed with DOLFINx by scripts/setup.sh); only a resume that cuts needs it
+    import h5py
+
+    kept = {item.text.strip() for item in tree.getroot().iter("DataItem") if item.text}
+    with h5py.File(xdmf_path.with_suffix(".h5"), "r+") as h5:
+        for reference in dropped:
+            dataset = reference.split(":", 1)[1]
+            if reference not in kept and dataset in h5:   # (an older run's repeated step shares its name)
+                del h5[dataset]
+    # The XInclude prefix as DOLFINx declared it (its URI differs between versions): ElementTree would invent one
+    namespace = re.search(r'xmlns:xi="([^"]+)"', xdmf_path.read_text())
+    if namespace is not None:
+        ElementTree.register_namespace("xi", namespace.group(1))
+    tmp = xdmf_path.with_suffix(".xdmf.tmp")
+    with open(tmp, "w") as f:   # DOLFINx's declaration, then the tree
+        f.write('<?xml version="1.0"?>\n' + ElementTree.tostring(tree.getroot(), encoding="unicode") + "\n")
+    os.replace(tmp, xdmf_path)
+    return steps, None
+
+
 class ResultWriter:
     """Writes a run's tables into ``out_dir`` (rank 0) and its fields (collective).
 
@@ -245,6 +312,8 @@ class ResultWriter:
         resume_sizes: Byte sizes of the tables at the checkpoint to resume from: the tables are
             truncated to them and appended to. ``None``: new tables.
         xdmf_started: The XDMF file already holds the mesh (resume).
+        fields_steps: The time steps of ``fields.xdmf`` the checkpoint counts (resume): the file is cut back to them
+            (:func:`keep_field_steps`). ``None`` (a checkpoint of an older version): the file is kept as it is.
         dim: Dimension of the contact (the columns of ``contact_profiles.csv``, :func:`profile_fields`).
         zones: Contact zones of the problem (with several, each zone's columns: :func:`history_fields`,
             :func:`cycle_fields`, :func:`profile_fields`).
@@ -253,7 +322,8 @@ class ResultWriter:
 
     def __init__(self, out_dir: str | Path, comm: MPI.Comm, profiles: bool = True,
                  resume_sizes: dict[str, int] | None = None, xdmf_started: bool = False, dim: int = 2,
-                 flat_profiles: bool = False, zones: int = 1, evolving_friction: bool = False):
+                 flat_profiles: bool = False, zones: int = 1, evolving_friction: bool = False,
+                 fields_steps: int | None = None):
         self.out = Path(out_dir)
         self.comm = comm
         self.rank0 = comm.rank == 0
@@ -271,8 +341,14 @@ class ResultWriter:
         problem = None
         if self.rank0 and resume_sizes is not None:
             problem = check_resume_tables(self.out, {k: v for k, v in resume_sizes.items() if k in names})
+        # fields.xdmf: the steps written after the checkpoint dropped (checked and cut on rank 0, before the bcast)
+        #: Time steps written into ``fields.xdmf`` (what a checkpoint records:
+        #: :meth:`~dolfinx_fretting.output.FrettingWriter.checkpoint_info`).
+        self.fields_steps = 0
+        if self.rank0 and resume_sizes is not None and xdmf_started and problem is None:
+            self.fields_steps, problem = keep_field_steps(self.out / "fields.xdmf", fields_steps)
         if comm.size > 1:
-            problem = comm.bcast(problem, root=0)
+            problem, self.fields_steps = comm.bcast((problem, self.fields_steps), root=0)
         if problem is not None:
             raise TableError(f"--resume: {problem}")
         if self.rank0:
@@ -365,6 +441,7 @@ class ResultWriter:
         except RuntimeError as exc:  # HDF5 (a full disk: "Failed to close HDF5 dataset."), as an output error
             raise OSError(f"{self._xdmf_path} (and its .h5) not written: {exc}{_free_space(self.out)}") from None
         self._xdmf_started = True
+        self.fields_steps += 1
 
     def _check_room(self, functions: list, msh) -> None:
         """Refuse (:class:`OSError`, on every rank) an XDMF write the disk has no room for, before HDF5 starts it:

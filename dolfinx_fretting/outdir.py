@@ -49,7 +49,8 @@ RUN_MARKERS = ("summary.json", "run.json", CHECKPOINT_NAME, *TABLE_NAMES)
 #: Every file a run writes into its folder (``io``, ``simulation``, ``contact_output``, ``plots``, ``pictures``),
 #: with the temporary names of its atomic writes: what ``overwrite`` deletes, and nothing else.
 RUN_FILES = (*RUN_MARKERS, "summary.json.tmp", "run.json.tmp", CHECKPOINT_NAME + ".tmp.npz", "worn_profiles.csv",
-             "fields.xdmf", "fields.h5", "contact.xdmf", "contact.h5", "contact.xdmf.tmp", "contact.h5.tmp",
+             "fields.xdmf", "fields.h5", "fields.xdmf.tmp", "contact.xdmf", "contact.h5", "contact.xdmf.tmp",
+             "contact.h5.tmp",
              "profiles.png", "profiles_across.png", "wear_first_cycle.png", "wear_evolution.png", "node_history.png", "fretting_loops.png",
              "wear_growth.png", "deformed_von_mises.png", "worn_profile.png",
              "fatigue.csv", "fatigue.png")

@@ -489,7 +489,8 @@ class FrettingWriter:
         #: The problem's contact zones (with several, each zone's columns).
         self.zones = len(problem.contacts)
         self.tables = ResultWriter(self.folder, self.comm, profiles=profiles, resume_sizes=resume.get("sizes"),
-                                   xdmf_started=bool(resume.get("xdmf_started", False)), dim=problem.contact.dim,
+                                   xdmf_started=bool(resume.get("xdmf_started", False)),
+                                   fields_steps=resume.get("fields_steps"), dim=problem.contact.dim,
                                    flat_profiles=problem.operators.surface_compliance is not None, zones=self.zones,
                                    evolving_friction=self.description.evolving_friction)
         self._functions = None
@@ -745,8 +746,10 @@ class FrettingWriter:
         self.tables.summary(summary)
 
     def checkpoint_info(self) -> dict[str, Any]:
-        """What a checkpoint records to resume the writer (``resume=``): the tables' sizes, the XDMF state."""
-        return {"sizes": self.tables.sizes(), "xdmf_started": self.tables.xdmf_started}
+        """What a checkpoint records to resume the writer (``resume=``): the tables' sizes, the XDMF state (started,
+        and its time steps: a resume drops those written after the checkpoint)."""
+        return {"sizes": self.tables.sizes(), "xdmf_started": self.tables.xdmf_started,
+                "fields_steps": self.tables.fields_steps}
 
     def flush(self) -> None:
         self.tables.flush()

@@ -30,11 +30,44 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["RECOVERIES", "surface_mass", "smoothed_tractions"]
+__all__ = ["RECOVERIES", "CELL_FACETS", "SURFACE_FACETS", "check_surface_cells", "surface_mass", "smoothed_tractions"]
 
 #: The values of :class:`~dolfinx_fretting.contact.Contact`'s ``pressure_recovery``: ``"auto"`` is
 #: ``"smoothed"`` against a rigid plane on a tetrahedral mesh (measured there) and ``"nodal"`` otherwise.
 RECOVERIES = ("auto", "nodal", "smoothed")
+
+#: The facet types of each cell type (DOLFINx's names): a prism's and a pyramid's are of two types.
+CELL_FACETS = {"interval": ("point",), "triangle": ("segment",), "quadrilateral": ("segment",),
+               "tetrahedron": ("triangle",), "hexahedron": ("quadrilateral",),
+               "prism": ("triangle", "quadrilateral"), "pyramid": ("triangle", "quadrilateral")}
+
+#: The facets :func:`surface_mass` integrates (and the tributary measures are computed on): of one type each mesh.
+SURFACE_FACETS = ("segment", "triangle", "quadrilateral")
+
+
+def check_surface_cells(cell_type: str, recovery: str) -> None:
+    """Refuse a mesh whose contact facets are not of one type :func:`surface_mass` integrates, before any work.
+
+    Args:
+        cell_type: The mesh's cell type (DOLFINx's name: ``"tetrahedron"``, ``"prism"`` ...).
+        recovery: ``pressure_recovery`` as given (named in the message).
+
+    Raises:
+        ValueError: cells of mixed facet types (prisms, pyramids) or of facets that are not segments, triangles or
+            quadrilaterals; the message names ``pressure_recovery``, its value, the facet types found and those
+            allowed.
+    """
+    facets = CELL_FACETS.get(cell_type)
+    if facets is not None and len(facets) == 1 and facets[0] in SURFACE_FACETS:
+        return
+    found = " and ".join(f"{name}s" for name in facets) if facets else "facets of an unknown type"
+    raise ValueError(
+        f"Contact: pressure_recovery = {recovery!r} on a mesh of {cell_type} cells, whose facets are {found}: the "
+        f"contact surface must be of one facet type, {', '.join(SURFACE_FACETS)} (2D meshes of triangles or "
+        "quadrilaterals: segments; tetrahedra: triangles; hexahedra: quadrilaterals). No recovery is supported on "
+        "it ('smoothed' integrates the surface mass over those facets, 'nodal' the tributary measures): mesh the "
+        "contact body with tetrahedra or hexahedra")
+
 
 # Gauss points (2 x 2) of the reference square [0, 1]^2: exact for the bilinear shapes' products times the
 # Jacobian of a bilinear (warped) quadrilateral, of degree 3 in each direction.

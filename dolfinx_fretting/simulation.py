@@ -338,6 +338,14 @@ def _description(scene: Scene, model: ContactModel, path: CyclePath | None) -> R
         surfaces=[scene.contact.surface, *(zone.surface for zone in scene.zones)])
 
 
+def _writer_resume(meta: dict[str, Any]) -> dict[str, Any]:
+    """What the writer resumes from (:meth:`FrettingWriter.checkpoint_info` as checkpointed): the tables' sizes,
+    the XDMF state and its time steps (``None`` from a checkpoint of a version that did not count them)."""
+    steps = meta.get("fields_steps")
+    return {"sizes": {k: int(v) for k, v in meta["sizes"].items()}, "xdmf_started": bool(meta["xdmf_started"]),
+            "fields_steps": int(steps) if steps is not None else None}
+
+
 class _Run:
     """One run of a scene: the load path, the checks, the outputs and the checkpoints. Collective."""
 
@@ -370,16 +378,15 @@ class _Run:
         self._plastic_pending: tuple[PlasticCycle, int, PlasticCycle] | None = None
         if meta is None:
             self.state = self.problem.initial_state()
-            sizes, xdmf_started = None, False
         else:
-            self.state, sizes, xdmf_started = self._restore(meta)
+            self.state = self._restore(meta)
         self.path = _cycle_path(scene, self.model) if scene.loading.cycles > 0 else None
         self.check_folder("before its first write")  # the writer would create a folder deleted while it meshed
         self.writer = FrettingWriter(
             self.problem, out_dir, _description(scene, self.model, self.path), profiles=scene.output.contact_profiles,
             fields=scene.output.xdmf, von_mises=self.model.setup.von_mises, pressure_load=PRESSURE_LOAD,
             shifted_cells=self.model.setup.display_cells,
-            resume={"sizes": sizes, "xdmf_started": xdmf_started} if meta is not None else None)
+            resume=_writer_resume(meta) if meta is not None else None)
         self.note_written()
         #: ``[fatigue]``: the evaluations, fatigue.csv and Miner's sum (a region without points refused here).
         self.fatigue: FatigueOutputs | None = None
@@ -426,7 +433,7 @@ class _Run:
                                   f"the checkpoint {path} has done; allowed: loading.cycles >= {done}")
         return meta
 
-    def _restore(self, meta: dict[str, Any]) -> tuple[ContactState, dict[str, int], bool]:
+    def _restore(self, meta: dict[str, Any]) -> ContactState:
         try:
             state, _ = self.problem.load_state(self.out / CHECKPOINT)
         except ValueError as exc:
@@ -440,7 +447,7 @@ class _Run:
             value = progress["jump"].get(key)
             progress["jump"][key] = np.array(value) if value is not None else None
         self.progress = Progress(**progress)
-        return state, {k: int(v) for k, v in meta["sizes"].items()}, bool(meta["xdmf_started"])
+        return state
 
     def check_folder(self, when: str) -> None:
         """Collective: stop (:class:`OutputFolderLost`) if the output folder was deleted or replaced since the run

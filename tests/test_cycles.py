@@ -6,10 +6,13 @@ import os
 import signal
 import subprocess
 import sys
+import xml.etree.ElementTree as ElementTree
 
+import h5py
 import numpy as np
 import pytest
 
+from dolfinx_fretting import simulation
 from dolfinx_fretting.plots import read_table
 from dolfinx_fretting.problem import FrettingProblem
 from dolfinx_fretting.scenes import load_scene
@@ -266,3 +269,54 @@ def test_nsgs_stall_is_reported(tmp_path):
                           "solver.local_method='nsgs'", "output.contact_profiles=false"]
     with pytest.raises(SimulationError, match=r"cycle 1, step \d+\): local solver did not converge"):
         run_scene(load_scene("stromberg-block", base), tmp_path, quiet=True)
+
+
+class _Cut(BaseException):
+    """A kill between a cycle's writes and its checkpoint (a BaseException: nothing in the run catches it)."""
+
+
+def _field_times(folder):
+    """Each function's Time values in ``fields.xdmf``, in file order (the XDMF's temporal collections)."""
+    root = ElementTree.parse(folder / "fields.xdmf").getroot()
+    return {grid.get("Name"): [float(time.get("Value")) for time in grid.iter("Time")]
+            for grid in root.iter("Grid") if grid.get("CollectionType") == "Temporal"}
+
+
+def test_resume_after_a_cut_between_fields_and_checkpoint_writes_each_field_time_once(tmp_path, monkeypatch):
+    """A run cut after cycle 4's fields were written and before its checkpoint (the last at cycle 2), then
+    resumed: fields.xdmf holds the same times as an uncut run, each once, and the re-written step's
+    displacement is the uncut run's. (Before the fix the resume appended cycle 4's step again: DOLFINx 0.11
+    listed its time twice, 0.5.2 failed to create the HDF5 dataset of a name that exists.)"""
+    base = ["geometry.nx=20", "geometry.ny=20", "output.xdmf=true", "output.plots=false", "loading.cycles=5",
+            "output.snapshot_cycles=[2, 4]", "output.checkpoint_interval=1e6", "output.contact_profiles=false",
+            "solver.cycle_kernel=false"]
+    scene = load_scene("stromberg-block", base)
+    run_scene(scene, tmp_path / "straight", quiet=True)
+    checkpoint = simulation._Run.checkpoint
+
+    def cut_at_cycle_4(self):
+        if self.progress.cycle == 4:
+            raise _Cut()
+        checkpoint(self)
+
+    monkeypatch.setattr(simulation._Run, "checkpoint", cut_at_cycle_4)
+    cut = tmp_path / "cut"
+    with pytest.raises(_Cut):
+        run_scene(scene, cut, quiet=True)
+    monkeypatch.setattr(simulation._Run, "checkpoint", checkpoint)
+    assert read_checkpoint(cut / CHECKPOINT)[0]["cycle"] == 2
+    straight_times = _field_times(tmp_path / "straight")
+    cut_times = _field_times(cut)["displacement"]
+    # the cut came after cycle 4's fields: the preload's, cycle 2's (counted by the checkpoint) and cycle 4's (not)
+    assert cut_times == straight_times["displacement"][:3] and len(straight_times["displacement"]) == 4
+    done = run_scene(scene, cut, quiet=True, resume=True)
+    assert done["resumed_from_cycle"] == 2 and done["converged"]
+    resumed_times = _field_times(cut)
+    assert resumed_times == straight_times
+    for times in resumed_times.values():
+        assert len(set(times)) == len(times)
+    # Same arithmetic from the same checkpointed state (serial, same path): the last step's displacement is the
+    # uncut run's to round-off (1e-12 relative: the values are written and read back as float64)
+    with h5py.File(tmp_path / "straight" / "fields.h5") as a, h5py.File(cut / "fields.h5") as b:
+        name = f"/Function/displacement/{straight_times['displacement'][-1]:g}"
+        np.testing.assert_allclose(b[name][:], a[name][:], rtol=1e-12, atol=1e-12 * np.abs(a[name][:]).max())

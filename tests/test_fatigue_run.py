@@ -15,13 +15,13 @@ import pytest
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
-from dolfinx_fretting import fatigue
+from dolfinx_fretting import fatigue, fatigue_outputs
 from dolfinx_fretting._dolfinx import mpiexec
 from dolfinx_fretting.fatigue import MinerSum
 from dolfinx_fretting.fatigue_fields import fatigue_over_cycle
 from dolfinx_fretting.fatigue_outputs import FATIGUE_XDMF, TABLE_COLUMNS, fatigue_arguments, xdmf_fields
 from dolfinx_fretting.scenes import SceneError, load_scene
-from dolfinx_fretting.output import read_description
+from dolfinx_fretting.output import FrettingWriter, read_description
 from dolfinx_fretting.plots import plot_fatigue_map
 from dolfinx_fretting.simulation import CHECKPOINT, ContactModel, SimulationError, _cycle_path, run_scene
 from dolfinx_fretting.tables import read_rows, write_rows
@@ -287,6 +287,60 @@ def test_with_cycle_jumps_a_block_is_the_jumps_cycles(tmp_path):
     damage = np.array([r["damage"] for r in rows if r["cycle"] == cycles[-1]])
     assert damage == pytest.approx((blocks[:, None] / lives).sum(axis=0), rel=1e-5)
     assert summary["fatigue"]["miner_damage_max"] == pytest.approx(damage.max(), rel=1e-5)
+
+
+@pytest.mark.parametrize("fault", ["rows not written", "cycle failed after its evaluation"])
+def test_miner_damage_counts_only_written_rows(tmp_path, monkeypatch, fault):
+    """Cycle 2 evaluated, then its fatigue rows not written (the disk full) or the cycle failing after the
+    evaluation: the fatigue summary, and what a checkpoint saves, stay at cycle 1, whose rows are the table's:
+    one evaluation, Miner's largest damage the table's (6 digits: 1e-5), the one block's 10/N at every point
+    (before the fix: cycle 2's, a damage > 1 for rows never written)."""
+    created = []
+    init = fatigue_outputs.FatigueOutputs.__init__
+
+    def kept(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        created.append(self)
+
+    monkeypatch.setattr(fatigue_outputs.FatigueOutputs, "__init__", kept)
+    if fault == "rows not written":
+        append_rows = fatigue_outputs.append_rows
+
+        def disk_full_at_cycle_2(path, rows, columns):
+            if rows and rows[0]["cycle"] == 2:
+                raise OSError(28, f"{path} not written: No space left on device")
+            append_rows(path, rows, columns)
+
+        monkeypatch.setattr(fatigue_outputs, "append_rows", disk_full_at_cycle_2)
+        raised = OSError
+    else:
+        write_cycle = FrettingWriter.write_cycle
+
+        def failed_cycle_2(self, cycle, *args, **kwargs):
+            if cycle == 2:
+                raise SimulationError("cycle 2 failed after its evaluation")
+            return write_cycle(self, cycle, *args, **kwargs)
+
+        monkeypatch.setattr(FrettingWriter, "write_cycle", failed_cycle_2)
+        raised = SimulationError
+    with pytest.raises(raised, match="not written|after its evaluation"):
+        run_scene(load_scene("stromberg-block", SMALL + FATIGUE + ["loading.cycles=2"]), tmp_path, quiet=True)
+    rows = _table(tmp_path)
+    assert {r["cycle"] for r in rows} == {1}
+    written = np.array([r["damage"] for r in rows])
+    lives = np.array([r["life"] for r in rows])
+    assert written == pytest.approx(ACCELERATION / lives, rel=1e-5)
+    outputs = created[0]
+    reported = outputs.summary()
+    assert reported["cycle"] == 1 and reported["evaluations"] == 1
+    assert reported["miner_damage_max"] == pytest.approx(written.max(), rel=1e-5)
+    saved = outputs.saved()
+    assert saved["last_evaluated"] == 1 and saved["covered"] == 1 and saved["cycles_summed"] == ACCELERATION
+    assert np.array(saved["damage"]) == pytest.approx(written, rel=1e-5)   # the rows' order is the sum's
+    if fault == "cycle failed after its evaluation":   # the summary on disk: the runner's failure summary
+        on_disk = json.loads((tmp_path / "summary.json").read_text())
+        assert on_disk["converged"] is False and on_disk["fatigue"]["evaluations"] == 1
+        assert on_disk["fatigue"]["miner_damage_max"] == pytest.approx(written.max(), rel=1e-5)
 
 
 @pytest.mark.mpi
