@@ -25,6 +25,7 @@ import hashlib
 import json
 import os
 import warnings
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -346,8 +347,11 @@ def _mortar_pairing_from(ref: ContactSet, data: dict[str, np.ndarray], surface_n
                          "index), which is not on this problem's master surface: load it into the mesh it was "
                          "written with")
     master_nodes = np.where(saved >= 0, nodes[where], -1)
-    return mortar_rows_set(ref, master_nodes, data["pairing_weights"].copy(), data["pairing_measures"].copy(),
-                           data["pairing_master_sizes"].copy())
+    pairing = mortar_rows_set(ref, master_nodes, data["pairing_weights"].copy(), data["pairing_measures"].copy(),
+                              data["pairing_master_sizes"].copy())
+    if "pairing_separations" not in data:   # written before the separation was kept: the first pairing's
+        return pairing
+    return replace(pairing, paired_separation=data["pairing_separations"].copy())
 
 
 def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: ContactState, path: str | Path,
@@ -386,6 +390,7 @@ def save_state(operators: ContactOperators, monitor: SlidingMonitor, state: Cont
                 arrays["pairing_master_nodes"] = pairing_keys
                 arrays["pairing_measures"] = state.pairing.tributary
                 arrays["pairing_master_sizes"] = state.pairing.master_sizes
+                arrays["pairing_separations"] = state.pairing.paired_separation
             else:
                 arrays["pairing_facet_nodes"] = pairing_keys
             arrays["pairing_weights"] = state.pairing.master_weights

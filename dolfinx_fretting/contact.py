@@ -211,6 +211,11 @@ class ContactSet:
     #: to that axis (:func:`find_mortar_pairs`' ``held_dofs``), whose H columns along the axis every pairing drops
     #: (the same function at every pairing); None for node pairing.
     symmetry_axes: np.ndarray | None = None
+    #: Mortar: (nc, dim) each slave node's position less its weighted master point's when it was paired (in that
+    #: moment's configuration), which finite sliding's offsets subtract: the dual weights' master point is not the
+    #: node's closest point (on a curved slave the two differ by about the gap times the slope), and that geometric
+    #: offset is not slip; None: zero (node pairing pairs with the closest point).
+    paired_separation: np.ndarray | None = None
 
     @property
     def two_body(self) -> bool:
@@ -254,7 +259,8 @@ class ContactSet:
                           pick(self.master_nodes), pick(self.master_weights), pick(self.master_points),
                           pick(self.master_sizes), pick(self.master_faces), self.master_surface, self.window_centre,
                           None if self.surface_mass is None else self.surface_mass[contacts][:, contacts].tocsr(),
-                          self.slave_surface, pick(self.slave_areas), self.symmetry_axes)
+                          self.slave_surface, pick(self.slave_areas), self.symmetry_axes,
+                          pick(self.paired_separation))
 
 
 def _tributary_measure(V, facets: np.ndarray, fdim: int) -> np.ndarray:
@@ -799,15 +805,17 @@ def mortar_contact_set(mortar: MortarMatrices, slave_segment_nodes: np.ndarray, 
     frames = surface.frames(normals)                                                # (s, dim, dim) rows n, t1[, t2]
     gaps = weighted_relative_displacement(mortar, coords, master_coords, normals) * scale
     master_nodes, master_weights = _padded_rows(weights, mortar.master_nodes)
+    master_points = np.asarray(weights @ master_coords)
     return ContactSet(dim=dim, global_nodes=nodes, coords=coords, frames=frames, gap0=gaps, tributary=measure,
                       abscissa=coords @ surface.reference_frame[1] if dim == 3 else np.einsum("ij,ij->i", coords,
                                                                                               frames[:, 1]),
                       H=_mortar_rows(nodes, frames, master_nodes, master_weights, measure, n_dofs),
                       master_nodes=master_nodes,
-                      master_weights=master_weights, master_points=np.asarray(weights @ master_coords),
+                      master_weights=master_weights, master_points=master_points,
                       master_sizes=mortar.master_sizes, master_faces=None, master_surface=surface,
                       slave_surface=slave_surface,
-                      slave_areas=None if slave_surface is None else slave_surface.node_measures(nodes))
+                      slave_areas=None if slave_surface is None else slave_surface.node_measures(nodes),
+                      paired_separation=coords - master_points)
 
 
 def _padded_rows(weights: sp.csr_matrix, master_nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -847,8 +855,9 @@ def mortar_paired_set(pairing: ContactSet, mortar: MortarMatrices) -> ContactSet
     As :func:`paired_contact_set` does for node pairing, the pairing (each contact's weights ``M_jl / D_jj``, its
     measure ``D_jj`` and master size) is the current configuration's, and everything else is the reference
     configuration's: the slave nodes, their frames (the first pairing's: the master's normals at the nodes' closest
-    points in the reference configuration, so a re-pairing does not turn the forces) and the gap ``g0_j = n_j . (X_j - sum_l w_jl X_l)``, so that
-    ``x = H u + g0`` is the linearised weighted gap and weighted relative displacement over ``D_jj``.
+    points in the reference configuration, so a re-pairing does not turn the forces) and the gap ``g0_j = n_j . (X_j -
+    sum_l w_jl X_l)``, so that ``x = H u + g0`` is the linearised weighted gap and weighted relative displacement over
+    ``D_jj``.
 
     Args:
         pairing: A mortar contact set (:func:`find_mortar_pairs`): its slave nodes are kept, in order.
@@ -1330,18 +1339,17 @@ class ElasticBody(Obstacle):
             compliance. None: every facet of the master surface. A pairing that would need a facet beyond it
             raises an error.
         formulation: ``"node"`` (default): each slave node paired with the closest master point (above);
-            ``"mortar"`` (2D and 3D, small or finite sliding): the segment-to-segment (2D) or face-to-face (3D: triangles
-            and quadrilaterals, clipped in each slave face's plane) mortar integrals with dual Lagrange multipliers
-            (:mod:`dolfinx_fretting.mortar`, :func:`find_mortar_pairs`): each slave node facing the master is a
-            contact whose gap and relative tangential displacement are the weighted ones divided by ``D_jj``, its
-            frame the master's at the node's closest point (as node-to-segment/face pairing's, above; not the
-            slave's normals, which on a curved slave tilt by x/R from the contact plane), its tributary measure
-            ``D_jj``; the pressure read is the multiplier. It passes the contact patch test on non-matching
-            meshes, which node-to-segment and node-to-face pairing do not. With friction make the flatter surface
-            the master, in both formulations. With ``sliding = "finite"`` a re-pairing recomputes D and M in the
-            current configuration (:func:`dolfinx_fretting.sliding.repair`, no refactorisation), the frames kept;
-            the slave's share of the wear is kept on its nodes by their own measure, the master's on the master's
-            nodes.
+            ``"mortar"`` (2D and 3D, small or finite sliding): the segment-to-segment (2D) or face-to-face (3D:
+            triangles and quadrilaterals, clipped in each slave face's plane) mortar integrals with dual Lagrange
+            multipliers (:mod:`dolfinx_fretting.mortar`, :func:`find_mortar_pairs`): each slave node facing the master
+            is a contact whose gap and relative tangential displacement are the weighted ones divided by ``D_jj``, its
+            frame the master's at the node's closest point (as node-to-segment/face pairing's, above; not the slave's
+            normals, which on a curved slave tilt by x/R from the contact plane), its tributary measure ``D_jj``; the
+            pressure read is the multiplier. It passes the contact patch test on non-matching meshes, which
+            node-to-segment and node-to-face pairing do not. With friction make the flatter surface the master, in both
+            formulations. With ``sliding = "finite"`` a re-pairing recomputes D and M in the current configuration
+            (:func:`dolfinx_fretting.sliding.repair`, no refactorisation), the frames kept; the slave's share of the
+            wear is kept on its nodes by their own measure, the master's on the master's nodes.
     """
 
     surface: tuple

@@ -29,7 +29,7 @@ Nothing here touches DOLFINx or MPI: every rank holds the same arrays and comput
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numba
 import numpy as np
@@ -209,9 +209,25 @@ def _master_motion(compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray, 
     return u[rows] + D
 
 
+def _separations(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """(nc, dim) each contact's slave node less its paired master point, both displaced (``u``, the master also by
+    ``D``): ``(X_s + u_s) - sum_i w_i (X_i + u_i + D)``."""
+    slave_rows, master_rows = compliance.pairing_rows(pairing)
+    slave = pairing.coords + u[slave_rows]
+    moved = _master_motion(compliance, u, D, master_rows)
+    if pairing.master_faces is None:   # mortar: the weighted master point sum_l w_jl X_l (the weights sum to one)
+        master = pairing.master_points + np.einsum("ci,cij->cj", pairing.master_weights, moved)
+    else:
+        master = np.einsum("ci,cij->cj", pairing.master_weights,
+                           pairing.master_surface.x[pairing.master_faces] + moved)
+    return slave - master
+
+
 def offsets(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray) -> np.ndarray:
     """How far each contact's paired master point has moved from its slave node, in the contact plane, in
-    master elements: ``|t . ((X_s + u_s) - sum_i w_i (X_i + u_i + D))| / size``.
+    master elements: ``|t . ((X_s + u_s) - sum_i w_i (X_i + u_i + D) - s_0)| / size``, ``s_0`` the separation when
+    it was paired (:attr:`~dolfinx_fretting.contact.ContactSet.paired_separation`: mortar's weighted point is not the
+    closest point; 0 for node pairing).
 
     Args:
         pairing: The pairing.
@@ -222,15 +238,10 @@ def offsets(pairing: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D
     Returns:
         (nc,) the offsets, in master facet sizes.
     """
-    slave_rows, master_rows = compliance.pairing_rows(pairing)
-    slave = pairing.coords + u[slave_rows]
-    moved = _master_motion(compliance, u, D, master_rows)
-    if pairing.master_faces is None:   # mortar: the weighted master point sum_l w_jl X_l (the weights sum to one)
-        master = pairing.master_points + np.einsum("ci,cij->cj", pairing.master_weights, moved)
-    else:
-        master = np.einsum("ci,cij->cj", pairing.master_weights,
-                           pairing.master_surface.x[pairing.master_faces] + moved)
-    tangential = np.einsum("ckj,cj->ck", pairing.frames[:, 1:], slave - master)
+    separation = _separations(pairing, compliance, u, D)
+    if pairing.paired_separation is not None:
+        separation = separation - pairing.paired_separation
+    tangential = np.einsum("ckj,cj->ck", pairing.frames[:, 1:], separation)
     return np.linalg.norm(tangential, axis=1) / pairing.master_sizes
 
 
@@ -303,7 +314,8 @@ def _repair_mortar(pairing: ContactSet, compliance: SurfaceCompliance, u: np.nda
     # mortar_paired_set keeps the reference pairing's frames and drops the H columns along a symmetry axis as the
     # first pairing did (pairing.symmetry_axes): the matrices' own normals are given the same axes only so that
     # they are the same as the frames kept.
-    return mortar_paired_set(pairing, matrices)
+    paired = mortar_paired_set(pairing, matrices)
+    return replace(paired, paired_separation=_separations(paired, compliance, u, D))
 
 
 def interpolate_master(pairing: ContactSet, compliance: SurfaceCompliance, master_wear: np.ndarray) -> np.ndarray:
@@ -351,10 +363,10 @@ def spread_wear(pairing: ContactSet, compliance: SurfaceCompliance, depth: np.nd
 def carry_state(old: ContactSet, new: ContactSet, compliance: SurfaceCompliance, u: np.ndarray, D: np.ndarray,
                 forces: np.ndarray, slip: np.ndarray, wear_gap: np.ndarray,
                 master_wear: np.ndarray) -> dict[str, np.ndarray]:
-    """A committed state's contact arrays expressed in the pairing ``new``: the forces and the last slip turned
-    into the new frames (the same vectors), the wear gap with the master's share read at the new points, and the relative
-    positions of the committed configuration as the new pairing measures them, ``L u - frames D + g0 + w``
-    (their tangential rows are where the next increment's slip is measured from)."""
+    """A committed state's contact arrays expressed in the pairing ``new``: the forces and the last slip turned into
+    the new frames (the same vectors), the wear gap with the master's share read at the new points, and the relative
+    positions of the committed configuration as the new pairing measures them, ``L u - frames D + g0 + w`` (their
+    tangential rows are where the next increment's slip is measured from)."""
     dim = new.dim
 
     def turned(values: np.ndarray) -> np.ndarray:   # the same vectors in the new frames
@@ -465,9 +477,10 @@ def _pairing_operators(fl: np.ndarray, weights: np.ndarray, frames: np.ndarray, 
     ``rho = 1 / ||W_aa||_2`` (:func:`~dolfinx_fretting.local_solvers.block_rho`). False if a contact's block of W
     is singular (as ``ContactOperators._hold_directions`` refuses it).
 
-    L's rows of contact c are its frame times ``e_s - w_0 e_m0 - w_1 e_m1`` (slave node s, the facet's nodes): so
-    ``N_c = (e_s - w_0 e_m0 - w_1 e_m1)^T C`` (two rows) is formed once per contact, and each 2 x 2 block of W is ``F_c (N_c's columns of contact e's nodes, weighted) F_e^T``, the upper
-    triangle mirrored (W exactly symmetric, as the factorised W)."""
+    L's rows of contact c are its frame times ``e_s - w_0 e_m0 - w_1 e_m1`` (slave node s, the facet's nodes): so ``N_c
+    = (e_s - w_0 e_m0 - w_1 e_m1)^T C`` (two rows) is formed once per contact, and each 2 x 2 block of W is ``F_c (N_c's
+    columns of contact e's nodes, weighted) F_e^T``, the upper triangle mirrored (W exactly symmetric, as the factorised
+    W)."""
     nc = fl.size
     M, n_loads = C.shape[0], Q.shape[0]
     nodes, coefs = np.empty((nc, 3), dtype=np.int64), np.empty((nc, 3))

@@ -369,12 +369,12 @@ def test_mortar_wear_energy_identity_and_checkpoint(compiled, sliding, tmp_path)
     weighted slip, and wears alpha mu p |dx_t| over its tributary D_jj, so the worn area is alpha times the energy
     (to 1e-10: rounding of sums over 6 contacts and 9 increments). The state saved and loaded back is the same.
 
-    Finite sliding (a stroke of 0.03, re-pairing past 0.001 master elements; the blocks are as wide
-    as each other, so the slave's end segment hangs off the master's end and its end node's D_jj changes with the
-    pairing): the slave's worn measure (depth over its nodes' own measures) plus the master's (alpha_master: on its
-    own nodes) is (alpha_slave + alpha_master) mu x the energy, the two in the ratio of the coefficients, to 1e-10;
-    the checkpoint holds the pairing's rows (master nodes, weights, D_jj): the pairing read back is the same, H
-    included, and so is the master's wear."""
+    Finite sliding (a stroke of 0.03, re-pairing past 0.001 master elements; the blocks are as wide as each other, so
+    the slave's end segment hangs off the master's end and its end node's D_jj changes with the pairing): the slave's
+    worn measure (depth over its nodes' own measures) plus the master's (alpha_master: on its own nodes) is (alpha_slave
+    + alpha_master) mu x the energy, the two in the ratio of the coefficients, to 1e-10; the checkpoint holds the
+    pairing's rows (master nodes, weights, D_jj, separations): the pairing read back is the same, H included, and so is
+    the master's wear."""
     alpha = 2e-6
     msh, tags = stacked_blocks(*MESHES["3:5"])
     V = compat.vector_space(msh, 1)
@@ -410,7 +410,7 @@ def test_mortar_wear_energy_identity_and_checkpoint(compiled, sliding, tmp_path)
     for name in ("forces", "positions", "slip", "wear_gap", "obstacle"):
         assert np.array_equal(getattr(back, name), getattr(state, name))
     if finite:
-        for name in ("master_nodes", "master_weights", "tributary", "gap0", "master_sizes"):
+        for name in ("master_nodes", "master_weights", "tributary", "gap0", "master_sizes", "paired_separation"):
             assert np.array_equal(getattr(back.pairing, name), getattr(state.pairing, name)), name
         assert (back.pairing.H != state.pairing.H).nnz == 0
         assert np.array_equal(back.master_wear, state.master_wear)
