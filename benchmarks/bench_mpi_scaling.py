@@ -29,7 +29,9 @@ process) and writes the tables; ``--alternate N`` adds N alternated 1- and 2-ran
 wall-clock ratio with its spread::
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_mpi_scaling.py --ranks 1 2 3 \\
-        --cases 8:0.25 12:0.25 16:0.25 8:uniform --alternate 3 --out benchmarks/results/mpi_scaling
+        --cases 4:0.25 6:uniform 8:0.25 12:0.25 --alternate 4 --out benchmarks/results/mpi_scaling
+
+``results/mpi_scaling.md`` joins three such runs (their commands are in it) with ``--render A.json B.json ...``.
 
 A single rank count, under mpirun yourself (what the driver runs)::
 
