@@ -177,16 +177,17 @@ class ContactOperators:
         return _plain_vector(f, self.K)
 
     def build(self, keep_slope: bool = False) -> None:
-        """W on the free dofs (one copy broadcast from rank 0) and each load's contact response (finite sliding:
+        """W on the free dofs (rank 0's copy on every rank) and each load's contact response (finite sliding:
         formed from the surface compliance, no communication)."""
         contact_set = self.contact.contact_set
         out_responses = None   # the loads' responses at the nodes outside the window (finite sliding: made once)
         if self.surface_compliance is not None:
             self.W, self.responses = self.surface_compliance.operators(contact_set)
         else:
-            W = self.delassus.build(self.contact.H_free)
+            # DelassusOperator.build broadcasts rank 0's W (a buffer Bcast): the same bits on every rank already; a
+            # second, pickled broadcast would fail past 2 GiB (about 5,500 3D contacts) on rank 0 alone
+            self.W = self.delassus.build(self.contact.H_free)
             self.delassus_route = self.delassus.stats["last_build_route"]
-            self.W = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
             self.responses = np.zeros((len(self.vectors), contact_set.nc * contact_set.dim))
             outside = self.contact.outside
             H_out = outside.H[0::outside.dim] if outside is not None else None
@@ -320,9 +321,8 @@ class ContactOperators:
         free[self.contact.fixed_global] = 0.0
         S_free = sp.csr_matrix(S @ sp.diags(free))
         S_free.eliminate_zeros()
-        C = self.delassus.build(S_free)
+        C = self.delassus.build(S_free)   # the same bits on every rank (build's Bcast)
         self.delassus_route = self.delassus.stats["last_build_route"]
-        C = self.comm.bcast(C if self.comm.rank == 0 else None, root=0)
         responses = np.array([self.local_response(f, S) for f in self.vectors]).reshape(len(self.vectors),
                                                                                           dofs.size)
         # rank 0's sums on every rank: each rank decides the re-pairings from these, so they must be the same bits

@@ -696,8 +696,7 @@ class ElastoplasticBody:
         else:
             self.state.assemble_tangent(self._KT, self.operators.bcs)
             self._tangent_op.refactorize()
-        W = self._tangent_op.build(self.H)
-        self._W_tangent = self.comm.bcast(W if self.comm.rank == 0 else None, root=0)
+        self._W_tangent = self._tangent_op.build(self.H)   # the same bits on every rank (build's Bcast)
         self.refactorizations += 1
         return self._tangent_op, self._W_tangent
 
