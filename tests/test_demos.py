@@ -64,7 +64,14 @@ def test_the_private_name_pattern_finds_private_names():
         assert not PRIVATE.search(line), line
 
 
-@pytest.mark.parametrize("demo", DEMOS, ids=[d.stem for d in DEMOS])
+#: Demos whose serial run is ``slow``: demo_mccoll's CI-sized run takes about a minute a stack (its finite
+#: sliding's compiled kernels compile on a fresh clone); the mccoll scene's answers are checked in the default run
+#: by tests/test_reference_summaries.py and on 2 and 3 ranks by tests/test_parallel.py.
+SERIAL_SLOW = {"demo_mccoll"}
+
+
+@pytest.mark.parametrize("demo", [pytest.param(d, marks=[pytest.mark.slow] if d.stem in SERIAL_SLOW else [])
+                                  for d in DEMOS], ids=[d.stem for d in DEMOS])
 def test_demo_runs(tmp_path_factory, demo):
     folder = _serial_run(demo, tmp_path_factory)
     pngs = list(folder.rglob("*.png"))
