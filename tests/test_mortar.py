@@ -12,6 +12,7 @@ from petsc4py import PETSc  # noqa: E402
 from support.blocks import E_PLANE, TIGHT, component, elasticity  # noqa: E402
 from support.two_body_meshes import E_STAR, cylinder_on_graded_flat  # noqa: E402
 from support.two_body_meshes import elasticity as two_body_elasticity  # noqa: E402
+from support.mortar_checks import assert_checkpoint_round_trip, assert_wear_balance  # noqa: E402
 
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import compat, mortar  # noqa: E402
@@ -394,26 +395,15 @@ def test_mortar_wear_energy_identity_and_checkpoint(compiled, sliding, tmp_path)
         pairing = problem.contact_set_of(state)
         assert problem.sliding.repairs >= 3
         assert not np.allclose(pairing.tributary, problem.operators.reference_pairing.tributary, rtol=0, atol=1e-6)
-        worn = problem.body_wear(state)
-        slave = float(worn["slave"] @ pairing.slave_areas)
-        master = float(state.master_wear @ problem.operators.surface_compliance.master_areas)
-        assert slave == pytest.approx(master / 1.5, rel=1e-10)
-        assert slave + master == pytest.approx(2.5 * alpha * state.dissipated_energy, rel=1e-10)
+        slave, master = assert_wear_balance(problem, state, alpha)
         assert problem.worn_measure(state) == pytest.approx(slave + master, rel=1e-12)
     else:
         area = float(state.wear_gap @ contact.contact_set.tributary)
         assert state.dissipated_energy > 0 and area > 0
         assert area == pytest.approx(alpha * state.dissipated_energy, rel=1e-10)
     path = MPI.COMM_WORLD.bcast(str(tmp_path / "state.npz"), root=0)
-    problem.save_state(state, path)
-    back, _ = problem.load_state(path)
-    for name in ("forces", "positions", "slip", "wear_gap", "obstacle"):
-        assert np.array_equal(getattr(back, name), getattr(state, name))
+    assert_checkpoint_round_trip(problem, state, path, finite)
     if finite:
-        for name in ("master_nodes", "master_weights", "tributary", "gap0", "master_sizes", "paired_separation"):
-            assert np.array_equal(getattr(back.pairing, name), getattr(state.pairing, name)), name
-        assert (back.pairing.H != state.pairing.H).nnz == 0
-        assert np.array_equal(back.master_wear, state.master_wear)
         problem.destroy()
         return
     # the same nodes under the node-to-segment formulation: the state means other forces (multipliers against

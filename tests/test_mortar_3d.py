@@ -18,6 +18,8 @@ from dolfinx_fretting import compat, mortar  # noqa: E402
 from dolfinx_fretting.analytic import (cattaneo_mindlin_sphere_traction, cattaneo_mindlin_stick_radius,  # noqa: E402
                                        hertz_sphere_pressure)
 from support.sphere import P as SPHERE_P, R as SPHERE_R, contact_modulus, pressed, sphere_model  # noqa: E402
+from support.mortar_checks import (assert_checkpoint_round_trip, assert_half_is_full,  # noqa: E402
+                                   assert_plane_rows_held, assert_wear_balance)
 
 
 # The pure mortar integrals ------------------------------------------------------------------------------------------
@@ -509,11 +511,7 @@ def test_mortar_wear_energy_identity_and_checkpoint(compiled, sliding, tmp_path)
         pairing = problem.contact_set_of(state)
         assert problem.sliding.repairs >= 3
         assert not np.allclose(pairing.tributary, problem.operators.reference_pairing.tributary, rtol=0, atol=1e-6)
-        worn = problem.body_wear(state)
-        slave = float(worn["slave"] @ pairing.slave_areas)
-        master = float(state.master_wear @ problem.operators.surface_compliance.master_areas)
-        assert slave == pytest.approx(master / 1.5, rel=1e-10)
-        assert slave + master == pytest.approx(2.5 * alpha * state.dissipated_energy, rel=1e-10)
+        assert_wear_balance(problem, state, alpha)
         stats = problem.operators.delassus.stats
         assert (stats["factorizations"], stats["refactorizations"]) == (1, 0)
         problem.operators.activate(state)
@@ -526,15 +524,7 @@ def test_mortar_wear_energy_identity_and_checkpoint(compiled, sliding, tmp_path)
         volume = float(state.wear_gap @ contact.contact_set.tributary)
         assert state.dissipated_energy > 0 and volume > 0
         assert volume == pytest.approx(alpha * state.dissipated_energy, rel=1e-10)
-    path = MPI.COMM_WORLD.bcast(str(tmp_path / "state.npz"), root=0)
-    problem.save_state(state, path)
-    back, _ = problem.load_state(path)
-    for name in ("forces", "positions", "slip", "wear_gap", "obstacle"):
-        assert np.array_equal(getattr(back, name), getattr(state, name))
-    if finite:
-        for name in ("master_nodes", "master_weights", "tributary", "gap0"):
-            assert np.array_equal(getattr(back.pairing, name), getattr(state.pairing, name)), name
-        assert np.array_equal(back.master_wear, state.master_wear)
+    assert_checkpoint_round_trip(problem, state, MPI.COMM_WORLD.bcast(str(tmp_path / "state.npz"), root=0), finite)
     problem.destroy()
 
 
@@ -607,8 +597,7 @@ def test_two_body_hertz_sphere_on_non_matching_meshes():
         errors[formulation, flat] = (pressure.max() / p0 - 1, np.sqrt(np.mean(error[inner] ** 2)),
                                      np.abs(error[inner]).max())
         if formulation == "mortar":
-            on_plane = np.flatnonzero(np.abs(problem.contact.contact_set.coords[:, 1]) <= 1e-12)
-            assert on_plane.size > 0 and problem.contact.held_rows.tolist() == (3 * on_plane + 2).tolist()
+            assert_plane_rows_held(problem)
         problem.destroy()
     peak, rms, largest = errors["mortar", None]
     assert abs(peak) < 5e-3 and rms < errors["node", None][1] + 5e-4, errors
@@ -681,15 +670,10 @@ def test_mortar_half_model_equals_full_model():
             state, tangential=(tangential, dfr.Displacement(0.0)) if half else dfr.Force([tangential.value, 0.0])))
         assert problem.total_force(state)[1] == pytest.approx(share * phi * mu * SPHERE_P, abs=1e-8 * SPHERE_P)
         if half:
-            on_plane = np.flatnonzero(np.abs(problem.contact.contact_set.coords[:, 1]) <= 1e-12)
-            assert on_plane.size > 0 and problem.contact.held_rows.tolist() == (3 * on_plane + 2).tolist()
+            assert_plane_rows_held(problem)
         fields[half] = problem.contact_fields(state)
         problem.destroy()
-    twin = {tuple(np.round(x, 12)): i for i, x in enumerate(fields[False]["coordinates"])}
-    index = np.array([twin[tuple(np.round(x, 12))] for x in fields[True]["coordinates"]])
-    for key in ("pressure", "shear"):
-        scale = np.abs(fields[False][key]).max()
-        assert np.abs(fields[True][key] - fields[False][key][index]).max() <= 1e-6 * scale, key
+    assert_half_is_full(fields[True], fields[False])
 
 
 def test_a_re_paired_mortar_half_model_equals_the_full_model():
@@ -713,12 +697,7 @@ def test_a_re_paired_mortar_half_model_equals_the_full_model():
             state = problem.commit(state, problem.solve(state, tangential=(slide, 0.0)))
         assert problem.sliding.repairs == steps
         if half:
-            on_plane = np.flatnonzero(np.abs(problem.contact.contact_set.coords[:, 1]) <= 1e-12)
-            assert on_plane.size > 0 and problem.contact.held_rows.tolist() == (3 * on_plane + 2).tolist()
+            assert_plane_rows_held(problem)
         fields[half] = problem.contact_fields(state)
         problem.destroy()
-    twin = {tuple(np.round(x, 12)): i for i, x in enumerate(fields[False]["coordinates"])}
-    index = np.array([twin[tuple(np.round(x, 12))] for x in fields[True]["coordinates"]])
-    for key in ("pressure", "shear"):
-        scale = np.abs(fields[False][key]).max()
-        assert np.abs(fields[True][key] - fields[False][key][index]).max() <= 1e-6 * scale, key
+    assert_half_is_full(fields[True], fields[False])
