@@ -19,12 +19,11 @@ import datetime
 import json
 import os
 import platform
-import resource
 import statistics
-import subprocess
 import sys
-import time
 from pathlib import Path
+
+from _machine import run_tree  # benchmarks/ is on sys.path when a script runs
 
 HERE = Path(__file__).resolve().parent
 TREE = HERE.parent
@@ -39,13 +38,7 @@ def run(route: str, cycles: int, work: Path) -> dict:
                "--overwrite", "--set", "output.progress=false", "--set", "contact.sliding='small'",
                "--set", f"loading.cycles={cycles}", "--set", "output.plots=false", "--set", "output.xdmf=false",
                *ROUTES[route]]
-    env = {**os.environ, "PYTHONPATH": str(TREE), "OPENBLAS_NUM_THREADS": "1"}
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    cpu, wall = run_tree(command, TREE)
     summary = json.loads((out / "summary.json").read_text())
     return {"cpu_s": cpu, "wall_s": wall, "cycle_path": summary["cycle_path"],
             **{key: summary[key] for key in ANSWERS}}

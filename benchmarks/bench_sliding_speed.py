@@ -16,12 +16,11 @@ import datetime
 import json
 import os
 import platform
-import resource
 import statistics
-import subprocess
 import sys
-import time
 from pathlib import Path
+
+from _machine import run_tree  # benchmarks/ is on sys.path when a script runs
 
 HERE = Path(__file__).resolve().parent
 TREE = HERE.parent
@@ -33,13 +32,7 @@ def run(tree: Path, sliding: str, cycles: int, work: Path) -> dict:
     command = [str(Path(sys.executable).parent / "dolfinx-fretting"), "run", "mccoll", "--out", str(out),
                "--overwrite", "--set", "output.progress=false", "--set", f"contact.sliding={sliding}",
                "--set", f"loading.cycles={cycles}", "--set", "output.plots=false", "--set", "output.xdmf=false"]
-    env = {**os.environ, "PYTHONPATH": str(tree), "OPENBLAS_NUM_THREADS": "1"}
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    cpu, wall = run_tree(command, tree)
     summary = json.loads((out / "summary.json").read_text())
     return {"cpu_s": cpu, "wall_s": wall, "repairs": summary.get("repairs"),
             "max_wear_depth": summary["max_wear_depth"], "dissipated_energy": summary["dissipated_energy"],
