@@ -171,7 +171,8 @@ def geometry_dofmap(msh) -> np.ndarray:
     if LEGACY_API:
         n = dm.num_nodes
         # a rank holding no cell (a submesh's empty part) still gets the row width, as the current API gives it
-        return dm.array.reshape(n, -1) if n else np.zeros((0, V.dofmap.dof_layout.num_dofs), dtype=np.int32)
+        width = msh.geometry.cmap.create_dof_layout().num_dofs
+        return dm.array.reshape(n, -1) if n else np.zeros((0, width), dtype=np.int32)
     return dm
 
 

@@ -173,9 +173,11 @@ def test_cell_submesh_maps_its_cells_to_the_parents(msh):
 
 
 def test_cell_dofmap_of_a_rank_without_cells_has_its_row_width(msh):
-    """A submesh with no cell on this rank (here on every rank): ``cell_dofmap`` is (0, dofs per cell), as the
-    current API gives it, so ``[:, 0]`` works there (the fatigue region's XDMF on a rank holding none of it)."""
+    """A submesh with no cell on this rank (here on every rank): ``cell_dofmap`` is (0, dofs per cell) and
+    ``geometry_dofmap`` (0, nodes per cell), as the current API gives them, so ``[:, 0]`` works there (the fatigue
+    region's XDMF on a rank holding none of it)."""
     submesh, _ = dfx.cell_submesh(msh, np.zeros(0, dtype=np.int32))
     per_cell = 3 if msh.topology.cell_type == dfx.dmesh.CellType.triangle else 4
     assert dfx.cell_dofmap(dfx.scalar_space(submesh, "DG", 0)).shape == (0, 1)
     assert dfx.cell_dofmap(dfx.vector_space(submesh, 1)).shape == (0, per_cell)
+    assert dfx.geometry_dofmap(submesh).shape == (0, per_cell)
