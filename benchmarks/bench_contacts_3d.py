@@ -9,7 +9,7 @@ nc grows like (a/h)^2 while the dofs grow like (a/h)^3). For each size:
   extra factors the ``owned`` and ``schur`` routes hold) exceeds ``--memory-fraction`` of the available memory is
   skipped, and so is a route that would not fit;
 * the model (``ContactModel``: mesh, K, one MUMPS factorisation, W by ``auto`` = selected inverse), timed;
-* W = H K^-1 H^T built again by each route of ``dolfinx_fretting.compliance.ROUTES`` (``columns`` skipped when
+* W = H K^-1 H^T built again by each route of ``dolfinx_fretting.delassus_routes.ROUTES`` (``columns`` skipped when
   nc*3 solves, timed from one solve, would exceed ``--columns-limit``), compared entry by entry with the
   selected inverse's; ``owned`` and ``schur`` include their own factorisation (reported apart) and are freed
   after;
@@ -61,7 +61,7 @@ import scipy.sparse as sp  # noqa: E402
 
 import dolfinx_fretting  # noqa: E402
 from dolfinx_fretting import local_solvers, sizes  # noqa: E402
-from dolfinx_fretting.compliance import ROUTES  # noqa: E402
+from dolfinx_fretting.delassus_routes import ROUTES  # noqa: E402
 from dolfinx_fretting.problem import Displacement, Force  # noqa: E402
 from dolfinx_fretting.scenes import load_scene  # noqa: E402
 from dolfinx_fretting.simulation import ContactModel  # noqa: E402

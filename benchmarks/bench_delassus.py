@@ -50,7 +50,7 @@ sys.path.insert(0, str(HERE.parent))
 from mpi4py import MPI  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
-from dolfinx_fretting.compliance import ROUTES  # noqa: E402
+from dolfinx_fretting.delassus_routes import ROUTES  # noqa: E402
 from dolfinx_fretting.scenes import load_scene  # noqa: E402
 from dolfinx_fretting.simulation import ContactModel  # noqa: E402
 

@@ -32,10 +32,11 @@ solves ``K x = b`` and the construction of the small dense W by one of three rou
     after :meth:`DelassusOperator.refactorize`). PETSc has no distributed Schur complement for MUMPS: under MPI
     the route is refused when the operator is made. Measured in ``benchmarks/results/schur_setup.md``.
 
-``"auto"`` picks, serially, ``"schur"`` for an H of at least :data:`AUTO_SCHUR_ROWS` rows on a K of at most
-:data:`AUTO_SCHUR_DOFS_PER_ROW` dofs per row and ``"selected_inverse"`` otherwise (the measured crossover:
-``benchmarks/results/schur_setup.md``), and ``"owned"`` under MPI (``benchmarks/results/delassus.md``,
-``benchmarks/results/delassus_owned_np2.md``).
+``"auto"`` picks, serially, ``"schur"`` for an H of at least
+:data:`~dolfinx_fretting.delassus_routes.AUTO_SCHUR_ROWS` rows on a K of at most
+:data:`~dolfinx_fretting.delassus_routes.AUTO_SCHUR_DOFS_PER_ROW` dofs per row and ``"selected_inverse"``
+otherwise (the measured crossover: ``benchmarks/results/schur_setup.md``), and ``"owned"`` under MPI
+(``benchmarks/results/delassus.md``, ``benchmarks/results/delassus_owned_np2.md``).
 
 Dirichlet conditions: DOLFINx assembles K with the constrained rows and columns zeroed and 1 on the
 diagonal, so (K^-1)_{dd} = 1 at a constrained dof d, in the wrong units and unrelated to the mechanics.
@@ -62,41 +63,10 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
-__all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs", "auto_route", "ROUTES", "METHODS",
-           "AUTO_SCHUR_ROWS", "AUTO_SCHUR_DOFS_PER_ROW"]
+from .delassus_routes import _AUTO_PARALLEL, METHODS, ROUTES, auto_route
 
-#: Routes that build W.
-ROUTES = ("columns", "block", "selected_inverse", "owned", "schur")
-#: Accepted values of ``method``.
-METHODS = ROUTES + ("auto",)
-
-# Route chosen by "auto", from benchmarks/results/delassus.md: the selected inverse beats the block
-# solve by 1.3-14x and the column solves by 8-81x in serial, on meshes of 1k-206k dofs. Under mpirun -n 2
-# (benchmarks/results/delassus_owned_np2.md) each rank factorising K alone for its own columns beats the
-# shared distributed selected inverse, even counting its extra factorisation.
-_AUTO_SERIAL = "selected_inverse"
-_AUTO_PARALLEL = "owned"
-#: Serial "auto" builds W by the Schur complement route from this many rows of H (contacts x dimension) up ...
-#: benchmarks/results/schur_setup.md, CPU time of W on the two-body sphere-flat, depth-graded mesh (28-40 dofs of
-#: K per row of H): the selected inverse 2.3x / 1.5x faster at 747 / 1110 rows, the Schur route 1.3x / 1.9x
-#: faster at 1536 / 2658 rows (the crossover ~1350 rows); from 1500, since near the crossover the selected inverse
-#: needs less memory (the Schur route's own factor is 1.2-2.9x K's). Measured in 3D only.
-AUTO_SCHUR_ROWS = 1500
-#: ... and when K has at most this many dofs per row of H: on today's uniform sphere-flat mesh (123 dofs per row at
-#: 1536 rows) the selected inverse is 1.8x faster than the Schur route (36 against 65 s CPU), on the graded mesh
-#: (38 dofs per row, the same rows) 1.3x slower. Between the two, not measured: the bound is ~their geometric
-#: mean (68).
-AUTO_SCHUR_DOFS_PER_ROW = 70
-
-
-def auto_route(comm_size: int, rows: int, dofs: int) -> str:
-    """The route ``"auto"`` takes for an H of ``rows`` rows and a K of ``dofs`` dofs on ``comm_size`` ranks."""
-    if comm_size > 1:
-        return _AUTO_PARALLEL
-    if rows >= AUTO_SCHUR_ROWS and dofs <= AUTO_SCHUR_DOFS_PER_ROW * rows:
-        return "schur"
-    return _AUTO_SERIAL
-
+# the routes and "auto"'s rule are declared in delassus_routes (pure, read by sizes too)
+__all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs"]
 
 # MUMPS INFOG(1) codes worth a sentence of their own.
 _MUMPS_HINTS = {
@@ -248,7 +218,8 @@ class DelassusOperator:
         K: Assembled stiffness matrix (symmetric; SPD once Dirichlet conditions are applied).
         comm: Communicator of K (default: K's).
         method: Route for :meth:`build`: ``"columns"``, ``"block"``, ``"selected_inverse"``, ``"owned"``,
-            ``"schur"`` (serial only) or ``"auto"`` (by :func:`auto_route` for each H).
+            ``"schur"`` (serial only) or ``"auto"`` (by :func:`~dolfinx_fretting.delassus_routes.auto_route` for
+            each H).
         petsc_options: Options for the KSP/PC/MUMPS (without the prefix).
         options_prefix: Options prefix of the KSP.
         spd: Declare K SPD so that Cholesky uses MUMPS SYM=1 (set False for a symmetric indefinite K:

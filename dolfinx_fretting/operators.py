@@ -45,7 +45,7 @@ class ContactOperators:
         loads: Named linear forms or assembled PETSc vectors.
         prescribed: Named lists of Dirichlet conditions scaled by their factors.
         petsc_options: Options of the factorisation (keys without prefix).
-        delassus_method: Route for W (:data:`~dolfinx_fretting.compliance.METHODS`).
+        delassus_method: Route for W (:data:`~dolfinx_fretting.delassus_routes.METHODS`).
         options_prefix: PETSc options prefix of the factorisation.
         plastic: The body is elastic–plastic (non-zero Dirichlet values in ``bcs`` are then refused).
 

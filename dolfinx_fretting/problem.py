@@ -54,7 +54,7 @@ from mpi4py import MPI
 
 from . import checkpoint, friction, readers
 from .commit import SlidingMonitor, commit, relative_slip_ratio, wear_coefficients
-from .compliance import METHODS
+from .delassus_routes import METHODS
 from .contact import Contact, ContactSet
 from .cycles import compiled_cycle, cycle_targets, sliding_cycle, stepwise_cycle
 from .increments import advance, increment_targets, load_plastic, on_rank0, solve_contact, solve_plastic
@@ -95,7 +95,7 @@ class FrettingProblem:
         prescribed: Named lists of Dirichlet conditions with non-zero values (``fem.Function`` or
             ``fem.Constant`` data): each set is applied times its factor.
         petsc_options: Options of the factorisation (MUMPS Cholesky by default; keys without prefix).
-        delassus_method: Route for W: ``"auto"`` (by W's size: :func:`~dolfinx_fretting.compliance.auto_route`),
+        delassus_method: Route for W: ``"auto"`` (by W's size: :func:`~dolfinx_fretting.delassus_routes.auto_route`),
             ``"selected_inverse"``, ``"owned"``, ``"block"``, ``"columns"``, ``"schur"`` (serial only).
         solver: :class:`~dolfinx_fretting.settings.LocalSolver` settings.
         plasticity: :class:`~dolfinx_fretting.settings.Plasticity` for an elastic–plastic body, else None.

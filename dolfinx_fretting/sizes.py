@@ -16,8 +16,12 @@ DOLFINx or building anything. The mesh is the geometry kind's to count (its ``me
   ``baseline`` (an interpreter with DOLFINx, PETSc and numba loaded, per rank), ``mesh`` (mesh, spaces, K,
   vectors, gmsh's own copy while it meshes: per dof), ``factor`` (the MUMPS factor of K: a nested-dissection
   fill model, ``n log2 n`` in 2D and ``n^(4/3)`` in 3D for n dofs, fitted to MUMPS's INFOG(22) on the built-in
-  geometries; under MPI the ``owned`` route adds one whole factor per rank), ``W`` (the dense Delassus matrix
-  ``(nc dim)^2`` doubles, replicated on every rank, and the compiled loop's transposed copy), ``W_build`` (the
+  geometries; under MPI the ``owned`` route adds one whole factor per rank), ``schur_factor`` (when W is built
+  by the Schur route, asked for or ``"auto"``'s choice by :func:`~dolfinx_fretting.delassus_routes.auto_route`:
+  its own factor of ``[[K, H^T], [H, 0]]``, kept for the run,
+  :data:`~dolfinx_fretting.delassus_routes.SCHUR_FACTOR_RATIO` times K's; its ``W_build`` is then the dense
+  Schur complement's copy), ``W`` (the dense Delassus matrix ``(nc dim)^2`` doubles, replicated on every rank,
+  and the compiled loop's transposed copy), ``W_build`` (the
   selected-inverse request pattern, values and dense block of ``(K^-1)_SS``, freed once W is built),
   ``cycle_cache`` (the 2D compiled loop's contact-pattern LU factors, one ``(nc dim)^2`` block per increment of
   a cycle) and ``plastic`` (the Gauss-point state of an elastic-plastic body, the dense ``(K^-1)_XX`` on its
@@ -42,6 +46,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .delassus_routes import SCHUR_FACTOR_RATIO, auto_route
 from .geometries import GEOMETRIES, Geometry
 from .geometries.base import MeshSize
 from .geometries.gmsh_nodes import GMSH_NODE_DENSITY
@@ -196,6 +201,12 @@ def _compiled_2d_cycles(scene: Scene, dim: int) -> bool:
             and not loading.tangential_force_controlled and scene.contact.sliding == "small")
 
 
+def _schur_route(scene: Scene, ranks: int, rows: int, dofs: int) -> bool:
+    """W is built by the Schur route (a second factor): asked for, or ``"auto"``'s choice for this size."""
+    method = scene.solver.delassus_method
+    return method == "schur" or (method == "auto" and auto_route(ranks, rows, dofs) == "schur")
+
+
 def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
     """Estimate the model of a validated scene before anything is built (pure: no mesh, no DOLFINx).
 
@@ -218,6 +229,9 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
                       else FACTOR_BYTES_3D * dofs ** (4.0 / 3.0))
         owned = ranks > 1 and scene.solver.delassus_method in ("auto", "owned")  # a whole factor on each rank
         memory["factor"] = int(one_factor * (1 + (ranks if owned else 0)))
+        if contacts is not None and _schur_route(scene, ranks, contacts * dim, dofs):
+            # the factor of [[K, H^T], [H, 0]], kept beside K's for later builds of W
+            memory["schur_factor"] = int(SCHUR_FACTOR_RATIO * one_factor)
         if scene.material.model == "elastoplastic":
             cell = mesh.cell
             cells = nodes * (1 if cell != "triangle" else 2)
@@ -232,6 +246,8 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
         memory["W"] = int(8 * m * m * (ranks + 1))  # W on every rank, and the compiled loop's transposed copy
         # the request pattern (int32 + float64), its CSR read-back (a copy), and the dense block of (K^-1)_SS
         memory["W_build"] = int(s * s * (12 + 12 + 8) + 8 * m * s)
+        if "schur_factor" in memory:
+            memory["W_build"] = 8 * m * m  # MUMPS's dense Schur complement, copied out as -W
         if scene.contact.sliding == "finite":
             # K^-1 on both surfaces, kept on every rank: the slave's dofs and the master's within reach (taken as
             # twice W's build set: the flat's nodes under the contact and under the stroke); its build replaces W's

@@ -13,8 +13,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from mpi4py import MPI
 
-from dolfinx_fretting import compliance
-from dolfinx_fretting.compliance import DelassusOperator, auto_route, check_no_constrained_dofs
+from dolfinx_fretting import delassus_routes
+from dolfinx_fretting.compliance import DelassusOperator, check_no_constrained_dofs
+from dolfinx_fretting.delassus_routes import auto_route
 from dolfinx_fretting.scenes import load_scene
 from dolfinx_fretting.simulation import ContactModel
 
@@ -171,15 +172,15 @@ def test_schur_route_on_two_bodies_in_3d(monkeypatch):
         assert np.abs(W_schur - W_si).max() <= 1e-10 * scale
         assert d.method == "auto"  # serially "auto" stays, resolved for each H
         dofs = problem.operators.K.getSize()[0]
-        monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0])
-        monkeypatch.setattr(compliance, "AUTO_SCHUR_DOFS_PER_ROW", dofs / H.shape[0])
+        monkeypatch.setattr(delassus_routes, "AUTO_SCHUR_ROWS", H.shape[0])
+        monkeypatch.setattr(delassus_routes, "AUTO_SCHUR_DOFS_PER_ROW", dofs / H.shape[0])
         d.build(H)
         assert d.stats["last_build_route"] == "schur"
-        monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0] + 1)
+        monkeypatch.setattr(delassus_routes, "AUTO_SCHUR_ROWS", H.shape[0] + 1)
         d.build(H)
         assert d.stats["last_build_route"] == "selected_inverse"  # too few rows
-        monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", H.shape[0])
-        monkeypatch.setattr(compliance, "AUTO_SCHUR_DOFS_PER_ROW", 0.99 * dofs / H.shape[0])
+        monkeypatch.setattr(delassus_routes, "AUTO_SCHUR_ROWS", H.shape[0])
+        monkeypatch.setattr(delassus_routes, "AUTO_SCHUR_DOFS_PER_ROW", 0.99 * dofs / H.shape[0])
         d.build(H)
         assert d.stats["last_build_route"] == "selected_inverse"  # too many dofs per row
     finally:
@@ -189,7 +190,7 @@ def test_schur_route_on_two_bodies_in_3d(monkeypatch):
 def test_auto_route():
     """``auto``: the Schur route from AUTO_SCHUR_ROWS rows on a K of at most AUTO_SCHUR_DOFS_PER_ROW dofs per row, else
     the selected inverse (serial); the owned route under MPI at any size (the Schur route is serial only)."""
-    rows, per_row = compliance.AUTO_SCHUR_ROWS, compliance.AUTO_SCHUR_DOFS_PER_ROW
+    rows, per_row = delassus_routes.AUTO_SCHUR_ROWS, delassus_routes.AUTO_SCHUR_DOFS_PER_ROW
     assert auto_route(1, rows - 1, per_row * rows) == "selected_inverse"
     assert auto_route(1, rows, per_row * rows) == "schur"
     assert auto_route(1, rows, per_row * rows + 1) == "selected_inverse"

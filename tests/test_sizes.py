@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from dolfinx_fretting import sizes
+from dolfinx_fretting import delassus_routes, sizes
 from dolfinx_fretting.cli import main
 from dolfinx_fretting.geometries import half_cylinder
 from dolfinx_fretting.scenes import SceneError, load_scene
@@ -309,3 +309,53 @@ def test_replicated_memory_terms_grow_with_the_ranks():
     expected = {"baseline": 3.0, "surface_compliance": 3.0, "W": 2.0, "factor": 4.0, "mesh": 1.0}
     for key, value in expected.items():
         assert ratio[key] == pytest.approx(value, rel=1e-5), key   # each term is int(): 1 byte in >= 1e5
+
+
+def test_the_schur_routes_second_factor_is_counted(monkeypatch):
+    """W by the Schur route keeps a second MUMPS factor, of [[K, H^T], [H, 0]], for the run: counted as
+    SCHUR_FACTOR_RATIO times K's factor whenever the route is taken (asked for, or ``"auto"``'s choice by the same
+    rule W's build follows), its build's working set then the dense Schur complement's copy (8 m^2 bytes); not
+    counted when another route builds W (auto below the rule's size, or under MPI)."""
+    from dolfinx_fretting.geometries.sphere import Sphere
+
+    today = Sphere.mesh_options
+    # the depth-graded mesh at a/h = 10: ~53 dofs of K per row of H, 1560 rows: "auto" takes the Schur route there
+    monkeypatch.setattr(Sphere, "mesh_options", lambda self, scene: {
+        **today(self, scene), "depth_growth": 1.5, "coarsening": 2, "field_cell": 0.25})
+    scene = load_scene("sphere-flat", ["geometry.contact_mesh_size=0.0187"])
+    serial, two_ranks = estimate(scene, 1), estimate(scene, 2)
+    rows = 3 * serial.contacts
+    assert sizes.auto_route(1, rows, serial.dofs) == "schur"
+    # both terms are int() of one float: a few bytes in 1e9
+    assert serial.memory["schur_factor"] == pytest.approx(sizes.SCHUR_FACTOR_RATIO * serial.memory["factor"],
+                                                          rel=1e-8)
+    assert serial.memory["W_build"] == 8 * rows * rows
+    assert "schur_factor" not in two_ranks.memory  # MPI: the owned route
+    asked = estimate(load_scene("sphere-flat", ["geometry.contact_mesh_size=0.0187",
+                                                "solver.delassus_method='selected_inverse'"]), 1)
+    assert "schur_factor" not in asked.memory and asked.memory["W_build"] > 8 * rows * rows
+    monkeypatch.setattr(Sphere, "mesh_options", today)
+    # today's uniform mesh: ~129 dofs of K per row of H, so "auto" keeps the selected inverse; asked for, counted
+    uniform = estimate(load_scene("sphere-flat", ["geometry.contact_mesh_size=0.0117"]), 1)
+    assert 3 * uniform.contacts >= delassus_routes.AUTO_SCHUR_ROWS and "schur_factor" not in uniform.memory
+    forced = estimate(load_scene("sphere-flat", ["geometry.contact_mesh_size=0.0117",
+                                                 "solver.delassus_method='schur'"]), 1)
+    assert forced.memory["schur_factor"] == pytest.approx(sizes.SCHUR_FACTOR_RATIO * forced.memory["factor"],
+                                                          rel=1e-8)
+
+
+def test_the_schur_factor_ratio_covers_every_measured_point():
+    """SCHUR_FACTOR_RATIO is the envelope of the measured ratio of the Schur route's factor to K's (MUMPS INFOG(22),
+    the columns "MUMPS Schur" and "MUMPS K" of benchmarks/results/schur_setup.md: 1.2-2.9): at least every point,
+    and not more than 1.5 times the largest (an envelope, not a guess far above the measurements)."""
+    table = (Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "schur_setup.md").read_text()
+    header = next(line for line in table.splitlines() if line.startswith("| stack | mesh |"))
+    columns = [cell.strip() for cell in header.strip("|").split("|")]
+    k_column, schur_column = columns.index("MUMPS K (MB)"), columns.index("MUMPS Schur (MB)")
+    ratios = []
+    for line in table.splitlines():
+        cells = [cell.strip() for cell in line.strip("|").split("|")]
+        if len(cells) == len(columns) and cells[columns.index("route")] == "schur":
+            ratios.append(float(cells[schur_column]) / float(cells[k_column]))
+    assert len(ratios) >= 8
+    assert max(ratios) <= sizes.SCHUR_FACTOR_RATIO <= 1.5 * max(ratios)
