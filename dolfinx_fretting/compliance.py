@@ -68,6 +68,18 @@ from .delassus_routes import _AUTO_PARALLEL, METHODS, ROUTES, auto_route
 # the routes and "auto"'s rule are declared in delassus_routes (pure, read by sizes too)
 __all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs"]
 
+#: The largest message W's transfers send, in doubles (512 MiB): MPI counts are C ints, so a dense W of more than
+#: 2^31 - 1 entries (m > 46 340 rows, ~15 400 3D contacts) cannot go in one message.
+MPI_CHUNK = 2**26
+
+
+def bcast_in_chunks(comm: MPI.Comm, array: np.ndarray) -> None:
+    """Broadcast a C-contiguous float64 array from rank 0 in place, in messages of at most :data:`MPI_CHUNK`."""
+    flat = array.reshape(-1)  # a view (C-contiguous): received in place
+    for offset in range(0, flat.size, MPI_CHUNK):
+        comm.Bcast(flat[offset:offset + MPI_CHUNK], root=0)
+
+
 # MUMPS INFOG(1) codes worth a sentence of their own.
 _MUMPS_HINTS = {
     -5: "not enough memory during analysis",
@@ -520,7 +532,7 @@ class DelassusOperator:
             if self.comm.rank == 0:
                 X = inv if small is R else inv.T     # (|R|, |C|) = (K^-1)_{R, C}
                 out[...] = H_rows[:, R] @ (H_cols[:, C] @ X.T).T
-        self.comm.Bcast(out, root=0)
+        bcast_in_chunks(self.comm, out)
         self.stats["last_coupling_time"] = time.perf_counter() - t0
         return out
 
@@ -532,7 +544,7 @@ class DelassusOperator:
             scale = np.abs(W).max() or 1.0
             self.stats["asymmetry"] = float(np.abs(W - W.T).max() / scale)
             out[...] = 0.5 * (W + W.T) if self.symmetrize else W
-        self.comm.Bcast(out, root=0)
+        bcast_in_chunks(self.comm, out)
         self.stats["asymmetry"] = self.comm.bcast(self.stats.get("asymmetry"), root=0)
         return out
 
@@ -744,10 +756,20 @@ class DelassusOperator:
         errors = self.comm.allgather(error)
         if any(errors):
             raise DelassusError(f"'owned' route failed: {next(e for e in errors if e)}")
-        # Column blocks in rank order: all-gather them as rows of W^T.
-        counts = np.array([((m * (r + 1)) // size - (m * r) // size) * m for r in range(size)])
-        WT = np.empty(m * m)
-        self.comm.Allgatherv(np.ascontiguousarray(np.asarray(WJ).T).ravel(), [WT, counts])
+        # Column blocks in rank order, gathered on rank 0 as rows of W^T (only rank 0 symmetrises; _finish
+        # broadcasts), each in messages of at most MPI_CHUNK doubles: MPI counts are ints.
+        block = np.ascontiguousarray(np.asarray(WJ).T).ravel()
+        WT = np.empty(m * m) if rank == 0 else None
+        for source in range(size):
+            first, last = ((m * source) // size) * m, ((m * (source + 1)) // size) * m
+            for offset in range(first, last, MPI_CHUNK):
+                end = min(offset + MPI_CHUNK, last)
+                if source == rank == 0:
+                    WT[offset:end] = block[offset - first:end - first]
+                elif rank == 0:
+                    self.comm.Recv(WT[offset:end], source=source, tag=offset // MPI_CHUNK)
+                elif rank == source:
+                    self.comm.Send(block[offset - first:end - first], dest=0, tag=offset // MPI_CHUNK)
         return WT.reshape(m, m).T if rank == 0 else None
 
     # Schur complement route ----------------------------------------------------------------------------

@@ -140,16 +140,39 @@ def test_delassus_routes_agree_in_parallel():
 
 
 @pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
-def test_auto_route_stays_owned_under_mpi(monkeypatch):
-    """Above AUTO_SCHUR_ROWS rows serial ``auto`` takes the Schur route, which PETSc cannot run distributed: under
-    MPI ``auto`` keeps the owned route at any size, on every rank (no rank left waiting in another route)."""
+def test_w_moves_between_ranks_in_chunks(monkeypatch):
+    """W's transfers (the owned route's column blocks to rank 0, the broadcast of the finished W) go in messages of
+    at most compliance.MPI_CHUNK doubles, since MPI counts are ints (one message would overflow past ~15 400 3D
+    contacts). With a chunk of 7 doubles (every block split, into pieces that straddle the ranks' blocks) W is the
+    same bits as with one message per block, on every rank."""
     from dolfinx_fretting import compliance
     from dolfinx_fretting.simulation import ContactModel
 
     model = ContactModel(load_scene("hertz", ["geometry.contact_mesh_size=0.04", "output.xdmf=false",
                                               "output.plots=false"]), COMM)
     d, H = model.problem.operators.delassus, model.contact.H
-    monkeypatch.setattr(compliance, "AUTO_SCHUR_ROWS", 1)  # every H is "large"
+    whole = {route: d.build(H, method=route) for route in ("owned", "selected_inverse")}
+    assert H.shape[0] ** 2 > 7 * COMM.size
+    monkeypatch.setattr(compliance, "MPI_CHUNK", 7)
+    for route, W in whole.items():
+        chunked = d.build(H, method=route)
+        assert np.array_equal(chunked, W), route
+        gathered = COMM.allgather(chunked)
+        assert all(np.array_equal(g, gathered[0]) for g in gathered), route
+    model.problem.destroy()
+
+
+@pytest.mark.skipif(COMM.size == 1, reason="collective test: ./tasks.sh test runs it under mpirun -n 2 and -n 3")
+def test_auto_route_stays_owned_under_mpi(monkeypatch):
+    """Above AUTO_SCHUR_ROWS rows serial ``auto`` takes the Schur route, which PETSc cannot run distributed: under
+    MPI ``auto`` keeps the owned route at any size, on every rank (no rank left waiting in another route)."""
+    from dolfinx_fretting import delassus_routes
+    from dolfinx_fretting.simulation import ContactModel
+
+    model = ContactModel(load_scene("hertz", ["geometry.contact_mesh_size=0.04", "output.xdmf=false",
+                                              "output.plots=false"]), COMM)
+    d, H = model.problem.operators.delassus, model.contact.H
+    monkeypatch.setattr(delassus_routes, "AUTO_SCHUR_ROWS", 1)  # every H is "large"
     W = d.build(H)
     routes = COMM.allgather(d.stats["last_build_route"])
     assert routes == ["owned"] * COMM.size
