@@ -5,7 +5,7 @@ Each (a/h, mesh, route) is built in a process of its own (a clean peak memory), 
 one size alternated; the parent compares the routes' W at each size (max |W_a - W_b| / max |W_b|). Recorded: wall
 and CPU time (this process; MUMPS and BLAS on one thread) of the whole model (mesh, assembly, factorisation, W and
 the loads' responses), of the factorisation and of W's build; MUMPS's memory (INFOG(22)) of K's factor and of the
-Schur route's own factor; the process's peak resident memory; the 1-min load average. Usage (from the repository
+Schur route's own factor; the process's peak resident memory and its resident memory after the set-up; the 1-min load average. Usage (from the repository
 root)::
 
     OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python benchmarks/bench_schur_setup.py --a-over-h 16 20 \\
@@ -18,6 +18,7 @@ prints the records of earlier runs as the markdown table of ``results/schur_setu
 from __future__ import annotations
 
 import argparse
+import ctypes
 import json
 import os
 import resource
@@ -30,6 +31,14 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+
+
+def _resident_after_trim_mb() -> float:
+    """Resident memory now (after the set-up: what the cycles start with), once glibc has handed its free heap
+    back (malloc_trim): memory the process freed counts as freed, whatever the allocator kept for reuse."""
+    ctypes.CDLL("libc.so.6").malloc_trim(0)
+    pages = int(Path("/proc/self/statm").read_text().split()[1])
+    return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
 
 
 def one_case(a_over_h: float, field_cell: float, route: str, save_W: str) -> dict:
@@ -54,6 +63,7 @@ def one_case(a_over_h: float, field_cell: float, route: str, save_W: str) -> dic
                schur_factorize_s=stats.get("schur_factorize_time"), schur_size=stats.get("schur_size"),
                mumps_mb=stats["mumps_memory_mb"], schur_mumps_mb=stats.get("schur_memory_mb"),
                peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+               rss_after_setup_mb=_resident_after_trim_mb(),
                operator_timings={k: round(v, 3) for k, v in problem.operators.timings.items()},  # wall (s)
                load_end=round(os.getloadavg()[0], 2))
     np.save(save_W, problem.operators.W)

@@ -28,9 +28,11 @@ solves ``K x = b`` and the construction of the small dense W by one of three rou
     so through ctypes): MUMPS eliminates the K block only (SPD, so LDL^T without pivoting holds) and returns the
     dense Schur complement of A on those rows, 0 - H K^-1 H^T = -W, W itself whatever number of dofs each row of
     H touches (two bodies: both surfaces' nodes). No entries of the inverse, no dense factorisation. The
-    factorisation is kept for later builds with the same H (numeric refactorisation of the K block's new values
-    after :meth:`DelassusOperator.refactorize`). PETSc has no distributed Schur complement for MUMPS: under MPI
-    the route is refused when the operator is made. Measured in ``benchmarks/results/schur_setup.md``.
+    factorisation is freed after the build while K has never been refactorised (an elastic body: a new H needs a
+    new factor anyway), and kept from K's first :meth:`DelassusOperator.refactorize` on for later builds with the
+    same H (a numeric refactorisation of the K block's new values: an elastic-plastic tangent). PETSc has no
+    distributed Schur complement for MUMPS: under MPI the route is refused when the operator is made. Measured in
+    ``benchmarks/results/schur_setup.md``.
 
 ``"auto"`` picks, serially, ``"schur"`` for an H of at least
 :data:`~dolfinx_fretting.delassus_routes.AUTO_SCHUR_ROWS` rows on a K of at most
@@ -877,6 +879,11 @@ class DelassusOperator:
         W = self._schur_factor(H)._schur_complement()
         np.negative(W, out=W)  # in place: W is the largest array of the build (m^2)
         self.stats["schur_size"] = int(W.shape[0])
+        if not self.stats["refactorizations"]:
+            # An operator never refactorised builds W once per H (a new H, a new factor): its second factor,
+            # 1.2-2.9x K's, would be held for nothing through the cycles. Once K's values have changed (an
+            # elastic-plastic tangent) it is kept, so that the next build is a numeric refactorisation.
+            self._drop_schur()
         return W
 
     # ------------------------------------------------------------------------------------------------

@@ -18,7 +18,7 @@ DOLFINx or building anything. The mesh is the geometry kind's to count (its ``me
   fill model, ``n log2 n`` in 2D and ``n^(4/3)`` in 3D for n dofs, fitted to MUMPS's INFOG(22) on the built-in
   geometries; under MPI the ``owned`` route adds one whole factor per rank), ``schur_factor`` (when W is built
   by the Schur route, asked for or ``"auto"``'s choice by :func:`~dolfinx_fretting.delassus_routes.auto_route`:
-  its own factor of ``[[K, H^T], [H, 0]]``, kept for the run,
+  its own factor of ``[[K, H^T], [H, 0]]``, alive beside K's while W is built,
   :data:`~dolfinx_fretting.delassus_routes.SCHUR_FACTOR_RATIO` times K's; its ``W_build`` is then the dense
   Schur complement's copy), ``W`` (the dense Delassus matrix ``(nc dim)^2`` doubles, replicated on every rank,
   and the compiled loop's transposed copy), ``W_build`` (the
@@ -230,7 +230,7 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
         owned = ranks > 1 and scene.solver.delassus_method in ("auto", "owned")  # a whole factor on each rank
         memory["factor"] = int(one_factor * (1 + (ranks if owned else 0)))
         if contacts is not None and _schur_route(scene, ranks, contacts * dim, dofs):
-            # the factor of [[K, H^T], [H, 0]], kept beside K's for later builds of W
+            # the factor of [[K, H^T], [H, 0]], beside K's while W is built (the peak)
             memory["schur_factor"] = int(SCHUR_FACTOR_RATIO * one_factor)
         if scene.material.model == "elastoplastic":
             cell = mesh.cell

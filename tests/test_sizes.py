@@ -312,7 +312,7 @@ def test_replicated_memory_terms_grow_with_the_ranks():
 
 
 def test_the_schur_routes_second_factor_is_counted(monkeypatch):
-    """W by the Schur route keeps a second MUMPS factor, of [[K, H^T], [H, 0]], for the run: counted as
+    """W by the Schur route needs a second MUMPS factor, of [[K, H^T], [H, 0]], beside K's while it builds: counted as
     SCHUR_FACTOR_RATIO times K's factor whenever the route is taken (asked for, or ``"auto"``'s choice by the same
     rule W's build follows), its build's working set then the dense Schur complement's copy (8 m^2 bytes); not
     counted when another route builds W (auto below the rule's size, or under MPI)."""
