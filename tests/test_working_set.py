@@ -6,6 +6,8 @@ References independent of the restricted route: the full sweeps (``working_set=F
 26), and the natural-map error recomputed on the whole problem by :func:`natural_map_error`.
 """
 
+import gc
+
 import numpy as np
 import pytest
 from support.fclib_problems import needs_fclib, problem
@@ -187,3 +189,35 @@ def test_start_at_the_answer_gives_the_whole_x(sphere_flat):
     assert full.iterations == 0 and again.converged and again.iterations == 0
     assert np.count_nonzero(again.x[1::3]) == xy.shape[0]  # every tangential row formed (a uniform slip: none is 0)
     assert np.array_equal(again.r, full.r) and np.array_equal(again.x, full.x)
+
+
+def test_held_block_across_a_join_and_in_float32(sphere_flat):
+    """The block held is used only for its own set: a solve that starts from a smaller set gathers that one, and
+    once the rim joins and the set is the held one, sweeps on the held block (the same bits as the solve that held
+    it). float32 sweeps hold their float32 copy beside it and meet the tolerance on the whole problem."""
+    W, xy, steps = _own(sphere_flat)
+    q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.3)
+    exact = solve(W, q, 0.5, 3, tol=1e-14, max_iter=100000, working_set=False)
+    centre = np.repeat(np.hypot(*xy.T) < 2.0, 3)
+    r0 = np.where(centre, 5.0 * exact.r, 0.0)  # the rim held open at the start (test_contacts_outside_the_start_join)
+    first = solve(W, q, 0.5, 3, tol=TOL, r0=r0, block_steps=steps)
+    second = solve(W, q, 0.5, 3, tol=TOL, r0=r0, block_steps=steps)
+    assert first.joined > 0 and not first.block_held
+    assert second.joined == first.joined and second.block_held
+    assert np.array_equal(second.r, first.r) and np.array_equal(second.x, first.x)
+    singles = [solve(W, q, 0.5, 3, tol=TOL, block_steps=steps, float32_sweeps=True) for _ in range(2)]
+    assert singles[1].block_held
+    for single in singles:
+        assert single.converged and natural_map_error(W, q, single.r, 0.5, 3) < TOL
+        # Within the tolerance of the one solution (see test_contacts_outside_the_start_join for the 1e-7).
+        assert np.abs(single.r - exact.r).max() <= 1e-7 * np.abs(exact.r).max()
+
+
+def test_held_block_goes_with_its_W(sphere_flat):
+    """The block held (tens of MB at 1000+ contacts) is dropped when its W is freed."""
+    W, xy, steps = _own(sphere_flat)
+    assert solve(W, sphere_flat_q(xy, 40.0, 0.5, 0.6), 0.5, 3, tol=TOL, block_steps=steps).converged
+    assert ls._held[0] is not None and ls._held[0].serves(W, steps)
+    del W
+    gc.collect()
+    assert ls._held[0] is None
