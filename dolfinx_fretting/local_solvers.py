@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 import warnings
+import weakref
 from dataclasses import dataclass
 
 import numba
@@ -93,6 +94,8 @@ class LocalResult:
             sweeps ran on all contacts (see ``working_set`` in :func:`solve`).
         working_set: Contacts in the working set at the end (0: all contacts swept).
         joined: Contacts that joined the working set after the start (their gap closed during the solve).
+        block_held: The working set's block ``W_AA`` was the one held from the previous solve on this ``W`` (the
+            same set; see ``block_steps`` in :func:`solve`), not gathered again.
     """
 
     r: np.ndarray
@@ -108,6 +111,7 @@ class LocalResult:
     passes: int = 0
     working_set: int = 0
     joined: int = 0
+    block_held: bool = False
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -313,11 +317,25 @@ def _set_contact(Wc: np.ndarray, indptr: np.ndarray, indices: np.ndarray, data: 
     if d0 != 0.0 or d1 != 0.0 or d2 != 0.0:
         r[o] = pn
         r[o + 1] = p1
-        _add_column(Wc, indptr, indices, data, sparse, o, d0, x)
-        _add_column(Wc, indptr, indices, data, sparse, o + 1, d1, x)
         if dim == 3:
             r[o + 2] = p2
-            _add_column(Wc, indptr, indices, data, sparse, o + 2, d2, x)
+        if dim == 3 and not sparse and d0 != 0.0 and d1 != 0.0 and d2 != 0.0:
+            # The three columns in one pass over x: each x[i] gets the same three products in the same order as from
+            # three passes (the same bits), x read and written once instead of three times.
+            row0 = Wc[o]
+            row1 = Wc[o + 1]
+            row2 = Wc[o + 2]
+            for i in range(x.size):
+                value = x[i]
+                value += row0[i] * d0
+                value += row1[i] * d1
+                value += row2[i] * d2
+                x[i] = value
+        else:
+            _add_column(Wc, indptr, indices, data, sparse, o, d0, x)
+            _add_column(Wc, indptr, indices, data, sparse, o + 1, d1, x)
+            if dim == 3:
+                _add_column(Wc, indptr, indices, data, sparse, o + 2, d2, x)
         return d0 * d0 + d1 * d1 + d2 * d2
     return 0.0
 
@@ -738,25 +756,98 @@ def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.n
     ``stats`` (int64, 3) gets: passes, working-set size at the end, contacts that joined after the start.
     Returns (sweeps, error, change, status) like :func:`_uzawa_kernel` (sweeps counted over all passes).
     """
+    its, err, change, status, _, _, _ = _restricted_core(
+        A, by_rows, True, blocks, q, mu, rho, rho_err, dim, r, x, tol, max_iter, refresh, nsgs, omega, scan_c, scan_s,
+        margin_factor, single, stats, np.zeros(0, dtype=np.bool_), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32))
+    return its, err, change, status
+
+
+@numba.njit(cache=True)
+def _gather_block(A: np.ndarray, by_rows: bool, rows: np.ndarray) -> np.ndarray:
+    """``(W_AA)^T`` C-contiguous (the sweeps' columns of ``W_AA`` as rows) for the rows and columns ``rows`` of ``W``,
+    given as ``A = W`` (``by_rows``) or ``A = W^T``: the same values, gathered."""
+    ma = rows.size
+    block = np.empty((ma, ma))
+    if by_rows:
+        # block[j, i] = W[rows[i], rows[j]], a tile of 32 x 32 at a time: the reads run along rows of W and the writes
+        # stay within the tile's 32 rows of the block (in cache), not one strided write per entry.
+        for i0 in range(0, ma, 32):
+            i1 = min(i0 + 32, ma)
+            for j0 in range(0, ma, 32):
+                j1 = min(j0 + 32, ma)
+                for i in range(i0, i1):
+                    source = A[rows[i]]
+                    for j in range(j0, j1):
+                        block[j, i] = source[rows[j]]
+    else:
+        for i in range(ma):
+            source = A[rows[i]]
+            for j in range(ma):
+                block[i, j] = source[rows[j]]
+    return block
+
+
+@numba.njit(cache=True)
+def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.ndarray, q: np.ndarray, mu: np.ndarray,
+                     rho: np.ndarray, rho_err: np.ndarray, dim: int, r: np.ndarray, x: np.ndarray, tol: float,
+                     max_iter: int, refresh: int, nsgs: bool, omega: float, scan_c: np.ndarray, scan_s: np.ndarray,
+                     margin_factor: float, single: bool, stats: np.ndarray, held_member: np.ndarray,
+                     held_block: np.ndarray, held_block32: np.ndarray
+                     ) -> tuple[int, float, float, int, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_restricted_kernel` with two savings for a caller that solves again and again on one ``W``.
+
+    ``x_ready`` False (``by_rows`` only): ``x`` is formed here on the rows the sweeps read, the normal rows of every
+    contact (the set is chosen from them) and the set's other rows; the outside contacts' other rows wait for the
+    check after the sweeps (an outside contact has ``x_n >= margin >= 0``, so it adds exactly 0 to the error
+    whatever its ``x_t``: 0 stands in for it until then, and ``x`` is complete on return).
+    ``held_block`` (``held_block32``: its float32 copy, or an empty array) is ``(W_AA)^T`` of a previous solve for
+    the set ``held_member``: a pass on the same set uses it instead of gathering ``W_AA`` again (the caller vouches
+    that it is this ``W``'s: the same values, so the same bits).
+
+    Returns (sweeps, error, change, status, member, block, block32): the last pass's set, its ``(W_AA)^T`` and the
+    float32 copy (empty unless ``single``), for the caller to hold.
+    """
     nc = mu.size
+    m = q.size
     scale = _force_scale(q, mu, rho_err, dim)
-    err = _error(r, x, mu, rho_err, dim, scale)
     stats[0] = 0
     stats[1] = 0
     stats[2] = 0
-    if err < tol:
-        return 0, err, 0.0, 1
     deepest = 0.0
     for a in range(nc):
         deepest = max(deepest, -q[a * dim])
     margin = margin_factor * deepest
+    if not x_ready:
+        _recompute_x_by_rows(A, q, r, x, np.arange(0, m, dim))
     member = np.zeros(nc, dtype=np.bool_)
     for a in range(nc):
         o = a * dim
         loaded = r[o] != 0.0 or r[o + 1] != 0.0 or (dim == 3 and r[o + 2] != 0.0)
         member[a] = loaded or x[o] < margin
+    if not x_ready:
+        count = 0
+        for a in range(nc):
+            if member[a]:
+                count += 1
+        tangential = np.empty(count * (dim - 1), dtype=np.int64)
+        k = 0
+        for a in range(nc):
+            for c in range(1, dim):
+                if member[a]:
+                    tangential[k] = a * dim + c
+                    k += 1
+                else:
+                    x[a * dim + c] = 0.0  # formed at the check
+        _recompute_x_by_rows(A, q, r, x, tangential)
+    err = _error(r, x, mu, rho_err, dim, scale)
     empty_i = np.zeros(1, dtype=np.int64)
     empty_f = np.zeros(1)
+    if err < tol and not x_ready:
+        # The answer is the start: x on every row, and the error of the whole x (a non-finite x_t would show).
+        _recompute_x_by_rows(A, q, r, x, np.arange(m))
+        err = _error(r, x, mu, rho_err, dim, scale)
+    if err < tol:
+        return 0, err, 0.0, 1, member, np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32)
     total = 0
     change = np.inf
     status = 0
@@ -775,17 +866,19 @@ def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.n
                 for c in range(dim):
                     rows[k * dim + c] = a * dim + c
                 k += 1
-        Wa = np.empty((ma, ma))  # (W_AA)^T, C-contiguous, like Wc
-        if by_rows:
-            for j in range(ma):
-                source = A[rows[j]]
-                for i in range(ma):
-                    Wa[i, j] = source[rows[i]]
+        same = held_member.size == nc and held_block.shape[0] == ma
+        if same:
+            for a in range(nc):
+                if member[a] != held_member[a]:
+                    same = False
+                    break
+        Wa = held_block if same else _gather_block(A, by_rows, rows)  # (W_AA)^T, C-contiguous, like Wc
+        if not single:
+            Wa32 = np.zeros((0, 0), dtype=np.float32)
+        elif same and held_block32.shape[0] == ma:
+            Wa32 = held_block32
         else:
-            for i in range(ma):
-                source = A[rows[i]]
-                for j in range(ma):
-                    Wa[i, j] = source[rows[j]]
+            Wa32 = Wa.astype(np.float32)
         qa = np.empty(ma)
         ra = np.empty(ma)
         xa = np.empty(ma)
@@ -806,18 +899,20 @@ def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.n
                 blocks_a[k] = blocks[a]
         left = max_iter - total
         if left <= 0:
-            return total, err, change, 0
+            if not x_ready:
+                _recompute_x_by_rows(A, q, r, x, np.arange(m))
+            return total, err, change, 0, member, Wa, Wa32
         if nsgs and single:
-            its, err, change, status = _nsgs_sweeps(Wa.astype(np.float32), Wa, empty_i, empty_i, empty_f, False,
-                                                    blocks_a, qa, mua, rho_erra, dim, ra, xa, tol, left, refresh,
-                                                    omega, scan_c, scan_s, scale)
+            its, err, change, status = _nsgs_sweeps(Wa32, Wa, empty_i, empty_i, empty_f, False, blocks_a, qa, mua,
+                                                    rho_erra, dim, ra, xa, tol, left, refresh, omega, scan_c, scan_s,
+                                                    scale)
         elif nsgs:
             its, err, change, status = _nsgs_sweeps(Wa, Wa, empty_i, empty_i, empty_f, False, blocks_a, qa, mua,
                                                     rho_erra, dim, ra, xa, tol, left, refresh, omega, scan_c,
                                                     scan_s, scale)
         elif single:
-            its, err, change, status = _uzawa_sweeps(Wa.astype(np.float32), Wa, empty_i, empty_i, empty_f, False,
-                                                     qa, mua, rhoa, rho_erra, dim, ra, xa, tol, left, refresh, scale)
+            its, err, change, status = _uzawa_sweeps(Wa32, Wa, empty_i, empty_i, empty_f, False, qa, mua, rhoa,
+                                                     rho_erra, dim, ra, xa, tol, left, refresh, scale)
         else:
             its, err, change, status = _uzawa_sweeps(Wa, Wa, empty_i, empty_i, empty_f, False, qa, mua, rhoa,
                                                      rho_erra, dim, ra, xa, tol, left, refresh, scale)
@@ -828,7 +923,7 @@ def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.n
         if by_rows and status == 1:
             # The set's rows of x are exact (the sub-problem's convergence is confirmed on x recomputed from
             # W_AA, the same bits as from W); the other rows from W's rows.
-            outside = np.empty(q.size - ma, dtype=np.int64)
+            outside = np.empty(m - ma, dtype=np.int64)
             k = 0
             for a in range(nc):
                 if not member[a]:
@@ -839,16 +934,16 @@ def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.n
                 x[rows[i]] = xa[i]
             _recompute_x_by_rows(A, q, r, x, outside)
         elif by_rows:
-            _recompute_x_by_rows(A, q, r, x, np.arange(q.size))
+            _recompute_x_by_rows(A, q, r, x, np.arange(m))
         else:
             _recompute_x(A, empty_i, empty_i, empty_f, False, q, r, x)
         if status == 2:
-            return total, err, change, 2
+            return total, err, change, 2, member, Wa, Wa32
         err = _error(r, x, mu, rho_err, dim, scale)
         if status != 1:
-            return total, err, change, status
+            return total, err, change, status, member, Wa, Wa32
         if err < tol:
-            return total, err, change, 1
+            return total, err, change, 1, member, Wa, Wa32
         added = 0
         for a in range(nc):
             if not member[a] and x[a * dim] < margin:
@@ -859,7 +954,7 @@ def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.n
             # Not reached in exact arithmetic (the outside terms are exact zeros): finish with full sweeps.
             left = max_iter - total
             if left <= 0:
-                return total, err, change, 0
+                return total, err, change, 0, member, Wa, Wa32
             Wc = np.ascontiguousarray(A.T) if by_rows else A
             if nsgs:
                 its, err, change, status = _nsgs_sweeps(Wc, Wc, empty_i, empty_i, empty_f, False, blocks, q, mu,
@@ -871,7 +966,7 @@ def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.n
             stats[1] = nc
             if status == 0:  # the sweeps update x step by step: a failed solve reports the x of its r, x = W r + q
                 _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-            return total + its, err, change, status
+            return total + its, err, change, status, member, Wa, Wa32
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -1084,7 +1179,10 @@ def _as_mu(mu: float | np.ndarray, nc: int) -> np.ndarray:
     return np.ascontiguousarray(arr)
 
 
-def _check_problem(W, q, mu, dim) -> tuple[np.ndarray | sp.csc_matrix, np.ndarray, np.ndarray, int]:
+def _check_problem(W, q, mu, dim, values_checked: bool = False
+                   ) -> tuple[np.ndarray | sp.csc_matrix, np.ndarray, np.ndarray, int]:
+    """The problem as the solvers take it, checked; ``values_checked``: W's values were checked by an earlier call
+    (the W held, see :class:`_HeldBlock`), not read again."""
     if dim not in (2, 3) or isinstance(dim, bool):
         raise ValueError(f"dim: expected 2 or 3, got {dim!r}")
     q = np.asarray(q, dtype=float)
@@ -1106,7 +1204,7 @@ def _check_problem(W, q, mu, dim) -> tuple[np.ndarray | sp.csc_matrix, np.ndarra
         raise ValueError(f"W: expected shape ({m}, {m}) to match q, got {W.shape}")
     # A finite sum has only finite terms (a NaN or inf term makes it NaN or inf): one vectorised read of W, no
     # temporary of W's size (np.isfinite's: ~8 ms a solve at 1000 contacts); the exact test only if it is not.
-    if not (math.isfinite(float(np.sum(values))) or np.all(np.isfinite(values))):
+    if not values_checked and not (math.isfinite(float(np.sum(values))) or np.all(np.isfinite(values))):
         raise ValueError("W: contains non-finite values")
     return W, q, _as_mu(mu, m // dim), int(dim)
 
@@ -1337,6 +1435,7 @@ class _Counts:
     passes: int = 0
     working_set: int = 0
     joined: int = 0
+    block_held: bool = False
 
     @property
     def total(self) -> int:
@@ -1446,11 +1545,53 @@ def _newton_driver(P: _Problem, r: np.ndarray, x: np.ndarray, tol: float, max_it
     return err, change, 0
 
 
+class _HeldBlock:
+    """The working set's block of the last solve on a ``W`` whose :func:`block_rho` the caller holds, for the next
+    solve on it (a gross-slip cycle's increments sweep the same set, and gathering ``W_AA`` reads ``W`` at every
+    one): the set, ``(W_AA)^T`` and its float32 copy (or an empty array). Keyed on the identity of the caller's
+    ``W`` and ``block_steps`` arrays (weak references: the block goes with its ``W``), and dropped when ``W``'s
+    diagonal or the steps' values are not those held (a ``W`` rebuilt in place). Its ``W`` had its values checked
+    (finite) when it was first solved on."""
+
+    def __init__(self, W: np.ndarray, steps: np.ndarray, member: np.ndarray, block: np.ndarray, block32: np.ndarray):
+        self._W = weakref.ref(W, _forget_block)
+        self._steps = weakref.ref(steps)
+        self._diagonal = W.diagonal().copy()
+        self._step_values = steps.copy()
+        self.member, self.block, self.block32 = member, block, block32
+
+    def serves(self, W: object, steps: object) -> bool:
+        """Whether ``W`` and ``steps`` are the very arrays held, with the diagonal and the steps held."""
+        return (self._W() is W and self._steps() is steps and np.array_equal(W.diagonal(), self._diagonal)
+                and np.array_equal(steps, self._step_values))
+
+    def owned_by(self, ref: weakref.ref) -> bool:
+        """Whether ``ref`` is the weak reference to this block's ``W``."""
+        return self._W is ref
+
+
+# The one block held (the package solves on one W at a time): see _HeldBlock.
+_held: list[_HeldBlock | None] = [None]
+
+
+def _forget_block(ref: weakref.ref) -> None:
+    """Drop the held block when its ``W`` is freed (the block is tens of MB at 1000+ contacts)."""
+    if _held[0] is not None and _held[0].owned_by(ref):
+        _held[0] = None
+
+
+def _holdable(W: object, steps: object) -> bool:
+    """Whether a working-set solve on ``W`` with these steps may hold its block for the next: the caller gives
+    :func:`block_rho` of ``W`` (it holds ``W``) and both are float64 arrays the solver uses as they are (no copy)."""
+    return (steps is not None and isinstance(W, np.ndarray) and W.dtype == np.float64 and W.flags.c_contiguous
+            and W.ndim == 2 and isinstance(steps, np.ndarray) and steps.dtype == np.float64)
+
+
 def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, dim: int,
           method: str = "uzawa", tol: float = 1e-10, max_iter: int = 10000, r0: np.ndarray | None = None,
           rho: float | None = None, raise_on_failure: bool = False,
           block_steps: np.ndarray | None = None, working_set: bool = True,
-          float32_sweeps: bool = False) -> LocalResult:
+          float32_sweeps: bool = False, hold_block: bool = True) -> LocalResult:
     """Solve the local frictional contact problem ``x = W r + q``, ``r`` and ``x`` satisfying Coulomb's law.
 
     Every method stops when :func:`natural_map_error` ``< tol`` (checked on ``x = W r + q`` recomputed
@@ -1518,7 +1659,11 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         raise_on_failure: Raise :class:`LocalSolverError` instead of returning ``converged=False``.
         block_steps: ``block_rho(W, dim)`` (the per-contact steps ``1/||W_aa||_2``) when the caller holds it for
             this very ``W`` (e.g. ``ContactOperators.block_steps``): the same numbers, not computed again at
-            every solve (its batched SVD was ~26 % of a 3D cycle). None: computed here.
+            every solve (its batched SVD was ~26 % of a 3D cycle). None: computed here. Given (float64 arrays, as
+            the package's), the caller also vouches that ``W`` is not changed in place while it solves on it: the
+            working set's block ``W_AA`` (and the check that ``W`` is finite) is then kept from one solve to the
+            next on the same ``W`` and ``block_steps`` arrays, and used again while the set is the same
+            (:attr:`LocalResult.block_held`); a new ``W`` or new steps start afresh. ``hold_block=False`` opts out.
         working_set: ``"uzawa"`` and ``"nsgs"`` on a dense ``W``: sweep only the contacts with a force and those
             whose gap at the start is below :data:`NEAR_MARGIN` times the deepest penetration, on their own rows
             and columns ``W_AA``, then check the whole problem (``x = W r + q`` on all rows, the error on all
@@ -1530,6 +1675,9 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
             ``W_AA`` (half the memory traffic); ``x`` is recomputed exactly in float64 every 200 sweeps and
             before convergence is declared, so the stopping criterion is unchanged, but the iterates differ
             from the float64 ones by rounding (answers within the tolerance, not the same bits).
+        hold_block: With ``block_steps`` and ``working_set``: use the block held from the previous solve on this
+            ``W`` and hold this solve's for the next (see ``block_steps``). False: neither (the block is gathered
+            and ``W`` checked at this solve, and what is held is left as it is).
 
     Returns:
         A :class:`LocalResult`. ``converged`` is False (with a message) when ``max_iter`` is reached or a
@@ -1541,7 +1689,9 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     """
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-    W, q, mu_arr, dim = _check_problem(W, q, mu, dim)
+    holding = (W, block_steps) if hold_block and _holdable(W, block_steps) else None
+    held = _held[0] if holding is not None and _held[0] is not None and _held[0].serves(W, block_steps) else None
+    W, q, mu_arr, dim = _check_problem(W, q, mu, dim, values_checked=held is not None)
     m = q.size
     nc = m // dim
     if block_steps is not None:  # bad input refused before any work
@@ -1575,7 +1725,7 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     else:
         r, x, err, change, status = _solve_full(W, q, mu_arr, dim, method, float(tol), int(max_iter), r,
                                                 r0 is not None, rho_factor, counts, rho_err, bool(working_set),
-                                                bool(float32_sweeps))
+                                                bool(float32_sweeps), holding, held)
     its = counts.total
     converged = status == 1 and bool(np.all(np.isfinite(r)))
     unit = {"uzawa": "sweeps", "nsgs": "sweeps"}.get(method, "iterations")
@@ -1593,7 +1743,8 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     if not converged and raise_on_failure:
         raise LocalSolverError(f"local solver {method!r}: {message}")
     return LocalResult(r, x, int(its), float(err), converged, method, message, float(change),
-                       int(counts.sweeps), int(counts.steps), counts.passes, counts.working_set, counts.joined)
+                       int(counts.sweeps), int(counts.steps), counts.passes, counts.working_set, counts.joined,
+                       counts.block_held)
 
 
 def _storage(W: np.ndarray | sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
@@ -1607,10 +1758,12 @@ def _storage(W: np.ndarray | sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.
 
 def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray, dim: int, method: str, tol: float,
                 max_iter: int, r: np.ndarray, warm: bool, rho_factor: float, counts: _Counts,
-                rho_err: np.ndarray | None = None, working_set: bool = True, float32_sweeps: bool = False
+                rho_err: np.ndarray | None = None, working_set: bool = True, float32_sweeps: bool = False,
+                holding: tuple[np.ndarray, np.ndarray] | None = None, held: _HeldBlock | None = None
                 ) -> tuple[np.ndarray, np.ndarray, float, float, int]:
     """The frictional problem in full dimension: (r, x, error, change, status), see :func:`solve` (``rho_err``:
-    :func:`block_rho` of ``W``, computed here if None)."""
+    :func:`block_rho` of ``W``, computed here if None; ``holding``: the caller's (W, block_steps) whose working set's
+    block is held for the next solve, ``held``: the block held for them, see :class:`_HeldBlock`)."""
     rho_err = block_rho(W, dim) if rho_err is None else rho_err
     if warm:
         # A warm start from another problem may lie outside the cones.
@@ -1618,15 +1771,25 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
     if working_set and method in ("uzawa", "nsgs") and not sp.issparse(W):
         # The sweeps on the closed and nearly closed contacts, read from W's rows (no transposed copy of W).
         W = np.ascontiguousarray(W)
-        x = np.empty(q.size)
-        _recompute_x_by_rows(W, q, r, x, np.arange(q.size))
+        x = np.empty(q.size)  # formed by the kernel on the rows it reads, complete on return
         nsgs = method == "nsgs"
         blocks = np.ascontiguousarray(_diag_blocks(W, dim)) if nsgs else np.zeros((1, dim, dim))
         stats = np.zeros(3, dtype=np.int64)
-        counts.sweeps, err, change, status = _restricted_kernel(
-            W, True, blocks, q, mu_arr, rho_err * (1.0 if nsgs else rho_factor), rho_err, dim, r, x, tol, max_iter,
-            _REFRESH, nsgs, rho_factor if nsgs else 1.0, _SCAN_COS, _SCAN_SIN, NEAR_MARGIN, float32_sweeps, stats)
+        if held is None:
+            held_member, held_block, held_block32 = (np.zeros(0, dtype=np.bool_), np.zeros((0, 0)),
+                                                     np.zeros((0, 0), dtype=np.float32))
+        else:
+            held_member, held_block, held_block32 = held.member, held.block, held.block32
+        counts.sweeps, err, change, status, member, block, block32 = _restricted_core(
+            W, True, False, blocks, q, mu_arr, rho_err * (1.0 if nsgs else rho_factor), rho_err, dim, r, x, tol,
+            max_iter, _REFRESH, nsgs, rho_factor if nsgs else 1.0, _SCAN_COS, _SCAN_SIN, NEAR_MARGIN, float32_sweeps,
+            stats, held_member, held_block, held_block32)
         counts.passes, counts.working_set, counts.joined = (int(v) for v in stats)
+        counts.block_held = held is not None and block is held.block
+        if holding is not None and block.shape[0] > 0 and not counts.block_held:
+            _held[0] = _HeldBlock(holding[0], holding[1], member, block, block32)
+        elif counts.block_held and float32_sweeps and held.block32.shape[0] == 0:
+            held.block32 = block32
         if nsgs and status != 2 and not _in_cones(r, mu_arr, dim):
             # As after the full NSGS below: a rounding step outside the cones is projected if that is as good.
             rp = r.copy()

@@ -6,6 +6,8 @@ References independent of the restricted route: the full sweeps (``working_set=F
 26), and the natural-map error recomputed on the whole problem by :func:`natural_map_error`.
 """
 
+import gc
+
 import numpy as np
 import pytest
 from support.fclib_problems import needs_fclib, problem
@@ -113,3 +115,109 @@ def test_float32_sweeps_meet_the_tolerance(sphere_flat):
     assert natural_map_error(W, q, single.r, 0.5, 3) < TOL
     # The same bound as above: within the tolerance of the one solution.
     assert np.abs(single.r - exact.r).max() <= 1e-7 * np.abs(exact.r).max()
+
+
+def _own(sphere_flat):
+    """The fixture's W as an array of this test's own (the block held is keyed on the array) and its steps."""
+    W, xy = sphere_flat
+    W = W.copy()
+    return W, xy, ls.block_rho(W, 3)
+
+
+def test_held_block_same_bits_over_a_cycle(sphere_flat):
+    """A fretting cycle of increments on one W with its steps given (as the package solves): from the second
+    increment on, the sweeps run on the block W_AA held from the increment before, and every answer is the full
+    sweeps' to the last bit (the same W_AA values, so the same sweeps).
+
+    The set is the same at every increment because these half-spaces are alike (no normal-tangential coupling in
+    W: the normal forces, hence the loaded contacts and the gaps, do not move with the slip); the solve from zero
+    before the cycle starts from a larger set (every penetrating contact), so the first increment gathers its own.
+    """
+    W, xy, steps = _own(sphere_flat)
+    r_held = r_full = solve(W, sphere_flat_q(xy, 40.0, 0.5, 0.6), 0.5, 3, tol=TOL, block_steps=steps).r
+    held = []
+    for k in range(1, 9):
+        q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.6 * np.cos(2.0 * np.pi * k / 8))
+        restricted = solve(W, q, 0.5, 3, tol=TOL, r0=r_held, block_steps=steps)
+        full = solve(W, q, 0.5, 3, tol=TOL, r0=r_full, working_set=False, hold_block=False)
+        assert restricted.converged and full.converged
+        assert np.array_equal(restricted.r, full.r) and np.array_equal(restricted.x, full.x)
+        held.append(restricted.block_held)
+        r_held, r_full = restricted.r, full.r
+    assert held == [False] + [True] * 7
+
+
+def test_held_block_not_used_for_a_changed_W(sphere_flat):
+    """W rebuilt in place (the same array, new values; its steps recomputed into the same array): the block held
+    for the old values is not used, and the answer is a fresh solve's on the new W (with the old block, r would be
+    off by the factor of 2 between the two W)."""
+    W, xy, steps = _own(sphere_flat)
+    q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.6)
+    first = solve(W, q, 0.5, 3, tol=TOL, block_steps=steps)
+    second = solve(W, q, 0.5, 3, tol=TOL, block_steps=steps)
+    assert second.block_held and np.array_equal(second.r, first.r)  # the same set from zero: held
+    W *= 2.0
+    steps[:] = ls.block_rho(W, 3)
+    changed = solve(W, q, 0.5, 3, tol=TOL, block_steps=steps)
+    fresh = solve(W.copy(), q, 0.5, 3, tol=TOL, hold_block=False)
+    assert not changed.block_held
+    assert np.array_equal(changed.r, fresh.r) and np.array_equal(changed.x, fresh.x)
+
+
+def test_a_W_not_held_is_checked(sphere_flat):
+    """W's check for non-finite values is skipped only for the very array whose block is held (checked when it was
+    first solved on): another W with the same steps, a NaN in it, is refused before any sweep."""
+    W, xy, steps = _own(sphere_flat)
+    q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.6)
+    assert solve(W, q, 0.5, 3, tol=TOL, block_steps=steps).converged
+    assert solve(W, q, 0.5, 3, tol=TOL, block_steps=steps).block_held
+    other = W.copy()
+    other[3, 0] = np.nan
+    with pytest.raises(ValueError, match="W: contains non-finite values"):
+        solve(other, q, 0.5, 3, tol=TOL, block_steps=steps)
+
+
+def test_start_at_the_answer_gives_the_whole_x(sphere_flat):
+    """From the answer the restricted route forms x only on the rows the sweeps read (the outside contacts'
+    tangential rows wait for the check): returned at once, x is complete, the full route's from the same start to
+    the last bit."""
+    W, xy = sphere_flat
+    q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.6)
+    answer = solve(W, q, 0.5, 3, tol=TOL, working_set=False).r
+    full = solve(W, q, 0.5, 3, tol=TOL, r0=answer, working_set=False)
+    again = solve(W, q, 0.5, 3, tol=TOL, r0=answer)
+    assert full.iterations == 0 and again.converged and again.iterations == 0
+    assert np.count_nonzero(again.x[1::3]) == xy.shape[0]  # every tangential row formed (a uniform slip: none is 0)
+    assert np.array_equal(again.r, full.r) and np.array_equal(again.x, full.x)
+
+
+def test_held_block_across_a_join_and_in_float32(sphere_flat):
+    """The block held is used only for its own set: a solve that starts from a smaller set gathers that one, and
+    once the rim joins and the set is the held one, sweeps on the held block (the same bits as the solve that held
+    it). float32 sweeps hold their float32 copy beside it and meet the tolerance on the whole problem."""
+    W, xy, steps = _own(sphere_flat)
+    q = sphere_flat_q(xy, radius=40.0, approach=0.5, slip=0.3)
+    exact = solve(W, q, 0.5, 3, tol=1e-14, max_iter=100000, working_set=False)
+    centre = np.repeat(np.hypot(*xy.T) < 2.0, 3)
+    r0 = np.where(centre, 5.0 * exact.r, 0.0)  # the rim held open at the start (test_contacts_outside_the_start_join)
+    first = solve(W, q, 0.5, 3, tol=TOL, r0=r0, block_steps=steps)
+    second = solve(W, q, 0.5, 3, tol=TOL, r0=r0, block_steps=steps)
+    assert first.joined > 0 and not first.block_held
+    assert second.joined == first.joined and second.block_held
+    assert np.array_equal(second.r, first.r) and np.array_equal(second.x, first.x)
+    singles = [solve(W, q, 0.5, 3, tol=TOL, block_steps=steps, float32_sweeps=True) for _ in range(2)]
+    assert singles[1].block_held
+    for single in singles:
+        assert single.converged and natural_map_error(W, q, single.r, 0.5, 3) < TOL
+        # Within the tolerance of the one solution (see test_contacts_outside_the_start_join for the 1e-7).
+        assert np.abs(single.r - exact.r).max() <= 1e-7 * np.abs(exact.r).max()
+
+
+def test_held_block_goes_with_its_W(sphere_flat):
+    """The block held (tens of MB at 1000+ contacts) is dropped when its W is freed."""
+    W, xy, steps = _own(sphere_flat)
+    assert solve(W, sphere_flat_q(xy, 40.0, 0.5, 0.6), 0.5, 3, tol=TOL, block_steps=steps).converged
+    assert ls._held[0] is not None and ls._held[0].serves(W, steps)
+    del W
+    gc.collect()
+    assert ls._held[0] is None
