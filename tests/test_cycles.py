@@ -80,7 +80,8 @@ def test_resume_after_kill_gives_the_uninterrupted_answer(tmp_path):
     row once, and the resumed run started from the checkpoint (cycle 5), not from cycle 0."""
     args = ["--set", "geometry.nx=20", "--set", "geometry.ny=20", "--set", "output.xdmf=false",
             "--set", "output.plots=false", "--set", f"loading.cycles={RESUME_END}",
-            "--set", "solver.cycle_kernel=false", "--set", f"output.snapshot_cycles=[{CHECKPOINT_AT}, {RESUME_END}]", "--set", "output.checkpoint_interval=1e6",
+            "--set", "solver.cycle_kernel=false", "--set", f"output.snapshot_cycles=[{CHECKPOINT_AT}, {RESUME_END}]",
+            "--set", "output.checkpoint_interval=1e6",
             "--set", "output.contact_profiles=false", "--quiet"]
     cmd = [sys.executable, "-m", "dolfinx_fretting", "run", "stromberg-block"]
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
