@@ -42,7 +42,7 @@ out = Path("results/demo_cylinder_flat")
 rank0 = MPI.COMM_WORLD.rank == 0  # under mpirun every rank runs the scenes; rank 0 prints and compares
 if "CI" in os.environ:       # CI-sized: a coarse contact mesh, 2 short cycles
     cycles, contact_mesh_size = 2, 0.02
-    extra = ["loading.increments_per_cycle=16", "output.xdmf=false"]
+    extra = ["loading.increments_per_cycle=8", "output.xdmf=false"]
 else:
     extra = []
 # -

@@ -5,7 +5,9 @@ with De Saxce's bipotential projection onto the Coulomb cone; the Archard law up
 """
 
 import hashlib
+import importlib.metadata
 import os
+import re
 import sys
 import tempfile
 import warnings
@@ -13,8 +15,14 @@ from pathlib import Path
 
 __version__ = "0.1.0"
 
-#: The modules with numba-compiled functions (the cycle loop calls into the wear and solver modules).
-_COMPILED = ("cycling.py", "local_solvers.py", "materials.py", "plastic_zone.py", "plasticity.py", "wear.py")
+#: The modules with numba-compiled functions (the cycle loop calls into the wear and solver modules; finite
+#: sliding's compiled cycle, in sliding.py, calls the cycle loop and contact.py's closest-segment search).
+_COMPILED = ("contact.py", "cycling.py", "local_solvers.py", "materials.py", "plastic_zone.py", "plasticity.py",
+             "sliding.py", "wear.py")
+#: The distributions whose build the machine code depends on besides the sources: numba's own index is keyed by
+#: numba's version only, and the Python version only through the file names (two venvs with one Python and two
+#: numpy builds would load each other's code).
+_BUILD = ("numba", "llvmlite", "numpy")
 
 
 def _numba_cache_dir() -> str:
@@ -23,12 +31,20 @@ def _numba_cache_dir() -> str:
     Numba revalidates a cached function against its own file only: a compiled function that calls one of
     another module (the cycle loop calls the wear update and the contact kernels) keeps its stale machine
     code when only the callee's file changes, and silently computes with the old callee. Keying the whole
-    cache on the sources of all the compiled modules makes any change start a fresh cache. The base is the
+    cache on the sources of all the compiled modules makes any change start a fresh cache. The key also holds
+    the interpreter (``sys.prefix``: each venv, each stack, its own folder) and the versions of numba, llvmlite
+    and numpy, so that two stacks sharing a home never load each other's machine code. The base is the
     user's ``NUMBA_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME`` or ``~/.cache``; an unwritable base falls
     back to the temporary folder (numba itself would silently fall back to the unkeyed ``__pycache__``).
     """
     here = Path(__file__).resolve().parent
     digest = hashlib.sha256(__version__.encode())
+    digest.update(f"{sys.prefix}|{sys.version}".encode())
+    for name in _BUILD:
+        try:
+            digest.update(f"|{name} {importlib.metadata.version(name)}".encode())
+        except importlib.metadata.PackageNotFoundError:  # not installed: numba would not run either
+            digest.update(f"|{name} missing".encode())
     for name in _COMPILED:
         try:
             digest.update((here / name).read_bytes())
@@ -38,7 +54,8 @@ def _numba_cache_dir() -> str:
     base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "dolfinx_fretting",
         "numba")
-    if os.path.basename(os.path.normpath(base)) == key:  # inherited from a parent process that set it
+    # Inherited from a parent process that set it: its key (another stack's, if the parent ran the other venv).
+    if re.fullmatch(r"[0-9a-f]{16}", os.path.basename(os.path.normpath(base))):
         base = os.path.dirname(os.path.normpath(base))
     for folder in (os.path.join(base, key),
                    os.path.join(tempfile.gettempdir(), f"dolfinx_fretting-numba-{os.getuid()}", key)):

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from support.images import assert_png
 
+from dolfinx_fretting import cli
 from dolfinx_fretting.compare import (COMPARE_PICTURES, SUMMARY_FIELDS, compare_runs, default_label, load_run,
                                       read_summary_csv)
 from dolfinx_fretting.io import CYCLE_FIELDS, HISTORY_FIELDS, PROFILE_FIELDS
@@ -254,20 +255,36 @@ def test_cli(tmp_path, two_runs):
         assert str(out / name) in res.stdout
         assert (out / name).is_file()
     assert "ep" in res.stdout and f"{sp['max_pressure']:.4g}" in res.stdout
-    # bad input: exit 2 with a message naming the problem
+
+
+def _main(capsys, *args: str) -> tuple[int, str]:
+    """``dolfinx-fretting compare ARGS`` in this process (cli.main, which the console script calls): its exit
+    code and stderr. An argparse refusal exits with its code."""
+    try:
+        code = cli.main(["compare", *args])
+    except SystemExit as exc:
+        code = exc.code
+    return code, capsys.readouterr().err
+
+
+def test_cli_bad_input_exits_2_naming_the_problem(tmp_path, two_runs, capsys):
+    """Bad input: exit 2 with a message naming the problem. In this process (cli.main, the function the console
+    script and ``python -m dolfinx_fretting`` call: test_cli above runs the latter once): five child processes
+    here cost ~7 s a stack, each mostly the interpreter's start-up."""
+    fe, fp, _, _ = two_runs
     missing = tmp_path / "no_such_run"
-    res = _cli(str(fe), str(missing), "--out", str(tmp_path / "x"))
-    assert res.returncode == 2 and str(missing) in res.stderr, res.stderr
+    code, err = _main(capsys, str(fe), str(missing), "--out", str(tmp_path / "x"))
+    assert code == 2 and str(missing) in err, err
     empty = tmp_path / "empty_run"
     empty.mkdir()
-    res = _cli(str(empty), "--out", str(tmp_path / "x"))
-    assert res.returncode == 2 and "empty_run" in res.stderr, res.stderr
-    res = _cli(str(fe), str(fp), "--out", str(tmp_path / "x"), "--labels", "a")
-    assert res.returncode == 2 and "label" in res.stderr
-    res = _cli(str(fe), "--out", str(tmp_path / "x"), "--cycles", "1,x")
-    assert res.returncode == 2 and "--cycles" in res.stderr
-    res = _cli(str(fe))
-    assert res.returncode == 2 and "--out" in res.stderr
+    code, err = _main(capsys, str(empty), "--out", str(tmp_path / "x"))
+    assert code == 2 and "empty_run" in err, err
+    code, err = _main(capsys, str(fe), str(fp), "--out", str(tmp_path / "x"), "--labels", "a")
+    assert code == 2 and "label" in err, err
+    code, err = _main(capsys, str(fe), "--out", str(tmp_path / "x"), "--cycles", "1,x")
+    assert code == 2 and "--cycles" in err, err
+    code, err = _main(capsys, str(fe))
+    assert code == 2 and "--out" in err, err
 
 
 def test_obstacle_note_reads_the_run_description(tmp_path):
