@@ -4,8 +4,8 @@
 # ./tasks.sh docs builds the API reference (docs/, Sphinx) into docs/_build/html.
 #
 # Two stacks: Debian's DOLFINx 0.5.2 (.venv, the default) and today's DOLFINx 0.11 from the
-# dolfinx-solver-real wheel (.venv-current). `test` runs the suite on both and fails if the second stack
-# cannot be set up; `run` and `bench` use DOLFINX_FRETTING_STACK (debian by default, or current).
+# dolfinx-solver-real wheel (.venv-current). `test` runs the suite on both (their default suites side by side,
+# then the collective tests) and fails if the second stack cannot be set up; `run` and `bench` use DOLFINX_FRETTING_STACK (debian by default, or current).
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 cd "$here"
@@ -24,21 +24,28 @@ loud() {  # a message nobody can miss in a CI log
   printf '\n%s\n# %s\n%s\n\n' "$line" "$*" "$line" >&2
 }
 
-# run_suite NAME PYTHON LAUNCHER... -- [pytest options]: the default suite, then the collective tests on 2 and 3
-# ranks (python -m mpi4py: an error on one rank aborts them all). Returns non-zero if any part failed.
-run_suite() {
-  local name=$1 python=$2 launcher=() status=0 t0=$SECONDS n
+# The default suite (pytest, not slow) of one stack, into LOG: run_pytest NAME PYTHON LOG [pytest options]. The two
+# stacks' suites run at the same time (each is one process; the machines have 2 cores), each into its own log,
+# printed whole once both have finished; pytest's cache is off (both would write .pytest_cache at once).
+run_pytest() {
+  local name=$1 python=$2 log=$3
+  shift 3
+  {
+    echo "[test] $name stack: $("$python" -c 'from mpi4py import MPI; import dolfinx; print("DOLFINx", dolfinx.__version__)' \
+      2>/dev/null || echo 'DOLFINx not importable')"
+    "$python" -m pytest -q -p no:cacheprovider -m "not slow" tests "$@"
+  } >"$log" 2>&1
+}
+
+# run_parallel NAME PYTHON LAUNCHER...: the collective tests on 2 and 3 ranks (python -m mpi4py: an error on one
+# rank aborts them all), one stack after the other (they start several processes each). Non-zero if any failed.
+run_parallel() {
+  local name=$1 python=$2 status=0 n
   shift 2
-  while [ "$1" != "--" ]; do launcher+=("$1"); shift; done
-  shift
-  echo "[test] $name stack: $("$python" -c 'from mpi4py import MPI; import dolfinx; print("DOLFINx", dolfinx.__version__)' \
-    2>/dev/null || echo 'DOLFINx not importable')"
-  "$python" -m pytest -q -m "not slow" tests "$@" || status=1
   for n in 2 3; do
-    echo "[test] $name stack, ${launcher[0]##*/} -n $n: tests/test_parallel.py"
-    "${launcher[@]}" -n "$n" "$python" -m mpi4py -m pytest -q -p no:cacheprovider tests/test_parallel.py || status=1
+    echo "[test] $name stack, ${1##*/} -n $n: tests/test_parallel.py"
+    "$@" -n "$n" "$python" -m mpi4py -m pytest -q -p no:cacheprovider tests/test_parallel.py || status=1
   done
-  times+=("$name: $((SECONDS - t0)) s ($([ $status = 0 ] && echo passed || echo FAILED))")
   return $status
 }
 
@@ -64,16 +71,37 @@ case "$cmd" in
     export DOLFINX_FRETTING_EXPECT_DOCS=1
     times=()
     status=0
-    run_suite debian .venv/bin/python mpirun --oversubscribe -- "$@" || status=1
+    logs=$(mktemp -d)
+    trap 'kill $(jobs -p) 2>/dev/null || true' INT TERM  # no suite left running after an interrupt
+    t0=$SECONDS
+    run_pytest debian .venv/bin/python "$logs/debian.log" "$@" &
+    debian_pid=$!
     if [ $current_ready = 1 ]; then
-      # test_stacks.py ran above (it starts both stacks in subprocesses): not twice; nor the docs build.
-      run_suite current .venv-current/bin/python .venv-current/bin/mpiexec -- --ignore=tests/test_stacks.py \
-        --ignore=tests/test_docs.py "$@" || status=1
-    else
-      times+=("current: NOT RUN (set-up failed)")
-      status=1
+      # test_stacks.py runs in the debian suite (it starts both stacks in subprocesses): not twice; nor the docs build.
+      run_pytest current .venv-current/bin/python "$logs/current.log" --ignore=tests/test_stacks.py \
+        --ignore=tests/test_docs.py "$@" &
+      current_pid=$!
     fi
-    echo "[test] wall time per stack: ${times[*]/%/;}"
+    wait $debian_pid && debian_status=passed || debian_status=FAILED
+    cat "$logs/debian.log"
+    if [ $current_ready = 1 ]; then
+      wait $current_pid && current_status=passed || current_status=FAILED
+      cat "$logs/current.log"
+    fi
+    times+=("both stacks' default suites side by side: $((SECONDS - t0)) s (debian $debian_status"\
+"$([ $current_ready = 1 ] && echo ", current $current_status" || echo ", current NOT RUN (set-up failed)"))")
+    [ $debian_status = passed ] && { [ $current_ready = 0 ] || [ $current_status = passed ]; } || status=1
+    [ $current_ready = 1 ] || status=1
+    rm -rf "$logs"
+    t0=$SECONDS
+    run_parallel debian .venv/bin/python mpirun --oversubscribe || status=1
+    times+=("debian MPI: $((SECONDS - t0)) s")
+    if [ $current_ready = 1 ]; then
+      t0=$SECONDS
+      run_parallel current .venv-current/bin/python .venv-current/bin/mpiexec || status=1
+      times+=("current MPI: $((SECONDS - t0)) s")
+    fi
+    echo "[test] wall time: ${times[*]/%/;}"
     if [ $status != 0 ]; then
       loud "./tasks.sh test FAILED: ${times[*]/%/;}"
     fi
