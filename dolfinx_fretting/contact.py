@@ -1347,7 +1347,8 @@ class ElasticBody(Obstacle):
             normals, which on a curved slave tilt by x/R from the contact plane), its tributary measure ``D_jj``; the
             pressure read is the multiplier. It passes the contact patch test on non-matching meshes, which
             node-to-segment and node-to-face pairing do not. With friction make the flatter surface the master, in both
-            formulations. With ``sliding = "finite"`` a re-pairing recomputes D and M in the current configuration
+            formulations. Without friction make the coarser surface the slave: a finer slave's nodes follow the
+            coarser master's chords and their pressures alternate at its node spacing (validation rows 58, 59). With ``sliding = "finite"`` a re-pairing recomputes D and M in the current configuration
             (:func:`dolfinx_fretting.sliding.repair`, no refactorisation), the frames kept; the slave's share of the
             wear is kept on its nodes by their own measure, the master's on the master's nodes.
     """
