@@ -206,6 +206,9 @@ def _add_map_parser(sub) -> None:
     add("--energy-threshold", type=float, default=fretting_map.GROSS_SLIP_ENERGY_RATIO, metavar="A_T",
         help="energy ratio A = E_d / (4 delta* Q*) at and above which a cycle is gross slip (default 0.2: Fouvry's "
              "sphere/plane transition)")
+    add("--axis", default="imposed", metavar="imposed|contact",
+        help="the picture's abscissa: the imposed amplitude delta* (default) or the contact's own delta* - C_b Q* "
+             "(a sphere: the bulk compliance C_b from the loop's slope at its reversals less Mindlin's)")
     add("--quiet", action="store_true", help="print only the final table")
     add("--verbose", action="store_true", help="also print the form compiler's build log (hidden by default)")
     add("--overwrite", action="store_true", help="replace the map --out holds (its table, picture and runs)")
@@ -222,6 +225,7 @@ def _map(args: argparse.Namespace) -> int:
         plan = fretting_map.plan_map(args.scene, fretting_map.parse_values(args.normal, "--normal"),
                                      fretting_map.parse_values(args.amplitude, "--amplitude"), args.cycles,
                                      args.overrides)
+        fretting_map.check_axis(plan, args.axis)
         for point in plan:  # every run's size before the first starts (SizeError is a SceneError)
             check_size(point.scene, MPI.COMM_WORLD, ignore=args.ignore_size)
         fretting_map.check_map_folder(args.out, overwrite=args.overwrite)
@@ -232,7 +236,7 @@ def _map(args: argparse.Namespace) -> int:
     try:
         rows = fretting_map.run_map(plan, args.out, MPI.COMM_WORLD, quiet=args.quiet,
                                     threshold=args.energy_threshold, overwrite=args.overwrite,
-                                    ignore_size=args.ignore_size)
+                                    ignore_size=args.ignore_size, axis=args.axis)
     except OutputFolderError as exc:
         _say_error("dolfinx-fretting map", exc)
         return 2

@@ -14,8 +14,9 @@ import numpy as np
 from . import friction, local_solvers
 from .commit import SlidingMonitor, acceleration, wear_coefficients
 from .contact import paired_contact_set
-from .cycling import (N_ROW, NOT_BRACKETED, SATURATED, SWEEPS_EXHAUSTED, TRIAL_NOT_FINITE, run_force_increments,
-                      run_increments)
+from .cycling import (N_ROW, NOT_BRACKETED, SATURATED, SWEEPS_EXHAUSTED, TRIAL_NOT_FINITE, FrictionEvolution,
+                      run_force_increments, run_increments)
+from .laws import Archard, EnergyWear
 from .increments import (force_names, load_control_message, on_rank0, per_zone, sweeps_message, target_items,
                          trial_not_finite_message)
 from .loading import (MAX_EVAL, CyclePath, Displacement, Force, not_bracketed_message, not_reached_message,
@@ -120,8 +121,11 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
 
     The friction coefficients are the state's (:func:`~dolfinx_fretting.friction.coefficients`): a friction law of
     the cycles holds them over the cycle (one compiled call); one of the dissipated energy changes them after every
-    increment, so the loop then runs one increment per call, with each contact's energy and mu (and an energy wear
-    law's rate, alpha mu) updated in between (``benchmarks/results/evolving_friction.md`` measures the cost)."""
+    increment. A table of the energy runs inside the compiled loop too (one call for the cycle:
+    :class:`~dolfinx_fretting.cycling.FrictionEvolution`, with the wear rates of the shipped laws, Archard's and
+    Fouvry's ``alpha mu``); the user's function of the energy, or a wear law of the user's, runs one increment per
+    call, with each contact's energy and mu (and the wear rate) updated in Python in between: the same arithmetic
+    (``benchmarks/results/evolving_friction.md`` measures both)."""
     contact_set = operators.contact.contact_set
     n, m, dim = obstacle.shape[0], contact_set.nc * contact_set.dim, contact_set.dim
     forced = np.zeros(obstacle.shape[1], dtype=bool) if forced is None else np.asarray(forced, dtype=bool)
@@ -131,8 +135,11 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
     targets = np.ascontiguousarray(obstacle, dtype=float)
     found = targets.copy()   # the increments' obstacle displacements (found where forced)
     failure, last_force = np.zeros(4), np.zeros(obstacle.shape[1])
-    per_increment = friction.tracks_energy(operators.contact)
     scale = acceleration(laws)
+    evolution = _friction_evolution(operators, laws, state, scale)
+    per_increment = friction.tracks_energy(operators.contact) and evolution is None
+    if evolution is None:
+        evolution = FrictionEvolution.held()
     warm_new = None
 
     def work():  # rank 0: the compiled loop; its result is broadcast, the warm start stays on rank 0
@@ -164,8 +171,9 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
         # arrays are C-contiguous views, so the kernel writes its results in place either way.
         calls = [slice(j, j + 1) for j in range(n)] if per_increment else [slice(0, n)]
         for part in calls:
+            # (an evolving law's coefficients are a new array: the loop may change them in place)
             mu = friction.coefficients(operators.contact, current)
-            if active:   # factors made with another mu are stale (an evolving law changed it)
+            if active and not evolution.evolve:   # factors made with another mu are stale (an evolving law changed it)
                 stale = np.any(cache.factor_mu[part] != mu, axis=1)
                 cache.lu_ok[part][stale] = False
                 cache.factor_mu[part] = mu
@@ -177,14 +185,14 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
                     r_warm[part], k, solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r[part],
                     out_x[part], out_y[part], out_wear[part], out_states[part], rows[part], found[part],
                     solves[part], active, cache.pattern[part], cache.lu[part], cache.piv[part], cache.lu_ok[part],
-                    cache.counts, failure, last_force)
+                    cache.counts, failure, last_force, cache.factor_mu[part], *evolution.arguments())
             else:
                 done, status, err = run_increments(
                     Wc, rho, mu, dim, contact_set.gap0, wear_gap, G, D[part], Q, S[part], contact_set.tributary,
                     contact_set.abscissa, y, r_last, r_warm[part], warm, k, solver.tol, solver.max_iter,
                     local_solvers._REFRESH, True, out_r[part], out_x[part], out_y[part], out_wear[part],
                     out_states[part], rows[part], active, cache.pattern[part], cache.lu[part], cache.piv[part],
-                    cache.lu_ok[part], cache.counts)
+                    cache.lu_ok[part], cache.counts, cache.factor_mu[part], *evolution.arguments())
             if done < part.stop - part.start:
                 step = part.start + done + 1
                 if status > 2:
@@ -196,6 +204,8 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
             if per_increment:
                 current = replace(current, friction_energy=friction.accumulated_energy(
                     operators.contact, current, out_r[part.start], out_x[part.start], scale))
+        if evolution.evolve:   # the energy the loop accumulated (a copy of the state's: it stays unchanged)
+            current = replace(current, friction_energy=evolution.energy)
         # Every increment of the cycle, not only the last: one product of the outside rows with the cycle's forces.
         operators.check_window(out_r, found, factors, solver.tol, cycle=True)
         if contact_set.surface_mass is not None:   # the peak of the pressure read (pressure_recovery "smoothed")
@@ -218,6 +228,25 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
                     record={k: records[k][-1].item() for k in INCREMENT_COLUMNS},
                     status=status, warm=warm_new if operators.comm.rank == 0 else None, friction_energy=energy_new)
     return CycleResult(records, found, factors, final, outs if keep else None, True)
+
+
+def _friction_evolution(operators: ContactOperators, laws: tuple, state: ContactState,
+                        scale: float) -> FrictionEvolution | None:
+    """The compiled loop's friction of the energy (a copy of the state's energy), or None when no zone's friction
+    follows the energy, or one follows the user's function, or a wear law is not one whose rate is affine in mu
+    (Archard's, Fouvry's): then the cycle runs one increment per call."""
+    contact = operators.contact
+    if not friction.tracks_energy(contact):
+        return None
+    tables = friction.energy_tables(contact)
+    if tables is None or not all(law is None or isinstance(law, (Archard, EnergyWear)) for law in laws):
+        return None
+    # k = k0 + k1 mu exactly as the laws compute it (Archard: k0 = k acceleration, k1 = 0; Fouvry: k0 = 0,
+    # k1 = alpha acceleration, so k0 + k1 mu is alpha acceleration mu to the bit)
+    base = wear_coefficients(operators, laws, True, np.zeros(contact.nc))
+    per_mu = wear_coefficients(operators, laws, True, np.ones(contact.nc)) - base
+    energy = np.zeros(contact.nc) if state.friction_energy is None else state.friction_energy.copy()
+    return FrictionEvolution(energy, scale, *tables, base, per_mu)
 
 
 def _records(rows: np.ndarray, solves: np.ndarray) -> dict[str, np.ndarray]:

@@ -37,6 +37,15 @@ cached pattern: the root finder would stop on other trials and move the answers 
 
 A failed increment stops the loop: the converged increments before it are committed (their wear is
 legitimate), the failed one leaves no trace in ``wear_gap``, ``y`` or ``r_warm``.
+
+Friction that evolves with the dissipated energy (:class:`~dolfinx_fretting.laws.EvolvingFriction` of a table,
+variable ``"energy"``) runs inside the loop too (:class:`FrictionEvolution`): before each increment every contact of
+such a zone takes ``mu = interp(E)`` from its table at its accumulated energy density E (``np.interp``'s formula),
+the wear rate ``k = k0 + k1 mu`` (Archard: k1 = 0; Fouvry's energy law: k0 = 0, k1 = alpha x acceleration) and, with
+the cached patterns, an increment's factors made with another mu are dropped; after it E grows by
+``scale (-r_t . dx_t) / A`` (:func:`~dolfinx_fretting.friction.energy_density`'s terms, in its order). That is the
+per-increment path's arithmetic step for step (``cycles.compiled_cycle`` with the user's function: one call per
+increment), so the answers are the same to rounding.
 """
 
 from __future__ import annotations
@@ -50,7 +59,7 @@ from .loading import FORCE_SWEEPS
 from .local_solvers import NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _recompute_x, _restricted_kernel
 from .wear import ROW_FIELDS, commit_increment
 
-__all__ = ["run_increments", "run_force_increments", "ActivePatternCache", "N_ROW"]
+__all__ = ["run_increments", "run_force_increments", "ActivePatternCache", "FrictionEvolution", "N_ROW"]
 
 #: Number of columns of the per-increment output (the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then
 #: local iterations and local error).
@@ -137,6 +146,103 @@ def _lu_solve(LU: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
         for j in range(i + 1, m):
             s -= LU[i, j] * b[j]
         b[i] = s / LU[i, i]
+
+
+class FrictionEvolution:
+    """Friction of the dissipated energy inside the compiled loop: the arrays the kernels read (see the module doc).
+
+    Args:
+        energy: (nc,) each contact's accumulated dissipated energy density (in/out: the loop adds each increment's).
+        scale: The factor on each increment's energy (the wear law's acceleration in a cycle).
+        table_of: (nc,) each contact's table (a row of ``abscissae``), -1 where mu is held over the cycle.
+        abscissae, values: (tables, L) the tables' rows, padded past ``lengths``.
+        lengths: (tables,) each table's rows.
+        wear_base, wear_per_mu: (nc,) the wear rate's ``k0`` and ``k1`` (``k = k0 + k1 mu``).
+    """
+
+    def __init__(self, energy: np.ndarray, scale: float, table_of: np.ndarray, abscissae: np.ndarray,
+                 values: np.ndarray, lengths: np.ndarray, wear_base: np.ndarray, wear_per_mu: np.ndarray):
+        self.evolve = True
+        self.energy = np.ascontiguousarray(energy, dtype=float)
+        self.scale = float(scale)
+        self.table_of = np.ascontiguousarray(table_of, dtype=np.int64)
+        self.abscissae = np.ascontiguousarray(abscissae, dtype=float)
+        self.values = np.ascontiguousarray(values, dtype=float)
+        self.lengths = np.ascontiguousarray(lengths, dtype=np.int64)
+        self.wear_base = np.ascontiguousarray(wear_base, dtype=float)
+        self.wear_per_mu = np.ascontiguousarray(wear_per_mu, dtype=float)
+
+    @classmethod
+    def held(cls) -> "FrictionEvolution":
+        """No evolution (mu held over the cycle): the kernels' arguments, unused."""
+        out = cls(np.zeros(1), 0.0, np.full(1, -1), np.zeros((1, 1)), np.zeros((1, 1)), np.ones(1), np.zeros(1),
+                  np.zeros(1))
+        out.evolve = False
+        return out
+
+    def arguments(self) -> tuple:
+        """The kernels' trailing arguments, in order."""
+        return (self.evolve, self.energy, self.scale, self.table_of, self.abscissae, self.values, self.lengths,
+                self.wear_base, self.wear_per_mu)
+
+
+@numba.njit(cache=True)
+def _interp(x: float, xp: np.ndarray, fp: np.ndarray, n: int) -> float:
+    """``np.interp(x, xp[:n], fp[:n])`` for one x, NumPy's arithmetic: held at the end values outside, else
+    ``slope (x - xp[j]) + fp[j]`` with ``xp[j] <= x < xp[j + 1]`` (x at a breakpoint: its value)."""
+    if x < xp[0]:
+        return fp[0]
+    if x >= xp[n - 1]:
+        return fp[n - 1]
+    j = 0
+    while xp[j + 1] <= x:
+        j += 1
+    if xp[j] == x:
+        return fp[j]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    return slope * (x - xp[j]) + fp[j]
+
+
+@numba.njit(cache=True)
+def _friction_before(j: int, mu: np.ndarray, k: np.ndarray, energy: np.ndarray, table_of: np.ndarray,
+                     abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray, wear_base: np.ndarray,
+                     wear_per_mu: np.ndarray, active: bool, factor_mu: np.ndarray, lu_ok: np.ndarray) -> None:
+    """Increment ``j``'s mu (the tables at the energy), wear rate and stale factors (see the module doc)."""
+    nc = mu.size
+    for a in range(nc):
+        t = table_of[a]
+        if t >= 0:
+            mu[a] = _interp(energy[a], abscissae[t], values[t], lengths[t])
+        k[a] = wear_base[a] + wear_per_mu[a] * mu[a]
+    if active:
+        stale = False
+        for a in range(nc):
+            if factor_mu[j, a] != mu[a]:   # (NaN: no factor yet)
+                stale = True
+            factor_mu[j, a] = mu[a]
+        if stale:
+            lu_ok[j] = False
+
+
+@numba.njit(cache=True)
+def _friction_after(r: np.ndarray, x: np.ndarray, dim: int, tributary: np.ndarray, scale: float,
+                    energy: np.ndarray) -> None:
+    """Each contact's energy density after a converged increment: ``E += scale (-r_t . dx_t) / A`` (0 where A is 0),
+    term by term as :func:`~dolfinx_fretting.friction.energy_density`."""
+    for a in range(energy.size):
+        work = 0.0
+        for c in range(1, dim):
+            work = r[a * dim + c] * x[a * dim + c] if c == 1 else work + r[a * dim + c] * x[a * dim + c]
+        density = -work / tributary[a] if tributary[a] > 0 else 0.0
+        energy[a] = energy[a] + scale * density
+
+
+@numba.njit(cache=True)
+def _all_zero(mu: np.ndarray) -> bool:
+    for a in range(mu.size):
+        if mu[a] != 0.0:
+            return False
+    return True
 
 
 @numba.njit(cache=True)
@@ -337,8 +443,10 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                    r_warm: np.ndarray, warm: int, k: np.ndarray, tol: float, max_iter: int, refresh: int,
                    keep: bool, out_r: np.ndarray, out_x: np.ndarray, out_y: np.ndarray, out_wear: np.ndarray,
                    out_states: np.ndarray, rows: np.ndarray, active: bool, pattern: np.ndarray,
-                   lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray
-                   ) -> tuple[int, int, float]:
+                   lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, factor_mu: np.ndarray,
+                   evolve: bool, energy: np.ndarray, energy_scale: float, table_of: np.ndarray,
+                   abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray, wear_base: np.ndarray,
+                   wear_per_mu: np.ndarray) -> tuple[int, int, float]:
     """Solve ``D.shape[0]`` increments in sequence, committing each converged one.
 
     Args:
@@ -364,7 +472,9 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         keep: Store every increment's r, x, y, wear_gap and states in the ``out_*`` arrays ((n, ...) each).
         rows: (n, N_ROW) output rows.
         active: Try the previous cycle's contact pattern first (2D only); ``pattern``, ``lu``, ``piv``,
-            ``lu_ok`` and ``counts`` are the arrays of an :class:`ActivePatternCache` (in/out).
+            ``lu_ok``, ``counts`` and ``factor_mu`` are the arrays of an :class:`ActivePatternCache` (in/out).
+        evolve: mu follows the dissipated energy (``mu`` and ``k`` are then updated in place before each
+            increment); ``energy`` to ``wear_per_mu``: :meth:`FrictionEvolution.arguments` (unused otherwise).
 
     Returns:
         (converged increments, local status of the first failure (1 if none), its error).
@@ -379,6 +489,13 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
     nn = Wn.shape[0]
     qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
     for j in range(n):
+        if evolve:
+            _friction_before(j, mu, k, energy, table_of, abscissae, values, lengths, wear_base, wear_per_mu,
+                             active, factor_mu, lu_ok)
+            if _all_zero(mu) != normal_only:
+                normal_only, Wn = _normal_rows(Wc, mu, dim)
+                nn = Wn.shape[0]
+                qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
         _rhs(g0, wear_gap, G, D[j], Q, S[j], y, dim, q_abs, q)
         if warm == 1:
             for i in range(m):
@@ -392,6 +509,8 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
             return j, status, err
         _finish(j, r, x, q, q_abs, y, mu, dim, tributary, abscissa, k, wear_gap, states, row, its, err, rows,
                 r_warm, r_last, keep, out_r, out_x, out_y, out_wear, out_states, active, pattern, lu_ok)
+        if evolve:
+            _friction_after(r, x, dim, tributary, energy_scale, energy)
     return n, 1, 0.0
 
 
@@ -444,8 +563,10 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                          max_iter: int, refresh: int, keep: bool, out_r: np.ndarray, out_x: np.ndarray,
                          out_y: np.ndarray, out_wear: np.ndarray, out_states: np.ndarray, rows: np.ndarray,
                          out_d: np.ndarray, solves: np.ndarray, active: bool, pattern: np.ndarray, lu: np.ndarray,
-                         piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, failure: np.ndarray, F: np.ndarray
-                         ) -> tuple[int, int, float]:
+                         piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, failure: np.ndarray, F: np.ndarray,
+                         factor_mu: np.ndarray, evolve: bool, energy: np.ndarray, energy_scale: float,
+                         table_of: np.ndarray, abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray,
+                         wear_base: np.ndarray, wear_per_mu: np.ndarray) -> tuple[int, int, float]:
     """:func:`run_increments` with force-controlled obstacle components: each increment finds the obstacle
     displacement whose total contact force meets the targets, by the stepwise path's load control
     (``increments._local_with_control``: sweeps over the controlled components, each closed by
@@ -464,7 +585,8 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
         solves: (n,) out: local solves per increment.
         failure: (4,) out on failure: the component, then the numbers of the message (see the codes above).
         F: (components,) out: the total force of the last trial.
-        Others: as :func:`run_increments` (no cycle warm start: the stepwise path's warm starts).
+        Others: as :func:`run_increments` (no cycle warm start: the stepwise path's warm starts; ``evolve`` and
+            the arrays after it: mu of the dissipated energy, updated before each increment).
 
     Returns:
         (converged increments, status of the first failure (1 if none: the local solver's, or a code above), the
@@ -486,6 +608,13 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
     for i in range(m):
         r[i] = r_last[i]
     for j in range(n):
+        if evolve:
+            _friction_before(j, mu, k, energy, table_of, abscissae, values, lengths, wear_base, wear_per_mu,
+                             active, factor_mu, lu_ok)
+            if _all_zero(mu) != normal_only:
+                normal_only, Wn = _normal_rows(Wc, mu, dim)
+                nn = Wn.shape[0]
+                qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
         tally[0] = 0
         tally[1] = 0
         for c in range(ncomp):
@@ -619,4 +748,6 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
         solves[j] = tally[0]
         _finish(j, r, x, q, q_abs, y, mu, dim, tributary, abscissa, k, wear_gap, states, row, tally[1], err, rows,
                 r_warm, r_last, keep, out_r, out_x, out_y, out_wear, out_states, active, pattern, lu_ok)
+        if evolve:
+            _friction_after(r, x, dim, tributary, energy_scale, energy)
     return n, 1, 0.0

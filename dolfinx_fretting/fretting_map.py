@@ -30,8 +30,35 @@ For the sphere (``geometry.kind = "sphere"``) the map also gives Mindlin's trans
 ``delta_t = 3 mu P / (16 G* a)`` (:func:`mindlin_transition_amplitude`, identical bodies or a rigid flat) as the
 contact's own share; the imposed displacement at the transition adds the bulk compliance times mu P.
 
+**The contact's own slip amplitude** (``contact_amplitude``, a sphere): a rig's measured delta* holds the
+machine's and the bodies' bulk compliance C_b besides the contact's, and tribologists plot maps against the
+contact's amplitude ``delta_c = delta* - C_b Q*``. C_b is read from the loop itself, as on a rig: at a load
+reversal the whole contact sticks again (Mindlin & Deresiewicz: the slip annulus of the unloading branch grows
+from zero width), so the loop's slope there, ``dDelta/dQ`` as the force change goes to 0
+(:func:`reversal_compliance`), is purely elastic: the bulk's compliance plus the stuck contact's,
+``1 / (8 G* a) = (2 - nu) / (4 G a)`` for identical bodies (Johnson, *Contact Mechanics*, §7.2: the slope of
+eq. 7.42 at Q = 0, both bodies' compliances; :func:`mindlin_contact_compliance`). So
+``C_b = slope - 1 / (8 G* a)``: only the bulk is removed, not the contact's tangential compliance, which is
+part of the contact's own displacement (removing the whole slope would leave the loop's opening at Q = 0,
+2 (1/2)^(2/3) - 1 = 0.26 delta_t at the transition by Masing's rule, not the slip amplitude). The slope is
+the chords from the reversal over its first two increments, extrapolated linearly to a zero force change
+(Mindlin's unloading branch has chord slopes ``C (1 + u/6 + 2 u^2/27 + ...)``, u the force change over 2 mu P:
+the extrapolation leaves ``2 u1 u2 / 27``).
+The bulk compliance does not depend on the amplitude: each point's contact amplitude uses the median of the
+measured C_b of the converged points at its normal load (a loop that slides within two increments of its
+reversal gives none itself). Why not the FE model's far-field compliance: the bulk and the contact's shares of a
+finite body's displacement separate only against the half-space's, which is Mindlin's closed form either way;
+the loop's slope is what a rig measures, so map and rig are corrected alike. On an FE model the slope holds the
+mesh's error on the contact's stiffness too (``sphere-flat`` at a/4, 16 increments a cycle: 1/(8 G* a)
+-1.9 % .. +3.1 % over the amplitudes, of the size of its bulk's share: benchmarks/results/fretting_map_sphere.md),
+so there delta_c is good to about 2 % of delta_t; the correction matters where the set-up is compliant (a
+rig's compliance is often several times the contact's). A 2D line contact has no
+contact compliance apart from the bodies' size (a half-plane's displacement grows with the log of the
+distance): its ``contact_amplitude`` and ``bulk_compliance`` stay blank; its ``reversal_compliance`` is given.
+
 Outputs in ``DIR``: ``map.csv`` (:data:`MAP_FIELDS`), ``map.md`` and ``map.png`` (amplitude against normal load, one
-marker per regime; the transition bracketed by the grid and, for a sphere, Mindlin's curve). A point whose run fails
+marker per regime; the transition bracketed by the grid and, for a sphere, Mindlin's curve; the abscissa the
+imposed amplitude or, ``axis="contact"``, the contact's own). A point whose run fails
 stays in the table with ``converged = False`` and its message; the map goes on.
 """
 
@@ -55,8 +82,9 @@ from .study import QUIET_OUTPUT, check_on_rank0, run_point
 from .tables import cell_text, read_rows, write_table
 from .units import Units
 
-__all__ = ["GROSS_SLIP_ENERGY_RATIO", "MAP_FIELDS", "MAP_FILES", "REGIMES", "MapPoint", "parse_values",
+__all__ = ["GROSS_SLIP_ENERGY_RATIO", "MAP_FIELDS", "MAP_FILES", "MAP_AXES", "REGIMES", "MapPoint", "parse_values",
            "energy_ratios", "regime_of_cycles", "classify_cycles", "mindlin_transition_amplitude",
+           "mindlin_contact_compliance", "reversal_compliance", "contact_amplitudes", "check_axis",
            "transition_brackets", "plan_map", "check_map_folder", "run_map", "write_map_table", "read_map_csv",
            "format_markdown", "plot_map"]
 
@@ -65,10 +93,15 @@ __all__ = ["GROSS_SLIP_ENERGY_RATIO", "MAP_FIELDS", "MAP_FILES", "REGIMES", "Map
 GROSS_SLIP_ENERGY_RATIO = 0.2
 #: The regimes a run is classified into (``"open"``: no contact loaded in any cycle).
 REGIMES = ("partial", "mixed", "gross", "open")
-#: Columns of ``map.csv``: the point, its classification by the energy ratio (``regime``) and by the stick zone
-#: (``regime_by_stick``), whether they agree, the last cycle's Q*/(mu P), the cycles run, the run's outcome.
-MAP_FIELDS = ["normal", "amplitude", "energy_ratio_first", "energy_ratio_last", "regime", "regime_by_stick",
-              "regimes_agree", "force_ratio_last", "cycles", "converged", "error", "wall_time_s", "folder"]
+#: Columns of ``map.csv``: the point (P, the imposed delta*, the contact's own amplitude delta* - C_b Q*), the loop's
+#: slope at its reversals and the bulk compliance C_b it gives (mm/N; see the module doc), its classification by
+#: the energy ratio (``regime``) and by the stick zone (``regime_by_stick``), whether they agree, the last cycle's
+#: Q* and Q*/(mu P), the cycles run, the run's outcome.
+MAP_FIELDS = ["normal", "amplitude", "contact_amplitude", "reversal_compliance", "bulk_compliance",
+              "energy_ratio_first", "energy_ratio_last", "regime", "regime_by_stick", "regimes_agree",
+              "force_amplitude_last", "force_ratio_last", "cycles", "converged", "error", "wall_time_s", "folder"]
+#: The picture's abscissa: the imposed amplitude (``amplitude``) or the contact's own (``contact_amplitude``).
+MAP_AXES = {"imposed": "amplitude", "contact": "contact_amplitude"}
 #: Files a map writes into its folder (besides ``runs/``).
 MAP_FILES = ("map.csv", "map.md", "map.png")
 #: What the map needs of every run besides the study's quiet outputs: no contact profiles (the classification
@@ -163,6 +196,27 @@ def classify_cycles(cycles: dict[str, np.ndarray], threshold: float = GROSS_SLIP
             "cycles": n, "energy_ratios": ratios, "cycle_regimes": by_energy, "cycle_regimes_by_stick": stick}
 
 
+def _mindlin_sphere(scene: Scene, normal: float) -> tuple[float, float] | None:
+    """(G*, a) of a sphere scene at ``normal`` (None for another geometry)."""
+    if scene.geometry.kind != "sphere":
+        return None
+    material = scene.material
+    two_bodies = scene.contact.obstacle == "elastic_flat"
+    g_star = mindlin_shear_modulus(material.E, material.nu, material.E if two_bodies else None,
+                                   material.nu if two_bodies else None)
+    return g_star, hertz_sphere(normal, scene.geometry.radius, scene.contact_modulus)[0]
+
+
+def mindlin_contact_compliance(scene: Scene, normal: float) -> float | None:
+    """The stuck contact's tangential compliance of a sphere, ``1 / (8 G* a)`` (mm/N): ``(2 - nu) / (4 G a)`` for
+    identical bodies (Johnson, *Contact Mechanics*, §7.2: each body's displacement under the stuck circle's
+    traction ``Q / (2 pi a sqrt(a^2 - r^2))`` is ``(2 - nu) Q / (8 G a)``; the slope of eq. 7.42 at Q = 0),
+    G* of :func:`~dolfinx_fretting.analytic.mindlin_shear_modulus` (the flat's term dropped on a rigid flat), a the
+    Hertz radius. None when the scene is not a sphere (a line contact has none apart from the bodies' size)."""
+    sphere = _mindlin_sphere(scene, normal)
+    return None if sphere is None else 1.0 / (8.0 * sphere[0] * sphere[1])
+
+
 def mindlin_transition_amplitude(scene: Scene, normal: float) -> float | None:
     """Mindlin's partial-to-gross slip transition amplitude ``delta_t = 3 mu P / (16 G* a)`` of a sphere (Johnson,
     *Contact Mechanics*, eq. 7.42 at Q = mu P), a the Hertz radius (:func:`~dolfinx_fretting.analytic.hertz_sphere`)
@@ -174,25 +228,78 @@ def mindlin_transition_amplitude(scene: Scene, normal: float) -> float | None:
         delta_t (mm), or None when the scene is not a sphere (a 2D contact's displacement depends on the bodies'
         size: gross slip starts when Q reaches mu P).
     """
-    if scene.geometry.kind != "sphere":
+    sphere = _mindlin_sphere(scene, normal)
+    if sphere is None:
         return None
-    material, mu = scene.material, scene.contact.mu
-    two_bodies = scene.contact.obstacle == "elastic_flat"
-    g_star = mindlin_shear_modulus(material.E, material.nu, material.E if two_bodies else None,
-                                   material.nu if two_bodies else None)
-    a = hertz_sphere(normal, scene.geometry.radius, scene.contact_modulus)[0]
+    (g_star, a), mu = sphere, scene.contact.mu
     return 3.0 * mu * normal / (16.0 * g_star * a)
 
 
-def transition_brackets(rows: Sequence[dict[str, Any]], column: str = "regime") -> dict[float, tuple[float, float]]:
+def reversal_compliance(displacement: np.ndarray, force: np.ndarray) -> float:
+    """The loop's slope ``dDelta/dQ`` at its load reversals, as the force change goes to 0 (mm/N): the elastic
+    compliance of the bodies and the stuck contact (see the module doc).
+
+    At each reversal (the cycle's largest and smallest displacement), the chords to the next two increments,
+    ``s_k = (delta_k - delta_0) / (Q_k - Q_0)`` over force changes ``c_1 < c_2``, extrapolated linearly to
+    ``c = 0``: ``(s_1 c_2 - s_2 c_1) / (c_2 - c_1)``. A reversal is left out when it has no two increments after it
+    in the cycle, when a chord's force change is 0 or does not grow, or when the second chord reaches the
+    cycle's opposite force extreme (to within 1 % of the range: the loop slid, the chord is not elastic).
+
+    Args:
+        displacement: The cycle's displacement at each increment's end (the imposed one).
+        force: Its tangential force Q at each increment's end.
+
+    Returns:
+        The mean over the reversals read, NaN when none is (a slope not > 0 counts as none).
+    """
+    delta = np.asarray(displacement, dtype=float)
+    force = np.asarray(force, dtype=float)
+    span = float(force.max() - force.min()) if force.size else 0.0
+    slopes = []
+    for turn, opposite in ((int(np.argmax(delta)) if delta.size else 0, float(force.min(initial=0.0))),
+                           (int(np.argmin(delta)) if delta.size else 0, float(force.max(initial=0.0)))):
+        if turn + 2 >= delta.size or span <= 0:
+            continue
+        changes = np.abs(force[turn + 1:turn + 3] - force[turn])
+        if not (0 < changes[0] < changes[1]) or abs(force[turn + 2] - opposite) <= 0.01 * span:
+            continue
+        chords = (delta[turn + 1:turn + 3] - delta[turn]) / (force[turn + 1:turn + 3] - force[turn])
+        slope = (chords[0] * changes[1] - chords[1] * changes[0]) / (changes[1] - changes[0])
+        if math.isfinite(slope) and slope > 0:
+            slopes.append(float(slope))
+    return float(np.mean(slopes)) if slopes else math.nan
+
+
+def contact_amplitudes(rows: Sequence[dict[str, Any]], plan: Sequence[MapPoint]) -> None:
+    """Fill each row's ``bulk_compliance`` (its reversal slope less Mindlin's stuck contact compliance,
+    :func:`mindlin_contact_compliance`) and ``contact_amplitude`` (``delta* - C_b Q*``, C_b the median of the
+    bulk compliances measured at its normal load: the bulk's does not depend on the amplitude), in place. Blank
+    (NaN) for a scene that is not a sphere, a failed point, or a load where no point gave a slope."""
+    for row, point in zip(rows, plan):
+        contact = mindlin_contact_compliance(point.scene, point.normal)
+        row["bulk_compliance"] = (float(row.get("reversal_compliance", math.nan)) - contact
+                                  if contact is not None and row.get("converged") else math.nan)
+    for normal in {float(r["normal"]) for r in rows}:
+        same = [r for r in rows if float(r["normal"]) == normal]
+        measured = [r["bulk_compliance"] for r in same if math.isfinite(r["bulk_compliance"])]
+        bulk = float(np.median(measured)) if measured else math.nan
+        for r in same:
+            r["contact_amplitude"] = (float(r["amplitude"]) - bulk * float(r["force_amplitude_last"])
+                                      if r.get("converged") else math.nan)
+
+
+def transition_brackets(rows: Sequence[dict[str, Any]], column: str = "regime",
+                        amplitude: str = "amplitude") -> dict[float, tuple[float, float]]:
     """The transition amplitude bracketed by the grid, per normal load: (largest amplitude in partial slip, smallest
     in gross slip) when every partial amplitude lies below every gross one (converged points, ``column`` the
-    classifier's); loads without both regimes, or with them interleaved, are left out."""
+    classifier's; ``amplitude`` the column read: the imposed ``amplitude`` or the ``contact_amplitude``); loads
+    without both regimes, or with them interleaved, are left out (and points without the amplitude)."""
     out: dict[float, tuple[float, float]] = {}
     for normal in sorted({float(r["normal"]) for r in rows}):
-        points = [r for r in rows if float(r["normal"]) == normal and r.get("converged")]
-        partial = [float(r["amplitude"]) for r in points if r.get(column) == "partial"]
-        gross = [float(r["amplitude"]) for r in points if r.get(column) == "gross"]
+        points = [r for r in rows if float(r["normal"]) == normal and r.get("converged")
+                  and math.isfinite(float(r.get(amplitude, math.nan)))]
+        partial = [float(r[amplitude]) for r in points if r.get(column) == "partial"]
+        gross = [float(r[amplitude]) for r in points if r.get(column) == "gross"]
         if partial and gross and max(partial) < min(gross):
             out[normal] = (max(partial), min(gross))
     return out
@@ -230,7 +337,8 @@ def plan_map(source: str | Path | dict, normals: Sequence[float], amplitudes: Se
 
     Each point is the scene with ``overrides`` (e.g. a coarser mesh), then ``loading.normal_force = P`` and
     ``loading.tangential_displacement = d`` (the scene's other normal and tangential controls removed), then
-    ``loading.cycles`` and the quiet outputs (:data:`MAP_OUTPUT`).
+    ``loading.cycles`` and the quiet outputs (:data:`MAP_OUTPUT`) with the last cycle's increments in
+    ``history.csv`` (``output.history_every`` = the cycles: the loop's reversals, :func:`reversal_compliance`).
 
     Args:
         source: The scene (built-in name, TOML file or dict).
@@ -268,7 +376,7 @@ def plan_map(source: str | Path | dict, normals: Sequence[float], amplitudes: Se
                            "loading.tangential_force=none", "loading.tangential_pressure=none",
                            f"loading.tangential_displacement={amplitude!r}", f"loading.cycles={cycles}"]
             try:
-                point_scene = load_scene(source, over + MAP_OUTPUT)
+                point_scene = load_scene(source, over + MAP_OUTPUT + [f"output.history_every={cycles}"])
             except SceneError as exc:
                 raise SceneError(f"map point P = {normal:g}, delta* = {amplitude:g}: {exc}") from None
             plan.append(MapPoint(normal, amplitude, _label(normal, amplitude), over, point_scene))
@@ -301,26 +409,48 @@ def _point_row(point: MapPoint, folder: Path, failure: str, wall: float, thresho
     error = failure or ("" if converged else str(summary.get("error") or "no summary.json"))
     cycles = read_table(folder / "cycles.csv")
     row: dict[str, Any] = {"normal": point.normal, "amplitude": point.amplitude, "converged": converged,
-                           "error": error, "wall_time_s": wall, "folder": str(Path("runs") / point.label)}
+                           "error": error, "wall_time_s": wall, "folder": str(Path("runs") / point.label),
+                           "contact_amplitude": math.nan, "bulk_compliance": math.nan}
     if converged and cycles.get("cycle", np.zeros(0)).size:
         classes = classify_cycles(cycles, threshold)
         row.update({k: classes[k] for k in ("energy_ratio_first", "energy_ratio_last", "regime", "regime_by_stick",
                                             "regimes_agree", "cycles")})
         force = 0.5 * (cycles["tangential_force_max"][-1] - cycles["tangential_force_min"][-1])
         mu = point.scene.contact.mu
+        row["force_amplitude_last"] = float(force)
         row["force_ratio_last"] = float(force / (mu * point.normal)) if mu > 0 else math.nan
+        history = read_table(folder / "history.csv")
+        last = history.get("cycle", np.zeros(0)) == cycles["cycle"][-1]
+        row["reversal_compliance"] = (reversal_compliance(history["tangential_displacement"][last],
+                                                          history["tangential_force"][last])
+                                      if last.any() else math.nan)
     else:  # a failed point: no regime (its completed cycles may be on disk; a map point is all or nothing)
         row.update(energy_ratio_first=math.nan, energy_ratio_last=math.nan, regime="failed", regime_by_stick="failed",
-                   regimes_agree=False, force_ratio_last=math.nan,
-                   cycles=int(cycles.get("cycle", np.zeros(0)).size))
+                   regimes_agree=False, force_amplitude_last=math.nan, force_ratio_last=math.nan,
+                   reversal_compliance=math.nan, cycles=int(cycles.get("cycle", np.zeros(0)).size))
         if converged:
             row.update(converged=False, error="no cycle in cycles.csv")
     return row
 
 
+def check_axis(plan: Sequence[MapPoint], axis: str) -> None:
+    """Refuse a picture's abscissa the map cannot draw: ``axis`` not one of :data:`MAP_AXES`, or ``"contact"`` for
+    a scene that is not a sphere (no contact compliance apart from the bodies' size: no contact amplitude).
+
+    Raises:
+        SceneError: naming the option, the value and what is allowed.
+    """
+    if axis not in MAP_AXES:
+        raise SceneError(f"map --axis = {axis!r}: allowed {', '.join(MAP_AXES)}")
+    if axis == "contact" and plan and plan[0].scene.geometry.kind != "sphere":
+        raise SceneError(f"map --axis = 'contact': the contact's own amplitude needs Mindlin's contact compliance, "
+                         f"a sphere (geometry.kind = 'sphere'); {plan[0].scene.name} has geometry.kind = "
+                         f"{plan[0].scene.geometry.kind!r}: allowed --axis imposed")
+
+
 def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = False,
             threshold: float = GROSS_SLIP_ENERGY_RATIO, overwrite: bool = False,
-            ignore_size: bool = False) -> list[dict[str, Any]]:
+            ignore_size: bool = False, axis: str = "imposed") -> list[dict[str, Any]]:
     """Run every point of ``plan``, classify it and write ``map.csv``, ``map.md`` and ``map.png``.
 
     Collective: every rank runs every scene; files are written and rows built on rank 0 and broadcast. A point
@@ -336,6 +466,7 @@ def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = 
         threshold: Energy ratio A_t of the gross-slip transition (:data:`GROSS_SLIP_ENERGY_RATIO`).
         overwrite: Replace the map ``out`` holds (its runs are rerun in place).
         ignore_size: Run each scene even if its size estimate exceeds the memory available.
+        axis: The picture's abscissa (:data:`MAP_AXES`): the imposed amplitude, or the contact's own (a sphere).
 
     Returns:
         The rows of ``map.csv`` (:data:`MAP_FIELDS`), in the plan's order.
@@ -345,8 +476,10 @@ def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = 
             or a point's folder is locked by another run.
         RunInterrupted: A signal stopped a run.
         ValueError: ``threshold`` outside (0, 1), before any run.
+        SceneError: ``axis`` refused (:func:`check_axis`), before any run.
     """
     classify_cycles({}, threshold)  # the threshold's range, before any run
+    check_axis(plan, axis)
     comm = comm or MPI.COMM_WORLD
     rank0 = comm.rank == 0
     out = Path(out)
@@ -365,6 +498,8 @@ def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = 
                                          f"{row['regime_by_stick']}" if row["converged"] else
                                          f"failed: {row['error']}"))
         rows.append(row)
+    if rank0:
+        contact_amplitudes(rows, plan)
     rows = comm.bcast(rows, root=0)
     if rank0:
         write_map_table(rows, out)
@@ -372,7 +507,7 @@ def run_map(plan: Sequence[MapPoint], out: str | Path, comm=None, quiet: bool = 
         mindlin = {p.normal: mindlin_transition_amplitude(p.scene, p.normal) for p in plan}
         plot_map(rows, out / "map.png", title=f"{scene.name}: fretting map ({scene.loading.cycles} cycles, "
                  f"A_t = {threshold:g})", force_unit=Units.mm_N_MPa().contact_force(scene.dim),
-                 mindlin={k: v for k, v in mindlin.items() if v is not None})
+                 mindlin={k: v for k, v in mindlin.items() if v is not None}, axis=axis)
     comm.barrier()
     return rows
 
@@ -391,9 +526,9 @@ def read_map_csv(path: str | Path) -> list[dict[str, Any]]:
 
 def format_markdown(rows: Sequence[dict[str, Any]]) -> str:
     """The map as a markdown table, then the transition amplitudes the grid brackets (by each classifier)."""
-    head = ["P", "delta*", "A (first)", "A (last)", "regime (energy)", "regime (stick)", "Q*/(mu P)", "cycles",
-            "wall time (s)"]
-    lines = ["| " + " | ".join(head) + " |", "| ---: | ---: | ---: | ---: | --- | --- | ---: | ---: | ---: |"]
+    head = ["P", "delta*", "delta_c", "A (first)", "A (last)", "regime (energy)", "regime (stick)", "Q*/(mu P)",
+            "cycles", "wall time (s)"]
+    lines = ["| " + " | ".join(head) + " |", "| ---: | ---: | ---: | ---: | ---: | --- | --- | ---: | ---: | ---: |"]
     for r in rows:
         regime = str(r.get("regime", ""))
         if not r.get("converged", False):
@@ -401,16 +536,23 @@ def format_markdown(rows: Sequence[dict[str, Any]]) -> str:
         elif not r.get("regimes_agree", True):
             regime += " (disagree)"
         lines.append("| " + " | ".join([cell_text(r.get("normal")), cell_text(r.get("amplitude")),
-                                        cell_text(r.get("energy_ratio_first")), cell_text(r.get("energy_ratio_last")), regime,
+                                        cell_text(r.get("contact_amplitude")),
+                                        cell_text(r.get("energy_ratio_first")),
+                                        cell_text(r.get("energy_ratio_last")), regime,
                                         cell_text(r.get("regime_by_stick")) if r.get("converged") else "",
                                         cell_text(r.get("force_ratio_last")), cell_text(r.get("cycles")),
                                         f"{r.get('wall_time_s', math.nan):.2f}"]) + " |")
-    for column, name in (("regime", "energy ratio"), ("regime_by_stick", "stick zone")):
-        brackets = transition_brackets(rows, column)
-        if brackets:
-            lines.append("")
-            lines.append(f"Transition amplitude by the {name}: " + "; ".join(
-                f"P = {p:g}: {low:g} < delta_t < {high:g}" for p, (low, high) in brackets.items()))
+    for amplitude, what in (("amplitude", "amplitude"), ("contact_amplitude", "contact amplitude")):
+        for column, name in (("regime", "energy ratio"), ("regime_by_stick", "stick zone")):
+            brackets = transition_brackets(rows, column, amplitude)
+            if brackets:
+                lines.append("")
+                lines.append(f"Transition {what} by the {name}: " + "; ".join(
+                    f"P = {p:g}: {low:g} < delta_t < {high:g}" for p, (low, high) in brackets.items()))
+    if any(math.isfinite(float(r.get("contact_amplitude", math.nan))) for r in rows):
+        lines += ["", "delta_c = delta* - C_b Q*: the contact's own amplitude, C_b the bulk compliance (the loop's "
+                  "slope at its reversals less Mindlin's stuck contact compliance 1/(8 G* a); map.csv's "
+                  "reversal_compliance and bulk_compliance)."]
     return "\n".join(lines)
 
 
@@ -420,7 +562,7 @@ _STYLE = {"partial": ("o", "tab:blue", "partial slip"), "mixed": ("D", "tab:gree
 
 
 def plot_map(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "", force_unit: str = "N",
-             mindlin: dict[float, float] | None = None) -> Path:
+             mindlin: dict[float, float] | None = None, axis: str = "imposed") -> Path:
     """Displacement amplitude (abscissa, log) against normal load (ordinate, log), one marker per regime by the
     energy ratio; a point the stick-zone classifier puts elsewhere is ringed in black. The transition bracketed
     by the grid (mid-points, geometric) as a line; Mindlin's delta_t (a sphere) dashed.
@@ -431,7 +573,16 @@ def plot_map(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "", 
         title: Its title.
         force_unit: The normal load's unit (N/mm in 2D, N in 3D).
         mindlin: Mindlin's transition amplitude (mm) per normal load, or None.
+        axis: The abscissa (:data:`MAP_AXES`): ``"imposed"`` delta*, or ``"contact"`` the contact's own amplitude
+            delta* - C_b Q* (points without it are left out), on which Mindlin's delta_t is the like-for-like curve.
+
+    Raises:
+        ValueError: ``axis`` not one of :data:`MAP_AXES`.
     """
+    if axis not in MAP_AXES:
+        raise ValueError(f"plot_map: axis = {axis!r}: allowed {', '.join(MAP_AXES)}")
+    column = MAP_AXES[axis]
+    rows = [r for r in rows if math.isfinite(float(r.get(column, math.nan)))]
     # Lazy: matplotlib is heavy and only the picture needs it; plots imports numba (through output)
     from matplotlib import ticker
 
@@ -442,13 +593,13 @@ def plot_map(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "", 
     for regime, (marker, colour, name) in _STYLE.items():
         sel = [r for r in rows if r.get("regime") == regime]
         if sel:
-            ax.plot([r["amplitude"] for r in sel], [r["normal"] for r in sel], ls="", marker=marker, ms=9,
+            ax.plot([r[column] for r in sel], [r["normal"] for r in sel], ls="", marker=marker, ms=9,
                     color=colour, label=name)
     ringed = [r for r in rows if r.get("converged") and not r.get("regimes_agree", True)]
     if ringed:
-        ax.plot([r["amplitude"] for r in ringed], [r["normal"] for r in ringed], ls="", marker="o", ms=16,
+        ax.plot([r[column] for r in ringed], [r["normal"] for r in ringed], ls="", marker="o", ms=16,
                 mfc="none", mec="k", label="stick zone says otherwise")
-    brackets = transition_brackets(rows)
+    brackets = transition_brackets(rows, amplitude=column)
     if brackets:
         normals = sorted(brackets)
         ax.plot([math.sqrt(brackets[p][0] * brackets[p][1]) for p in normals], normals, color="tab:purple",
@@ -456,13 +607,14 @@ def plot_map(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "", 
     if mindlin:
         normals = sorted(mindlin)
         ax.plot([mindlin[p] for p in normals], normals, color="k", ls="--", lw=1.2,
-                label="Mindlin 3 mu P / (16 G* a) (contact only)")
+                label="Mindlin 3 mu P / (16 G* a)" + (" (contact only)" if axis == "imposed" else ""))
     ax.set_xscale("log")
     ax.set_yscale("log")
     for axis in (ax.xaxis, ax.yaxis):  # plain numbers: the grid's values are what the user typed
         axis.set_major_formatter(ticker.FormatStrFormatter("%g"))
         axis.set_minor_formatter(ticker.FormatStrFormatter("%g"))
-    ax.set_xlabel("displacement amplitude delta* (mm)")
+    ax.set_xlabel("displacement amplitude delta* (mm)" if axis == "imposed"
+                  else "contact's amplitude delta_c = delta* - C_b Q* (mm)")
     ax.set_ylabel(f"normal load P ({force_unit})")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8, loc="best")

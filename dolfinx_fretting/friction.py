@@ -14,7 +14,8 @@ import numpy as np
 
 from .laws import EvolvingFriction
 
-__all__ = ["evolving_laws", "tracks_energy", "coefficients", "energy_density", "accumulated_energy", "jump_limit"]
+__all__ = ["evolving_laws", "tracks_energy", "energy_tables", "coefficients", "energy_density", "accumulated_energy",
+           "jump_limit"]
 
 
 def evolving_laws(contact) -> list[tuple[int, EvolvingFriction]]:
@@ -26,6 +27,27 @@ def evolving_laws(contact) -> list[tuple[int, EvolvingFriction]]:
 def tracks_energy(contact) -> bool:
     """Whether a zone's friction follows the dissipated energy (then the state carries it per contact)."""
     return any(law.variable == "energy" for _, law in evolving_laws(contact))
+
+
+def energy_tables(contact) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """The energy laws' tables as the compiled loop reads them (:class:`~dolfinx_fretting.cycling.FrictionEvolution`):
+    (each contact's table or -1 where mu is held over a cycle, the tables' abscissae and coefficients padded to
+    the longest, each one's rows). None when a zone's law of the energy is the user's function: a Python call per
+    increment, which the compiled loop cannot make (that cycle then runs one increment per call)."""
+    laws = [(zone, law) for zone, law in evolving_laws(contact) if law.variable == "energy"]
+    if any(law.table is None for _, law in laws):
+        return None
+    table_of = np.full(contact.nc, -1, dtype=np.int64)
+    longest = max((law.table.shape[0] for _, law in laws), default=1)
+    abscissae, values = np.zeros((max(len(laws), 1), longest)), np.zeros((max(len(laws), 1), longest))
+    lengths = np.ones(max(len(laws), 1), dtype=np.int64)
+    for index, (zone, law) in enumerate(laws):
+        rows = contact.zone_slice(zone)
+        table_of[rows] = index
+        size = law.table.shape[0]
+        abscissae[index, :size], values[index, :size] = law.table[:, 0], law.table[:, 1]
+        lengths[index] = size
+    return table_of, abscissae, values, lengths
 
 
 def coefficients(contact, state) -> np.ndarray:

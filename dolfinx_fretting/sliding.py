@@ -689,6 +689,9 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
     new_fl, new_weights = np.empty(nc, dtype=np.int64), np.empty((nc, 2))
     new_frames, new_gap0 = np.empty((nc, 2, 2)), np.empty(nc)
     old_interp, new_interp = np.empty(nc), np.empty(nc)
+    # mu held over the cycle (a friction law of the energy never runs here): the loop's unused evolution arguments
+    factor_mu, held_energy, held_tables = np.zeros((1, 1)), np.zeros(1), np.full(1, -1, dtype=np.int64)
+    held_rows, held_lengths, held_rates = np.zeros((1, 1)), np.ones(1, dtype=np.int64), np.zeros(1)
     normal = obstacle_frame[0]
     repairs = 0
     for j in range(n):
@@ -699,12 +702,14 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
                 W, rho, mu, 2, gap0, wear_gap, G, T, A, targets[j:j + 1], controlled, d, stiffness, force_tol,
                 max_eval, Q, factors[j:j + 1], tributary, abscissa, y, r_last, r_warm, k, tol, max_iter, refresh,
                 True, out_r, out_x, out_y, out_wear, out_states, rows[j:j + 1], found[j:j + 1], solves[j:j + 1],
-                False, pattern, lu, piv, lu_ok, counts, failure, force)
+                False, pattern, lu, piv, lu_ok, counts, failure, force, factor_mu, False, held_energy, 0.0,
+                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates)
         else:
             done, code, err = run_increments(
                 W, rho, mu, 2, gap0, wear_gap, G, translations[j:j + 1], Q, factors[j:j + 1], tributary, abscissa,
                 y, r_last, r_warm, 0, k, tol, max_iter, refresh, True, out_r, out_x, out_y, out_wear, out_states,
-                rows[j:j + 1], False, pattern, lu, piv, lu_ok, counts)
+                rows[j:j + 1], False, pattern, lu, piv, lu_ok, counts, factor_mu, False, held_energy, 0.0,
+                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates)
         if done < 1:
             return j, SOLVE_FAILED, repairs
         for c in range(nc):

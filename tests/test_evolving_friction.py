@@ -20,6 +20,7 @@ import pytest
 from mpi4py import MPI  # noqa: F401  (before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs)
 
 import dolfinx_fretting as dfr  # noqa: E402
+from dolfinx_fretting import cycles as cycles_module  # noqa: E402
 from dolfinx_fretting import friction  # noqa: E402
 from dolfinx_fretting.scenes import SceneError, builtin_scenes, load_scene  # noqa: E402
 from dolfinx_fretting.simulation import run_scene  # noqa: E402
@@ -346,3 +347,64 @@ def test_scene_tables_of_further_zones_and_force_control():
     # hertz: Q = 89.658 N/mm under P = 199.24 N/mm: 0.9 carries it, a table falling to 0.2 would not
     with pytest.raises(SceneError, match=r"\|Q\| < min\(contact\.mu_table's mu\) x loading\.normal_force = 0\.2 x"):
         load_scene("hertz", ["contact.mu_table=[[0, 0.9], [5, 0.2]]"])
+
+
+def _interp_function(table):
+    """The table as the user's function of the energy (np.interp, the table's own arithmetic): the per-increment
+    path (one compiled call per increment, mu updated in Python)."""
+    abscissae, values = np.array(table, dtype=float).T
+
+    def mu_of_energy(energy):
+        return np.interp(energy, abscissae, values)
+    return mu_of_energy
+
+
+@pytest.mark.parametrize("control", ["displacement", "force"])
+@pytest.mark.parametrize("wear", [None, "energy", "archard"])
+def test_energy_table_runs_inside_the_compiled_cycle(monkeypatch, control, wear):
+    """mu(E) of a table runs inside the compiled loop: one call for the cycle (counted), against the same law as
+    the user's function, which runs one call per increment with mu, the energy and the wear rate updated in
+    Python between the calls (the path kept for functions). The same arithmetic in the same order: forces, slip,
+    wear gap, energy and the rows to 1e-12 of each quantity's largest value (rounding; measured bit-identical).
+    Under force control (Q* = 0.15 P, partial slip at mu >= 0.2) the load control's root finder runs inside too.
+    The table's first breakpoint is crossed during the cycles (mu from 0.2 past 0.3), so a mu held over the cycle or
+    an energy update out of step would differ at the 1e-2 level."""
+    table = [(0.0, 0.2), (0.005, 0.3), (0.15, 0.8)]
+    laws = {"energy": dfr.EnergyWear(ALPHA), "archard": dfr.Archard(k=1e-5), None: None}
+    calls = {"run_increments": 0, "run_force_increments": 0}
+    for name in calls:
+        real = getattr(cycles_module, name)
+
+        def counting(*args, _real=real, _name=name):
+            calls[_name] += 1
+            return _real(*args)
+        monkeypatch.setattr(cycles_module, name, counting)
+    results, counted = [], []
+    for law in (dfr.EvolvingFriction(table, variable="energy"),
+                dfr.EvolvingFriction(_interp_function(table), variable="energy")):
+        problem, contact, state = pressed_block(law, wear=laws[wear])
+        if control == "force":
+            P = abs(state.record["normal_force"])
+            path = dfr.CyclePath.waveform(INCREMENTS, tangential=dfr.Force(0.15 * P))
+        else:
+            path = dfr.CyclePath.waveform(INCREMENTS, tangential=AMPLITUDE)
+        for key in calls:
+            calls[key] = 0
+        runs = []
+        for _ in range(3):
+            result = problem.run_cycle(state, path, keep=True)
+            assert result.compiled
+            runs.append(result)
+            state = problem.commit(state, result)
+        counted.append(sum(calls.values()))
+        results.append((state.forces, state.slip, state.wear_gap, state.friction_energy,
+                        np.array([r.kept[0] for r in runs]), np.array([r.kept[1] for r in runs]),
+                        np.array([r.records["dissipated_energy"] for r in runs]),
+                        np.array([r.records["tangential_force"] for r in runs])))
+        mu = friction.coefficients(contact, state)
+        problem.destroy()
+    assert counted == [3, 3 * INCREMENTS]   # one call a cycle (table), one an increment (function)
+    assert mu.max() > 0.3 and state.friction_energy.max() > 0.005   # a breakpoint was crossed
+    for compiled, stepwise in zip(*results):
+        scale = max(np.abs(stepwise).max(), 1e-300)
+        assert np.abs(compiled - stepwise).max() <= 1e-12 * scale

@@ -7,14 +7,18 @@ import math
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from dolfinx_fretting.analytic import (hertz_sphere, mindlin_deresiewicz_energy, mindlin_shear_modulus,
                                        mindlin_tangential_displacement)
 from dolfinx_fretting.cli import main
 from dolfinx_fretting.contact_output import read_table
-from dolfinx_fretting.fretting_map import (GROSS_SLIP_ENERGY_RATIO, MAP_FIELDS, classify_cycles, energy_ratios,
-                                           mindlin_transition_amplitude, read_map_csv, regime_of_cycles)
-from dolfinx_fretting.scenes import load_scene
+from dolfinx_fretting.fretting_map import (GROSS_SLIP_ENERGY_RATIO, MAP_FIELDS, MapPoint, check_axis,
+                                           classify_cycles, contact_amplitudes, energy_ratios,
+                                           mindlin_contact_compliance,
+                                           mindlin_transition_amplitude, plan_map, plot_map, read_map_csv,
+                                           regime_of_cycles, reversal_compliance)
+from dolfinx_fretting.scenes import SceneError, load_scene
 
 
 def _shoelace(delta: np.ndarray, force: np.ndarray) -> float:
@@ -119,6 +123,98 @@ def test_mindlin_transition_amplitude_of_the_sphere_scene():
     assert mindlin_transition_amplitude(load_scene("cylinder-flat"), 100.0) is None  # 2D: none
 
 
+def _rig_cycle(amplitude: float, bulk: float, mu: float, P: float, a: float, g_star: float, n: int = 64):
+    """The steady cycle of a sphere on a flat under a triangular imposed displacement (0 -> +A -> -A -> 0, n
+    increments) through a bulk compliance ``bulk`` in series with the contact: delta = bulk Q + Mindlin's loop
+    (the virgin curve to the tip, Johnson eq. 7.42; Masing's branches, each the virgin curve of half the force
+    change, doubled), the force solved at each increment's displacement (brentq, 1e-15 relative). A loop that
+    reaches mu P slides at it (gross slip). Returns (displacement, force) at the increments' ends, and Q*."""
+    limit = mu * P * (1 - 1e-12)
+
+    def contact(change: float) -> float:   # Mindlin's displacement of a force change from a stuck state
+        return mindlin_tangential_displacement(min(change, limit), mu, P, a, g_star)
+
+    tip = bulk * limit + contact(limit)
+    q_star = limit if amplitude >= tip else brentq(lambda q: bulk * q + contact(q) - amplitude, 0, limit,
+                                                   xtol=1e-300, rtol=1e-15)
+    j = np.arange(1, n + 1)
+    wave = np.interp(j / n, [0, 0.25, 0.75, 1.0], [0, 1, -1, 0])
+    delta = amplitude * wave
+    force = np.empty(n)
+    for i, (d, t) in enumerate(zip(delta, j / n)):
+        down = 0.25 <= t < 0.75   # the branch from (+A, +Q*); else from (-A, -Q*)
+        sign, start = (-1.0, amplitude) if down else (1.0, -amplitude)
+        reach = abs(d - start)   # the displacement travelled from the reversal
+
+        def branch(change):
+            return bulk * change + 2 * contact(change / 2)
+        change = 2 * q_star if reach >= branch(2 * q_star) else brentq(lambda c: branch(c) - reach, 0, 2 * q_star,
+                                                                         xtol=1e-300, rtol=1e-15)
+        force[i] = -sign * q_star + sign * change
+    return delta, force, q_star
+
+
+def test_reversal_slope_and_contact_amplitude_of_mindlins_loop():
+    """Loops made of Mindlin's closed form (sphere-flat's steel bodies at P = 100 N) in series with a bulk
+    compliance C_b = 5 % of the contact's 1/(8 G* a): the reversal slope is C_b + 1/(8 G* a) (Johnson §7.2), to
+    1e-3 (the linear extrapolation of the first two chords leaves 2 u1 u2 / 27 of it, u the force changes over
+    2 mu P: u1 ~ 0.03, u2 ~ 0.06 at 64 increments, 1.3e-4; the first chord alone would be u1/6 = 5e-3 off); the
+    contact amplitude delta* - C_b Q* is Mindlin's displacement at Q*, delta_M(Q*), to 1e-3 of delta_t (the slope's
+    error times Q*/delta_t ~ 1); a loop that slides within two increments of its reversal gives no slope, and its
+    contact amplitude uses the load's measured C_b."""
+    scene = load_scene("sphere-flat")
+    m, mu, P = scene.material, scene.contact.mu, 100.0
+    g_star = mindlin_shear_modulus(m.E, m.nu, m.E, m.nu)
+    a = hertz_sphere(P, scene.geometry.radius, scene.contact_modulus)[0]
+    contact = mindlin_contact_compliance(scene, P)
+    assert contact == pytest.approx((2 - m.nu) / (4 * (m.E / (2 * (1 + m.nu))) * a), rel=1e-12)  # identical bodies
+    assert mindlin_contact_compliance(load_scene("cylinder-flat"), P) is None
+    bulk = 0.05 * contact
+    delta_t = mindlin_transition_amplitude(scene, P)
+    rows, plan = [], []
+    for ratio in (0.3, 0.9, 1.1, 30.0):   # partial, partial, gross, gross sliding at once
+        amplitude = ratio * delta_t
+        delta, force, q_star = _rig_cycle(amplitude, bulk, mu, P, a, g_star, n=64 if ratio < 10 else 16)
+        slope = reversal_compliance(delta, force)
+        if ratio < 10:
+            assert slope == pytest.approx(bulk + contact, rel=1e-3)
+        else:
+            assert math.isnan(slope)   # the chords reach -mu P: not elastic
+        rows.append({"normal": P, "amplitude": amplitude, "converged": True, "reversal_compliance": slope,
+                     "force_amplitude_last": q_star})
+        plan.append(MapPoint(P, amplitude, "", [], scene))
+    contact_amplitudes(rows, plan)
+    for row in rows[:3]:
+        assert row["bulk_compliance"] == pytest.approx(bulk, abs=1e-3 * contact)   # the slope's 1e-3
+    for row in rows[:2]:
+        q_star = row["force_amplitude_last"]
+        expected = mindlin_tangential_displacement(q_star, mu, P, a, g_star)
+        assert row["contact_amplitude"] == pytest.approx(expected, abs=1e-3 * delta_t)
+    gross = rows[3]
+    assert math.isnan(gross["bulk_compliance"])
+    # the measured C_b's error (1e-3 of 1/(8 G* a)) times mu P: 7e-4 delta_t
+    assert gross["contact_amplitude"] == pytest.approx(gross["amplitude"] - bulk * mu * P, abs=1e-3 * delta_t)
+    # the transition in contact terms: 0.9 delta_t imposed is 0.9 delta_t - C_b Q*, under delta_t, as 1.1 is over
+    assert rows[1]["contact_amplitude"] < delta_t < rows[2]["contact_amplitude"]
+
+
+def test_map_axis_option(tmp_path):
+    """The picture's abscissa: ``contact`` draws the contact amplitude (a sphere); a scene that is not one, or
+    another name, is refused naming the option before any run."""
+    rows = [{"normal": 100.0, "amplitude": 0.003, "contact_amplitude": 0.0029, "regime": "partial",
+             "converged": True, "regimes_agree": True},
+            {"normal": 100.0, "amplitude": 0.004, "contact_amplitude": 0.0039, "regime": "gross",
+             "converged": True, "regimes_agree": True}]
+    assert plot_map(rows, tmp_path / "contact.png", axis="contact", mindlin={100.0: 0.0034}).stat().st_size > 10_000
+    with pytest.raises(ValueError, match="axis = 'x': allowed imposed, contact"):
+        plot_map(rows, tmp_path / "x.png", axis="x")
+    assert main(["map", "cylinder-flat", "--normal", "100", "--amplitude", "0.01", "--axis", "contact",
+                 "--out", str(tmp_path / "m")]) == 2
+    assert not (tmp_path / "m" / "runs").exists()
+    with pytest.raises(SceneError, match="--axis = 'sideways': allowed imposed, contact"):
+        check_axis(plan_map("sphere-flat", [100.0], [0.003], cycles=1), "sideways")
+
+
 #: cylinder-flat at CI size (contact elements of 40 um, 16 increments a cycle, 3 cycles): ~2 s a point; the refined
 #: zone (and so the window's limit) 0.2 mm: P = 400 N/mm (Hertz a = 0.217 mm) does not fit and fails at its preload.
 TINY = ["--set", "geometry.contact_mesh_size=0.04", "--set", "geometry.coarse_mesh_size=1.0",
@@ -155,6 +251,11 @@ def test_tiny_map_through_the_cli(tiny_map):
     assert partial["energy_ratio_last"] < 0.05  # measured 0.010
     assert gross["regime"] == "gross" and gross["force_ratio_last"] == pytest.approx(1.0, abs=1e-6)
     assert gross["energy_ratio_last"] > 0.5  # measured 0.68
+    # 2D: the loop's reversal slope is read (partial slip: elastic chords), no contact amplitude (a line contact has
+    # no compliance apart from the bodies' size); Q* as the cycle's half range
+    assert partial["reversal_compliance"] > 0 and math.isnan(partial["contact_amplitude"])
+    assert math.isnan(partial["bulk_compliance"])
+    assert partial["force_amplitude_last"] == pytest.approx(partial["force_ratio_last"] * mu * 100.0, rel=1e-5)
     for failed in rows[2:]:
         assert not failed["converged"] and failed["regime"] == "failed"
         assert "candidate window" in failed["error"] and math.isnan(failed["energy_ratio_last"])
@@ -203,6 +304,7 @@ def test_map_cli_bad_input(capsys, tmp_path, args, fragment):
 @pytest.mark.slow
 def test_sphere_transition_against_mindlin(tmp_path):
     """sphere-flat (identical steel bodies, the scene's a/4 mesh), P = 100 N, no wear, two cycles of 16 increments:
+    in imposed and in contact terms.
     the transition amplitude against Mindlin's delta_t = 3 mu P / (16 G* a) = 3.383 um. The scene imposes the flat's
     displacement on finite bodies: delta_t,FE = delta_t + C_b mu P, C_b the bulk compliance, measured on the
     partial-slip point as (delta* - delta_M(Q*)) / Q* (delta_M: Mindlin's loading curve): measured C_b mu P = 0.10 um
@@ -228,3 +330,19 @@ def test_sphere_transition_against_mindlin(tmp_path):
     assert partial["amplitude"] < predicted < gross["amplitude"]
     assert partial["regime"] == partial["regime_by_stick"] == "partial"
     assert gross["regime"] == gross["regime_by_stick"] == "gross"
+    # The contact's own amplitude (map.csv). The loop's slope at its reversals is the stuck contact's compliance
+    # plus the bulk's: Mindlin's 1/(8 G* a) (Johnson §7.2) within 5 % (measured over 2..6 um in
+    # benchmarks/results/fretting_map_sphere.md: -1.9 % .. +3.1 %, the chords of 16 increments a cycle read after the
+    # outer ring of nodes has slipped; the loop's secant delta*/Q* would be +50 %)
+    contact = mindlin_contact_compliance(scene, P)
+    for row in (partial, gross):
+        assert row["reversal_compliance"] == pytest.approx(contact, rel=0.05)
+        # map.csv's 6 digits of the slope: 5e-11 mm/N
+        assert row["bulk_compliance"] == pytest.approx(row["reversal_compliance"] - contact, abs=1e-10)
+    # delta_c = delta* - C_b Q* against Mindlin's displacement at the partial point's Q* (Johnson eq. 7.42): within
+    # 5 % of delta_t: the slope's 3 % of 1/(8 G* a) times mu P is 2 % of delta_t, the FE loop's own C_b from its
+    # tip (above) 3 % (measured 2 %). Removing the whole slope would leave 3.05 - 2.15 um: -70 %.
+    assert partial["contact_amplitude"] == pytest.approx(
+        mindlin_tangential_displacement(partial["force_amplitude_last"], mu, P, a, g_star), abs=0.05 * delta_t)
+    # the transition in contact terms brackets Mindlin's delta_t (the points 10 % either side of it)
+    assert partial["contact_amplitude"] < delta_t < gross["contact_amplitude"]
