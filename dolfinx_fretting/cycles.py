@@ -13,7 +13,7 @@ import numpy as np
 
 from . import friction, local_solvers
 from .commit import SlidingMonitor, acceleration, wear_coefficients
-from .contact import paired_contact_set
+from .contact import ContactSet, paired_contact_set
 from .cycling import (N_ROW, NOT_BRACKETED, SATURATED, SWEEPS_EXHAUSTED, TRIAL_NOT_FINITE, FrictionEvolution,
                       run_force_increments, run_increments)
 from .laws import Archard, EnergyWear
@@ -261,20 +261,23 @@ def _records(rows: np.ndarray, solves: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def sliding_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple, monitor: SlidingMonitor,
-                  state: ContactState, obstacle: np.ndarray, forced: np.ndarray, factors: np.ndarray
-                  ) -> CycleResult | None:
+                  state: ContactState, obstacle: np.ndarray, forced: np.ndarray, factors: np.ndarray,
+                  keep: bool = False) -> CycleResult | None:
     """A finite-sliding cycle in the compiled loop (:func:`~dolfinx_fretting.sliding.run_sliding_increments`: the
     increments solved, committed and re-paired as :func:`stepwise_cycle` does them, with the same decisions), on
-    rank 0, broadcast. Collective.
+    rank 0, broadcast. Collective. ``keep``: also every increment's committed arrays and the pairing they refer to
+    (:attr:`~dolfinx_fretting.state.CycleResult.kept_pairings`), as :func:`stepwise_cycle` keeps them.
 
-    None, with nothing changed, when the loop does not apply (3D or mortar pairings, a friction law of the dissipated energy, directions held by the
-    conditions) or stops before the cycle's end: a failed increment, a node outside the window that may penetrate,
-    a warning due (a stride over one master element, a contact beyond the reach), a singular contact compliance;
-    the caller then solves the cycle increment by increment, which raises or warns with its own messages."""
+    None, with nothing changed, when the loop does not apply (3D or mortar pairings, a friction law of the dissipated
+    energy, directions held by the conditions, a smoothed pressure read) or stops before the cycle's end: a failed
+    increment, a node outside the window that may penetrate, a warning due (a stride over one master element, a
+    contact beyond the reach), a singular contact compliance; the caller then solves the cycle increment by
+    increment, which raises or warns with its own messages."""
     pairing = state.pairing
     contact = operators.contact
+    # (a smoothed pressure read: the loop's rows hold the nodal peak pressure, the stepwise path's the smoothed one)
     if (pairing.dim != 2 or pairing.master_faces is None or friction.tracks_energy(contact)
-            or contact.held_rows.size or len(contact.zones) != 1):
+            or contact.held_rows.size or len(contact.zones) != 1 or pairing.surface_mass is not None):
         return None
     data = operators.sliding_kernel_data()
     faces = data.local_faces(pairing)
@@ -305,28 +308,48 @@ def sliding_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple,
         rows, found, solves = np.zeros((n, N_ROW)), copy(obstacle, dtype=float), np.ones(n, dtype=np.int64)
         slip, status = np.zeros(pairing.nc * 2), np.zeros(pairing.nc, dtype=np.int8)
         fl, stiffness = copy(faces), copy(operators.stiffness)
+        kept_rows = n if keep else 0
+        kept = (np.zeros((kept_rows, 2 * pairing.nc)), np.zeros((kept_rows, 2 * pairing.nc)),
+                np.zeros((kept_rows, 2 * pairing.nc)), np.zeros((kept_rows, pairing.nc)))
+        kept_status = np.zeros((kept_rows, pairing.nc), dtype=np.int8)
+        kept_fl, kept_weights = np.zeros((kept_rows, pairing.nc), dtype=np.int64), np.zeros((kept_rows, pairing.nc, 2))
         _done, code, repairs = run_sliding_increments(
             fl, weights, frames, gap0, W, Q, G, A_now, rho, data.face_rows, data.face_x, data.face_inside,
             data.face_sizes, data.slave_rows, pairing.coords, pairing.tributary, pairing.abscissa, compliance.C,
-            data.compliance_columns, compliance.responses, compliance.master_areas, contact.frame, T, data.on_surfaces, data.out_responses,
-            data.out_motion, data.out_gap0, by_force, np.ascontiguousarray(obstacle, dtype=float), forced,
-            translations, np.ascontiguousarray(factors), solver.force_tol, MAX_EVAL, stiffness, d,
-            wear_gap, master_wear, y, r_last, mu, k, master_share, solver.tol, solver.max_iter,
-            local_solvers._REFRESH, float(contact.obstacle.repair_slip), warn_stride, warn_reach, rows, found, solves, slip,
-            status, ROW["wear_area"])
+            data.compliance_columns, compliance.responses, compliance.master_areas, contact.frame, T,
+            data.on_surfaces, data.out_responses, data.out_motion, data.out_gap0, by_force,
+            np.ascontiguousarray(obstacle, dtype=float), forced, translations, np.ascontiguousarray(factors),
+            solver.force_tol, MAX_EVAL, stiffness, d, wear_gap, master_wear, y, r_last, mu, k, master_share,
+            solver.tol, solver.max_iter, local_solvers._REFRESH, float(contact.obstacle.repair_slip), warn_stride,
+            warn_reach, rows, found, solves, slip, status, ROW["wear_area"], kept, kept_status, kept_fl, kept_weights)
         if code:
             return None
         operators.stiffness[:] = stiffness   # the slopes learnt, as the stepwise load control keeps them (rank 0)
-        return rows, found, solves, fl, weights, wear_gap, master_wear, y, r_last, slip, status, repairs
+        return (rows, found, solves, fl, weights, wear_gap, master_wear, y, r_last, slip, status, repairs,
+                (*kept, kept_status) if keep else None, (kept_fl, kept_weights) if keep else None)
 
     result = on_rank0(operators.comm, work)
     if result is None:
         return None
-    rows, found, solves, fl, weights, wear_gap, master_wear, y, r_last, slip, status, repairs = result
+    rows, found, solves, fl, weights, wear_gap, master_wear, y, r_last, slip, status, repairs, kept, kept_faces = result
     monitor.repairs += repairs
-    final_pairing = pairing if not repairs else paired_contact_set(
-        pairing.master_surface, pairing.global_nodes, pairing.coords, pairing.tributary, pairing.abscissa,
-        data.faces[fl], weights, pairing.H.shape[1])
+
+    def paired(faces_now: np.ndarray, weights_now: np.ndarray) -> ContactSet:
+        return paired_contact_set(pairing.master_surface, pairing.global_nodes, pairing.coords, pairing.tributary,
+                                  pairing.abscissa, data.faces[faces_now], weights_now, pairing.H.shape[1],
+                                  pairing.surface_mass)
+
+    final_pairing = pairing if not repairs else paired(fl, weights)
+    kept_pairings = None
+    if keep:   # one ContactSet per pairing held, as the stepwise path's states share theirs until a re-pairing
+        kept_pairings, held, held_arrays = [], pairing, (faces, pairing.master_weights)
+        for faces_now, weights_now in zip(*kept_faces):
+            if not (np.array_equal(faces_now, held_arrays[0]) and np.array_equal(weights_now, held_arrays[1])):
+                same_as_final = np.array_equal(faces_now, fl) and np.array_equal(weights_now, weights)
+                held = final_pairing if same_as_final else paired(faces_now, weights_now)
+                held_arrays = (faces_now, weights_now)
+            kept_pairings.append(held)
+        kept_pairings = tuple(kept_pairings)
     records = _records(rows, solves)
     nf = len(ROW_FIELDS)
     final = replace(state, forces=r_last, positions=y, slip=slip, wear_gap=wear_gap, obstacle=found[-1].copy(),
@@ -336,7 +359,7 @@ def sliding_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple,
                     local_iterations=state.local_iterations + int(rows[:, nf].sum()),
                     record={k: records[k][-1].item() for k in INCREMENT_COLUMNS}, status=status,
                     master_wear=master_wear, pairing=final_pairing)
-    return CycleResult(records, found, factors, final, None, True)
+    return CycleResult(records, found, factors, final, kept, True, kept_pairings)
 
 
 def _load_control_failure(operators: ContactOperators, status: int, failure: np.ndarray, targets: np.ndarray,

@@ -361,7 +361,7 @@ class FrettingProblem:
 
         Elastic bodies run in the compiled loop (:mod:`dolfinx_fretting.cycling`, the path the scenes use; the
         local method must be Uzawa), prescribed forces found inside it by the stepwise load control; finite sliding
-        (2D node-to-segment, ``keep=False``) in its own compiled loop that pairs anew between increments
+        (2D node-to-segment) in its own compiled loop that pairs anew between increments
         (:func:`~dolfinx_fretting.cycles.sliding_cycle`); other local methods, plasticity and the rest of finite
         sliding run increment by increment. Either way a failure raises before anything is committed.
 
@@ -388,13 +388,12 @@ class FrettingProblem:
                 if operators.surface_compliance is None:
                     return compiled_cycle(operators, self.solver, self.wear_laws, start, obstacle, factors, keep,
                                           forced)
-                # Finite sliding pairs anew between increments, in its own compiled loop (the pairings of the kept
-                # increments and what the loop does not cover: increment by increment).
-                if not keep:
-                    result = sliding_cycle(operators, self.solver, self.wear_laws, self.sliding, start, obstacle,
-                                           forced, factors)
-                    if result is not None:
-                        return result
+                # Finite sliding pairs anew between increments, in its own compiled loop (what the loop does not
+                # cover: increment by increment).
+                result = sliding_cycle(operators, self.solver, self.wear_laws, self.sliding, start, obstacle, forced,
+                                       factors, keep)
+                if result is not None:
+                    return result
             return stepwise_cycle(operators, self._advance_once, start, obstacle, forced, factors, keep, check)
         # A growth solves the whole cycle again from ``state`` in the wider window (its increments then all refer
         # to one contact set); the result is still ``state``'s to commit (its final state is in the wider window).

@@ -477,42 +477,44 @@ def _pairing_operators(fl: np.ndarray, weights: np.ndarray, frames: np.ndarray, 
     ``rho = 1 / ||W_aa||_2`` (:func:`~dolfinx_fretting.local_solvers.block_rho`). False if a contact's block of W
     is singular (as ``ContactOperators._hold_directions`` refuses it).
 
-    L's rows of contact c are its frame times ``e_s - w_0 e_m0 - w_1 e_m1`` (slave node s, the facet's nodes): so ``N_c
-    = (e_s - w_0 e_m0 - w_1 e_m1)^T C`` (two rows) is formed once per contact, and each 2 x 2 block of W is ``F_c (N_c's
-    columns of contact e's nodes, weighted) F_e^T``, the upper triangle mirrored (W exactly symmetric, as the factorised
-    W)."""
+    L's rows of contact c are its frame times ``e_s - w_0 e_m0 - w_1 e_m1`` (slave node s, the facet's nodes): each
+    2 x 2 block of W is ``F_c (sum_ab coef_ca coef_eb C[node_ca, node_eb]) F_e^T``, ``C[p, q]`` the 2 x 2 block of C
+    at nodes p, q: the nine blocks of C the two contacts' nodes meet, read in place (not L times C's whole rows: C has
+    ~4 surface dofs per contact dof), the upper triangle mirrored (W exactly symmetric, as the factorised W)."""
     nc = fl.size
-    M, n_loads = C.shape[0], Q.shape[0]
+    n_loads = Q.shape[0]
     nodes, coefs = np.empty((nc, 3), dtype=np.int64), np.empty((nc, 3))
     for c in range(nc):
         f = fl[c]
         nodes[c, 0], nodes[c, 1], nodes[c, 2] = slave_rows[c], face_rows[f, 0], face_rows[f, 1]
         coefs[c, 0], coefs[c, 1], coefs[c, 2] = 1.0, -weights[c, 0], -weights[c, 1]
-    N = np.zeros((nc, 2, M))
-    for c in range(nc):
-        for a in range(3):
-            coef = coefs[c, a]
-            if coef == 0.0:
-                continue
-            for j in range(2):
-                row = 2 * nodes[c, a] + j
-                for col in range(M):
-                    N[c, j, col] += coef * C[row, col]
-    block = np.empty((2, 2))
     for c in range(nc):
         for e in range(c, nc):
-            for j in range(2):
-                for jj in range(2):
-                    v = 0.0
-                    for b in range(3):
-                        if coefs[e, b] != 0.0:
-                            v += coefs[e, b] * N[c, j, 2 * nodes[e, b] + jj]
-                    block[j, jj] = v
+            b00 = b01 = b10 = b11 = 0.0
+            for a in range(3):
+                ca = coefs[c, a]
+                if ca == 0.0:
+                    continue
+                row0, row1 = 2 * nodes[c, a], 2 * nodes[c, a] + 1
+                s00 = s01 = s10 = s11 = 0.0
+                for b in range(3):
+                    eb = coefs[e, b]
+                    if eb == 0.0:
+                        continue
+                    col = 2 * nodes[e, b]
+                    s00 += eb * C[row0, col]
+                    s01 += eb * C[row0, col + 1]
+                    s10 += eb * C[row1, col]
+                    s11 += eb * C[row1, col + 1]
+                b00 += ca * s00
+                b01 += ca * s01
+                b10 += ca * s10
+                b11 += ca * s11
             for k in range(2):
+                f0, f1 = frames[c, k, 0], frames[c, k, 1]
                 for kk in range(2):
-                    v = 0.0
-                    for j in range(2):
-                        v += frames[c, k, j] * (block[j, 0] * frames[e, kk, 0] + block[j, 1] * frames[e, kk, 1])
+                    v = (f0 * (b00 * frames[e, kk, 0] + b01 * frames[e, kk, 1])
+                         + f1 * (b10 * frames[e, kk, 0] + b11 * frames[e, kk, 1]))
                     W[2 * c + k, 2 * e + kk] = v
                     W[2 * e + kk, 2 * c + k] = v
         off = 0.5 * (W[2 * c, 2 * c + 1] + W[2 * c + 1, 2 * c])
@@ -655,7 +657,8 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
                            k: np.ndarray, master_share: float, tol: float, max_iter: int, refresh: int,
                            repair_slip: float, warn_stride: bool, warn_reach: bool, rows: np.ndarray,
                            found: np.ndarray, solves: np.ndarray, slip: np.ndarray, status: np.ndarray,
-                           wear_area_column: int) -> tuple[int, int, int]:
+                           wear_area_column: int, kept: tuple, kept_status: np.ndarray, kept_fl: np.ndarray,
+                           kept_weights: np.ndarray) -> tuple[int, int, int]:
     """The increments of a cycle under finite sliding (2D node-to-segment), each solved on the pairing of the state
     it starts from and committed as :func:`~dolfinx_fretting.commit.commit` commits it: the compiled loop's local
     solve and load control (:func:`~dolfinx_fretting.cycling.run_force_increments` or
@@ -669,6 +672,9 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
     ``G``, ``A``, ``rho``) and the state (``d``, ``stiffness``, ``wear_gap``, ``master_wear``, ``y``, ``r_last``)
     are in/out; ``rows``, ``found`` (each increment's obstacle), ``solves``, the last increment's ``slip`` and
     ``status`` out. ``translations``: (n, 2) each increment's obstacle translation (displacement control).
+    ``kept`` (forces, slip, positions, wear gap: (n, m), (n, m), (n, m), (n, nc)), ``kept_status`` (n, nc),
+    ``kept_fl`` (n, nc), ``kept_weights`` (n, nc, 2): out, each increment's committed state as the stepwise path keeps
+    it (after its re-pairing: in the frames of the pairing ``kept_fl``, ``kept_weights``); n = 0 rows: not kept.
 
     Returns:
         (increments done, 0 or the code of what stopped the loop (``SOLVE_FAILED`` ...), re-pairings).
@@ -694,7 +700,11 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
     held_rows, held_lengths, held_rates = np.zeros((1, 1)), np.ones(1, dtype=np.int64), np.zeros(1)
     normal = obstacle_frame[0]
     repairs = 0
+    keep = kept_fl.shape[0] > 0
     for j in range(n):
+        if keep and j > 0:   # the state increment j - 1 committed (re-paired or not: its step ends here)
+            _keep_increment(j - 1, r_last, slip, y, wear_gap, status, fl, weights, kept, kept_status, kept_fl,
+                            kept_weights)
         for c in range(nc):
             before[c] = wear_gap[c]
         if by_force:
@@ -828,4 +838,25 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
         if not _pairing_operators(fl, weights, frames, face_rows, slave_rows, C, surface_responses, obstacle_frame,
                                   W, Q, G, A, rho):
             return j, SINGULAR_BLOCK, repairs
+    if keep and n > 0:
+        _keep_increment(n - 1, r_last, slip, y, wear_gap, status, fl, weights, kept, kept_status, kept_fl,
+                        kept_weights)
     return n, 0, repairs
+
+
+@numba.njit(cache=True)
+def _keep_increment(j: int, r: np.ndarray, slip: np.ndarray, y: np.ndarray, wear_gap: np.ndarray, status: np.ndarray,
+                    fl: np.ndarray, weights: np.ndarray, kept: tuple, kept_status: np.ndarray, kept_fl: np.ndarray,
+                    kept_weights: np.ndarray) -> None:
+    """Row ``j`` of :func:`run_sliding_increments`' kept arrays: the committed state and its pairing."""
+    kept_r, kept_x, kept_y, kept_wear = kept
+    for i in range(r.size):
+        kept_r[j, i] = r[i]
+        kept_x[j, i] = slip[i]
+        kept_y[j, i] = y[i]
+    for c in range(fl.size):
+        kept_wear[j, c] = wear_gap[c]
+        kept_status[j, c] = status[c]
+        kept_fl[j, c] = fl[c]
+        kept_weights[j, c, 0] = weights[c, 0]
+        kept_weights[j, c, 1] = weights[c, 1]

@@ -596,14 +596,18 @@ def test_the_free_contact_operator_drops_the_fixed_columns(cylinder_on_flat):
 
 
 # The compiled loop of finite sliding against increment by increment (issue 26) -------------------------------------
-def _both_paths(problem, state, path):
+def _both_paths(problem, state, path, keep=False):
     """The cycle from ``state`` in the compiled loop and increment by increment (LocalSolver(compiled_cycles=
-    False), the reference), each committed; the repairs each made."""
+    False), the reference), each committed; the repairs each made. Both start from the same load control slopes
+    (``operators.stiffness``, which a cycle updates: from others the first increment's root finder takes other
+    trials and its answer moves by the force tolerance)."""
     out = {}
+    stiffness = problem.operators.stiffness.copy()
     for compiled in (True, False):
         problem.solver = dataclasses.replace(problem.solver, compiled_cycles=compiled)
+        problem.operators.stiffness[:] = stiffness
         before = problem.sliding.repairs
-        result = problem.run_cycle(state, path)
+        result = problem.run_cycle(state, path, keep=keep)
         out[compiled] = (result, problem.commit(state, result), problem.sliding.repairs - before)
     return out
 
@@ -636,6 +640,34 @@ def test_the_compiled_finite_sliding_cycle_is_the_stepwise_one(cylinder_on_flat,
             assert np.abs(a - b).max() <= 1e-8 * np.abs(b).max(), name
         assert np.abs(compiled.obstacle - stepwise.obstacle).max() <= 1e-8 * np.abs(stepwise.obstacle).max()
         state = slow
+
+
+def test_a_kept_compiled_finite_sliding_cycle_keeps_the_stepwise_increments(cylinder_on_flat):
+    """A cycle whose increments are kept (a snapshot's, keep=True) also runs in the compiled loop: every increment's
+    forces, slip, positions, wear gap and status, and the pairing they are expressed in (its facets and weights, one
+    ContactSet per pairing held), are the stepwise path's to 1e-8 of each quantity's scale (the paths differ by the
+    order of their sums only, as in the test above)."""
+    problem = sliding_problem(cylinder_on_flat, "finite", wear=dfr.Archard(k_slave=2e-6, k_master=3e-6))
+    state = pressed(problem)
+    path = dfr.CyclePath.waveform(24, normal=dfr.Force(P), tangential=0.06)
+    runs = _both_paths(problem, state, path, keep=True)
+    (compiled, fast, repairs), (stepwise, slow, repairs_slow) = runs[True], runs[False]
+    assert compiled.compiled and not stepwise.compiled
+    assert repairs == repairs_slow and repairs >= 12
+    for a, b, name in zip(compiled.kept, stepwise.kept, ("forces", "slip", "positions", "wear_gap", "status")):
+        assert a.shape == b.shape == (24,) + getattr(slow, name).shape, name
+        assert np.abs(a - b).max() <= 1e-8 * np.abs(b).max(), name
+    assert len(compiled.kept_pairings) == len(stepwise.kept_pairings) == 24
+    for j, (a, b) in enumerate(zip(compiled.kept_pairings, stepwise.kept_pairings)):
+        assert np.array_equal(a.master_faces, b.master_faces), j
+        assert np.abs(a.master_weights - b.master_weights).max() <= 1e-8, j
+        assert np.abs(a.frames - b.frames).max() <= 1e-12 and np.abs(a.gap0 - b.gap0).max() <= 1e-8 * np.abs(
+            b.gap0).max(), j
+        # a pairing held over increments is one object, as the stepwise states share theirs
+        if j and (stepwise.kept_pairings[j] is stepwise.kept_pairings[j - 1]):
+            assert a is compiled.kept_pairings[j - 1], j
+    assert compiled.kept_pairings[-1] is fast.pairing
+    assert np.abs(fast.forces - slow.forces).max() <= 1e-8 * np.abs(slow.forces).max()
 
 
 def test_a_failed_compiled_finite_sliding_cycle_raises_the_stepwise_message(cylinder_on_flat):
