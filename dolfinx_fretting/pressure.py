@@ -33,7 +33,8 @@ import scipy.sparse as sp
 __all__ = ["RECOVERIES", "CELL_FACETS", "SURFACE_FACETS", "check_surface_cells", "surface_mass", "smoothed_tractions"]
 
 #: The values of :class:`~dolfinx_fretting.contact.Contact`'s ``pressure_recovery``: ``"auto"`` is
-#: ``"smoothed"`` against a rigid plane on a tetrahedral mesh (measured there) and ``"nodal"`` otherwise.
+#: ``"smoothed"`` on a tetrahedral mesh against a rigid plane or an elastic body (node-to-face or mortar; measured
+#: there) and ``"nodal"`` otherwise.
 RECOVERIES = ("auto", "nodal", "smoothed")
 
 #: The facet types of each cell type (DOLFINx's names): a prism's and a pyramid's are of two types.
