@@ -1412,14 +1412,15 @@ class ElasticBody(Obstacle):
 
 
 def _resolved_recovery(given: str, V, obstacle: Obstacle) -> str:
-    """``pressure_recovery`` with ``"auto"`` resolved: ``"smoothed"`` against a rigid plane on tetrahedra (the
-    case measured), ``"nodal"`` otherwise."""
+    """``pressure_recovery`` with ``"auto"`` resolved: ``"smoothed"`` on tetrahedra against a rigid plane or an elastic
+    body (node-to-face or mortar: the cases measured, ``benchmarks/results/tet_pressure.md``), ``"nodal"``
+    otherwise."""
     from dolfinx import mesh as dmesh  # lazy: DOLFINx (see the note at the imports)
 
     if given != "auto":
         return given
     tetrahedra = V.mesh.topology.cell_type == dmesh.CellType.tetrahedron
-    return "smoothed" if tetrahedra and isinstance(obstacle, RigidPlane) else "nodal"
+    return "smoothed" if tetrahedra and isinstance(obstacle, (RigidPlane, ElasticBody)) else "nodal"
 
 
 def _candidate_surface_mass(V, facets: np.ndarray, contact_set: ContactSet) -> sp.csr_matrix:
@@ -1605,17 +1606,19 @@ class Contact:
             profiles and maps) are recovered from the nodal contact forces (:mod:`dolfinx_fretting.pressure`):
             ``"nodal"``, force over tributary measure; ``"smoothed"``, those nodal values of the loaded nodes
             smoothed by two sweeps of the lumped L2 projection over the loaded facets; ``"auto"`` (default):
-            ``"smoothed"`` against a :class:`RigidPlane` on tetrahedra (where the nodal values scatter: measured,
-            ``benchmarks/results/tet_pressure.md``), ``"nodal"`` otherwise (hexahedra: within 0.1 % of Hertz;
-            2D and elastic bodies as validated). The contact problem, the wear and the total forces do not depend
-            on it.
+            ``"smoothed"`` on tetrahedra against a :class:`RigidPlane` or an :class:`ElasticBody` (node-to-face or
+            mortar), where the nodal values scatter node to node (measured against Hertz, the pressure and
+            Cattaneo-Mindlin's shear, ``benchmarks/results/tet_pressure.md``), ``"nodal"`` otherwise (hexahedra:
+            within 0.1 % of Hertz; 2D as validated). The contact problem, the wear
+            and the total forces do not depend on it.
 
     Attributes:
         contact_set: The :class:`ContactSet` (nodes, frames, gaps, tributary measures, H).
         outside: The free nodes of ``surface`` outside the window (a :class:`ContactSet`, paired with the master
             like the candidates for an :class:`ElasticBody`), or None (no window, or none outside it).
         H_free: H without the columns of fixed dofs (what W is built from).
-        held_rows: Rows of H (``dim c + k``, k >= 1) whose every dof is fixed: held tangential directions.
+        held_rows: Rows of H (``dim c + k``, k >= 1) whose every dof is fixed (their free entries, if any, rounding:
+            below 1e-12 of the row's largest): held tangential directions.
         friction: The friction law (``Coulomb(mu)`` when ``mu`` was a number).
         mu: Friction coefficient per contact (the law's; an evolving law's at the start: a state's are
             :func:`dolfinx_fretting.friction.coefficients`).
@@ -1716,6 +1719,17 @@ class Contact:
         # H's entries at the free columns (the product H diag(free) without forming it: finite sliding holds a new
         # pairing at almost every increment)
         self.H_free = sp.csr_matrix((H.data * free[H.indices], H.indices.copy(), H.indptr.copy()), shape=H.shape)
+        # A row whose every free entry is rounding (below 1e-12 of the row's largest entry, fixed columns included)
+        # touches held dofs only: a slave node on a symmetry plane paired with a master vertex there gets
+        # interpolation weights of ~1e-14 on the vertex's neighbours off the plane (measured 6.6e-15 on gmsh
+        # tetrahedra), which would leave its compliance along the plane's normal at ~1e-29 instead of held.
+        row_of = np.repeat(np.arange(H.shape[0]), np.diff(H.indptr))
+        row_scale = np.zeros(H.shape[0])
+        np.maximum.at(row_scale, row_of, np.abs(H.data))
+        free_row = np.repeat(np.arange(H.shape[0]), np.diff(self.H_free.indptr))
+        significant = np.abs(self.H_free.data) > 1e-12 * row_scale[free_row]
+        rounding_only = np.bincount(free_row[significant], minlength=H.shape[0]) == 0
+        self.H_free.data[rounding_only[free_row]] = 0.0
         self.H_free.eliminate_zeros()
         empty = np.diff(self.H_free.indptr) == 0
         normal_rows = np.arange(empty.size) % contact_set.dim == 0

@@ -21,8 +21,11 @@ Why: on unstructured tetrahedra the nodal forces of node-to-rigid contact scatte
 ``r / A`` (a sphere's cap on a rigid plane, a/h = 12-16: +4.0 ... +5.7 % at the peak, 7-10 % at single nodes, RMS
 2.6-4.0 % within 0.8a); the L2 projection with the consistent mass matrix, ``M^-1 r``, amplifies that scatter
 (+11 ... +25 % at the peak), while the smoothing above gives the peak within 0.4 % and the RMS within 1 % of Hertz at
-a/h >= 12 (``benchmarks/results/tet_pressure.md``). The wear law and the cycle jumps keep using the nodal ``r / A``
-(Archard's worn volume is the sum of the nodal ``A dg``, whatever is read).
+a/h >= 12 (``benchmarks/results/tet_pressure.md``). Against an elastic body on tetrahedra (node-to-face or mortar,
+non-matching faces) the nodal values scatter more (RMS 2.5-8.7 % of Hertz's p0 within 0.8a) and the smoothed ones
+are 3-5 times closer (0.5-2.3 %), the shear likewise (Cattaneo-Mindlin's: 7-11 % against 3-4 % of mu p0). The
+wear law and the cycle jumps keep using the nodal ``r / A`` (Archard's worn volume is the sum of the nodal ``A dg``,
+whatever is read).
 """
 
 from __future__ import annotations
@@ -33,7 +36,8 @@ import scipy.sparse as sp
 __all__ = ["RECOVERIES", "CELL_FACETS", "SURFACE_FACETS", "check_surface_cells", "surface_mass", "smoothed_tractions"]
 
 #: The values of :class:`~dolfinx_fretting.contact.Contact`'s ``pressure_recovery``: ``"auto"`` is
-#: ``"smoothed"`` against a rigid plane on a tetrahedral mesh (measured there) and ``"nodal"`` otherwise.
+#: ``"smoothed"`` on a tetrahedral mesh against a rigid plane or an elastic body (node-to-face or mortar; measured
+#: there) and ``"nodal"`` otherwise.
 RECOVERIES = ("auto", "nodal", "smoothed")
 
 #: The facet types of each cell type (DOLFINx's names): a prism's and a pyramid's are of two types.

@@ -18,6 +18,7 @@ from petsc4py import PETSc  # noqa: E402
 
 import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
+from support.tet_boxes import stacked_boxes  # noqa: E402
 
 E, NU = 200000.0, 0.3
 LMBDA, MU_LAME = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))
@@ -308,24 +309,6 @@ def test_3d_box_on_a_rigid_plane_is_uniaxial_stress(cell):
     problem.destroy()
 
 
-def _tetrahedral_box(n, z0, z1, first):
-    """Points and cells of [-1/2, 1/2]^2 x [z0, z1] on an n x n x n grid, each cube cut into 6 tetrahedra
-    around its main diagonal (Kuhn); vertex numbers start at ``first``."""
-    g = np.linspace(-0.5, 0.5, n + 1)
-    z = np.linspace(z0, z1, n + 1)
-    X, Y, Z = np.meshgrid(g, g, z, indexing="ij")
-    points = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
-    index = np.arange(points.shape[0]).reshape(n + 1, n + 1, n + 1) + first
-    cells = []
-    paths = ([0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7])
-    for i in range(n):
-        for j in range(n):
-            for k in range(n):
-                corner = [index[i + a, j + b, k + c] for a in (0, 1) for b in (0, 1) for c in (0, 1)]
-                cells += [[corner[v] for v in path] for path in paths]
-    return points, np.array(cells)
-
-
 @pytest.mark.parametrize("upper_cells", [4, 6])
 def test_two_tetrahedral_bodies_pressed_together_are_uniaxial_stress(upper_cells):
     """Two identical boxes of tetrahedra, the upper (slave) pressed onto the lower (master, 4 cells along each
@@ -338,39 +321,9 @@ def test_two_tetrahedral_bodies_pressed_together_are_uniaxial_stress(upper_cells
       contact does not pass this patch test (Taylor & Papadopoulos, IJNME 31, 1991: the master's nodal forces are
       the slave's redistributed by the pairing weights, not the uniform traction's), so the nodal pressures
       scatter (measured -32 % to +13 %) while the total force stays within 0.5 % (measured -0.20 %)."""
-    lower, upper = _tetrahedral_box(4, 0.0, 1.0, 0), _tetrahedral_box(upper_cells, 1.0, 2.0, 125)
-    comm = MPI.COMM_WORLD
-    root = comm.rank == 0
-    points = np.vstack([lower[0], upper[0]]) if root else np.zeros((0, 3))
-    cells = np.vstack([lower[1], upper[1]]) if root else np.zeros((0, 4), dtype=np.int64)
-    msh = dfx.create_mesh(comm, cells, points, "tetrahedron")
-    V = dfx.vector_space(msh, 1)
-    fdim = 2
-    msh.topology.create_connectivity(fdim, 3)
-    interface = mesh.locate_entities_boundary(msh, fdim, lambda x: np.isclose(x[2], 1.0))
-    f_to_c = msh.topology.connectivity(fdim, 3)
-    centre_z = np.array([mesh.compute_midpoints(msh, 3, f_to_c.links(f))[0, 2] for f in interface])
-    marker = np.where(centre_z > 1.0, 1, 2).astype(np.int32)     # 1 the upper's bottom (slave), 2 the lower's top
-    order = np.argsort(interface)
-    tags = mesh.meshtags(msh, fdim, interface[order], marker[order])
-
-    def component(i, where):
-        Vi, _ = V.sub(i).collapse()
-        dofs = fem.locate_dofs_geometrical((V.sub(i), Vi), where)
-        return fem.dirichletbc(fem.Function(Vi), dofs, V.sub(i))
-
-    bcs = []
-    for z in (0.0, 2.0):   # rollers on the top and the bottom, the in-plane rigid motions removed on them
-        bcs += [component(2, lambda x, z=z: np.isclose(x[2], z)),
-                component(0, lambda x, z=z: np.isclose(x[2], z) & np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0)),
-                component(1, lambda x, z=z: np.isclose(x[2], z) & np.isclose(x[1], 0.0))]
-    contact = dfr.Contact(V, (tags, 1), dfr.ElasticBody((tags, 2), [0.0, 0.0, 1.0]), mu=0.0, bcs=bcs)
+    problem, state, sigma = stacked_boxes(upper_cells, pressure_recovery="nodal")
+    contact = problem.contact
     assert contact.nc == (upper_cells + 1) ** 2 and contact.contact_set.master_nodes.shape[1] == 4
-    problem = dfr.FrettingProblem(elasticity(V), contact, bcs)
-    state = problem.initial_state()
-    delta = 1e-4
-    state = problem.commit(state, problem.solve(state, normal=delta))
-    sigma = E * delta / 2.0
     if upper_cells == 4:
         assert problem.total_force(state)[0] == pytest.approx(sigma, rel=1e-8)
         assert np.allclose(problem.contact_fields(state)["pressure"], sigma, rtol=1e-8)

@@ -3,7 +3,9 @@
 References: the P1 surface mass matrix against DOLFINx's own assembly of ``int phi_j q ds`` for fields q in the
 space (exact); the smoothing against an independent quadrature on an irregular triangulation (the edge-midpoint
 rule, exact for the quadratic ``phi_j x``); Hertz (Johnson, *Contact Mechanics*, 1985, §4.2) for a sphere's cap
-in unstructured tetrahedra on a rigid plane (tests/support/tet_sphere.py).
+in unstructured tetrahedra on a rigid plane and on an identical elastic flat (tests/support/tet_sphere.py);
+Cattaneo-Mindlin (Johnson §7.2) for its shear; the uniform stress of two stacked boxes of tetrahedra (the contact
+patch test, tests/support/tet_boxes.py).
 """
 
 import numpy as np
@@ -19,7 +21,9 @@ import dolfinx_fretting as dfr  # noqa: E402
 from dolfinx_fretting import _dolfinx as dfx  # noqa: E402
 from dolfinx_fretting.pressure import check_surface_cells, smoothed_tractions, surface_mass  # noqa: E402
 
-from support.tet_sphere import hertz_errors, pressed, tet_cap_problem  # noqa: E402
+from dolfinx_fretting.analytic import cattaneo_mindlin_sphere_traction  # noqa: E402
+from support.tet_boxes import stacked_boxes  # noqa: E402
+from support.tet_sphere import E_STAR_PAIR, P, R, hertz_errors, pressed, tet_cap_problem  # noqa: E402
 
 
 def _assembled(V, tags, field) -> np.ndarray:
@@ -259,3 +263,105 @@ def test_scene_key_reaches_the_outputs(tmp_path):
         assert summary["max_pressure"] == pytest.approx(p0, rel=0.01)
         peaks[recovery] = summary["max_pressure"]
     assert abs(peaks["smoothed"] / peaks["auto"] - 1) > 1e-6
+
+
+@pytest.mark.parametrize("formulation", ["node", "mortar"])
+def test_auto_reads_the_smoothed_pressure_against_an_elastic_body_on_tetrahedra(formulation):
+    """Two boxes of tetrahedra pressed together (uniaxial stress sigma, the contact patch test): "auto" resolves to
+    "smoothed" against an ElasticBody on tetrahedra, node-to-face or mortar (measured on the sphere below and in
+    benchmarks/results/tet_pressure.md), and reads, of the same contact forces:
+
+    - matching faces (4 cells on 4): sigma at every contact to 1e-8 (the local tolerance 1e-10; a uniform traction
+      stays uniform under the smoothing to 1e-14);
+    - non-matching faces (6 on 4): mortar passes the patch test, the read sigma to 1e-8; node-to-face does
+      not (its nodal force over area -32 % ... +13 %, tests/test_api.py), and the smoothed read is within 10 % of
+      sigma at every contact (measured -8.1 % ... +3.3 %) with less than half the nodal spread (0.25 measured)."""
+    for upper_cells in (4, 6):
+        problem, state, sigma = stacked_boxes(upper_cells, formulation)
+        contact = problem.contact
+        assert contact.pressure_recovery == "smoothed" and contact.contact_set.surface_mass is not None
+        read = problem.contact_fields(state)["pressure"] / sigma - 1
+        nodal = state.forces[0::3] / contact.contact_set.tributary / sigma - 1
+        if upper_cells == 4:
+            assert np.abs(read).max() < 1e-8 and np.abs(nodal).max() < 1e-8, (read, nodal)
+        elif formulation == "mortar":   # measured 1.1e-9 (the nodal values 9.2e-9: tests/test_mortar_3d.py's)
+            assert np.abs(read).max() < 1e-8, read
+        else:
+            assert np.abs(nodal).max() > 0.2, nodal   # node-to-face fails the patch test (the contrast)
+            assert np.abs(read).max() < 0.1, read
+            assert np.ptp(read) < 0.5 * np.ptp(nodal), (read, nodal)
+        problem.destroy()
+
+
+def _on_the_flat(a_over_h, formulation):
+    """The quarter cap on the identical flat (the flat's a/h the cap's, two gmsh triangulations: the faces do not
+    match) pressed by P/4 with "auto": the Hertz errors (the pair's E*) of the smoothed read and of the nodal force
+    over tributary measure of the same state."""
+    problem, contact, a, p0, h = tet_cap_problem(a_over_h, flat_a_over_h=a_over_h, formulation=formulation)
+    assert contact.pressure_recovery == "smoothed"
+    state = pressed(problem)
+    assert problem.total_force(state)[0] == pytest.approx(P / 4, rel=1e-8)   # force control (LocalSolver.force_tol)
+    fields = problem.contact_fields(state)
+    assert state.record["max_pressure"] == pytest.approx(fields["pressure"].max(), rel=1e-14)
+    contact_set = contact.contact_set
+    errors = (hertz_errors(contact_set.coords, fields["pressure"], a, p0),
+              hertz_errors(contact_set.coords, state.forces[0::3] / contact_set.tributary, a, p0))
+    problem.destroy()
+    return errors
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("formulation", ["node", "mortar"])
+def test_sphere_on_an_elastic_flat_in_tetrahedra(formulation):
+    """Issue 23, two bodies: the quarter cap in gmsh tetrahedra on an identical flat in gmsh tetrahedra (non-matching
+    faces), node-to-face and mortar, a/h = 8 and 12 (17 k and 33 k dofs; 10-16 s idle, ~1 min loaded). Hertz with the
+    pair's E* (Johnson eqs 3.39, 4.22-4.23). Measured (frontal-Delaunay, benchmarks/results/tet_pressure.md, peak /
+    RMS within 0.8a): node-to-face smoothed +0.01 / 2.16 % (8), -0.08 / 1.43 % (12), its nodal force over area
+    +15.3 / 7.3 % and +13.1 / 4.8 %; mortar smoothed -1.00 / 1.21 % (8), -0.34 / 0.81 % (12), nodal +3.3 / 3.7 %
+    and +3.3 / 2.9 %.
+    Asserted: the smoothed read (the default) within 3 % of Hertz at the peak and in RMS at a/h = 12 (the issue's
+    target) and within 2 % at the peak and 3 % in RMS at 8; its RMS falling with h and below half the nodal one's."""
+    coarse, coarse_nodal = _on_the_flat(8, formulation)
+    fine, fine_nodal = _on_the_flat(12, formulation)
+    assert abs(coarse["peak"]) < 0.02 and coarse["rms"] < 0.03, coarse
+    assert abs(fine["peak"]) < 0.03 and fine["rms"] < 0.03, fine
+    assert fine["rms"] < coarse["rms"]
+    for smoothed, nodal in ((coarse, coarse_nodal), (fine, fine_nodal)):
+        assert smoothed["rms"] < 0.5 * nodal["rms"], (smoothed, nodal)
+
+
+@pytest.mark.slow
+def test_smoothed_shear_on_an_elastic_flat_in_tetrahedra():
+    """Cattaneo-Mindlin on tetrahedra: the half cap (a roller on y = 0) on the identical flat, mortar, a/h = 8 (31 k
+    dofs; 12 s idle, ~1 min loaded), mu = 0.5, P/2 then Q = 0.5 mu P/2 along x by force (identical bodies: Dundurs' beta
+    = 0, Mindlin's traction the reference, ``analytic.cattaneo_mindlin_sphere_traction``). Measured (benchmarks/
+    results/tet_pressure.md), the x traction's error over mu p0 within 0.8a, RMS / largest: smoothed 3.8 / 10.4 %,
+    nodal 9.7 / 26.6 %; the smoothed peak sits 8.9 % of mu p0 under Mindlin's (the cusp at the stick radius
+    averaged over its neighbours), the nodal one 6.2 % over it.
+    Asserted: the tangential force to 1e-8 Q; the smoothed RMS within 6 % and below half the nodal one; Coulomb's
+    |shear| <= mu p at every loaded node after smoothing (to 1e-12: the same positive weights on shear and
+    pressure) as before it."""
+    mu, phi = 0.5, 0.5
+    problem, contact, a, p0, h = tet_cap_problem(8, flat_a_over_h=8, formulation="mortar", half=True, mu=mu)
+    assert contact.pressure_recovery == "smoothed"
+    state = pressed(problem, share=0.5)
+    Q = phi * mu * P
+    for fraction in (0.5, 1.0):
+        state = problem.commit(state, problem.solve(
+            state, tangential=(dfr.Force(fraction * Q / 2), dfr.Displacement(0.0))))
+    assert problem.total_force(state)[1] == pytest.approx(Q / 2, rel=1e-8)
+    contact_set = contact.contact_set
+    fields = problem.contact_fields(state)
+    local = {"smoothed": np.column_stack([fields["pressure"], fields["shear"]]),
+             "nodal": state.forces.reshape(-1, 3) / contact_set.tributary[:, None]}
+    r = np.linalg.norm(contact_set.coords[:, :2], axis=1)
+    expected = cattaneo_mindlin_sphere_traction(r, Q, mu, P, R, E_STAR_PAIR)
+    inner = r < 0.8 * a
+    rms = {}
+    for name, traction in local.items():
+        loaded = traction[:, 0] > 0
+        assert np.all(np.linalg.norm(traction[loaded, 1:], axis=1) <= mu * traction[loaded, 0] * (1 + 1e-12)), name
+        along_x = np.einsum("ik,ik->i", traction, contact_set.frames[:, :, 0])
+        rms[name] = np.sqrt(np.mean(((along_x - expected) / (mu * p0))[inner] ** 2))
+    assert rms["smoothed"] < 0.06 and rms["smoothed"] < 0.5 * rms["nodal"], rms
+    problem.destroy()
