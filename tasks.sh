@@ -27,14 +27,13 @@ loud() {  # a message nobody can miss in a CI log
 # The default suite (pytest, not slow) of one stack, into LOG: run_pytest NAME PYTHON LOG [pytest options]. The two
 # stacks' suites run at the same time (each is one process; the machines have 2 cores), each into its own log,
 # printed whole once both have finished; pytest's cache is off (both would write .pytest_cache at once).
-run_pytest() {
+run_pytest() {  # run in the background: the job becomes pytest itself (exec), so the trap below reaches it
   local name=$1 python=$2 log=$3
   shift 3
-  {
-    echo "[test] $name stack: $("$python" -c 'from mpi4py import MPI; import dolfinx; print("DOLFINx", dolfinx.__version__)' \
-      2>/dev/null || echo 'DOLFINx not importable')"
-    "$python" -m pytest -q -p no:cacheprovider -m "not slow" tests "$@"
-  } >"$log" 2>&1
+  exec >"$log" 2>&1
+  echo "[test] $name stack: $("$python" -c 'from mpi4py import MPI; import dolfinx; print("DOLFINx", dolfinx.__version__)' \
+    2>/dev/null || echo 'DOLFINx not importable')"
+  exec "$python" -m pytest -q -p no:cacheprovider -m "not slow" tests "$@"
 }
 
 # run_parallel NAME PYTHON LAUNCHER...: the collective tests on 2 and 3 ranks (python -m mpi4py: an error on one
@@ -72,7 +71,8 @@ case "$cmd" in
     times=()
     status=0
     logs=$(mktemp -d)
-    trap 'kill $(jobs -p) 2>/dev/null || true' INT TERM  # no suite left running after an interrupt
+    # an interrupt stops both suites (background jobs of a script ignore SIGINT) and the whole test run
+    trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$logs"; echo "[test] interrupted" >&2; exit 130' INT TERM
     t0=$SECONDS
     run_pytest debian .venv/bin/python "$logs/debian.log" "$@" &
     debian_pid=$!

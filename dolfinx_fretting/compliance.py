@@ -18,7 +18,8 @@ solves ``K x = b`` and the construction of the small dense W by one of three rou
 ``"owned"``
     For MPI: every rank gathers the whole K (``MatCreateSubMatrices``), factorises it alone (MUMPS on
     COMM_SELF, all ranks at once) and computes by entries of the inverse only the columns
-    W[:, J] = H_S (K^-1)_{S, S_J} H_J^T of its share J of the rows of H; the columns are all-gathered.
+    W[:, J] = H_S (K^-1)_{S, S_J} H_J^T of its share J of the rows of H; the columns are sent to rank 0, which
+    broadcasts the whole W.
     No solve is shared between ranks; each rank holds a whole factor of K (memory x ranks). The
     distributed factor is still the one used for the displacement solves.
 
@@ -738,7 +739,7 @@ class DelassusOperator:
         self._own = None
 
     def _build_owned(self, H: sp.csr_matrix, HS: sp.csr_matrix, S: np.ndarray) -> np.ndarray:
-        """W from each rank's columns W[:, J] = H_S (K^-1)_{S, S_J} H_J^T on its own factor, all-gathered."""
+        """W from each rank's columns W[:, J] = H_S (K^-1)_{S, S_J} H_J^T on its own factor, gathered on rank 0."""
         m = H.shape[0]
         size, rank = self.comm.size, self.comm.rank
         start, stop = (m * rank) // size, (m * (rank + 1)) // size
@@ -854,8 +855,13 @@ class DelassusOperator:
             op = DelassusOperator(matrix, MPI.COMM_SELF, method="selected_inverse", petsc_options=self.petsc_options,
                                   options_prefix=self.options_prefix, spd=self.spd, symmetrize=False)
             op._schur_dofs = np.arange(n - H.shape[0], n, dtype=np.int64)
-            self._schur, self._schur_key = op, key
-            op.factorize()
+            try:
+                op.factorize()
+            except Exception:
+                op.destroy()
+                matrix.destroy()
+                raise
+            self._schur, self._schur_key = op, key  # only a factorised operator is reused
         elif getattr(self, "_schur_stale", False):
             A = self._augmented(H)  # the same pattern: K's new values in place, then a numeric refactorisation
             op.K.setValuesCSR(A.indptr.astype(PETSc.IntType), A.indices.astype(PETSc.IntType), A.data)

@@ -239,7 +239,8 @@ def _friction_evolution(operators: ContactOperators, laws: tuple, state: Contact
     if not friction.tracks_energy(contact):
         return None
     tables = friction.energy_tables(contact)
-    if tables is None or not all(law is None or isinstance(law, (Archard, EnergyWear)) for law in laws):
+    # the shipped laws themselves, not a subclass: a user's subclass may make the rate other than affine in mu
+    if tables is None or not all(law is None or type(law) in (Archard, EnergyWear) for law in laws):
         return None
     # k = k0 + k1 mu exactly as the laws compute it (Archard: k0 = k acceleration, k1 = 0; Fouvry: k0 = 0,
     # k1 = alpha acceleration, so k0 + k1 mu is alpha acceleration mu to the bit)

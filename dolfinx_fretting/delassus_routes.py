@@ -32,7 +32,7 @@ AUTO_SCHUR_ROWS = 1500
 AUTO_SCHUR_DOFS_PER_ROW = 70
 
 
-#: The Schur route's own factor of [[K, H^T], [H, 0]] (MUMPS INFOG(22), kept with W for later builds) over K's
+#: The Schur route's own factor of [[K, H^T], [H, 0]] (MUMPS INFOG(22), alive beside K's while W is built) over K's
 #: factor: measured 1.2-2.9 on the graded and uniform sphere meshes of 148-1915 contacts
 #: (benchmarks/results/schur_setup.md, columns "MUMPS Schur" / "MUMPS K"); the envelope, as the size estimate's
 #: factor model is.

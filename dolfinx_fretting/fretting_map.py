@@ -254,10 +254,12 @@ def reversal_compliance(displacement: np.ndarray, force: np.ndarray) -> float:
     """
     delta = np.asarray(displacement, dtype=float)
     force = np.asarray(force, dtype=float)
-    span = float(force.max() - force.min()) if force.size else 0.0
+    if delta.size == 0 or force.size == 0:
+        return math.nan
+    span = float(force.max() - force.min())
     slopes = []
-    for turn, opposite in ((int(np.argmax(delta)) if delta.size else 0, float(force.min(initial=0.0))),
-                           (int(np.argmin(delta)) if delta.size else 0, float(force.max(initial=0.0)))):
+    # after the largest displacement the force heads for its smallest value, and the other way round
+    for turn, opposite in ((int(np.argmax(delta)), float(force.min())), (int(np.argmin(delta)), float(force.max()))):
         if turn + 2 >= delta.size or span <= 0:
             continue
         changes = np.abs(force[turn + 1:turn + 3] - force[turn])
@@ -610,9 +612,9 @@ def plot_map(rows: Sequence[dict[str, Any]], path: str | Path, title: str = "", 
                 label="Mindlin 3 mu P / (16 G* a)" + (" (contact only)" if axis == "imposed" else ""))
     ax.set_xscale("log")
     ax.set_yscale("log")
-    for axis in (ax.xaxis, ax.yaxis):  # plain numbers: the grid's values are what the user typed
-        axis.set_major_formatter(ticker.FormatStrFormatter("%g"))
-        axis.set_minor_formatter(ticker.FormatStrFormatter("%g"))
+    for scale in (ax.xaxis, ax.yaxis):  # plain numbers: the grid's values are what the user typed
+        scale.set_major_formatter(ticker.FormatStrFormatter("%g"))
+        scale.set_minor_formatter(ticker.FormatStrFormatter("%g"))
     ax.set_xlabel("displacement amplitude delta* (mm)" if axis == "imposed"
                   else "contact's amplitude delta_c = delta* - C_b Q* (mm)")
     ax.set_ylabel(f"normal load P ({force_unit})")

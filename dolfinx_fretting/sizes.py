@@ -20,7 +20,7 @@ DOLFINx or building anything. The mesh is the geometry kind's to count (its ``me
   by the Schur route, asked for or ``"auto"``'s choice by :func:`~dolfinx_fretting.delassus_routes.auto_route`:
   its own factor of ``[[K, H^T], [H, 0]]``, alive beside K's while W is built,
   :data:`~dolfinx_fretting.delassus_routes.SCHUR_FACTOR_RATIO` times K's; its ``W_build`` is then the dense
-  Schur complement's copy), ``W`` (the dense Delassus matrix ``(nc dim)^2`` doubles, replicated on every rank,
+  Schur complement's three copies), ``W`` (the dense Delassus matrix ``(nc dim)^2`` doubles, replicated on every rank,
   and the compiled loop's transposed copy), ``W_build`` (the
   selected-inverse request pattern, values and dense block of ``(K^-1)_SS``, freed once W is built),
   ``cycle_cache`` (the 2D compiled loop's contact-pattern LU factors, one ``(nc dim)^2`` block per increment of
@@ -204,7 +204,8 @@ def _compiled_2d_cycles(scene: Scene, dim: int) -> bool:
 def _schur_route(scene: Scene, ranks: int, rows: int, dofs: int) -> bool:
     """W is built by the Schur route (a second factor): asked for, or ``"auto"``'s choice for this size."""
     method = scene.solver.delassus_method
-    return method == "schur" or (method == "auto" and auto_route(ranks, rows, dofs) == "schur")
+    # "schur" under MPI is refused before any build (compliance): no second factor to count
+    return ranks == 1 and method == "schur" or (method == "auto" and auto_route(ranks, rows, dofs) == "schur")
 
 
 def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
@@ -247,7 +248,9 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
         # the request pattern (int32 + float64), its CSR read-back (a copy), and the dense block of (K^-1)_SS
         memory["W_build"] = int(s * s * (12 + 12 + 8) + 8 * m * s)
         if "schur_factor" in memory:
-            memory["W_build"] = 8 * m * m  # MUMPS's dense Schur complement, copied out as -W
+            # three dense m x m blocks at once: the factor's Schur block, PETSc's copy of it
+            # (MatFactorCreateSchurComplement) and the package's copy, negated in place into W
+            memory["W_build"] = 3 * 8 * m * m
         if scene.contact.sliding == "finite":
             # K^-1 on both surfaces, kept on every rank: the slave's dofs and the master's within reach (taken as
             # twice W's build set: the flat's nodes under the contact and under the stroke); its build replaces W's

@@ -13,6 +13,7 @@ from dolfinx_fretting.analytic import (hertz_sphere, mindlin_deresiewicz_energy,
                                        mindlin_tangential_displacement)
 from dolfinx_fretting.cli import main
 from dolfinx_fretting.contact_output import read_table
+from dolfinx_fretting import plots
 from dolfinx_fretting.fretting_map import (GROSS_SLIP_ENERGY_RATIO, MAP_FIELDS, MapPoint, check_axis,
                                            classify_cycles, contact_amplitudes, energy_ratios,
                                            mindlin_contact_compliance,
@@ -198,9 +199,10 @@ def test_reversal_slope_and_contact_amplitude_of_mindlins_loop():
     assert rows[1]["contact_amplitude"] < delta_t < rows[2]["contact_amplitude"]
 
 
-def test_map_axis_option(tmp_path):
-    """The picture's abscissa: ``contact`` draws the contact amplitude (a sphere); a scene that is not one, or
-    another name, is refused naming the option before any run."""
+def test_map_axis_option(tmp_path, monkeypatch):
+    """The picture's abscissa: ``contact`` draws the contact amplitude (a sphere) and says so on its axis, the
+    default the imposed one (a loop variable once shadowed the option: every picture was labelled delta_c); a scene
+    that is not a sphere, or another name, is refused naming the option before any run."""
     rows = [{"normal": 100.0, "amplitude": 0.003, "contact_amplitude": 0.0029, "regime": "partial",
              "converged": True, "regimes_agree": True},
             {"normal": 100.0, "amplitude": 0.004, "contact_amplitude": 0.0039, "regime": "gross",
@@ -213,6 +215,11 @@ def test_map_axis_option(tmp_path):
     assert not (tmp_path / "m" / "runs").exists()
     with pytest.raises(SceneError, match="--axis = 'sideways': allowed imposed, contact"):
         check_axis(plan_map("sphere-flat", [100.0], [0.003], cycles=1), "sideways")
+    labels = []
+    monkeypatch.setattr(plots, "_save", lambda fig, path: labels.append(fig.axes[0].get_xlabel()) or path)
+    plot_map(rows, tmp_path / "imposed.png")
+    plot_map(rows, tmp_path / "contact.png", axis="contact")
+    assert labels == ["displacement amplitude delta* (mm)", "contact's amplitude delta_c = delta* - C_b Q* (mm)"]
 
 
 #: cylinder-flat at CI size (contact elements of 40 um, 16 increments a cycle, 3 cycles): ~2 s a point; the refined
