@@ -44,6 +44,9 @@ Four cases hold a force through their cycles (``cylinder-flat-partial-force``, `
 (its load control repeats the stepwise iteration, without the contact-pattern cache). Their numbers moved by at
 most 5.2e-14 (measured: api-block's last-cycle energy; 1.6e-14, 3.3e-15 and 8.7e-16 for the others), rounding;
 only the stored route label ``cycle_path`` was changed from "python" to "compiled" for the three scene cases.
+``mccoll-finite-sliding`` kept its snapshot cycle on the increment-by-increment path until the compiled
+finite-sliding loop took kept cycles too (issue 26): every number still within its tolerance of the frozen one
+(checked on both stacks), only its ``cycle_path`` changed from "python" to "compiled".
 
 Numbers near zero (a stick width in gross slip, the flat's wear with a single k, the tangential force at the
 end of a force-controlled cycle) are compared relative to the natural scale of their quantity, the stored
