@@ -5,7 +5,8 @@
 #
 # Two stacks: Debian's DOLFINx 0.5.2 (.venv, the default) and today's DOLFINx 0.11 from the
 # dolfinx-solver-real wheel (.venv-current). `test` runs the suite on both (their default suites side by side,
-# then the collective tests) and fails if the second stack cannot be set up; `run` and `bench` use DOLFINX_FRETTING_STACK (debian by default, or current).
+# then the collective tests) and fails if the second stack cannot be set up; `run` and `bench` use
+# DOLFINX_FRETTING_STACK (debian by default, or current).
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 cd "$here"
@@ -94,12 +95,14 @@ case "$cmd" in
     [ $current_ready = 1 ] || status=1
     rm -rf "$logs"
     t0=$SECONDS
-    run_parallel debian .venv/bin/python mpirun --oversubscribe || status=1
-    times+=("debian MPI: $((SECONDS - t0)) s")
+    run_parallel debian .venv/bin/python mpirun --oversubscribe && mpi_status=passed || mpi_status=FAILED
+    [ $mpi_status = passed ] || status=1
+    times+=("debian MPI: $((SECONDS - t0)) s ($mpi_status)")
     if [ $current_ready = 1 ]; then
       t0=$SECONDS
-      run_parallel current .venv-current/bin/python .venv-current/bin/mpiexec || status=1
-      times+=("current MPI: $((SECONDS - t0)) s")
+      run_parallel current .venv-current/bin/python .venv-current/bin/mpiexec && mpi_status=passed || mpi_status=FAILED
+      [ $mpi_status = passed ] || status=1
+      times+=("current MPI: $((SECONDS - t0)) s ($mpi_status)")
     fi
     echo "[test] wall time: ${times[*]/%/;}"
     if [ $status != 0 ]; then
