@@ -281,9 +281,11 @@ def _pattern_rhs(q: np.ndarray, pattern: np.ndarray, b: np.ndarray) -> None:
 
 
 @numba.njit(cache=True)
-def _normal_rows(Wc: np.ndarray, mu: np.ndarray, dim: int) -> tuple[bool, np.ndarray]:
-    """(frictionless?, W_nn): without friction the Uzawa sweeps run on the normal rows alone (W_nn, transposed like
-    Wc), the iterates being those of the full sweep with mu = 0 (r_t stays 0; see local_solvers.solve)."""
+def _normal_rows(Wc: np.ndarray, mu: np.ndarray, dim: int
+                 ) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(frictionless?, W_nn, and the work arrays q_n, r_n, x_n of its size): without friction the Uzawa sweeps run
+    on the normal rows alone (W_nn, transposed like Wc), the iterates being those of the full sweep with mu = 0
+    (r_t stays 0; see local_solvers.solve)."""
     nc = mu.size
     normal_only = True
     for a in range(nc):
@@ -295,7 +297,7 @@ def _normal_rows(Wc: np.ndarray, mu: np.ndarray, dim: int) -> tuple[bool, np.nda
         for b in range(nc):
             for a in range(nc):
                 Wn[b, a] = Wc[b * dim, a * dim]
-    return normal_only, Wn
+    return normal_only, Wn, np.empty(nn), np.empty(nn), np.empty(nn)
 
 
 @numba.njit(cache=True)
@@ -485,17 +487,13 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
     q, q_abs, x, r, xs = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     states = np.empty(nc, dtype=np.int8)
     row = np.empty(N_ROW - 2)
-    normal_only, Wn = _normal_rows(Wc, mu, dim)
-    nn = Wn.shape[0]
-    qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
+    normal_only, Wn, qn, rn, xn = _normal_rows(Wc, mu, dim)
     for j in range(n):
         if evolve:
             _friction_before(j, mu, k, energy, table_of, abscissae, values, lengths, wear_base, wear_per_mu,
                              active, factor_mu, lu_ok)
             if _all_zero(mu) != normal_only:
-                normal_only, Wn = _normal_rows(Wc, mu, dim)
-                nn = Wn.shape[0]
-                qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
+                normal_only, Wn, qn, rn, xn = _normal_rows(Wc, mu, dim)
         _rhs(g0, wear_gap, G, D[j], Q, S[j], y, dim, q_abs, q)
         if warm == 1:
             for i in range(m):
@@ -599,9 +597,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
     q, q_abs, x, r, xs = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     states = np.empty(nc, dtype=np.int8)
     row = np.empty(N_ROW - 2)
-    normal_only, Wn = _normal_rows(Wc, mu, dim)
-    nn = Wn.shape[0]
-    qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
+    normal_only, Wn, qn, rn, xn = _normal_rows(Wc, mu, dim)
     Dj = np.empty(G.shape[1])
     trial = np.empty(ncomp)
     tally = np.zeros(2, dtype=np.int64)
@@ -612,9 +608,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
             _friction_before(j, mu, k, energy, table_of, abscissae, values, lengths, wear_base, wear_per_mu,
                              active, factor_mu, lu_ok)
             if _all_zero(mu) != normal_only:
-                normal_only, Wn = _normal_rows(Wc, mu, dim)
-                nn = Wn.shape[0]
-                qn, rn, xn = np.empty(nn), np.empty(nn), np.empty(nn)
+                normal_only, Wn, qn, rn, xn = _normal_rows(Wc, mu, dim)
         tally[0] = 0
         tally[1] = 0
         for c in range(ncomp):
