@@ -359,6 +359,25 @@ def _interp_function(table):
     return mu_of_energy
 
 
+def test_a_subclassed_wear_law_keeps_the_table_per_increment(monkeypatch):
+    """The compiled loop computes the wear rate as k0 + k1 mu, which holds for the shipped laws themselves; a user's
+    subclass may compute it otherwise, so with one the cycle runs one call per increment (as with a function of the
+    energy), not one call a cycle."""
+    class OwnArchard(dfr.Archard):
+        pass
+
+    calls = []
+    real = cycles_module.run_increments
+    monkeypatch.setattr(cycles_module, "run_increments", lambda *args: calls.append(1) or real(*args))
+    problem, _, state = pressed_block(dfr.EvolvingFriction([(0.0, 0.2), (0.15, 0.8)], variable="energy"),
+                                      wear=OwnArchard(k=1e-5))
+    try:
+        problem.run_cycle(state, dfr.CyclePath.waveform(INCREMENTS, tangential=AMPLITUDE), keep=True)
+    finally:
+        problem.destroy()
+    assert len(calls) == INCREMENTS
+
+
 @pytest.mark.parametrize("control", ["displacement", "force"])
 @pytest.mark.parametrize("wear", [None, "energy", "archard"])
 def test_energy_table_runs_inside_the_compiled_cycle(monkeypatch, control, wear):
