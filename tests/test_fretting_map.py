@@ -310,8 +310,8 @@ def test_map_cli_bad_input(capsys, tmp_path, args, fragment):
 
 @pytest.mark.slow
 def test_sphere_transition_against_mindlin(tmp_path):
-    """sphere-flat (identical steel bodies, the scene's a/4 mesh), P = 100 N, no wear, two cycles of 16 increments:
-    in imposed and in contact terms.
+    """sphere-flat (identical steel bodies, cubes of a/4: the scene's default before issue 26), P = 100 N, no wear,
+    two cycles of 16 increments, in imposed and in contact terms:
     the transition amplitude against Mindlin's delta_t = 3 mu P / (16 G* a) = 3.383 um. The scene imposes the flat's
     displacement on finite bodies: delta_t,FE = delta_t + C_b mu P, C_b the bulk compliance, measured on the
     partial-slip point as (delta* - delta_M(Q*)) / Q* (delta_M: Mindlin's loading curve): measured C_b mu P = 0.10 um
@@ -319,13 +319,15 @@ def test_sphere_transition_against_mindlin(tmp_path):
     transition must fall on its two sides by both classifiers: the tolerance 10 % is the transition's position
     between two rings of contact nodes at a/4 spacing (the stick radius falls to 0 at Q = mu P; the last ring's
     tributary area is ~1/16 of the contact, so the loop's end is reached within a few per cent of mu P). ~40 s."""
-    scene = load_scene("sphere-flat")
+    a_hertz = hertz_sphere(100.0, 10.0, load_scene("sphere-flat").contact_modulus)[0]
+    quarter = f"geometry.contact_mesh_size={a_hertz / 4:.6g}"
+    scene = load_scene("sphere-flat", [quarter])
     delta_t = mindlin_transition_amplitude(scene, 100.0)
     low, high = 0.9 * delta_t, 1.1 * delta_t
     out = tmp_path / "map"
     assert main(["map", "sphere-flat", "--normal", "100", "--amplitude", f"{low:.6g},{high:.6g}", "--cycles", "2",
                  "--out", str(out), "--quiet", "--set", "wear.law='none'", "--set", "wear.k=none",
-                 "--set", "loading.increments_per_cycle=16"]) == 0
+                 "--set", "loading.increments_per_cycle=16", "--set", quarter]) == 0
     partial, gross = read_map_csv(out / "map.csv")
     m, mu, P = scene.material, scene.contact.mu, 100.0
     g_star = mindlin_shear_modulus(m.E, m.nu, m.E, m.nu)

@@ -14,6 +14,7 @@ import pytest
 from mpi4py import MPI  # noqa: F401  (before dolfinx on the wheel)
 
 from dolfinx_fretting.contact_output import read_profiles  # noqa: E402
+from dolfinx_fretting.geometries import sphere as sphere_module  # noqa: E402
 from dolfinx_fretting.scenes import load_scene  # noqa: E402
 from dolfinx_fretting.simulation import run_scene  # noqa: E402
 
@@ -131,10 +132,11 @@ def _force_controlled_run(folder, a_over_h, phi, cycles, increments, half=True):
 
 
 def test_cattaneo_mindlin_stick_radius_under_a_tangential_force(tmp_path):
-    """Identical bodies (Dundurs' beta = 0), Q = 0.5 mu P reached by force in 4 increments, the scene's own mesh
-    (a/h = 4): the stick radius c = a (1 - Q/(mu P))^(1/3) (Johnson §7.2). The summary's ``stick_radius`` is the
-    equivalent radius of the sticking nodes' tributary areas: measured c + 0.26 h (+8.1 %; at phi = 0.8 c + 0.25 h,
-    +10.5 %), the edge nodes' areas reaching half an element past c. The issue's tolerance: 3 % + one element."""
+    """Identical bodies (Dundurs' beta = 0), Q = 0.5 mu P reached by force in 4 increments, cubes of a/4 (the
+    scene's default mesh before issue 26): the stick radius c = a (1 - Q/(mu P))^(1/3) (Johnson §7.2). The
+    summary's ``stick_radius`` is the equivalent radius of the sticking nodes' tributary areas: measured c + 0.26 h
+    (+8.1 %; at phi = 0.8 c + 0.25 h, +10.5 %), the edge nodes' areas reaching half an element past c. The issue's
+    tolerance: 3 % + one element."""
     from dolfinx_fretting.analytic import cattaneo_mindlin_stick_radius
 
     phi = 0.5
@@ -243,10 +245,11 @@ def _check_worn_sphere(summary, scene, cycles, h):
 
 
 def test_the_uniform_zone_is_sized_from_the_wear_of_the_cycles():
-    """Before any mesh: 100 cycles keep the zone 1.5 a (the default mesh, 21 450 dofs, unchanged); 10^4 cycles size
-    it 1.5 times Archard's worn radius (0.329 mm for the bound 4 k P delta N = 8e-4 mm^3), which holds the radius
-    measured after 10^4 cycles on a window of 0.5 mm set by hand, 0.3244 mm, with room: the 1.5 a zone (0.28 mm)
-    stopped the run at cycle 4769 with the contact's edge on it. The user's keys win; too much wear is refused."""
+    """Before any mesh: 100 cycles keep the zone 1.5 a (15 cubes of a/10, 69 372 dofs on the depth-graded bodies);
+    10^4 cycles size it 1.5 times Archard's worn radius (0.329 mm for the bound 4 k P delta N = 8e-4 mm^3), which
+    holds the radius measured after 10^4 cycles on a window of 0.5 mm set by hand, 0.3244 mm, with room: the 1.5 a
+    zone (0.28 mm) stopped the run at cycle 4769 with the contact's edge on it; the window starts three elements
+    past that radius. The user's keys win; too much wear is refused."""
     from dolfinx_fretting.geometries import GEOMETRIES
     from dolfinx_fretting.scenes import SceneError
     from dolfinx_fretting.sizes import estimate
@@ -254,15 +257,24 @@ def test_the_uniform_zone_is_sized_from_the_wear_of_the_cycles():
     sphere = GEOMETRIES["sphere"]
     default = load_scene("sphere-flat")
     a = sphere.contact_size(default)
-    assert sphere.zone_half_width(default) == 1.5 * a and sphere.mesh_options(default)["extent"] == 9.0
-    assert estimate(default).dofs == 21450 and estimate(default).contacts == 63
+    # ten elements across Hertz's radius (issue 26), on the depth-graded bodies (a/h >= GRADED_FROM)
+    assert sphere.element_size(default) == pytest.approx(a / 10, rel=1e-12)
+    options = sphere.mesh_options(default)
+    assert {key: options[key] for key in ("depth_growth", "coarsening", "field_cell")} == sphere_module.DEPTH_GRADING
+    assert sphere.zone_half_width(default) == 1.5 * a and options["extent"] == 9.0
+    assert estimate(default).dofs == 69372 and estimate(default).contacts == 370
+    # the unworn contact's window: 1.5 a + 3 h, at most the zone (15 cubes of a/10: 1.5 a)
+    assert sphere.candidate_window(default, 1.5 * a, a / 10) == (pytest.approx(1.5 * a), True)
     long = load_scene("sphere-flat", ["loading.cycles=10000", "wear.cycle_jump=true"])
     # the rigid cap's radius (4 R V / pi)^(1/4) = 0.3005 mm is a lower bound: the elastic sag widens the scar
     assert sphere.worn_contact_radius(long) == pytest.approx(0.3291, abs=5e-5)
     assert sphere.worn_contact_radius(long) > (4 * 10.0 * 8e-4 / np.pi) ** 0.25
     assert sphere.zone_half_width(long) >= 1.5 * 0.3244
+    # the window starts at the worn radius plus 3 h (1.5 a + 3 h = 0.336 mm held 0.317 mm with 1 element to spare)
+    window, automatic = sphere.candidate_window(long, 0.5039, a / 10)
+    assert automatic and window == pytest.approx(sphere.worn_contact_radius(long) + 0.3 * a, rel=1e-12)
     size = estimate(long)
-    assert "uniform contact zone 0.5132 mm" in size.describe() and "worn volume <= 0.0008 mm^3" in size.sizing
+    assert "uniform contact zone 0.5039 mm" in size.describe() and "worn volume <= 0.0008 mm^3" in size.sizing
     assert size.drivers["loading.cycles"] == 10000
     # the user's keys win: the zone, and the window within it
     by_hand = load_scene("sphere-flat", ["loading.cycles=10000", "geometry.contact_half_width=0.4",

@@ -207,7 +207,7 @@ def test_study_plan_validation():
 
 
 def test_study_default_plan_of_a_sphere():
-    # The sphere's mesh is sized from its Hertz contact radius a (cubes of a/4 unless the scene sets
+    # The sphere's mesh is sized from its Hertz contact radius a (cubes of a/10 unless the scene sets
     # contact_mesh_size; it has no nx, ny): the default reference halves that size and the default sweep takes
     # 2x and 4x the reference's. Before, both wrote geometry.nx, which a sphere refuses.
     from dolfinx_fretting.analytic import hertz_sphere
@@ -216,10 +216,10 @@ def test_study_default_plan_of_a_sphere():
     scene = load_scene("sphere-flat")
     a, _ = hertz_sphere(scene.loading.normal_force, scene.geometry.radius, scene.contact_modulus)
     ref = plan[0].scene
-    assert ref.geometry.contact_mesh_size == pytest.approx(a / 8, rel=1e-9)
+    assert ref.geometry.contact_mesh_size == pytest.approx(a / 20, rel=1e-9)
     assert ref.loading.increments_per_cycle == 2 * scene.loading.increments_per_cycle
     sizes = [p.scene.geometry.contact_mesh_size for p in plan if p.key == "geometry.contact_mesh_size"]
-    assert sizes == pytest.approx([a / 4, a / 2], rel=1e-5)
+    assert sizes == pytest.approx([a / 10, a / 5], rel=1e-5)
 
 
 def test_study_cli_bad_input(capsys, tmp_path):
