@@ -56,10 +56,11 @@ QUIET = ["output.xdmf=false", "output.plots=false", "output.progress=false"]
 # (Looser bounds, f_w 0.5 / f_p 0.25 and 1 / 1, took the default's jumps on stromberg-block and cylinder-flat: the
 # stability, growth and landing bounds set them; results/cycle_jump.md of 2026-11-22.)
 BOUNDS = [("old rule, tight (f_w 0.02, f_p 0.01)", ["wear.jump_wear_fraction=0.02", "wear.jump_pressure_change=0.01"]),
-          ("old rule, default (f_w 0.1, f_p 0.05)", []),
-          ("tolerance 0.01", ["wear.jump_tolerance=0.01"]),
-          ("tolerance 0.03", ["wear.jump_tolerance=0.03"]),
-          ("tolerance 0.1", ["wear.jump_tolerance=0.1"])]
+          ("old rule, default (f_w 0.1, f_p 0.05)", ["wear.jump_pressure_change=0.05"]),
+          # none: unset a scene file's pressure bound (sphere-flat's 0.1), which the tolerance refuses beside it
+          ("tolerance 0.01", ["wear.jump_tolerance=0.01", "wear.jump_pressure_change=none"]),
+          ("tolerance 0.03", ["wear.jump_tolerance=0.03", "wear.jump_pressure_change=none"]),
+          ("tolerance 0.1", ["wear.jump_tolerance=0.1", "wear.jump_pressure_change=none"])]
 LIMIT_SCENE = ["contact.obstacle='rigid_plane'", "loading.normal_force=none", "loading.normal_displacement=0.0045", "geometry.contact_mesh_size=0.02",
                "loading.increments_per_cycle=16", "wear.k=8.5e-8"]
 

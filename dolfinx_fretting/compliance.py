@@ -66,7 +66,8 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from .delassus_routes import _AUTO_PARALLEL, METHODS, ROUTES, auto_route
+from .delassus_routes import _AUTO_PARALLEL, METHODS, ROUTES, SCHUR_FACTOR_RATIO, auto_route, schur_preferred
+from .memory import available_memory
 
 # the routes and "auto"'s rule are declared in delassus_routes (pure, read by sizes too)
 __all__ = ["DelassusOperator", "DelassusError", "check_no_constrained_dofs"]
@@ -396,6 +397,14 @@ class DelassusOperator:
         self.stats["factor_entries"] = nz if nz >= 0 else -nz * 1_000_000
         self.stats["mumps_memory_mb"] = F.getMumpsInfog(22)
 
+    def _schur_factor_fits(self) -> bool:
+        """The Schur route's second factor, :data:`~dolfinx_fretting.delassus_routes.SCHUR_FACTOR_RATIO` times K's
+        (MUMPS INFOG(22), K's factor already resident), fits in the memory available now (unknown: it fits, as
+        :func:`~dolfinx_fretting.sizes.check_size` lets a run through)."""
+        available, _ = available_memory()
+        need = SCHUR_FACTOR_RATIO * self.stats.get("mumps_memory_mb", 0) * 2**20
+        return available <= 0 or need <= available
+
     def _mumps_status(self) -> str:
         try:
             F = self.ksp.getPC().getFactorMatrix()
@@ -470,8 +479,11 @@ class DelassusOperator:
         """
         self._require_factor()
         route = self.method if method is None else method
-        if route == "auto":
-            route = auto_route(self.comm.size, H.shape[0], self.K.getSize()[0])  # H is replicated: same on every rank
+        if route == "auto":  # H is replicated: the same rows on every rank (and serial for the memory reading)
+            rows, dofs = H.shape[0], self.K.getSize()[0]
+            fits = self.comm.size > 1 or not schur_preferred(rows, dofs) or self._schur_factor_fits()
+            route = auto_route(self.comm.size, rows, dofs, fits)
+            self.stats["auto_schur_skipped_for_memory"] = not fits
         if route not in ROUTES:
             raise ValueError(f"unknown Delassus route {route!r}; choose one of {', '.join(METHODS)}")
         _check_route_fits(route, self.comm)

@@ -6,7 +6,8 @@ count the memory of the route a scene will take before anything is built (the Sc
 
 from __future__ import annotations
 
-__all__ = ["ROUTES", "METHODS", "AUTO_SCHUR_ROWS", "AUTO_SCHUR_DOFS_PER_ROW", "SCHUR_FACTOR_RATIO", "auto_route"]
+__all__ = ["ROUTES", "METHODS", "AUTO_SCHUR_ROWS", "AUTO_SCHUR_DOFS_PER_ROW", "SCHUR_FACTOR_RATIO", "auto_route",
+           "schur_preferred"]
 
 #: Routes that build W.
 ROUTES = ("columns", "block", "selected_inverse", "owned", "schur")
@@ -39,10 +40,19 @@ AUTO_SCHUR_DOFS_PER_ROW = 70
 SCHUR_FACTOR_RATIO = 3.0
 
 
-def auto_route(comm_size: int, rows: int, dofs: int) -> str:
-    """The route ``"auto"`` takes for an H of ``rows`` rows and a K of ``dofs`` dofs on ``comm_size`` ranks."""
+def auto_route(comm_size: int, rows: int, dofs: int, schur_fits: bool = True) -> str:
+    """The route ``"auto"`` takes for an H of ``rows`` rows and a K of ``dofs`` dofs on ``comm_size`` ranks.
+
+    ``schur_fits``: the Schur route's second factor (:data:`SCHUR_FACTOR_RATIO` times K's) fits in the memory
+    available; if not, the selected inverse, which needs no second factor (sphere-flat at a/10 for 10^5 cycles:
+    a peak of ~21 GB by the Schur route, ~7 GB by the selected inverse, on a 24 GB machine)."""
     if comm_size > 1:
         return _AUTO_PARALLEL
-    if rows >= AUTO_SCHUR_ROWS and dofs <= AUTO_SCHUR_DOFS_PER_ROW * rows:
+    if schur_preferred(rows, dofs) and schur_fits:
         return "schur"
     return _AUTO_SERIAL
+
+
+def schur_preferred(rows: int, dofs: int) -> bool:
+    """The serial size rule of :func:`auto_route` alone: the Schur route is the faster for this size."""
+    return rows >= AUTO_SCHUR_ROWS and dofs <= AUTO_SCHUR_DOFS_PER_ROW * rows

@@ -404,7 +404,8 @@ class WearSettings(_Section):
             raise range_error("wear.jump_tolerance", self.jump_tolerance, "unset unless wear.cycle_jump = true")
         if self.jump_tolerance is not None and "jump_pressure_change" in self.model_fields_set:
             raise range_error("wear.jump_pressure_change", self.jump_pressure_change,
-                              "unset with wear.jump_tolerance (the tolerance's bound takes the pressure bound's place)")
+                              "unset with wear.jump_tolerance (the tolerance's bound takes the pressure bound's place; "
+                              "a scene file's value is unset by --set wear.jump_pressure_change=none)")
         # the coefficients of the law not chosen would be silently ignored: the scene may have meant that law
         for name, law in (("k", "archard"), ("alpha", "energy")):
             given = [key for key in (name, f"{name}_slave", f"{name}_master") if getattr(self, key)]

@@ -17,8 +17,8 @@ DOLFINx or building anything. The mesh is the geometry kind's to count (its ``me
   vectors, gmsh's own copy while it meshes: per dof), ``factor`` (the MUMPS factor of K: a nested-dissection
   fill model, ``n log2 n`` in 2D and ``n^(4/3)`` in 3D for n dofs, fitted to MUMPS's INFOG(22) on the built-in
   geometries; under MPI the ``owned`` route adds one whole factor per rank), ``schur_factor`` (when W is built
-  by the Schur route, asked for or ``"auto"``'s choice by :func:`~dolfinx_fretting.delassus_routes.auto_route`:
-  its own factor of ``[[K, H^T], [H, 0]]``, alive beside K's while W is built,
+  by the Schur route, asked for or ``"auto"``'s choice by :func:`~dolfinx_fretting.delassus_routes.auto_route`,
+  which takes it only where that peak fits in the memory available: its own factor of ``[[K, H^T], [H, 0]]``, alive beside K's while W is built,
   :data:`~dolfinx_fretting.delassus_routes.SCHUR_FACTOR_RATIO` times K's; its ``W_build`` is then the dense
   Schur complement's three copies), ``W`` (the dense Delassus matrix ``(nc dim)^2`` doubles, replicated on every rank,
   and the compiled loop's transposed copy), ``W_build`` (the
@@ -41,9 +41,7 @@ bad input, exit code 2 in the CLI) when it does not fit, before any mesh is buil
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Any
 
 from .delassus_routes import SCHUR_FACTOR_RATIO, auto_route
@@ -51,6 +49,7 @@ from .geometries import GEOMETRIES, Geometry
 from .geometries.base import MeshSize
 from .geometries.gmsh_nodes import GMSH_NODE_DENSITY
 from .geometries.mesh_file import msh_node_count, xdmf_node_count
+from .memory import available_memory
 from .scenes import Scene, SceneError
 
 __all__ = ["SizeEstimate", "SizeError", "estimate", "available_memory", "check_size", "msh_node_count",
@@ -201,23 +200,37 @@ def _compiled_2d_cycles(scene: Scene, dim: int) -> bool:
             and not loading.tangential_force_controlled and scene.contact.sliding == "small")
 
 
-def _schur_route(scene: Scene, ranks: int, rows: int, dofs: int) -> bool:
+def _schur_route(scene: Scene, ranks: int, rows: int, dofs: int, schur_fits: bool) -> bool:
     """W is built by the Schur route (a second factor): asked for, or ``"auto"``'s choice for this size."""
     method = scene.solver.delassus_method
     # "schur" under MPI is refused before any build (compliance): no second factor to count
-    return ranks == 1 and method == "schur" or (method == "auto" and auto_route(ranks, rows, dofs) == "schur")
+    return (ranks == 1 and method == "schur"
+            or (method == "auto" and auto_route(ranks, rows, dofs, schur_fits) == "schur"))
 
 
-def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
+def estimate(scene: Scene, ranks: int = 1, available: int | None = None) -> SizeEstimate:
     """Estimate the model of a validated scene before anything is built (pure: no mesh, no DOLFINx).
 
     Args:
         scene: The validated scene.
         ranks: MPI ranks that will run it (the memory terms are the whole machine's).
+        available: Bytes of memory available (:func:`~dolfinx_fretting.memory.available_memory`), or None. Given,
+            a W that ``"auto"`` would build by the Schur route is counted by the selected inverse when the Schur
+            route's peak exceeds it: the build makes the same choice when the second factor does not fit
+            (:func:`~dolfinx_fretting.delassus_routes.auto_route`'s ``schur_fits``).
 
     Returns:
         The estimate; counts the geometry cannot give cheaply are None, with a ``note``.
     """
+    size = _estimate(scene, ranks, schur_fits=True)
+    if (available is not None and 0 < available < size.total_bytes and "schur_factor" in size.memory
+            and scene.solver.delassus_method == "auto"):
+        return _estimate(scene, ranks, schur_fits=False)
+    return size
+
+
+def _estimate(scene: Scene, ranks: int, schur_fits: bool) -> SizeEstimate:
+    """:func:`estimate` with ``"auto"``'s Schur route counted only if ``schur_fits``."""
     geometry = GEOMETRIES[scene.geometry.kind]
     dim = scene.dim
     mesh = geometry.mesh_size(scene)
@@ -230,7 +243,7 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
                       else FACTOR_BYTES_3D * dofs ** (4.0 / 3.0))
         owned = ranks > 1 and scene.solver.delassus_method in ("auto", "owned")  # a whole factor on each rank
         memory["factor"] = int(one_factor * (1 + (ranks if owned else 0)))
-        if contacts is not None and _schur_route(scene, ranks, contacts * dim, dofs):
+        if contacts is not None and _schur_route(scene, ranks, contacts * dim, dofs, schur_fits):
             # the factor of [[K, H^T], [H, 0]], beside K's while W is built (the peak)
             memory["schur_factor"] = int(SCHUR_FACTOR_RATIO * one_factor)
         if scene.material.model == "elastoplastic":
@@ -264,38 +277,6 @@ def estimate(scene: Scene, ranks: int = 1) -> SizeEstimate:
 
 
 # The machine -------------------------------------------------------------------------------------------------
-def available_memory() -> tuple[int, str]:
-    """Bytes of memory available to a new run, and where the number comes from.
-
-    ``MemAvailable`` of ``/proc/meminfo`` (what can be allocated without swapping), lowered to the room left
-    under a cgroup v2 limit (``memory.max - memory.current``) in a container; without ``/proc``,
-    ``os.sysconf``'s available physical pages.
-    """
-    value, source = None, ""
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                value, source = int(line.split()[1]) * 1024, "MemAvailable"
-                break
-    except OSError:
-        pass
-    if value is None:
-        try:
-            value = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-            source = "sysconf(SC_AVPHYS_PAGES)"
-        except (ValueError, OSError, AttributeError):
-            return 0, "unknown"
-    try:
-        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
-        if limit != "max":
-            room = int(limit) - int(Path("/sys/fs/cgroup/memory.current").read_text().strip())
-            if room < value:
-                value, source = room, "the cgroup's memory.max - memory.current"
-    except (OSError, ValueError):
-        pass
-    return int(value), source
-
-
 def check_size(scene: Scene, comm=None, ignore: bool = False) -> SizeEstimate:
     """Estimate the scene's model and refuse it if it exceeds the memory available. Collective if ``comm``.
 
@@ -313,10 +294,10 @@ def check_size(scene: Scene, comm=None, ignore: bool = False) -> SizeEstimate:
             the size, the estimate's terms, the memory available and how to override), on every rank.
     """
     ranks = 1 if comm is None else comm.size
-    size = estimate(scene, ranks)
     available, source = available_memory()
     if comm is not None and comm.size > 1:
         available, source = comm.bcast((available, source), root=0)
+    size = estimate(scene, ranks, available)
     if ignore or available <= 0 or size.total_bytes <= available:
         return size
     keys = ", ".join(f"{k} = {v!r}" for k, v in size.drivers.items())

@@ -13,7 +13,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from mpi4py import MPI
 
-from dolfinx_fretting import delassus_routes
+from dolfinx_fretting import compliance, delassus_routes
 from dolfinx_fretting.compliance import DelassusOperator, check_no_constrained_dofs
 from dolfinx_fretting.delassus_routes import auto_route
 from dolfinx_fretting.scenes import load_scene
@@ -195,6 +195,15 @@ def test_schur_route_on_two_bodies_in_3d(monkeypatch):
         monkeypatch.setattr(delassus_routes, "AUTO_SCHUR_DOFS_PER_ROW", 0.99 * dofs / H.shape[0])
         d.build(H)
         assert d.stats["last_build_route"] == "selected_inverse"  # too many dofs per row
+        # The size rule says Schur, but its second factor (3x K's INFOG(22)) would not fit: the selected inverse.
+        monkeypatch.setattr(delassus_routes, "AUTO_SCHUR_DOFS_PER_ROW", dofs / H.shape[0])
+        need = delassus_routes.SCHUR_FACTOR_RATIO * d.stats["mumps_memory_mb"] * 2**20
+        monkeypatch.setattr(compliance, "available_memory", lambda: (int(0.99 * need), "test"))
+        d.build(H)
+        assert d.stats["last_build_route"] == "selected_inverse" and d.stats["auto_schur_skipped_for_memory"]
+        monkeypatch.setattr(compliance, "available_memory", lambda: (int(1.01 * need), "test"))
+        d.build(H)
+        assert d.stats["last_build_route"] == "schur" and not d.stats["auto_schur_skipped_for_memory"]
     finally:
         problem.destroy()
 
@@ -207,3 +216,6 @@ def test_auto_route():
     assert auto_route(1, rows, per_row * rows) == "schur"
     assert auto_route(1, rows, per_row * rows + 1) == "selected_inverse"
     assert auto_route(2, 10 * rows, rows) == "owned" and auto_route(3, 1, 1) == "owned"
+    # where the Schur route's second factor does not fit in memory: the selected inverse (serial), as before (MPI)
+    assert auto_route(1, rows, per_row * rows, schur_fits=False) == "selected_inverse"
+    assert auto_route(2, 10 * rows, rows, schur_fits=False) == "owned"

@@ -4,6 +4,7 @@ of a model that would not fit in memory (before any mesh, with a message naming 
 from __future__ import annotations
 
 import functools
+import math
 import json
 import subprocess
 import sys
@@ -16,6 +17,7 @@ from mpi4py import MPI
 from dolfinx_fretting import delassus_routes, sizes
 from dolfinx_fretting.cli import main
 from dolfinx_fretting.geometries import half_cylinder
+from dolfinx_fretting.geometries import sphere as sphere_module
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.sizes import SizeError, check_size, estimate, msh_node_count
 
@@ -139,12 +141,14 @@ def test_refusal_names_the_keys_and_the_numbers(tmp_path, monkeypatch):
     from dolfinx_fretting.simulation import run_scene
 
     _no_mesh(monkeypatch)
+    # a fixed reading: the machine's own moves between the run's reading and a second one here (other processes)
+    available = 3 * 2**30
+    monkeypatch.setattr(sizes, "available_memory", lambda: (available, "MemAvailable"))
     scene = load_scene("cylinder-flat", ["geometry.contact_mesh_size=5e-5"])
     out = tmp_path / "run"
     with pytest.raises(SizeError) as info:
         run_scene(scene, out, COMM, quiet=True)
     text = str(info.value)
-    available, _ = sizes.available_memory()
     assert "geometry.contact_mesh_size = 5e-05" in text
     assert "--ignore-size" in text and "ignore_size=True" in text
     assert f"{available / 2**30:.3g} GB available" in text
@@ -335,13 +339,37 @@ def test_the_schur_routes_second_factor_is_counted(monkeypatch):
                                                 "solver.delassus_method='selected_inverse'"]), 1)
     assert "schur_factor" not in asked.memory and asked.memory["W_build"] > 8 * rows * rows
     monkeypatch.setattr(Sphere, "mesh_options", today)
-    # today's uniform mesh: ~129 dofs of K per row of H, so "auto" keeps the selected inverse; asked for, counted
+    # the uniform cubes (the mesh below GRADED_FROM elements across a): ~129 dofs of K per row of H, so "auto" keeps
+    # the selected inverse; asked for, counted
+    monkeypatch.setattr(sphere_module, "GRADED_FROM", math.inf)
     uniform = estimate(load_scene("sphere-flat", ["geometry.contact_mesh_size=0.0117"]), 1)
     assert 3 * uniform.contacts >= delassus_routes.AUTO_SCHUR_ROWS and "schur_factor" not in uniform.memory
     forced = estimate(load_scene("sphere-flat", ["geometry.contact_mesh_size=0.0117",
                                                  "solver.delassus_method='schur'"]), 1)
     assert forced.memory["schur_factor"] == pytest.approx(sizes.SCHUR_FACTOR_RATIO * forced.memory["factor"],
                                                           rel=1e-8)
+
+
+def test_auto_counts_the_selected_inverse_where_the_schur_factor_does_not_fit(monkeypatch):
+    """sphere-flat's default mesh for 10^5 cycles: "auto"'s size rule takes the Schur route, whose second factor
+    brings the peak to ~21 GB (the selected inverse's ~7 GB). With less memory available than that peak the build
+    takes the selected inverse (compliance: the factor would not fit), and the estimate counts what it will build:
+    the same terms as the selected inverse asked for; with enough, the Schur route as before."""
+    cycles = ["loading.cycles=100000", "wear.cycle_jump=true"]
+    scene = load_scene("sphere-flat", cycles)
+    pure = estimate(scene)
+    assert "schur_factor" in pure.memory
+    asked = estimate(load_scene("sphere-flat", [*cycles, "solver.delassus_method='selected_inverse'"]))
+    assert asked.total_bytes < 0.5 * pure.total_bytes
+    tight = estimate(scene, 1, available=pure.total_bytes - 1)
+    assert tight.memory == asked.memory
+    assert estimate(scene, 1, available=pure.total_bytes).memory == pure.memory
+    # check_size lets it through on a machine that holds the selected inverse's peak, not the Schur route's
+    monkeypatch.setattr(sizes, "available_memory", lambda: (asked.total_bytes, "test"))
+    assert check_size(scene).memory == asked.memory
+    monkeypatch.setattr(sizes, "available_memory", lambda: (asked.total_bytes - 1, "test"))
+    with pytest.raises(SizeError):
+        check_size(scene)
 
 
 def test_the_schur_factor_ratio_covers_every_measured_point():
