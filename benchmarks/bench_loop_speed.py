@@ -12,7 +12,8 @@ machine is shared: medians of the repeats, and the load average is recorded):
 * ``before`` (``--before TREE``): the loop of another checkout (e.g. ``git archive``'s copy of the commit before),
   imported from ``TREE/dolfinx_fretting`` beside this one;
 * ``gathered``: this loop with ``hold_block=False`` (``W_AA`` gathered at every local solve);
-* ``held``: this loop's default (``W_AA`` held from one local solve to the next while the set is the same).
+* ``held``: this loop's default (``W_AA`` held from one local solve to the next while the set is the same);
+* ``held float32`` (``--float32``): the same with the sweeps' updates of x read from a float32 copy of ``W_AA``.
 
 The CPU time of the whole call (one thread), per increment and per local solve: the local solves are nearly all of
 it (the rest, the increment's right-hand side and its commit, is O(m) an increment). Answers: ``same bits`` as
@@ -66,9 +67,10 @@ def loop_of(tree: Path) -> types.ModuleType:
 
 
 def timed(W: np.ndarray, xy: np.ndarray, radius: float, slips: np.ndarray, force: float | None, wear: float,
-          hold: bool | None, loop: types.ModuleType, start: dict | None = None) -> tuple[dict, float]:
+          variant: tuple, start: dict | None = None) -> tuple[dict, float]:
+    hold, loop, single = variant
     t0 = time.process_time()
-    out = sphere_flat_cycle(W, xy, radius, APPROACH, slips, MU, wear, force, hold, loop, start)
+    out = sphere_flat_cycle(W, xy, radius, APPROACH, slips, MU, wear, force, hold, loop, start, single)
     elapsed = time.process_time() - t0
     if out["done"] != slips.size or out["status"] != 1:
         raise RuntimeError(f"loop stopped at increment {out['done']}: status {out['status']}, error {out['error']}")
@@ -88,6 +90,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--wear", type=float, default=1e-4, help="Archard coefficient (the gaps move a little)")
     ap.add_argument("--before", type=Path, default=None, help="a checkout whose loop runs beside this one")
+    ap.add_argument("--float32", action="store_true", help="also the held loop with float32 sweeps")
     ap.add_argument("--warm", choices=["increment", "cycle"], default="increment",
                     help="each increment from the one before, or a second cycle from the first's increments")
     ap.add_argument("--out", type=Path, default=HERE / "results" / "loop_speed")
@@ -99,8 +102,10 @@ def main(argv=None) -> int:
 
     variants = {}
     if args.before is not None:
-        variants["before"] = (None, loop_of(args.before.resolve()))
-    variants |= {"gathered": (False, cycling), "held": (True, cycling)}
+        variants["before"] = (None, loop_of(args.before.resolve()), False)
+    variants |= {"gathered": (False, cycling, False), "held": (True, cycling, False)}
+    if args.float32:
+        variants["held float32"] = (True, cycling, True)
     info = {"date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"), "cpu": cpu_model(),
             "logical_cpus": os.cpu_count(), "python": platform.python_version(), "numpy": np.__version__,
             "numba": numba.__version__, "load_start": list(os.getloadavg()), "repeats": args.repeats,
@@ -112,18 +117,18 @@ def main(argv=None) -> int:
         radius = (side / 3.0) ** 2 / APPROACH
         nc = xy.shape[0]
         # The normal force of the approach (the first increment's), for the force-controlled cycle.
-        first, _ = timed(W, xy, radius, slips[:1], None, 0.0, True, cycling)
+        first, _ = timed(W, xy, radius, slips[:1], None, 0.0, variants["held"])
         force = float(first["r"][0, 0::3].sum())
         for control, load in (("displacement", None), ("normal force", force)):
-            for hold, loop in variants.values():  # JIT (cached on disk) and first touch of W out of the timings
-                timed(W, xy, radius, slips[:2], load, args.wear, hold, loop)
-            start = timed(W, xy, radius, slips, load, args.wear, True, cycling)[0]["end"] if args.warm == "cycle" \
+            for variant in variants.values():  # JIT (cached on disk) and first touch of W out of the timings
+                timed(W, xy, radius, slips[:2], load, args.wear, variant)
+            start = timed(W, xy, radius, slips, load, args.wear, variants["held"])[0]["end"] if args.warm == "cycle" \
                 else None
             times: dict[str, list[float]] = {name: [] for name in variants}
             outs: dict[str, dict] = {}
             for _ in range(args.repeats):
-                for name, (hold, loop) in variants.items():  # alternating: the machine's load hits all alike
-                    outs[name], elapsed = timed(W, xy, radius, slips, load, args.wear, hold, loop, start)
+                for name, variant in variants.items():  # alternating: the machine's load hits all alike
+                    outs[name], elapsed = timed(W, xy, radius, slips, load, args.wear, variant, start)
                     times[name].append(elapsed)
             solves = int(outs["held"]["solves"].sum())
             sweeps = float(outs["held"]["rows"][:, -2].sum())
@@ -132,7 +137,8 @@ def main(argv=None) -> int:
                    "variants": {name: {"median_s": float(np.median(t)), "min_s": float(np.min(t)),
                                        "per_increment_s": float(np.median(t)) / args.increments,
                                        "per_solve_s": float(np.median(t)) / solves,
-                                       "answer": difference(outs[name], outs["gathered"])}
+                                       "answer": difference(outs[name], outs["gathered"]),
+                                       "max_error": float(outs[name]["rows"][:, -1].max())}
                                 for name, t in times.items()}}
             records.append(rec)
             print(f"{nc} {control}: " + ", ".join(f"{n} {1e3 * v['per_increment_s']:.3g} ms/increment "
@@ -164,8 +170,8 @@ def markdown(command: str, info: dict, records: list[dict]) -> str:
          "per local solve (min of the repeats in brackets, per increment)", "",
          "| contacts | W | control | " + " | ".join(f"{n}: per increment (min)" for n in names) + " | "
          + " | ".join(f"{n}: per solve" for n in names) + " | solves | sweeps a solve | held / gathered solves | "
-         + " | ".join(f"answer {n}" for n in names if n != "gathered") + " |",
-         "|---:|---:|---|" + "---:|" * (2 * len(names)) + "---:|---:|---|" + "---|" * (len(names) - 1)]
+         + " | ".join(f"answer {n}" for n in names if n != "gathered") + " | largest local error |",
+         "|---:|---:|---|" + "---:|" * (2 * len(names)) + "---:|---:|---|" + "---|" * len(names)]
     for rec in records:
         v = rec["variants"]
         counts = rec["held_counts"]
@@ -174,7 +180,8 @@ def markdown(command: str, info: dict, records: list[dict]) -> str:
                               for n in names) + " | "
                  + " | ".join(f"{1e3 * v[n]['per_solve_s']:.3g} ms" for n in names)
                  + f" | {rec['solves']} | {rec['mean_sweeps_per_solve']:.1f} | {counts[3]} / {counts[4]} | "
-                 + " | ".join(v[n]["answer"] for n in names if n != "gathered") + " |")
+                 + " | ".join(v[n]["answer"] for n in names if n != "gathered") + " | "
+                 + " / ".join(f"{v[n]['max_error']:.1e}" for n in names) + " |")
     return "\n".join(L) + "\n"
 
 

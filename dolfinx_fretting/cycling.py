@@ -378,7 +378,7 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
                  q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, active: bool,
                  j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray,
                  xs: np.ndarray, qn: np.ndarray, rn: np.ndarray, xn: np.ndarray,
-                 held: tuple[np.ndarray, np.ndarray, np.ndarray], hold_block: bool
+                 held: tuple[np.ndarray, np.ndarray, np.ndarray], hold_block: bool, float32_sweeps: bool
                  ) -> tuple[int, float, int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """One local solve of increment ``j`` from the warm start ``r`` (in/out; ``x`` out): the exact answer when no
     contact penetrates, else the cached contact pattern (``active``), else the Uzawa sweeps (on the normal rows
@@ -391,7 +391,8 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
     it; a new W is a new call, which starts with nothing held): the same values, so the same bits. ``hold_block``
     False: nothing is held (the block gathered at every solve). ``counts`` of 5 entries (an
     :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those that
-    gathered one in ``counts[4]``.
+    gathered one in ``counts[4]``. ``float32_sweeps``: the sweeps' updates of x read a float32 copy of the block
+    (held beside it), as ``local_solvers.solve(..., float32_sweeps=True)``.
 
     Returns (sweeps, error, local status: 1 converged, what is held for the next solve)."""
     m = q.size
@@ -457,7 +458,7 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
         its, err, change, status, member, block, block32 = _restricted_core(
             Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0, empty_f,
-            empty_f, NEAR_MARGIN, False, working_stats, held[0], held[1], held[2])
+            empty_f, NEAR_MARGIN, float32_sweeps, working_stats, held[0], held[1], held[2])
         if counts.size >= 5:
             counts[3] += 1 if working_stats[3] > 0 else 0
             counts[4] += 1 if working_stats[3] < working_stats[0] else 0
@@ -478,7 +479,8 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                    lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, factor_mu: np.ndarray,
                    evolve: bool, energy: np.ndarray, energy_scale: float, table_of: np.ndarray,
                    abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray, wear_base: np.ndarray,
-                   wear_per_mu: np.ndarray, hold_block: bool = True) -> tuple[int, int, float]:
+                   wear_per_mu: np.ndarray, hold_block: bool = True, float32_sweeps: bool = False
+                   ) -> tuple[int, int, float]:
     """Solve ``D.shape[0]`` increments in sequence, committing each converged one.
 
     Args:
@@ -509,6 +511,8 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
             increment); ``energy`` to ``wear_per_mu``: :meth:`FrictionEvolution.arguments` (unused otherwise).
         hold_block: Keep the working set's block ``W_AA`` from one local solve to the next while the set is the
             same (see :func:`_solve_local`; the same bits either way). False: gathered at every solve.
+        float32_sweeps: The sweeps' incremental updates of x in float32 (the stopping criterion still on x
+            recomputed in float64: answers within the tolerance of the float64 ones, not the same bits).
 
     Returns:
         (converged increments, local status of the first failure (1 if none), its error).
@@ -536,7 +540,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                 r[i] = r_last[i]
         its, err, status, held = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh,
                                               active, j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held,
-                                              hold_block)
+                                              hold_block, float32_sweeps)
         if status != 1:
             return j, status, err
         _finish(j, r, x, q, q_abs, y, mu, dim, tributary, abscissa, k, wear_gap, states, row, its, err, rows,
@@ -560,11 +564,12 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
                  q_abs: np.ndarray, q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int,
                  refresh: int, active: bool, j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray,
                  lu_ok: np.ndarray, counts: np.ndarray, xs: np.ndarray, qn: np.ndarray, rn: np.ndarray,
-                 xn: np.ndarray, tally: np.ndarray, held: tuple[np.ndarray, np.ndarray, np.ndarray], hold_block: bool
-                 ) -> tuple[int, float, int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+                 xn: np.ndarray, tally: np.ndarray, held: tuple[np.ndarray, np.ndarray, np.ndarray], hold_block: bool,
+                 float32_sweeps: bool) -> tuple[int, float, int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """One trial of the load control: the local problem with the obstacle at ``trial`` (its components), warm
     started from ``r`` (the previous trial's forces, as the stepwise path), then ``F = A r`` (the total force along
-    each component). ``tally``: (solves, sweeps) so far, in/out; ``held``, ``hold_block``: as :func:`_solve_local`.
+    each component). ``tally``: (solves, sweeps) so far, in/out; ``held``, ``hold_block``, ``float32_sweeps``: as
+    :func:`_solve_local`.
     Returns (the first non-finite component or -1, error, local status, what is held for the next solve)."""
     for c in range(trial.size):
         if not math.isfinite(trial[c]):
@@ -576,7 +581,8 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
         Dj[g] = v
     _rhs(g0, wear_gap, G, Dj, Q, Sj, y, dim, q_abs, q)
     its, err, status, held = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh, active,
-                                          j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held, hold_block)
+                                          j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held, hold_block,
+                                          float32_sweeps)
     tally[0] += 1
     tally[1] += its
     for c in range(F.size):
@@ -599,8 +605,8 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                          piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, failure: np.ndarray, F: np.ndarray,
                          factor_mu: np.ndarray, evolve: bool, energy: np.ndarray, energy_scale: float,
                          table_of: np.ndarray, abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray,
-                         wear_base: np.ndarray, wear_per_mu: np.ndarray, hold_block: bool = True
-                         ) -> tuple[int, int, float]:
+                         wear_base: np.ndarray, wear_per_mu: np.ndarray, hold_block: bool = True,
+                         float32_sweeps: bool = False) -> tuple[int, int, float]:
     """:func:`run_increments` with force-controlled obstacle components: each increment finds the obstacle
     displacement whose total contact force meets the targets, by the stepwise path's load control
     (``increments._local_with_control``: sweeps over the controlled components, each closed by
@@ -652,9 +658,10 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
             if not controlled[c]:
                 d[c] = targets[j, c]
             trial[c] = d[c]
-        bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0, wear_gap, G, Q,
-                                        S[j], y, q_abs, q, r, x, tol, max_iter, refresh, active, j, pattern, lu,
-                                        piv, lu_ok, counts, xs, qn, rn, xn, tally, held, hold_block)
+        bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0, wear_gap, G,
+                                              Q, S[j], y, q_abs, q, r, x, tol, max_iter, refresh, active, j, pattern,
+                                              lu, piv, lu_ok, counts, xs, qn, rn, xn, tally, held, hold_block,
+                                              float32_sweeps)
         if bad >= 0:
             failure[0] = bad
             return j, TRIAL_NOT_FINITE, 0.0
@@ -689,9 +696,9 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                 while True:   # a block to break out of: the bracketing, then the Illinois regula falsi
                     trial[kc] = d[kc]
                     bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
-                                                    wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
-                                                    refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
-                                                    rn, xn, tally, held, hold_block)
+                                                          wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
+                                                          refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
+                                                          rn, xn, tally, held, hold_block, float32_sweeps)
                     if bad >= 0 or status != 1:
                         break
                     f0 = F[kc] - target
@@ -705,9 +712,9 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                     b = d[kc] + step
                     trial[kc] = b
                     bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
-                                                    wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
-                                                    refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
-                                                    rn, xn, tally, held, hold_block)
+                                                          wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
+                                                          refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
+                                                          rn, xn, tally, held, hold_block, float32_sweeps)
                     if bad >= 0 or status != 1:
                         break
                     fb = F[kc] - target
@@ -727,9 +734,10 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                         b = b + step
                         trial[kc] = b
                         bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim,
-                                                        g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
-                                                        refresh, active, j, pattern, lu, piv, lu_ok, counts, xs,
-                                                        qn, rn, xn, tally, held, hold_block)
+                                                              g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol,
+                                                              max_iter, refresh, active, j, pattern, lu, piv, lu_ok,
+                                                              counts, xs, qn, rn, xn, tally, held, hold_block,
+                                                              float32_sweeps)
                         if bad >= 0 or status != 1:
                             break
                         fb = F[kc] - target
@@ -743,9 +751,10 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                         c_new = b - fb * (b - a) / (fb - fa)
                         trial[kc] = c_new
                         bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim,
-                                                        g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
-                                                        refresh, active, j, pattern, lu, piv, lu_ok, counts, xs,
-                                                        qn, rn, xn, tally, held, hold_block)
+                                                              g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol,
+                                                              max_iter, refresh, active, j, pattern, lu, piv, lu_ok,
+                                                              counts, xs, qn, rn, xn, tally, held, hold_block,
+                                                              float32_sweeps)
                         if bad >= 0 or status != 1:
                             break
                         fc = F[kc] - target

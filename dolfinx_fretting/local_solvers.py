@@ -764,12 +764,11 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
                      ) -> tuple[int, float, float, int, np.ndarray, np.ndarray, np.ndarray]:
     """Uzawa (``nsgs`` False) or NSGS sweeps on the working set only, with a final check on all contacts.
 
-    Dense ``W`` only, given as ``A = W`` (``by_rows``: a solve's own ``W``, or the compiled loop's ``W^T``, which is
-    ``W``: the package's ``W`` is exactly symmetric) or ``A = W^T`` C-contiguous; ``x = W r + q`` on entry when
-    ``x_ready``. The working set is the contacts with a force and those whose gap ``x_n`` is below
-    ``margin_factor * max(-q_n)``; the sweeps run on the gathered ``W_AA`` (rows ``dim |A|`` long instead of ``m``,
-    and a matrix that may fit in cache), in float32 for the incremental updates of ``x`` when ``single`` (the exact
-    recomputations stay float64).
+    Dense ``W`` only, given as ``A = W`` (``by_rows``: no transposed copy to make, a solve's own ``W``) or
+    ``A = W^T`` C-contiguous (the compiled loop's ``Wc``); ``x = W r + q`` on entry when ``x_ready``. The working
+    set is the contacts with a force and those whose gap ``x_n`` is below ``margin_factor * max(-q_n)``; the sweeps
+    run on the gathered ``W_AA`` (rows ``dim |A|`` long instead of ``m``, and a matrix that may fit in cache), in
+    float32 for the incremental updates of ``x`` when ``single`` (the exact recomputations stay float64).
 
     Why it is the full sweeps' answer: a contact with ``r^a = 0`` and ``x_n^a >= 0`` is left at ``r^a = 0`` by
     a sweep (Uzawa's predictor ``-rho (x_n + mu |x_t|, x_t)`` lies in the polar cone exactly when ``x_n >= 0``,

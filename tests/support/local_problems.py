@@ -119,7 +119,8 @@ def sphere_flat_q(xy: np.ndarray, radius: float, approach: float, slip: float) -
 
 def sphere_flat_cycle(W: np.ndarray, xy: np.ndarray, radius: float, approach: float, slips: np.ndarray,
                       mu: float = 0.5, wear: float = 0.0, normal_force: float | None = None,
-                      hold_block: bool | None = True, loop=cycling, start: dict | None = None) -> dict:
+                      hold_block: bool | None = True, loop=cycling, start: dict | None = None,
+                      float32_sweeps: bool = False) -> dict:
     """The package's compiled cycle loop on a half-space problem (:func:`half_space`): a sphere of radius ``radius``
     pressed ``approach`` into the flat (or, with ``normal_force``, pressed by that total normal force: the
     force-controlled loop finds the approach) and moved by ``slips[j]`` along x at increment ``j``, each increment
@@ -128,7 +129,8 @@ def sphere_flat_cycle(W: np.ndarray, xy: np.ndarray, radius: float, approach: fl
     The obstacle moves the contacts' local frames as one: its translation (approach, slip, 0) enters every
     contact's rows (normal, t1, t2) with weight -1 (``G``), no other load. ``W`` must be exactly symmetric (given as
     the loop's W^T, as the package's W is). ``loop``: the module of the loop (``dolfinx_fretting.cycling``, or
-    another version's for a benchmark; ``hold_block`` None: that argument not passed, for a version without it).
+    another version's for a benchmark; ``hold_block`` None: neither it nor ``float32_sweeps`` is passed, for a version
+    without them).
     ``start``: the ``end`` of an earlier call (its wear gap, positions, forces and every increment's forces): this
     cycle continues from there, each increment warm started from the same increment of that cycle (the package's
     default warm start, ``solver.warm_start = "cycle"``; under force control from the increment before, as the
@@ -160,7 +162,7 @@ def sphere_flat_cycle(W: np.ndarray, xy: np.ndarray, radius: float, approach: fl
     rows = np.zeros((n, loop.N_ROW))
     cache = loop.ActivePatternCache(n, nc, 3)
     held = loop.FrictionEvolution.held().arguments()
-    hold = () if hold_block is None else (hold_block,)
+    hold = () if hold_block is None else (hold_block, float32_sweeps)
     found, solves = targets.copy(), np.ones(n, dtype=np.int64)
     if normal_force is None:
         done, status, error = loop.run_increments(
