@@ -10,7 +10,9 @@ with D the obstacle's rigid translation (each zone's in turn with several contac
 contact displacement per unit factor of that load. So a whole cycle (thousands in a run) can run in one compiled
 call:
 local Uzawa solve (:mod:`dolfinx_fretting.local_solvers`; on the normal rows alone when ``mu = 0``, with
-the same iterates), then :func:`dolfinx_fretting.wear.commit_increment`.
+the same iterates; else on the working set of closed and nearly closed contacts, its block ``W_AA`` held from one
+local solve to the next while the set is the same, as ``local_solvers.solve`` holds it), then
+:func:`dolfinx_fretting.wear.commit_increment`.
 Python only sees a cycle's outputs. The result is the same as the per-increment Python path (a test
 checks it); only the warm start may differ: ``warm = 1`` starts each increment from the same increment of
 the previous cycle (the state is nearly periodic, so few sweeps are needed), ``warm = 0`` from the
@@ -56,7 +58,7 @@ import numba
 import numpy as np
 
 from .loading import FORCE_SWEEPS
-from .local_solvers import NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _recompute_x, _restricted_kernel
+from .local_solvers import NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _recompute_x, _restricted_core
 from .wear import ROW_FIELDS, commit_increment
 
 __all__ = ["run_increments", "run_force_increments", "ActivePatternCache", "FrictionEvolution", "N_ROW"]
@@ -84,8 +86,9 @@ class ActivePatternCache:
         self.lu = np.zeros(shape_m)
         self.piv = np.zeros((n, m) if used else (1, 1), dtype=np.int64)
         self.lu_ok = np.zeros(n if used else 1, dtype=np.bool_)
-        #: Counts of the exact pattern solves accepted and rejected, and of the factorisations.
-        self.counts = np.zeros(3, dtype=np.int64)
+        #: Counts of the exact pattern solves accepted and rejected, of the factorisations, and of the local solves
+        #: that swept the working set's block held from the solve before and of those that gathered one (any dim).
+        self.counts = np.zeros(5, dtype=np.int64)
         #: The friction coefficients each increment's factors were made with (NaN: none yet): an evolving
         #: friction law changes mu between cycles, and a factor of another mu is dropped before the loop.
         self.factor_mu = np.full(shape_n, np.nan)
@@ -365,20 +368,39 @@ def _finish(j: int, r: np.ndarray, x: np.ndarray, q: np.ndarray, q_abs: np.ndarr
 
 
 @numba.njit(cache=True)
+def _nothing_held() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nothing held yet (see :func:`_solve_local`): an empty set, block and float32 block."""
+    return np.zeros(0, dtype=np.bool_), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32)
+
+
+@numba.njit(cache=True)
 def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndarray, mu: np.ndarray, dim: int,
                  q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, active: bool,
                  j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray,
-                 xs: np.ndarray, qn: np.ndarray, rn: np.ndarray, xn: np.ndarray) -> tuple[int, float, int]:
+                 xs: np.ndarray, qn: np.ndarray, rn: np.ndarray, xn: np.ndarray,
+                 held: tuple[np.ndarray, np.ndarray, np.ndarray], hold_block: bool, float32_sweeps: bool
+                 ) -> tuple[int, float, int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """One local solve of increment ``j`` from the warm start ``r`` (in/out; ``x`` out): the exact answer when no
     contact penetrates, else the cached contact pattern (``active``), else the Uzawa sweeps (on the normal rows
-    alone when ``normal_only``; ``Wn`` their W). ``xs``, ``qn``, ``rn``, ``xn``: work arrays. Returns (sweeps,
-    error, local status: 1 converged)."""
+    alone when ``normal_only``; ``Wn`` their W; else on the working set, as ``local_solvers.solve``'s default).
+    ``xs``, ``qn``, ``rn``, ``xn``: work arrays.
+
+    ``held``: the working set, its ``(W_AA)^T`` and float32 copy of an earlier solve of this call of the loop
+    (:func:`_nothing_held` at first): the sweeps use the block again while the set is the same, instead of gathering
+    it from W (41 ms at 2025 3D contacts). Sound because ``Wc`` is fixed within a call of the loop (no loop changes
+    it; a new W is a new call, which starts with nothing held): the same values, so the same bits. ``hold_block``
+    False: nothing is held (the block gathered at every solve). ``counts`` of 5 entries (an
+    :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those that
+    gathered one in ``counts[4]``. ``float32_sweeps``: the sweeps' updates of x read a float32 copy of the block
+    (held beside it), as ``local_solvers.solve(..., float32_sweeps=True)``.
+
+    Returns (sweeps, error, local status: 1 converged, what is held for the next solve)."""
     m = q.size
     nc = mu.size
     empty_i = np.zeros(1, dtype=np.int64)
     empty_f = np.zeros(1)
     empty_blocks = np.zeros((1, dim, dim))
-    working_stats = np.zeros(3, dtype=np.int64)
+    working_stats = np.zeros(4, dtype=np.int64)
     its = 0
     err = 0.0
     # No contact penetrates: r = 0 is an exact solution (x = q), as in local_solvers.solve.
@@ -421,21 +443,30 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         its, err, change, status = _lcp_kernel(Wn, empty_i, empty_i, empty_f, False, qn, rho, False, 1.0, rho,
                                                rn, xn, tol, max_iter, refresh)
         if status != 1:
-            return its, err, status
+            return its, err, status, held
         for a in range(nc):
             r[a * dim] = rn[a]
             for c in range(1, dim):
                 r[a * dim + c] = 0.0
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)  # the slip rows too
     elif not exact:
+        # Sweeps on the closed and nearly closed contacts, then a check on all (local_solvers.solve's default). x on
+        # every row by W^T's rows, before and at the check: contiguous, vectorised reads (7 ms at 2025 contacts, where
+        # the rows the sweeps read, by W's rows, take 10 ms and the check's rows 8 ms: measured, local_speed.md).
+        if not hold_block:
+            held = _nothing_held()
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-        # Sweeps on the closed and nearly closed contacts, then a check on all (local_solvers.solve's default).
-        its, err, change, status = _restricted_kernel(Wc, False, empty_blocks, q, mu, rho, rho, dim, r, x, tol,
-                                                      max_iter, refresh, False, 1.0, empty_f, empty_f, NEAR_MARGIN,
-                                                      False, working_stats)
+        its, err, change, status, member, block, block32 = _restricted_core(
+            Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0, empty_f,
+            empty_f, NEAR_MARGIN, float32_sweeps, working_stats, held[0], held[1], held[2])
+        if counts.size >= 5:
+            counts[3] += 1 if working_stats[3] > 0 else 0
+            counts[4] += 1 if working_stats[3] < working_stats[0] else 0
+        if hold_block and block.shape[0] > 0:
+            held = (member, block, block32)
         if status != 1:
-            return its, err, status
-    return its, err, 1
+            return its, err, status, held
+    return its, err, 1, held
 
 
 @numba.njit(cache=True)
@@ -448,7 +479,8 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                    lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, factor_mu: np.ndarray,
                    evolve: bool, energy: np.ndarray, energy_scale: float, table_of: np.ndarray,
                    abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray, wear_base: np.ndarray,
-                   wear_per_mu: np.ndarray) -> tuple[int, int, float]:
+                   wear_per_mu: np.ndarray, hold_block: bool = True, float32_sweeps: bool = False
+                   ) -> tuple[int, int, float]:
     """Solve ``D.shape[0]`` increments in sequence, committing each converged one.
 
     Args:
@@ -477,6 +509,10 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
             ``lu_ok``, ``counts`` and ``factor_mu`` are the arrays of an :class:`ActivePatternCache` (in/out).
         evolve: mu follows the dissipated energy (``mu`` and ``k`` are then updated in place before each
             increment); ``energy`` to ``wear_per_mu``: :meth:`FrictionEvolution.arguments` (unused otherwise).
+        hold_block: Keep the working set's block ``W_AA`` from one local solve to the next while the set is the
+            same (see :func:`_solve_local`; the same bits either way). False: gathered at every solve.
+        float32_sweeps: The sweeps' incremental updates of x in float32 (the stopping criterion still on x
+            recomputed in float64: answers within the tolerance of the float64 ones, not the same bits).
 
     Returns:
         (converged increments, local status of the first failure (1 if none), its error).
@@ -488,6 +524,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
     states = np.empty(nc, dtype=np.int8)
     row = np.empty(N_ROW - 2)
     normal_only, Wn, qn, rn, xn = _normal_rows(Wc, mu, dim)
+    held = _nothing_held()   # the working set's block, held from one local solve to the next (Wc is fixed here)
     for j in range(n):
         if evolve:
             _friction_before(j, mu, k, energy, table_of, abscissae, values, lengths, wear_base, wear_per_mu,
@@ -501,8 +538,9 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
         else:
             for i in range(m):
                 r[i] = r_last[i]
-        its, err, status = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh, active,
-                                        j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn)
+        its, err, status, held = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh,
+                                              active, j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held,
+                                              hold_block, float32_sweeps)
         if status != 1:
             return j, status, err
         _finish(j, r, x, q, q_abs, y, mu, dim, tributary, abscissa, k, wear_gap, states, row, its, err, rows,
@@ -526,22 +564,25 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
                  q_abs: np.ndarray, q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int,
                  refresh: int, active: bool, j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray,
                  lu_ok: np.ndarray, counts: np.ndarray, xs: np.ndarray, qn: np.ndarray, rn: np.ndarray,
-                 xn: np.ndarray, tally: np.ndarray) -> tuple[int, float, int]:
+                 xn: np.ndarray, tally: np.ndarray, held: tuple[np.ndarray, np.ndarray, np.ndarray], hold_block: bool,
+                 float32_sweeps: bool) -> tuple[int, float, int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """One trial of the load control: the local problem with the obstacle at ``trial`` (its components), warm
     started from ``r`` (the previous trial's forces, as the stepwise path), then ``F = A r`` (the total force along
-    each component). ``tally``: (solves, sweeps) so far, in/out. Returns (the first non-finite component or -1,
-    error, local status)."""
+    each component). ``tally``: (solves, sweeps) so far, in/out; ``held``, ``hold_block``, ``float32_sweeps``: as
+    :func:`_solve_local`.
+    Returns (the first non-finite component or -1, error, local status, what is held for the next solve)."""
     for c in range(trial.size):
         if not math.isfinite(trial[c]):
-            return c, 0.0, 1
+            return c, 0.0, 1, held
     for g in range(Dj.size):   # D = T d, component by component (as ContactZone.translations)
         v = 0.0
         for c in range(trial.size):
             v = v + trial[c] * T[g, c] if c > 0 else trial[c] * T[g, c]
         Dj[g] = v
     _rhs(g0, wear_gap, G, Dj, Q, Sj, y, dim, q_abs, q)
-    its, err, status = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh, active, j,
-                                    pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn)
+    its, err, status, held = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh, active,
+                                          j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held, hold_block,
+                                          float32_sweeps)
     tally[0] += 1
     tally[1] += its
     for c in range(F.size):
@@ -549,7 +590,7 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
         for i in range(r.size):
             v += A[c, i] * r[i]
         F[c] = v
-    return -1, err, status
+    return -1, err, status, held
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -564,7 +605,8 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                          piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, failure: np.ndarray, F: np.ndarray,
                          factor_mu: np.ndarray, evolve: bool, energy: np.ndarray, energy_scale: float,
                          table_of: np.ndarray, abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray,
-                         wear_base: np.ndarray, wear_per_mu: np.ndarray) -> tuple[int, int, float]:
+                         wear_base: np.ndarray, wear_per_mu: np.ndarray, hold_block: bool = True,
+                         float32_sweeps: bool = False) -> tuple[int, int, float]:
     """:func:`run_increments` with force-controlled obstacle components: each increment finds the obstacle
     displacement whose total contact force meets the targets, by the stepwise path's load control
     (``increments._local_with_control``: sweeps over the controlled components, each closed by
@@ -601,6 +643,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
     Dj = np.empty(G.shape[1])
     trial = np.empty(ncomp)
     tally = np.zeros(2, dtype=np.int64)
+    held = _nothing_held()   # the working set's block, held from one local solve to the next (Wc is fixed here)
     for i in range(m):
         r[i] = r_last[i]
     for j in range(n):
@@ -615,9 +658,10 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
             if not controlled[c]:
                 d[c] = targets[j, c]
             trial[c] = d[c]
-        bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0, wear_gap, G, Q,
-                                        S[j], y, q_abs, q, r, x, tol, max_iter, refresh, active, j, pattern, lu,
-                                        piv, lu_ok, counts, xs, qn, rn, xn, tally)
+        bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0, wear_gap, G,
+                                              Q, S[j], y, q_abs, q, r, x, tol, max_iter, refresh, active, j, pattern,
+                                              lu, piv, lu_ok, counts, xs, qn, rn, xn, tally, held, hold_block,
+                                              float32_sweeps)
         if bad >= 0:
             failure[0] = bad
             return j, TRIAL_NOT_FINITE, 0.0
@@ -651,10 +695,10 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                 evals = 0
                 while True:   # a block to break out of: the bracketing, then the Illinois regula falsi
                     trial[kc] = d[kc]
-                    bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
-                                                    wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
-                                                    refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
-                                                    rn, xn, tally)
+                    bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
+                                                          wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
+                                                          refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
+                                                          rn, xn, tally, held, hold_block, float32_sweeps)
                     if bad >= 0 or status != 1:
                         break
                     f0 = F[kc] - target
@@ -667,10 +711,10 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                     a, fa = d[kc], f0
                     b = d[kc] + step
                     trial[kc] = b
-                    bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
-                                                    wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
-                                                    refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
-                                                    rn, xn, tally)
+                    bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
+                                                          wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
+                                                          refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
+                                                          rn, xn, tally, held, hold_block, float32_sweeps)
                     if bad >= 0 or status != 1:
                         break
                     fb = F[kc] - target
@@ -689,10 +733,11 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                         a, fa = b, fb
                         b = b + step
                         trial[kc] = b
-                        bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim,
-                                                        g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
-                                                        refresh, active, j, pattern, lu, piv, lu_ok, counts, xs,
-                                                        qn, rn, xn, tally)
+                        bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim,
+                                                              g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol,
+                                                              max_iter, refresh, active, j, pattern, lu, piv, lu_ok,
+                                                              counts, xs, qn, rn, xn, tally, held, hold_block,
+                                                              float32_sweeps)
                         if bad >= 0 or status != 1:
                             break
                         fb = F[kc] - target
@@ -705,10 +750,11 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                     while evals < max_eval:
                         c_new = b - fb * (b - a) / (fb - fa)
                         trial[kc] = c_new
-                        bad, err, status = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim,
-                                                        g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
-                                                        refresh, active, j, pattern, lu, piv, lu_ok, counts, xs,
-                                                        qn, rn, xn, tally)
+                        bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim,
+                                                              g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol,
+                                                              max_iter, refresh, active, j, pattern, lu, piv, lu_ok,
+                                                              counts, xs, qn, rn, xn, tally, held, hold_block,
+                                                              float32_sweeps)
                         if bad >= 0 or status != 1:
                             break
                         fc = F[kc] - target

@@ -731,38 +731,6 @@ NEAR_MARGIN = 0.05
 
 
 @numba.njit(cache=True)
-def _restricted_kernel(A: np.ndarray, by_rows: bool, blocks: np.ndarray, q: np.ndarray, mu: np.ndarray, rho: np.ndarray,
-                       rho_err: np.ndarray, dim: int, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int,
-                       refresh: int, nsgs: bool, omega: float, scan_c: np.ndarray, scan_s: np.ndarray,
-                       margin_factor: float, single: bool, stats: np.ndarray) -> tuple[int, float, float, int]:
-    """Uzawa (``nsgs`` False) or NSGS sweeps on the working set only, with a final check on all contacts.
-
-    Dense ``W`` only, given as ``A = W`` (``by_rows``: no transposed copy to make, a solve's own ``W``) or
-    ``A = W^T`` C-contiguous (the other kernels' ``Wc``, held by the compiled loop); ``x = W r + q`` on entry.
-    The working set is the contacts with a force and those whose gap ``x_n`` is below
-    ``margin_factor * max(-q_n)``; the sweeps run on the gathered
-    ``W_AA`` (rows ``dim |A|`` long instead of ``m``, and a matrix that may fit in cache), in float32 for the
-    incremental updates of ``x`` when ``single`` (the exact recomputations stay float64).
-
-    Why it is the full sweeps' answer: a contact with ``r^a = 0`` and ``x_n^a >= 0`` is left at ``r^a = 0`` by
-    a sweep (Uzawa's predictor ``-rho (x_n + mu |x_t|, x_t)`` lies in the polar cone exactly when ``x_n >= 0``,
-    and projects to 0; NSGS's one-contact problem is open when ``b_n = x_n >= 0``) and adds exactly 0 to the
-    natural-map error (whose force scale is the full problem's). So while every contact outside the set keeps
-    ``x_n >= 0`` the restricted sweeps are the full ones, iterate for iterate. Once they converge, ``x = W r + q``
-    is recomputed on all rows and the error on all contacts; a contact outside with ``x_n < 0`` (the only way
-    the two errors can differ) joins the set, with any other below the margin, and the sweeps go on from there.
-    The answer meets the same criterion as the full sweeps', on the whole problem.
-
-    ``stats`` (int64, 3) gets: passes, working-set size at the end, contacts that joined after the start.
-    Returns (sweeps, error, change, status) like :func:`_uzawa_kernel` (sweeps counted over all passes).
-    """
-    its, err, change, status, _, _, _ = _restricted_core(
-        A, by_rows, True, blocks, q, mu, rho, rho_err, dim, r, x, tol, max_iter, refresh, nsgs, omega, scan_c, scan_s,
-        margin_factor, single, stats, np.zeros(0, dtype=np.bool_), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32))
-    return its, err, change, status
-
-
-@numba.njit(cache=True)
 def _gather_block(A: np.ndarray, by_rows: bool, rows: np.ndarray) -> np.ndarray:
     """``(W_AA)^T`` C-contiguous (the sweeps' columns of ``W_AA`` as rows) for the rows and columns ``rows`` of ``W``,
     given as ``A = W`` (``by_rows``) or ``A = W^T``: the same values, gathered."""
@@ -794,18 +762,37 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
                      margin_factor: float, single: bool, stats: np.ndarray, held_member: np.ndarray,
                      held_block: np.ndarray, held_block32: np.ndarray
                      ) -> tuple[int, float, float, int, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_restricted_kernel` with two savings for a caller that solves again and again on one ``W``.
+    """Uzawa (``nsgs`` False) or NSGS sweeps on the working set only, with a final check on all contacts.
 
+    Dense ``W`` only, given as ``A = W`` (``by_rows``: no transposed copy to make, a solve's own ``W``) or
+    ``A = W^T`` C-contiguous (the compiled loop's ``Wc``); ``x = W r + q`` on entry when ``x_ready``. The working
+    set is the contacts with a force and those whose gap ``x_n`` is below ``margin_factor * max(-q_n)``; the sweeps
+    run on the gathered ``W_AA`` (rows ``dim |A|`` long instead of ``m``, and a matrix that may fit in cache), in
+    float32 for the incremental updates of ``x`` when ``single`` (the exact recomputations stay float64).
+
+    Why it is the full sweeps' answer: a contact with ``r^a = 0`` and ``x_n^a >= 0`` is left at ``r^a = 0`` by
+    a sweep (Uzawa's predictor ``-rho (x_n + mu |x_t|, x_t)`` lies in the polar cone exactly when ``x_n >= 0``,
+    and projects to 0; NSGS's one-contact problem is open when ``b_n = x_n >= 0``) and adds exactly 0 to the
+    natural-map error (whose force scale is the full problem's). So while every contact outside the set keeps
+    ``x_n >= 0`` the restricted sweeps are the full ones, iterate for iterate. Once they converge, ``x = W r + q``
+    is recomputed on all rows and the error on all contacts; a contact outside with ``x_n < 0`` (the only way
+    the two errors can differ) joins the set, with any other below the margin, and the sweeps go on from there.
+    The answer meets the same criterion as the full sweeps', on the whole problem.
+
+    Two savings for a caller that solves again and again on one ``W``:
     ``x_ready`` False (``by_rows`` only): ``x`` is formed here on the rows the sweeps read, the normal rows of every
     contact (the set is chosen from them) and the set's other rows; the outside contacts' other rows wait for the
     check after the sweeps (an outside contact has ``x_n >= margin >= 0``, so it adds exactly 0 to the error
     whatever its ``x_t``: 0 stands in for it until then, and ``x`` is complete on return).
     ``held_block`` (``held_block32``: its float32 copy, or an empty array) is ``(W_AA)^T`` of a previous solve for
     the set ``held_member``: a pass on the same set uses it instead of gathering ``W_AA`` again (the caller vouches
-    that it is this ``W``'s: the same values, so the same bits).
+    that it is this ``W``'s: the same values, so the same bits). Empty arrays: nothing held.
 
-    Returns (sweeps, error, change, status, member, block, block32): the last pass's set, its ``(W_AA)^T`` and the
-    float32 copy (empty unless ``single``), for the caller to hold.
+    ``stats`` (int64, 4) gets: passes, working-set size at the end, contacts that joined after the start, passes
+    that swept the held block.
+    Returns (sweeps, error, change, status, member, block, block32): sweeps counted over all passes, status 1
+    converged, 0 max_iter, 2 non-finite (as :func:`_uzawa_kernel`); the last pass's set, its ``(W_AA)^T`` and the
+    float32 copy (empty unless ``single``; empty blocks when no pass ran), for the caller to hold.
     """
     nc = mu.size
     m = q.size
@@ -813,6 +800,7 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
     stats[0] = 0
     stats[1] = 0
     stats[2] = 0
+    stats[3] = 0
     deepest = 0.0
     for a in range(nc):
         deepest = max(deepest, -q[a * dim])
@@ -873,6 +861,8 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
                     same = False
                     break
         Wa = held_block if same else _gather_block(A, by_rows, rows)  # (W_AA)^T, C-contiguous, like Wc
+        if same:
+            stats[3] += 1
         if not single:
             Wa32 = np.zeros((0, 0), dtype=np.float32)
         elif same and held_block32.shape[0] == ma:
@@ -1774,7 +1764,7 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
         x = np.empty(q.size)  # formed by the kernel on the rows it reads, complete on return
         nsgs = method == "nsgs"
         blocks = np.ascontiguousarray(_diag_blocks(W, dim)) if nsgs else np.zeros((1, dim, dim))
-        stats = np.zeros(3, dtype=np.int64)
+        stats = np.zeros(4, dtype=np.int64)
         if held is None:
             held_member, held_block, held_block32 = (np.zeros(0, dtype=np.bool_), np.zeros((0, 0)),
                                                      np.zeros((0, 0), dtype=np.float32))
@@ -1784,7 +1774,7 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
             W, True, False, blocks, q, mu_arr, rho_err * (1.0 if nsgs else rho_factor), rho_err, dim, r, x, tol,
             max_iter, _REFRESH, nsgs, rho_factor if nsgs else 1.0, _SCAN_COS, _SCAN_SIN, NEAR_MARGIN, float32_sweeps,
             stats, held_member, held_block, held_block32)
-        counts.passes, counts.working_set, counts.joined = (int(v) for v in stats)
+        counts.passes, counts.working_set, counts.joined = (int(v) for v in stats[:3])
         counts.block_held = held is not None and block is held.block
         if holding is not None and block.shape[0] > 0 and not counts.block_held:
             _held[0] = _HeldBlock(holding[0], holding[1], member, block, block32)

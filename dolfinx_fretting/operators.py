@@ -434,8 +434,9 @@ class ContactOperators:
 
     @property
     def pattern_counts(self) -> np.ndarray | None:
-        """Counts of the compiled cycles' exact pattern solves accepted and rejected, and of their LU
-        factorisations (rank 0)."""
+        """Counts of the compiled cycles' exact pattern solves accepted and rejected, of their LU factorisations,
+        and of the local solves that swept the held block W_AA and that gathered one
+        (:class:`~dolfinx_fretting.cycling.ActivePatternCache`'s ``counts``; rank 0)."""
         return None if self._kernel is None else self._kernel[2].counts
 
 

@@ -22,7 +22,8 @@ import dolfinx_fretting as dfr
 from dolfinx_fretting import sliding
 from dolfinx_fretting.analytic import hertz_line_contact
 from dolfinx_fretting.checkpoint import _find_facets
-from dolfinx_fretting.contact import MasterSurface, pair_with_segments, paired_contact_set, tangent_frame
+from dolfinx_fretting.contact import (MasterSurface, _closest_segments, pair_with_segments, paired_contact_set,
+                                      tangent_frame)
 from dolfinx_fretting.scenes import SceneError, load_scene
 from dolfinx_fretting.simulation import run_scene
 from dolfinx_fretting.state import ConvergenceError
@@ -515,6 +516,44 @@ def test_the_closest_segment_is_the_brute_force_one():
     assert np.abs(pairs["weights"][:, 1] - ts).max() <= 1e-15
     with pytest.raises(ValueError, match="no master segment"):
         pair_with_segments(points, segments[:0], inside[:0])
+
+
+def test_the_pruned_closest_segment_search_is_the_full_one():
+    """The re-pairing's search pruned from each node's previous facet (sliding._closest_segments_near) against the
+    full search (contact._closest_segments): the same facet, t and distance to the bit, whatever the guess. Random
+    points about a wavy master of uneven segments, each with a random previous facet (near or far), and ties:
+    points on the master's nodes (two segments at distance 0), two identical copies of a segment (the first must win
+    even when the guess is the second), points midway between two facets of a V (equal distances)."""
+    rng = np.random.default_rng(5)
+    x_nodes = np.sort(rng.uniform(-1.0, 1.0, 61))
+    ends = np.column_stack([x_nodes, 1e-2 * np.sin(9 * x_nodes)])
+    segments = np.stack([ends[:-1], ends[1:]], axis=1)
+    segments = np.concatenate([segments, segments[20:23]])            # exact copies: ties by construction
+    v = np.array([[[-1.0, 3.0], [0.0, 2.0]], [[0.0, 2.0], [1.0, 3.0]]])   # a V: on its axis x = 0 equidistant, exactly
+    segments = np.concatenate([segments, v])
+    on_axis = np.column_stack([np.zeros(5), [2.125, 2.25, 2.5, 2.75, 3.0]])   # dyadic: the distances are exact
+    points = np.vstack([np.column_stack([rng.uniform(-1.3, 1.3, 400), rng.normal(0.0, 0.05, 400)]),
+                        ends, segments[20:23].mean(axis=1), on_axis])
+    A = np.ascontiguousarray(segments[:, 0])
+    d = np.ascontiguousarray(segments[:, 1] - segments[:, 0])
+    L2 = (d ** 2).sum(axis=1)
+    n = points.shape[0]
+    full = np.empty(n, dtype=np.int64), np.empty(n), np.empty(n)
+    _closest_segments(points, A, d, L2, *full)
+    ties = 0
+    for guess in (rng.integers(0, A.shape[0], n), np.clip(full[0] + rng.integers(-2, 3, n), 0, A.shape[0] - 1),
+                  np.where(np.isin(full[0], [20, 21, 22]), full[0] + 40, full[0]),   # the later copy
+                  np.where(full[0] == A.shape[0] - 2, A.shape[0] - 1, full[0])):      # the V's other arm
+        pruned = np.empty(n, dtype=np.int64), np.empty(n), np.empty(n)
+        sliding._closest_segments_near(points, A, d, L2, guess.astype(np.int64), *pruned)
+        for a, b in zip(pruned, full):
+            assert np.array_equal(a, b)
+        ties += int((guess != full[0]).sum())
+    assert ties > 0
+    # the copies and the V's axis are ties indeed: another segment at the same distance, the first one chosen
+    copies = np.arange(n - 8, n - 5)
+    assert np.array_equal(full[0][copies], [20, 21, 22])
+    assert np.all(full[0][n - 5:] == A.shape[0] - 2)
 
 
 def test_the_contact_operator_maps_displacements_as_its_definition():

@@ -11,7 +11,7 @@ import gc
 import numpy as np
 import pytest
 from support.fclib_problems import needs_fclib, problem
-from support.local_problems import half_space, sphere_flat_q
+from support.local_problems import cycle_q, half_space, sphere_flat_cycle, sphere_flat_q
 
 from dolfinx_fretting import local_solvers as ls
 from dolfinx_fretting.local_solvers import natural_map_error, solve
@@ -221,3 +221,62 @@ def test_held_block_goes_with_its_W(sphere_flat):
     del W
     gc.collect()
     assert ls._held[0] is None
+
+
+# The compiled cycle loop (cycling.run_increments, run_force_increments) holds the block too, from one local solve to
+# the next of one call (W is fixed within a call).
+LOOP_OUTPUTS = ("rows", "r", "x", "y", "wear_gap", "states", "d", "solves")
+
+
+@pytest.mark.parametrize("normal_force", [None, 1.6])
+def test_compiled_loop_holds_the_block(sphere_flat, normal_force):
+    """A fretting cycle in the compiled loop, displacement or normal-force controlled (the sphere-flat scene's way:
+    several local solves an increment): with the block held, every increment's answer meets the tolerance on its
+    own whole problem (the natural-map error recomputed from W, independent of the loop), the loop's outputs are
+    those of the loop that gathers W_AA at every solve to the last bit (the same W_AA values, so the same sweeps),
+    and the held block was used (a loop that never holds counts 0 and fails here).
+
+    The force 1.6 presses the sphere about as far as the approach 0.5 (r_n sums to 1.66 there). The wear moves the
+    gaps a little from one increment to the next, so the force-controlled loop looks for the approach at every
+    increment (3-6 solves each, measured).
+    """
+    W, xy = sphere_flat
+    assert np.array_equal(W, W.T)  # exactly symmetric, as the package's W (the helper passes it as W^T)
+    slips = 0.6 * np.cos(2.0 * np.pi * np.arange(1, 9) / 8)
+    held = sphere_flat_cycle(W, xy, 40.0, 0.5, slips, wear=1e-3, normal_force=normal_force)
+    gathered = sphere_flat_cycle(W, xy, 40.0, 0.5, slips, wear=1e-3, normal_force=normal_force, hold_block=False)
+    n = slips.size
+    for out in (held, gathered):
+        assert out["done"] == n and out["status"] == 1, out
+    for j in range(n):
+        assert natural_map_error(W, cycle_q(held, j), held["r"][j], 0.5, 3) < TOL
+    assert held["wear_gap"][-1].max() > 0 and np.any(held["states"][-1] == 2)  # worn, and sliding at the end
+    if normal_force is not None:
+        assert held["solves"].min() >= 2  # trials of the load control: solves within an increment hold the block too
+        assert np.abs(held["r"][:, 0::3].sum(axis=1) - normal_force).max() <= 1e-8 * normal_force  # force_tol
+    for name in LOOP_OUTPUTS:
+        assert np.array_equal(held[name], gathered[name]), name
+    # Each solve that swept used the block it held or gathered one (a trial may start at its answer: no sweep, and
+    # neither count); the set changes at the first increments (from r = 0 every penetrating contact, then the loaded
+    # ones) and, under force control, when a trial's approach moves the rim across the margin: measured 6 of 8 and 25
+    # of 29 sweeping solves (37 solves) on the held block. The loop that gathers never holds.
+    swept = int(gathered["counts"][4])
+    assert held["counts"][3] + held["counts"][4] == swept <= int(held["solves"].sum())
+    assert held["counts"][3] >= swept // 2 and gathered["counts"][3] == 0
+
+
+def test_compiled_loop_float32_sweeps_meet_the_tolerance(sphere_flat):
+    """float32 sweeps in the compiled loop (on the held float32 copy of the block): every increment's answer meets
+    the tolerance on its own whole problem, and the cycle is the float64 one's to the tolerance's effect."""
+    W, xy = sphere_flat
+    slips = 0.6 * np.cos(2.0 * np.pi * np.arange(1, 9) / 8)
+    double = sphere_flat_cycle(W, xy, 40.0, 0.5, slips, wear=1e-3)
+    single = sphere_flat_cycle(W, xy, 40.0, 0.5, slips, wear=1e-3, float32_sweeps=True)
+    assert single["done"] == slips.size and single["status"] == 1
+    for j in range(slips.size):
+        assert natural_map_error(W, cycle_q(single, j), single["r"][j], 0.5, 3) < TOL
+    assert single["counts"][3] > 0  # the float32 copy held with the block
+    assert not np.array_equal(single["r"], double["r"])  # float32 updates: other iterates
+    # Within the tolerance of the one solution of each increment (see test_contacts_outside_the_start_join for the
+    # 1e-7: measured 1.9e-9 at error < 1e-10); each increment starts from its own previous answer and positions.
+    assert np.abs(single["r"] - double["r"]).max() <= 1e-7 * np.abs(double["r"]).max()
