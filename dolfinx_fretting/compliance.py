@@ -37,8 +37,10 @@ solves ``K x = b`` and the construction of the small dense W by one of three rou
 
 ``"auto"`` picks, serially, ``"schur"`` for an H of at least
 :data:`~dolfinx_fretting.delassus_routes.AUTO_SCHUR_ROWS` rows on a K of at most
-:data:`~dolfinx_fretting.delassus_routes.AUTO_SCHUR_DOFS_PER_ROW` dofs per row and ``"selected_inverse"``
-otherwise (the measured crossover: ``benchmarks/results/schur_setup.md``), and ``"owned"`` under MPI
+:data:`~dolfinx_fretting.delassus_routes.AUTO_SCHUR_DOFS_PER_ROW` dofs per row, where the Schur route's second factor
+fits in the memory available then (K's factored), and ``"selected_inverse"`` otherwise (the measured crossover:
+``benchmarks/results/schur_setup.md``; ``stats["auto_schur_skipped_for_memory"]`` says when memory decided), and
+``"owned"`` under MPI
 (``benchmarks/results/delassus.md``, ``benchmarks/results/delassus_owned_np2.md``).
 
 Dirichlet conditions: DOLFINx assembles K with the constrained rows and columns zeroed and 1 on the
@@ -194,7 +196,8 @@ def _petsc_c_api() -> ctypes.CDLL:
                                 [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_int)]),
                                ("MatGetSize", [ctypes.c_void_p, pint, pint]),
                                ("MatDenseGetLDA", [ctypes.c_void_p, pint]),
-                               ("MatDenseGetArrayRead", [ctypes.c_void_p, ctypes.POINTER(ctypes.POINTER(ctypes.c_double))]),
+                               ("MatDenseGetArrayRead",
+                                [ctypes.c_void_p, ctypes.POINTER(ctypes.POINTER(ctypes.c_double))]),
                                ("MatDenseRestoreArrayRead",
                                 [ctypes.c_void_p, ctypes.POINTER(ctypes.POINTER(ctypes.c_double))]),
                                ("MatDestroy", [ctypes.POINTER(ctypes.c_void_p)])):
@@ -246,7 +249,8 @@ class DelassusOperator:
 
     Attributes:
         method: The route of :meth:`build`: as given, except ``"auto"`` under MPI, resolved to ``"owned"``
-            (serially ``"auto"`` stays: the route depends on H's size; ``stats["last_build_route"]`` says which).
+            (serially ``"auto"`` stays: the route depends on H's size and the memory available;
+            ``stats["last_build_route"]`` says which).
         factorization: ``"cholesky"`` or ``"lu"`` (after options).
         last_build_time: Wall time (s) of the last :meth:`build`.
         last_factorize_time: Wall time (s) of the last :meth:`factorize` or :meth:`refactorize`.

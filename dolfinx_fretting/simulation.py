@@ -402,6 +402,8 @@ class _Run:
         self.last_checkpoint = time.perf_counter()
         self.say(f"[{scene.name}] {self.problem.n_dofs} dofs, {self.model.contact.nc} contact candidates, "
                  f"W by {self.problem.operators.delassus_route} in {self.model.timings['delassus_s']:.3f} s"
+                 + (" (the Schur route's second factor would not fit in the memory available)"
+                    if self.problem.operators.delassus.stats.get("auto_schur_skipped_for_memory") else "")
                  + (f"; resumed after increment {self.state.increment} (cycle {self.progress.cycle})"
                     if meta is not None else ""))
 

@@ -17,8 +17,9 @@ DOLFINx or building anything. The mesh is the geometry kind's to count (its ``me
   vectors, gmsh's own copy while it meshes: per dof), ``factor`` (the MUMPS factor of K: a nested-dissection
   fill model, ``n log2 n`` in 2D and ``n^(4/3)`` in 3D for n dofs, fitted to MUMPS's INFOG(22) on the built-in
   geometries; under MPI the ``owned`` route adds one whole factor per rank), ``schur_factor`` (when W is built
-  by the Schur route, asked for or ``"auto"``'s choice by :func:`~dolfinx_fretting.delassus_routes.auto_route`,
-  which takes it only where that peak fits in the memory available: its own factor of ``[[K, H^T], [H, 0]]``, alive beside K's while W is built,
+  by the Schur route, asked for or ``"auto"``'s choice by
+  :func:`~dolfinx_fretting.delassus_routes.auto_route`, counted only where that peak fits in the memory
+  available: its own factor of ``[[K, H^T], [H, 0]]``, alive beside K's while W is built,
   :data:`~dolfinx_fretting.delassus_routes.SCHUR_FACTOR_RATIO` times K's; its ``W_build`` is then the dense
   Schur complement's three copies), ``W`` (the dense Delassus matrix ``(nc dim)^2`` doubles, replicated on every rank,
   and the compiled loop's transposed copy), ``W_build`` (the
@@ -216,8 +217,10 @@ def estimate(scene: Scene, ranks: int = 1, available: int | None = None) -> Size
         ranks: MPI ranks that will run it (the memory terms are the whole machine's).
         available: Bytes of memory available (:func:`~dolfinx_fretting.memory.available_memory`), or None. Given,
             a W that ``"auto"`` would build by the Schur route is counted by the selected inverse when the Schur
-            route's peak exceeds it: the build makes the same choice when the second factor does not fit
-            (:func:`~dolfinx_fretting.delassus_routes.auto_route`'s ``schur_fits``).
+            route's peak exceeds it. The build decides by its own reading (the second factor, 3 times K's measured
+            one, against the memory available after K's factorisation:
+            :func:`~dolfinx_fretting.delassus_routes.auto_route`'s ``schur_fits``), so near the limit the two may
+            differ; the summary's ``delassus_method`` is the route taken.
 
     Returns:
         The estimate; counts the geometry cannot give cheaply are None, with a ``note``.
