@@ -387,11 +387,11 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
 
     ``held``: the working set, its ``(W_AA)^T`` and float32 copy of an earlier solve of this call of the loop
     (:func:`_nothing_held` at first): the sweeps use the block again while the set is the same, instead of gathering
-    it from W (41 ms at 2025 3D contacts). Sound because ``Wc`` is fixed within a call of the loop (no loop changes
+    it from W (its cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is fixed within a call of the loop (no loop changes
     it; a new W is a new call, which starts with nothing held): the same values, so the same bits. ``hold_block``
     False: nothing is held (the block gathered at every solve). ``counts`` of 5 entries (an
     :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those that
-    gathered one in ``counts[4]``. ``float32_sweeps``: the sweeps' updates of x read a float32 copy of the block
+    gathered one in ``counts[4]`` (a shorter ``counts``, finite sliding's 3, gets neither). ``float32_sweeps``: the sweeps' updates of x read a float32 copy of the block
     (held beside it), as ``local_solvers.solve(..., float32_sweeps=True)``.
 
     Returns (sweeps, error, local status: 1 converged, what is held for the next solve)."""
@@ -451,8 +451,8 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)  # the slip rows too
     elif not exact:
         # Sweeps on the closed and nearly closed contacts, then a check on all (local_solvers.solve's default). x on
-        # every row by W^T's rows, before and at the check: contiguous, vectorised reads (7 ms at 2025 contacts, where
-        # the rows the sweeps read, by W's rows, take 10 ms and the check's rows 8 ms: measured, local_speed.md).
+        # every row by W^T's rows, before and at the check: contiguous, vectorised reads, faster here than the rows
+        # the sweeps read by W's rows and the check's rows apart (measured: local_speed.md, its loop section).
         if not hold_block:
             held = _nothing_held()
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)

@@ -213,6 +213,26 @@ def test_held_block_across_a_join_and_in_float32(sphere_flat):
         assert np.abs(single.r - exact.r).max() <= 1e-7 * np.abs(exact.r).max()
 
 
+def test_held_block_only_for_its_own_set(sphere_flat):
+    """The block held is used only for the very set it was gathered for: a sphere pressed 2 spacings left of centre
+    after one pressed 2 right has a working set of the same size (the mirror image) but other contacts, and gathers
+    its own. On a W scaled contact by contact (no longer the same under translation and mirroring, unlike the
+    half-space's, where another set's block has the same values) the answer is a fresh solve's to the last bit;
+    a held block reused for any set of its size (the set check skipped) fails here."""
+    W, xy = sphere_flat
+    scale = np.repeat(np.random.default_rng(7).uniform(0.7, 1.3, xy.shape[0]), 3)
+    W = W * scale[:, None] * scale[None, :]   # S W S: symmetric positive definite as W
+    steps = ls.block_rho(W, 3)
+    shift = np.array([2.0, 0.0])
+    right = solve(W, sphere_flat_q(xy - shift, 40.0, 0.5, 0.6), 0.5, 3, tol=TOL, block_steps=steps)
+    q_left = sphere_flat_q(xy + shift, 40.0, 0.5, 0.6)
+    left = solve(W, q_left, 0.5, 3, tol=TOL, block_steps=steps)
+    fresh = solve(W.copy(), q_left, 0.5, 3, tol=TOL, hold_block=False)
+    assert right.converged and left.converged and left.working_set == right.working_set > 0
+    assert not left.block_held
+    assert np.array_equal(left.r, fresh.r) and np.array_equal(left.x, fresh.x)
+
+
 def test_held_block_goes_with_its_W(sphere_flat):
     """The block held (tens of MB at 1000+ contacts) is dropped when its W is freed."""
     W, xy, steps = _own(sphere_flat)
@@ -259,9 +279,11 @@ def test_compiled_loop_holds_the_block(sphere_flat, normal_force):
     # Each solve that swept used the block it held or gathered one (a trial may start at its answer: no sweep, and
     # neither count); the set changes at the first increments (from r = 0 every penetrating contact, then the loaded
     # ones) and, under force control, when a trial's approach moves the rim across the margin: measured 6 of 8 and 25
-    # of 29 sweeping solves (37 solves) on the held block. The loop that gathers never holds.
+    # of 29 sweeping solves (37 solves) on the held block. The loop that gathers never holds. A solve may count in
+    # both (it swept the held block, then a contact joined and it gathered the larger set's).
     swept = int(gathered["counts"][4])
-    assert held["counts"][3] + held["counts"][4] == swept <= int(held["solves"].sum())
+    assert max(held["counts"][3], held["counts"][4]) <= swept <= held["counts"][3] + held["counts"][4]
+    assert swept <= int(held["solves"].sum())
     assert held["counts"][3] >= swept // 2 and gathered["counts"][3] == 0
 
 
