@@ -29,6 +29,11 @@ from .wear import ROW, ROW_FIELDS
 
 __all__ = ["cycle_targets", "stepwise_cycle", "compiled_cycle", "sliding_cycle"]
 
+#: The compiled loops' trailing ``hold_block``, ``float32_sweeps``, passed explicitly: left to their defaults, numba's
+#: dispatcher folds the omitted arguments in Python and types every array argument there (~1.3 ms a call: the
+#: main job's 9000 calls took 17 % more CPU, measured in benchmarks/results/refactor.md, session 12).
+HELD_BLOCK_ARGUMENTS = (True, False)
+
 
 def cycle_targets(operators: ContactOperators, state: ContactState, path: CyclePath
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -185,14 +190,16 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
                     r_warm[part], k, solver.tol, solver.max_iter, local_solvers._REFRESH, True, out_r[part],
                     out_x[part], out_y[part], out_wear[part], out_states[part], rows[part], found[part],
                     solves[part], active, cache.pattern[part], cache.lu[part], cache.piv[part], cache.lu_ok[part],
-                    cache.counts, failure, last_force, cache.factor_mu[part], *evolution.arguments())
+                    cache.counts, failure, last_force, cache.factor_mu[part], *evolution.arguments(),
+                    *HELD_BLOCK_ARGUMENTS)
             else:
                 done, status, err = run_increments(
                     Wc, rho, mu, dim, contact_set.gap0, wear_gap, G, D[part], Q, S[part], contact_set.tributary,
                     contact_set.abscissa, y, r_last, r_warm[part], warm, k, solver.tol, solver.max_iter,
                     local_solvers._REFRESH, True, out_r[part], out_x[part], out_y[part], out_wear[part],
                     out_states[part], rows[part], active, cache.pattern[part], cache.lu[part], cache.piv[part],
-                    cache.lu_ok[part], cache.counts, cache.factor_mu[part], *evolution.arguments())
+                    cache.lu_ok[part], cache.counts, cache.factor_mu[part], *evolution.arguments(),
+                    *HELD_BLOCK_ARGUMENTS)
             if done < part.stop - part.start:
                 step = part.start + done + 1
                 if status > 2:
