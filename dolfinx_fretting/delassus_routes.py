@@ -45,7 +45,7 @@ def auto_route(comm_size: int, rows: int, dofs: int, schur_fits: bool = True) ->
 
     ``schur_fits``: the Schur route's second factor (:data:`SCHUR_FACTOR_RATIO` times K's) fits in the memory
     available; if not, the selected inverse, which needs no second factor (sphere-flat at a/10 for 10^5 cycles:
-    a peak of ~21 GB by the Schur route, ~7 GB by the selected inverse, on a 24 GB machine)."""
+    estimated 20.7 GB by the Schur route, 9.8 GB by the selected inverse, on a 23 GB machine)."""
     if comm_size > 1:
         return _AUTO_PARALLEL
     if schur_preferred(rows, dofs) and schur_fits:
