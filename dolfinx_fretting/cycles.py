@@ -14,8 +14,8 @@ import numpy as np
 from . import friction, local_solvers
 from .commit import SlidingMonitor, acceleration, wear_coefficients
 from .contact import ContactSet, paired_contact_set
-from .cycling import (N_ROW, NOT_BRACKETED, SATURATED, SWEEPS_EXHAUSTED, TRIAL_NOT_FINITE, FrictionEvolution,
-                      run_force_increments, run_increments)
+from .cycling import (HELD_BLOCK_ARGUMENTS, N_ROW, NOT_BRACKETED, SATURATED, SWEEPS_EXHAUSTED, TRIAL_NOT_FINITE,
+                      FrictionEvolution, run_force_increments, run_increments)
 from .laws import Archard, EnergyWear
 from .increments import (force_names, load_control_message, on_rank0, per_zone, sweeps_message, target_items,
                          trial_not_finite_message)
@@ -28,11 +28,6 @@ from .state import INCREMENT_COLUMNS, ContactState, ConvergenceError, CycleResul
 from .wear import ROW, ROW_FIELDS
 
 __all__ = ["cycle_targets", "stepwise_cycle", "compiled_cycle", "sliding_cycle"]
-
-#: The compiled loops' trailing ``hold_block``, ``float32_sweeps``, passed explicitly: left to their defaults, numba's
-#: dispatcher folds the omitted arguments in Python and types every array argument there (~1.3 ms a call: the
-#: main job's 9000 calls took 17 % more CPU, measured in benchmarks/results/refactor.md, session 12).
-HELD_BLOCK_ARGUMENTS = (True, False)
 
 
 def cycle_targets(operators: ContactOperators, state: ContactState, path: CyclePath

@@ -58,10 +58,18 @@ import numba
 import numpy as np
 
 from .loading import FORCE_SWEEPS
-from .local_solvers import NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _recompute_x, _restricted_core
+from .local_solvers import (NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _nothing_held, _recompute_x,
+                            _restricted_core)
 from .wear import ROW_FIELDS, commit_increment
 
-__all__ = ["run_increments", "run_force_increments", "ActivePatternCache", "FrictionEvolution", "N_ROW"]
+__all__ = ["run_increments", "run_force_increments", "ActivePatternCache", "FrictionEvolution", "N_ROW",
+           "HELD_BLOCK_ARGUMENTS"]
+
+#: The package's ``hold_block``, ``float32_sweeps`` for the loops below (the block held; float64 sweeps). The loops
+#: take them without defaults: an argument left to a default makes numba's dispatcher fold the call in Python and
+#: type every array argument there (~1.3 ms a call: 17 % of the main job's CPU, benchmarks/results/refactor.md,
+#: session 12).
+HELD_BLOCK_ARGUMENTS = (True, False)
 
 #: Number of columns of the per-increment output (the :data:`~dolfinx_fretting.wear.ROW_FIELDS`, then
 #: local iterations and local error).
@@ -368,12 +376,6 @@ def _finish(j: int, r: np.ndarray, x: np.ndarray, q: np.ndarray, q_abs: np.ndarr
 
 
 @numba.njit(cache=True)
-def _nothing_held() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nothing held yet (see :func:`_solve_local`): an empty set, block and float32 block."""
-    return np.zeros(0, dtype=np.bool_), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32)
-
-
-@numba.njit(cache=True)
 def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndarray, mu: np.ndarray, dim: int,
                  q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, active: bool,
                  j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray,
@@ -386,13 +388,14 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
     ``xs``, ``qn``, ``rn``, ``xn``: work arrays.
 
     ``held``: the working set, its ``(W_AA)^T`` and float32 copy of an earlier solve of this call of the loop
-    (:func:`_nothing_held` at first): the sweeps use the block again while the set is the same, instead of gathering
-    it from W (its cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is fixed within a call of the loop (no loop changes
-    it; a new W is a new call, which starts with nothing held): the same values, so the same bits. ``hold_block``
-    False: nothing is held (the block gathered at every solve). ``counts`` of 5 entries (an
-    :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those that
-    gathered one in ``counts[4]`` (a shorter ``counts``, finite sliding's 3, gets neither). ``float32_sweeps``: the sweeps' updates of x read a float32 copy of the block
-    (held beside it), as ``local_solvers.solve(..., float32_sweeps=True)``.
+    (``local_solvers._nothing_held`` at first): the sweeps use the block again while the set is the same, instead
+    of gathering it from W (its cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is fixed within a
+    call of the loop (no loop changes it; a new W is a new call, which starts with nothing held): the same values,
+    so the same bits. ``hold_block`` False: nothing is held (the block gathered at every solve). ``counts`` of 5
+    entries (an :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those
+    that gathered one in ``counts[4]`` (a shorter ``counts``, finite sliding's 3, gets neither). ``float32_sweeps``:
+    the sweeps' updates of x read a float32 copy of the block (held beside it), as
+    ``local_solvers.solve(..., float32_sweeps=True)``.
 
     Returns (sweeps, error, local status: 1 converged, what is held for the next solve)."""
     m = q.size
@@ -453,8 +456,6 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         # Sweeps on the closed and nearly closed contacts, then a check on all (local_solvers.solve's default). x on
         # every row by W^T's rows, before and at the check: contiguous, vectorised reads, faster here than the rows
         # the sweeps read by W's rows and the check's rows apart (measured: local_speed.md, its loop section).
-        if not hold_block:
-            held = _nothing_held()
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
         its, err, change, status, member, block, block32 = _restricted_core(
             Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0, empty_f,
@@ -479,8 +480,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                    lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, factor_mu: np.ndarray,
                    evolve: bool, energy: np.ndarray, energy_scale: float, table_of: np.ndarray,
                    abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray, wear_base: np.ndarray,
-                   wear_per_mu: np.ndarray, hold_block: bool = True, float32_sweeps: bool = False
-                   ) -> tuple[int, int, float]:
+                   wear_per_mu: np.ndarray, hold_block: bool, float32_sweeps: bool) -> tuple[int, int, float]:
     """Solve ``D.shape[0]`` increments in sequence, committing each converged one.
 
     Args:
@@ -605,8 +605,8 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                          piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, failure: np.ndarray, F: np.ndarray,
                          factor_mu: np.ndarray, evolve: bool, energy: np.ndarray, energy_scale: float,
                          table_of: np.ndarray, abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray,
-                         wear_base: np.ndarray, wear_per_mu: np.ndarray, hold_block: bool = True,
-                         float32_sweeps: bool = False) -> tuple[int, int, float]:
+                         wear_base: np.ndarray, wear_per_mu: np.ndarray, hold_block: bool,
+                         float32_sweeps: bool) -> tuple[int, int, float]:
     """:func:`run_increments` with force-controlled obstacle components: each increment finds the obstacle
     displacement whose total contact force meets the targets, by the stepwise path's load control
     (``increments._local_with_control``: sweeps over the controlled components, each closed by

@@ -731,6 +731,13 @@ NEAR_MARGIN = 0.05
 
 
 @numba.njit(cache=True)
+def _nothing_held() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nothing held (:func:`_restricted_core`'s ``held_member``, ``held_block``, ``held_block32``): an empty set,
+    block and float32 block."""
+    return np.zeros(0, dtype=np.bool_), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32)
+
+
+@numba.njit(cache=True)
 def _gather_block(A: np.ndarray, by_rows: bool, rows: np.ndarray) -> np.ndarray:
     """``(W_AA)^T`` C-contiguous (the sweeps' columns of ``W_AA`` as rows) for the rows and columns ``rows`` of ``W``,
     given as ``A = W`` (``by_rows``) or ``A = W^T``: the same values, gathered."""
@@ -1765,11 +1772,8 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
         nsgs = method == "nsgs"
         blocks = np.ascontiguousarray(_diag_blocks(W, dim)) if nsgs else np.zeros((1, dim, dim))
         stats = np.zeros(4, dtype=np.int64)
-        if held is None:
-            held_member, held_block, held_block32 = (np.zeros(0, dtype=np.bool_), np.zeros((0, 0)),
-                                                     np.zeros((0, 0), dtype=np.float32))
-        else:
-            held_member, held_block, held_block32 = held.member, held.block, held.block32
+        held_member, held_block, held_block32 = (_nothing_held() if held is None
+                                                 else (held.member, held.block, held.block32))
         counts.sweeps, err, change, status, member, block, block32 = _restricted_core(
             W, True, False, blocks, q, mu_arr, rho_err * (1.0 if nsgs else rho_factor), rho_err, dim, r, x, tol,
             max_iter, _REFRESH, nsgs, rho_factor if nsgs else 1.0, _SCAN_COS, _SCAN_SIN, NEAR_MARGIN, float32_sweeps,

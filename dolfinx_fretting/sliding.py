@@ -36,7 +36,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .contact import ContactSet, MasterSurface, mortar_paired_set, paired_contact_set
-from .cycling import run_force_increments, run_increments
+from .cycling import HELD_BLOCK_ARGUMENTS, run_force_increments, run_increments
 from .mortar import mortar_matrices
 
 __all__ = ["SurfaceCompliance", "surface_nodes", "master_node_areas", "offsets", "repair", "carry_state",
@@ -752,13 +752,13 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
                 max_eval, Q, factors[j:j + 1], tributary, abscissa, y, r_last, r_warm, k, tol, max_iter, refresh,
                 True, out_r, out_x, out_y, out_wear, out_states, rows[j:j + 1], found[j:j + 1], solves[j:j + 1],
                 False, pattern, lu, piv, lu_ok, counts, failure, force, factor_mu, False, held_energy, 0.0,
-                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates)
+                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates, *HELD_BLOCK_ARGUMENTS)
         else:
             done, code, err = run_increments(
                 W, rho, mu, 2, gap0, wear_gap, G, translations[j:j + 1], Q, factors[j:j + 1], tributary, abscissa,
                 y, r_last, r_warm, 0, k, tol, max_iter, refresh, True, out_r, out_x, out_y, out_wear, out_states,
                 rows[j:j + 1], False, pattern, lu, piv, lu_ok, counts, factor_mu, False, held_energy, 0.0,
-                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates)
+                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates, *HELD_BLOCK_ARGUMENTS)
         if done < 1:
             return j, SOLVE_FAILED, repairs
         for c in range(nc):
