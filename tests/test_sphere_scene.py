@@ -244,6 +244,22 @@ def _check_worn_sphere(summary, scene, cycles, h):
     assert summary["contact_window"] >= summary["contact_radius"]
 
 
+def test_the_scene_files_jump_bound_gives_way_to_a_tolerance_only_when_unset():
+    """The scene file sets the jump's pressure bound (0.1: 0.18 % of peak pressure against the package's 0.05 at half
+    the simulated cycles over 10^4 cycles, benchmarks/results/sphere_resolution.md). The error-estimate rule refuses
+    a pressure bound beside it, so ``wear.jump_tolerance`` alone is refused with the key, its value and how to unset
+    the file's bound; unset, the tolerance runs (the package's bound back as the field's default, unused)."""
+    from dolfinx_fretting.scenes import SceneError
+
+    jumped = ["wear.cycle_jump=true", "wear.jump_tolerance=0.01"]
+    assert load_scene("sphere-flat").wear.jump_pressure_change == 0.1
+    with pytest.raises(SceneError, match=r"wear.jump_pressure_change = 0.1 is out of range; allowed: unset with "
+                                         r"wear.jump_tolerance .*--set wear.jump_pressure_change=none"):
+        load_scene("sphere-flat", jumped)
+    unset = load_scene("sphere-flat", [*jumped, "wear.jump_pressure_change=none"]).wear
+    assert unset.jump_tolerance == 0.01 and "jump_pressure_change" not in unset.model_fields_set
+
+
 def test_the_uniform_zone_is_sized_from_the_wear_of_the_cycles():
     """Before any mesh: 100 cycles keep the zone 1.5 a (15 cubes of a/10, 69 372 dofs on the depth-graded bodies);
     10^4 cycles size it 1.5 times Archard's worn radius (0.329 mm for the bound 4 k P delta N = 8e-4 mm^3), which
