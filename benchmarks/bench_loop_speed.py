@@ -102,7 +102,9 @@ def main(argv=None) -> int:
 
     variants = {}
     if args.before is not None:
-        variants["before"] = (None, loop_of(args.before.resolve()), False)
+        before = loop_of(args.before.resolve())
+        # A tree whose loops take hold_block / float32_sweeps (HELD_BLOCK_ARGUMENTS) holds the block, as this one.
+        variants["before"] = (True if hasattr(before, "HELD_BLOCK_ARGUMENTS") else None, before, False)
     variants |= {"gathered": (False, cycling, False), "held": (True, cycling, False)}
     if args.float32:
         variants["held float32"] = (True, cycling, True)

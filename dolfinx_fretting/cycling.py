@@ -58,7 +58,7 @@ import numba
 import numpy as np
 
 from .loading import FORCE_SWEEPS
-from .local_solvers import (NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _nothing_held, _recompute_x,
+from .local_solvers import (GROSS_SLIP_PREDICTOR, NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _nothing_held, _recompute_x,
                             _restricted_core)
 from .wear import ROW_FIELDS, commit_increment
 
@@ -380,8 +380,8 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
                  q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, active: bool,
                  j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray,
                  xs: np.ndarray, qn: np.ndarray, rn: np.ndarray, xn: np.ndarray,
-                 held: tuple[np.ndarray, np.ndarray, np.ndarray], hold_block: bool, float32_sweeps: bool
-                 ) -> tuple[int, float, int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+                 held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], hold_block: bool,
+                 float32_sweeps: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
     """One local solve of increment ``j`` from the warm start ``r`` (in/out; ``x`` out): the exact answer when no
     contact penetrates, else the cached contact pattern (``active``), else the Uzawa sweeps (on the normal rows
     alone when ``normal_only``; ``Wn`` their W; else on the working set, as ``local_solvers.solve``'s default).
@@ -403,7 +403,7 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
     empty_i = np.zeros(1, dtype=np.int64)
     empty_f = np.zeros(1)
     empty_blocks = np.zeros((1, dim, dim))
-    working_stats = np.zeros(4, dtype=np.int64)
+    working_stats = np.zeros(7, dtype=np.int64)
     its = 0
     err = 0.0
     # No contact penetrates: r = 0 is an exact solution (x = q), as in local_solvers.solve.
@@ -457,14 +457,15 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         # every row by W^T's rows, before and at the check: contiguous, vectorised reads, faster here than the rows
         # the sweeps read by W's rows and the check's rows apart (measured: local_speed.md, its loop section).
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-        its, err, change, status, member, block, block32 = _restricted_core(
+        its, err, change, status, member, block, block32, loaded, factor = _restricted_core(
             Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0, empty_f,
-            empty_f, NEAR_MARGIN, float32_sweeps, working_stats, held[0], held[1], held[2])
+            empty_f, NEAR_MARGIN, float32_sweeps, working_stats, held[0], held[1], held[2], GROSS_SLIP_PREDICTOR,
+            held[3], held[4])
         if counts.size >= 5:
             counts[3] += 1 if working_stats[3] > 0 else 0
             counts[4] += 1 if working_stats[3] < working_stats[0] else 0
         if hold_block and block.shape[0] > 0:
-            held = (member, block, block32)
+            held = (member, block, block32, loaded, factor)
         if status != 1:
             return its, err, status, held
     return its, err, 1, held
@@ -564,8 +565,8 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
                  q_abs: np.ndarray, q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int,
                  refresh: int, active: bool, j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray,
                  lu_ok: np.ndarray, counts: np.ndarray, xs: np.ndarray, qn: np.ndarray, rn: np.ndarray,
-                 xn: np.ndarray, tally: np.ndarray, held: tuple[np.ndarray, np.ndarray, np.ndarray], hold_block: bool,
-                 float32_sweeps: bool) -> tuple[int, float, int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+                 xn: np.ndarray, tally: np.ndarray, held: tuple[np.ndarray, ...], hold_block: bool,
+                 float32_sweeps: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
     """One trial of the load control: the local problem with the obstacle at ``trial`` (its components), warm
     started from ``r`` (the previous trial's forces, as the stepwise path), then ``F = A r`` (the total force along
     each component). ``tally``: (solves, sweeps) so far, in/out; ``held``, ``hold_block``, ``float32_sweeps``: as

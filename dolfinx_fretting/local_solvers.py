@@ -81,7 +81,8 @@ class LocalResult:
     Attributes:
         r: Contact forces, ``(n, t...)`` per contact, length ``dim * nc``.
         x: Relative displacements ``W r + q`` (recomputed exactly at exit).
-        iterations: Gauss-Seidel sweeps done (0 when the initial guess already met the tolerance).
+        iterations: Gauss-Seidel sweeps done, plus Newton steps and gross-slip predictor steps where the method
+            takes them (0 when the initial guess already met the tolerance).
         error: Natural-map residual of ``r`` (see :func:`natural_map_error`), the stopping criterion.
         converged: ``error < tol`` with finite values.
         method: Solver name.
@@ -96,6 +97,8 @@ class LocalResult:
         joined: Contacts that joined the working set after the start (their gap closed during the solve).
         block_held: The working set's block ``W_AA`` was the one held from the previous solve on this ``W`` (the
             same set; see ``block_steps`` in :func:`solve`), not gathered again.
+        predictor_steps: Steps of the gross-slip predictor among ``iterations`` (3D ``"uzawa"`` on the working
+            set: each pass first tries it, see :func:`solve`).
     """
 
     r: np.ndarray
@@ -112,6 +115,7 @@ class LocalResult:
     working_set: int = 0
     joined: int = 0
     block_held: bool = False
+    predictor_steps: int = 0
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -729,12 +733,19 @@ def _nsgs_sweeps(Ws: np.ndarray, Wc: np.ndarray, indptr: np.ndarray, indices: np
 #: (The compiled cycle loop reads it when numba compiles cycling.py: clear its cache after changing it.)
 NEAR_MARGIN = 0.05
 
+#: The 3D working-set Uzawa solve (:func:`solve`'s default and the compiled cycle loops) first tries
+#: :func:`_gross_slip_predictor` on each pass. Its answer meets the same criterion as the sweeps' but is another
+#: point within it (r within ~1e-8 of the sweeps' on the sphere's problems at tol 1e-10).
+#: (The compiled cycle loop reads it when numba compiles cycling.py: clear its cache after changing it.)
+GROSS_SLIP_PREDICTOR = True
+
 
 @numba.njit(cache=True)
-def _nothing_held() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nothing held (:func:`_restricted_core`'s ``held_member``, ``held_block``, ``held_block32``): an empty set,
-    block and float32 block."""
-    return np.zeros(0, dtype=np.bool_), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32)
+def _nothing_held() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Nothing held (:func:`_restricted_core`'s ``held_member``, ``held_block``, ``held_block32``, ``held_loaded``,
+    ``held_factor``): an empty set, block, float32 block, loaded set and factor."""
+    return (np.zeros(0, dtype=np.bool_), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32),
+            np.zeros(0, dtype=np.int64), np.zeros((0, 0)))
 
 
 @numba.njit(cache=True)
@@ -762,13 +773,238 @@ def _gather_block(A: np.ndarray, by_rows: bool, rows: np.ndarray) -> np.ndarray:
     return block
 
 
+# ----------------------------------------------------------------------------------------------------------
+# Gross-slip predictor: the normal forces solved exactly, the slip directions by fixed point
+# ----------------------------------------------------------------------------------------------------------
+#: The predictor stops when a step does not divide the error by at least 2 (stick, a reversal, a contact opening
+#: or closing): the sweeps go on from its best iterate.
+PREDICTOR_CONTRACTION = 0.5
+#: At most this many predictor steps a pass (~1.5 sweeps' reads of ``W_AA`` each).
+PREDICTOR_STEPS = 20
+#: Steps Anderson's mixing combines (:func:`_anderson_mix`).
+PREDICTOR_DEPTH = 4
+
+
+@numba.njit(cache=True)
+def _cholesky_solve(factor: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``P^{-1} b`` for ``P = L L^T`` (``factor = L``, lower, C-contiguous): both triangles read along ``L``'s rows."""
+    n = b.size
+    y = b.copy()
+    for i in range(n):
+        row = factor[i]
+        value = y[i]
+        for k in range(i):
+            value -= row[k] * y[k]
+        y[i] = value / row[i]
+    for i in range(n - 1, -1, -1):
+        y[i] /= factor[i, i]
+        value = y[i]
+        row = factor[i]
+        for k in range(i):
+            y[k] -= row[k] * value
+    return y
+
+
+@numba.njit(cache=True)
+def _anderson_mix(outputs: np.ndarray, residuals: np.ndarray, outputs_x: np.ndarray, last: int, stored: int,
+                  loaded: np.ndarray, r: np.ndarray, x: np.ndarray) -> None:
+    """Anderson's mixing of the last ``stored`` steps (rows of the ring buffers, ``last`` the newest): the
+    combination of their outputs whose residuals' combination is least (weights summing to 1), written to the
+    loaded contacts' rows of ``r`` and to ``x`` (the same combination of the outputs' exact ``x``: ``x`` is affine
+    in ``r``). Fewer than two steps, or a singular system: ``r``, ``x`` are left as they are (the newest output)."""
+    if stored < 2:
+        return
+    size = outputs.shape[0]
+    others = np.empty(stored - 1, dtype=np.int64)
+    k = 0
+    for back in range(1, stored):
+        others[k] = (last - back) % size
+        k += 1
+    n = stored - 1
+    differences = np.empty((n, residuals.shape[1]))
+    for c in range(n):
+        differences[c] = residuals[last] - residuals[others[c]]
+    gram = differences @ differences.T
+    rhs = differences @ residuals[last]
+    for c in range(n):
+        gram[c, c] *= 1.0 + 1e-10   # a tiny ridge: steps with nearly equal residuals leave gram singular
+    try:
+        weights = np.linalg.solve(gram, rhs)
+    except Exception:
+        return
+    for c in range(n):
+        if not math.isfinite(weights[c]):
+            return
+    mixed = outputs[last].copy()
+    mixed_x = outputs_x[last].copy()
+    for c in range(n):
+        mixed -= weights[c] * (outputs[last] - outputs[others[c]])
+        mixed_x -= weights[c] * (outputs_x[last] - outputs_x[others[c]])
+    for i in range(loaded.size):
+        o = 3 * loaded[i]
+        for c in range(3):
+            r[o + c] = mixed[3 * i + c]
+    x[:] = mixed_x
+
+
+@numba.njit(cache=True)
+def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err: np.ndarray, scale: float,
+                          contacts: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float,
+                          held_loaded: np.ndarray, held_factor: np.ndarray, stats: np.ndarray
+                          ) -> tuple[int, float, int, np.ndarray, np.ndarray]:
+    """Steps towards the answer of a 3D sub-problem in gross slip, cheaper than the sweeps there.
+
+    ``Wa = (W_AA)^T`` C-contiguous (``W`` symmetric), ``q``, ``mu``, ``rho_err``, ``r``, ``x = W_AA r + q`` (exact)
+    the working set's (``contacts``: their indices in the whole problem), ``scale`` the whole problem's force
+    scale. The loaded contacts ``L`` (``r_n > 0`` at the start) are taken to slide; a step
+
+    - solves their normal rows exactly with the tangential forces held: ``r_n <- r_n - W_LL^{-1} x_n`` (a Cholesky
+      factor of ``W_LL``, the normal block of the loaded contacts);
+    - puts each on its cone against its slip, ``r_t = -mu r_n x_t / |x_t|`` (De Saxce's law for a sliding
+      contact), and forms ``x`` exactly: the step's output, whose error is measured;
+    - mixes the outputs of the last ``PREDICTOR_DEPTH`` steps (Anderson, :func:`_anderson_mix`) into the next
+      step's input (the loaded contacts' forces, and ``x`` as the same mix of the outputs' exact ones).
+
+    A sliding contact with ``x_n = 0`` and ``r_t`` so directed is an exact zero of the natural map, so in gross
+    slip the error falls as the normal forces and the directions settle (4-5 steps from the increment before on
+    the sphere's half-space problems at mu 0.8, where the sweeps take ~20: benchmarks/results/gross_slip.md).
+    Where a contact sticks, opens or closes at the answer it does not: the predictor stops at the first output
+    that does not divide the best error by ``1 / PREDICTOR_CONTRACTION``, at the tolerance, at a negative normal
+    force, at a loaded contact without slip (``x_t = 0``), or after ``PREDICTOR_STEPS``; ``r``, ``x`` are then
+    the best of the start and the outputs (the start unless an output did better): inside the cones, ``x`` exact.
+
+    ``held_loaded``/``held_factor``: the loaded contacts (indices in the whole problem) and the factor of an
+    earlier call on the same ``W`` (the caller vouches): used again while the loaded set is the same.
+    ``stats`` (int64, 3) gets: calls that stepped, steps, factorisations.
+    Returns (1 converged / 0 not, error, steps, the loaded contacts and factor to hold: the held ones, a new
+    pair, or empty arrays when no factor was made).
+    """
+    na = mu.size
+    nothing_i = np.zeros(0, dtype=np.int64)
+    nothing_f = np.zeros((0, 0))
+    count = 0
+    for a in range(na):
+        if r[3 * a] > 0.0:
+            count += 1
+    if count == 0:
+        return 0, 0.0, 0, held_loaded, held_factor
+    loaded = np.empty(count, dtype=np.int64)   # positions in the set
+    k = 0
+    for a in range(na):
+        o = 3 * a
+        if r[o] > 0.0:
+            if x[o + 1] == 0.0 and x[o + 2] == 0.0:   # no direction to slide in
+                return 0, 0.0, 0, held_loaded, held_factor
+            loaded[k] = a
+            k += 1
+    key = contacts[loaded]
+    same = held_loaded.size == count and held_factor.shape[0] == count
+    if same:
+        for i in range(count):
+            if held_loaded[i] != key[i]:
+                same = False
+                break
+    if same:
+        factor = held_factor
+    else:
+        block = np.empty((count, count))
+        for i in range(count):
+            row = Wa[3 * loaded[i]]
+            for j in range(count):
+                block[i, j] = row[3 * loaded[j]]
+        for i in range(count):   # Cholesky reads one triangle: a W that is not symmetric is not for it
+            for j in range(i):
+                if block[i, j] != block[j, i]:
+                    return 0, 0.0, 0, nothing_i, nothing_f
+        try:
+            factor = np.linalg.cholesky(block)
+        except Exception:  # not positive definite (a rank-deficient W): the sweeps' business
+            return 0, 0.0, 0, nothing_i, nothing_f
+        stats[2] += 1
+    stats[0] += 1
+    err = _error(r, x, mu, rho_err, 3, scale)
+    best, best_r, best_x = err, r.copy(), x.copy()
+    rn = np.empty(count)
+    for i in range(count):
+        rn[i] = r[3 * loaded[i]]
+    steps = 0
+    empty_i = np.zeros(1, dtype=np.int64)
+    empty_f = np.zeros(1)
+    # Anderson mixing of the steps (history of PREDICTOR_DEPTH): the steps' outputs, their exact x and residuals.
+    ml = 3 * count
+    outputs = np.zeros((PREDICTOR_DEPTH + 1, ml))
+    residuals = np.zeros((PREDICTOR_DEPTH + 1, ml))
+    outputs_x = np.zeros((PREDICTOR_DEPTH + 1, x.size))
+    inputs = np.empty(ml)
+    stored = 0
+    while steps < PREDICTOR_STEPS:
+        for i in range(count):
+            o = 3 * loaded[i]
+            for c in range(3):
+                inputs[3 * i + c] = r[o + c]
+        # x_n = W_LL r_n + (the rest, held): the r_n that zeroes it is r_n - W_LL^{-1} x_n.
+        gaps = np.empty(count)
+        for i in range(count):
+            gaps[i] = x[3 * loaded[i]]
+        correction = _cholesky_solve(factor, gaps)
+        for i in range(count):
+            rn[i] -= correction[i]
+        steps += 1
+        negative = False
+        for i in range(count):
+            if rn[i] < 0.0:
+                negative = True
+        if negative:
+            break
+        for i in range(count):
+            a = loaded[i]
+            o = 3 * a
+            slip = math.sqrt(x[o + 1] ** 2 + x[o + 2] ** 2)
+            r[o] = rn[i]
+            r[o + 1] = -mu[a] * rn[i] * x[o + 1] / slip
+            r[o + 2] = -mu[a] * rn[i] * x[o + 2] / slip
+        _recompute_x(Wa, empty_i, empty_i, empty_f, False, q, r, x)
+        err = _error(r, x, mu, rho_err, 3, scale)
+        if not math.isfinite(err):
+            break
+        improved = err < PREDICTOR_CONTRACTION * best
+        if err < best:
+            best = err
+            best_r[:] = r
+            best_x[:] = x
+        if err < tol or not improved:
+            break
+        slot = stored % (PREDICTOR_DEPTH + 1)
+        for i in range(count):
+            o = 3 * loaded[i]
+            for c in range(3):
+                outputs[slot, 3 * i + c] = r[o + c]
+                residuals[slot, 3 * i + c] = r[o + c] - inputs[3 * i + c]
+        outputs_x[slot] = x
+        stored += 1
+        _anderson_mix(outputs, residuals, outputs_x, slot, min(stored, PREDICTOR_DEPTH + 1), loaded, r, x)
+        zero_slip = False
+        for i in range(count):
+            o = 3 * loaded[i]
+            rn[i] = r[o]
+            if x[o + 1] == 0.0 and x[o + 2] == 0.0:
+                zero_slip = True
+        if zero_slip:
+            break
+    stats[1] += steps
+    r[:] = best_r
+    x[:] = best_x
+    return (1 if best < tol else 0), best, steps, key, factor
+
+
 @numba.njit(cache=True)
 def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.ndarray, q: np.ndarray, mu: np.ndarray,
                      rho: np.ndarray, rho_err: np.ndarray, dim: int, r: np.ndarray, x: np.ndarray, tol: float,
                      max_iter: int, refresh: int, nsgs: bool, omega: float, scan_c: np.ndarray, scan_s: np.ndarray,
                      margin_factor: float, single: bool, stats: np.ndarray, held_member: np.ndarray,
-                     held_block: np.ndarray, held_block32: np.ndarray
-                     ) -> tuple[int, float, float, int, np.ndarray, np.ndarray, np.ndarray]:
+                     held_block: np.ndarray, held_block32: np.ndarray, predict: bool, held_loaded: np.ndarray,
+                     held_factor: np.ndarray
+                     ) -> tuple[int, float, float, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Uzawa (``nsgs`` False) or NSGS sweeps on the working set only, with a final check on all contacts.
 
     Dense ``W`` only, given as ``A = W`` (``by_rows``: no transposed copy to make, a solve's own ``W``) or
@@ -795,11 +1031,16 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
     the set ``held_member``: a pass on the same set uses it instead of gathering ``W_AA`` again (the caller vouches
     that it is this ``W``'s: the same values, so the same bits). Empty arrays: nothing held.
 
-    ``stats`` (int64, 4) gets: passes, working-set size at the end, contacts that joined after the start, passes
-    that swept the held block.
-    Returns (sweeps, error, change, status, member, block, block32): sweeps counted over all passes, status 1
-    converged, 0 max_iter, 2 non-finite (as :func:`_uzawa_kernel`); the last pass's set, its ``(W_AA)^T`` and the
-    float32 copy (empty unless ``single``; empty blocks when no pass ran), for the caller to hold.
+    ``predict`` (3D Uzawa only): each pass first tries :func:`_gross_slip_predictor` on the set (``held_loaded``,
+    ``held_factor``: its factor of an earlier solve, or empty arrays) and sweeps only if it does not converge,
+    from its best iterate.
+
+    ``stats`` (int64, 7) gets: passes, working-set size at the end, contacts that joined after the start, passes
+    that swept the held block, then the predictor's passes that stepped, steps and factorisations.
+    Returns (iterations, error, change, status, member, block, block32, loaded, factor): sweeps plus predictor steps
+    over all passes, status 1 converged, 0 max_iter, 2 non-finite (as :func:`_uzawa_kernel`); the last pass's set,
+    its ``(W_AA)^T`` and the float32 copy (empty unless ``single``; empty blocks when no pass ran), and the
+    predictor's loaded contacts and factor, for the caller to hold.
     """
     nc = mu.size
     m = q.size
@@ -808,6 +1049,10 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
     stats[1] = 0
     stats[2] = 0
     stats[3] = 0
+    stats[4] = 0
+    stats[5] = 0
+    stats[6] = 0
+    predict = predict and dim == 3 and not nsgs
     deepest = 0.0
     for a in range(nc):
         deepest = max(deepest, -q[a * dim])
@@ -842,7 +1087,7 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
         _recompute_x_by_rows(A, q, r, x, np.arange(m))
         err = _error(r, x, mu, rho_err, dim, scale)
     if err < tol:
-        return 0, err, 0.0, 1, member, np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32)
+        return 0, err, 0.0, 1, member, np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32), held_loaded, held_factor
     total = 0
     change = np.inf
     status = 0
@@ -898,8 +1143,22 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
         if left <= 0:
             if not x_ready:
                 _recompute_x_by_rows(A, q, r, x, np.arange(m))
-            return total, err, change, 0, member, Wa, Wa32
-        if nsgs and single:
+            return total, err, change, 0, member, Wa, Wa32, held_loaded, held_factor
+        predicted = False
+        if predict:
+            contacts = np.empty(na, dtype=np.int64)
+            for k in range(na):
+                contacts[k] = rows[k * dim] // dim
+            outcome, err, steps, held_loaded, held_factor = _gross_slip_predictor(
+                Wa, qa, mua, rho_erra, scale, contacts, ra, xa, tol, held_loaded, held_factor, stats[4:])
+            total += steps
+            predicted = outcome == 1
+            left = max_iter - total
+        if predicted:
+            its, change, status = 0, 0.0, 1
+        elif left <= 0:
+            its, status = 0, 0
+        elif nsgs and single:
             its, err, change, status = _nsgs_sweeps(Wa32, Wa, empty_i, empty_i, empty_f, False, blocks_a, qa, mua,
                                                     rho_erra, dim, ra, xa, tol, left, refresh, omega, scan_c, scan_s,
                                                     scale)
@@ -935,12 +1194,12 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
         else:
             _recompute_x(A, empty_i, empty_i, empty_f, False, q, r, x)
         if status == 2:
-            return total, err, change, 2, member, Wa, Wa32
+            return total, err, change, 2, member, Wa, Wa32, held_loaded, held_factor
         err = _error(r, x, mu, rho_err, dim, scale)
         if status != 1:
-            return total, err, change, status, member, Wa, Wa32
+            return total, err, change, status, member, Wa, Wa32, held_loaded, held_factor
         if err < tol:
-            return total, err, change, 1, member, Wa, Wa32
+            return total, err, change, 1, member, Wa, Wa32, held_loaded, held_factor
         added = 0
         for a in range(nc):
             if not member[a] and x[a * dim] < margin:
@@ -951,7 +1210,7 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
             # Not reached in exact arithmetic (the outside terms are exact zeros): finish with full sweeps.
             left = max_iter - total
             if left <= 0:
-                return total, err, change, 0, member, Wa, Wa32
+                return total, err, change, 0, member, Wa, Wa32, held_loaded, held_factor
             Wc = np.ascontiguousarray(A.T) if by_rows else A
             if nsgs:
                 its, err, change, status = _nsgs_sweeps(Wc, Wc, empty_i, empty_i, empty_f, False, blocks, q, mu,
@@ -963,7 +1222,7 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
             stats[1] = nc
             if status == 0:  # the sweeps update x step by step: a failed solve reports the x of its r, x = W r + q
                 _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-            return total + its, err, change, status, member, Wa, Wa32
+            return total + its, err, change, status, member, Wa, Wa32, held_loaded, held_factor
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -1433,10 +1692,12 @@ class _Counts:
     working_set: int = 0
     joined: int = 0
     block_held: bool = False
+    predicted: int = 0
+    predictor_steps: int = 0
 
     @property
     def total(self) -> int:
-        return self.sweeps + self.steps
+        return self.sweeps + self.steps + self.predictor_steps
 
 
 # Newton safeguards (see _newton_driver), chosen on the FCLIB problems (benchmarks/results/solver_suite.md).
@@ -1545,17 +1806,20 @@ def _newton_driver(P: _Problem, r: np.ndarray, x: np.ndarray, tol: float, max_it
 class _HeldBlock:
     """The working set's block of the last solve on a ``W`` whose :func:`block_rho` the caller holds, for the next
     solve on it (a gross-slip cycle's increments sweep the same set, and gathering ``W_AA`` reads ``W`` at every
-    one): the set, ``(W_AA)^T`` and its float32 copy (or an empty array). Keyed on the identity of the caller's
+    one): the set, ``(W_AA)^T`` and its float32 copy (or an empty array), and the gross-slip predictor's loaded
+    contacts and Cholesky factor (or empty arrays). Keyed on the identity of the caller's
     ``W`` and ``block_steps`` arrays (weak references: the block goes with its ``W``), and dropped when ``W``'s
     diagonal or the steps' values are not those held (a ``W`` rebuilt in place). Its ``W`` had its values checked
     (finite) when it was first solved on."""
 
-    def __init__(self, W: np.ndarray, steps: np.ndarray, member: np.ndarray, block: np.ndarray, block32: np.ndarray):
+    def __init__(self, W: np.ndarray, steps: np.ndarray, member: np.ndarray, block: np.ndarray, block32: np.ndarray,
+                 loaded: np.ndarray, factor: np.ndarray):
         self._W = weakref.ref(W, _forget_block)
         self._steps = weakref.ref(steps)
         self._diagonal = W.diagonal().copy()
         self._step_values = steps.copy()
         self.member, self.block, self.block32 = member, block, block32
+        self.loaded, self.factor = loaded, factor
 
     def serves(self, W: object, steps: object) -> bool:
         """Whether ``W`` and ``steps`` are the very arrays held, with the diagonal and the steps held."""
@@ -1588,7 +1852,8 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
           method: str = "uzawa", tol: float = 1e-10, max_iter: int = 10000, r0: np.ndarray | None = None,
           rho: float | None = None, raise_on_failure: bool = False,
           block_steps: np.ndarray | None = None, working_set: bool = True,
-          float32_sweeps: bool = False, hold_block: bool = True) -> LocalResult:
+          float32_sweeps: bool = False, hold_block: bool = True,
+          gross_slip_predictor: bool = GROSS_SLIP_PREDICTOR) -> LocalResult:
     """Solve the local frictional contact problem ``x = W r + q``, ``r`` and ``x`` satisfying Coulomb's law.
 
     Every method stops when :func:`natural_map_error` ``< tol`` (checked on ``x = W r + q`` recomputed
@@ -1675,6 +1940,14 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         hold_block: With ``block_steps`` and ``working_set``: use the block held from the previous solve on this
             ``W`` and hold this solve's for the next (see ``block_steps``). False: neither (the block is gathered
             and ``W`` checked at this solve, and what is held is left as it is).
+        gross_slip_predictor: 3D ``"uzawa"`` with ``working_set`` on a symmetric ``W``: each pass first tries a
+            predictor made for gross slip, when every loaded contact of its start slides: the loaded contacts'
+            normal forces solved exactly (a Cholesky factor of their ``W_nn``, held with the block) with the
+            tangential forces held, each put on its cone against its slip, ``x`` formed exactly, again while the
+            error falls at least twofold a step (:func:`_gross_slip_predictor`). The sweeps go on from its best
+            iterate if it does not reach the tolerance. Same stopping criterion; the answer is another point
+            within it (not the sweeps' bits). In gross slip it replaces ~27 sweeps by 4-8 steps of ~1.5 sweeps'
+            cost each (benchmarks/results/loop_speed.md). False: the sweeps alone.
 
     Returns:
         A :class:`LocalResult`. ``converged`` is False (with a message) when ``max_iter`` is reached or a
@@ -1722,7 +1995,7 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     else:
         r, x, err, change, status = _solve_full(W, q, mu_arr, dim, method, float(tol), int(max_iter), r,
                                                 r0 is not None, rho_factor, counts, rho_err, bool(working_set),
-                                                bool(float32_sweeps), holding, held)
+                                                bool(float32_sweeps), holding, held, bool(gross_slip_predictor))
     its = counts.total
     converged = status == 1 and bool(np.all(np.isfinite(r)))
     unit = {"uzawa": "sweeps", "nsgs": "sweeps"}.get(method, "iterations")
@@ -1741,7 +2014,7 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         raise LocalSolverError(f"local solver {method!r}: {message}")
     return LocalResult(r, x, int(its), float(err), converged, method, message, float(change),
                        int(counts.sweeps), int(counts.steps), counts.passes, counts.working_set, counts.joined,
-                       counts.block_held)
+                       counts.block_held, counts.predictor_steps)
 
 
 def _storage(W: np.ndarray | sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
@@ -1756,11 +2029,12 @@ def _storage(W: np.ndarray | sp.csc_matrix) -> tuple[np.ndarray, np.ndarray, np.
 def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray, dim: int, method: str, tol: float,
                 max_iter: int, r: np.ndarray, warm: bool, rho_factor: float, counts: _Counts,
                 rho_err: np.ndarray | None = None, working_set: bool = True, float32_sweeps: bool = False,
-                holding: tuple[np.ndarray, np.ndarray] | None = None, held: _HeldBlock | None = None
-                ) -> tuple[np.ndarray, np.ndarray, float, float, int]:
+                holding: tuple[np.ndarray, np.ndarray] | None = None, held: _HeldBlock | None = None,
+                predictor: bool = GROSS_SLIP_PREDICTOR) -> tuple[np.ndarray, np.ndarray, float, float, int]:
     """The frictional problem in full dimension: (r, x, error, change, status), see :func:`solve` (``rho_err``:
     :func:`block_rho` of ``W``, computed here if None; ``holding``: the caller's (W, block_steps) whose working set's
-    block is held for the next solve, ``held``: the block held for them, see :class:`_HeldBlock`)."""
+    block is held for the next solve, ``held``: the block held for them, see :class:`_HeldBlock`; ``predictor``:
+    ``gross_slip_predictor``)."""
     rho_err = block_rho(W, dim) if rho_err is None else rho_err
     if warm:
         # A warm start from another problem may lie outside the cones.
@@ -1771,19 +2045,23 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
         x = np.empty(q.size)  # formed by the kernel on the rows it reads, complete on return
         nsgs = method == "nsgs"
         blocks = np.ascontiguousarray(_diag_blocks(W, dim)) if nsgs else np.zeros((1, dim, dim))
-        stats = np.zeros(4, dtype=np.int64)
-        held_member, held_block, held_block32 = (_nothing_held() if held is None
-                                                 else (held.member, held.block, held.block32))
-        counts.sweeps, err, change, status, member, block, block32 = _restricted_core(
+        stats = np.zeros(7, dtype=np.int64)
+        held_arrays = (_nothing_held() if held is None
+                       else (held.member, held.block, held.block32, held.loaded, held.factor))
+        counts.sweeps, err, change, status, member, block, block32, loaded, factor = _restricted_core(
             W, True, False, blocks, q, mu_arr, rho_err * (1.0 if nsgs else rho_factor), rho_err, dim, r, x, tol,
             max_iter, _REFRESH, nsgs, rho_factor if nsgs else 1.0, _SCAN_COS, _SCAN_SIN, NEAR_MARGIN, float32_sweeps,
-            stats, held_member, held_block, held_block32)
+            stats, *held_arrays[:3], predictor, *held_arrays[3:])
         counts.passes, counts.working_set, counts.joined = (int(v) for v in stats[:3])
+        counts.predicted, counts.predictor_steps = int(stats[4]), int(stats[5])
+        counts.sweeps -= counts.predictor_steps
         counts.block_held = held is not None and block is held.block
         if holding is not None and block.shape[0] > 0 and not counts.block_held:
-            _held[0] = _HeldBlock(holding[0], holding[1], member, block, block32)
-        elif counts.block_held and float32_sweeps and held.block32.shape[0] == 0:
-            held.block32 = block32
+            _held[0] = _HeldBlock(holding[0], holding[1], member, block, block32, loaded, factor)
+        elif counts.block_held:
+            if float32_sweeps and held.block32.shape[0] == 0:
+                held.block32 = block32
+            held.loaded, held.factor = loaded, factor
         if nsgs and status != 2 and not _in_cones(r, mu_arr, dim):
             # As after the full NSGS below: a rounding step outside the cones is projected if that is as good.
             rp = r.copy()

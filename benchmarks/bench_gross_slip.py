@@ -1,0 +1,152 @@
+"""A fretting cycle's local solves one by one at 1000-2000 3D contacts: the gross-slip predictor on and off.
+
+The problems: a cycle of the package's compiled loop (``cycling.run_increments``, displacement control, Archard
+k = 1e-4, each increment warm started from the one before) on the synthetic half-space W of the sphere's structure
+(``tests/support/local_problems.half_space``, as ``bench_loop_speed.py``: approach 1, contact radius a third of the
+grid's side, mu 0.8, slip 3.4 x cos over the cycle). Each increment's problem (its ``q`` from the loop's outputs,
+its warm start the answer of the increment before) is then solved again by ``local_solvers.solve`` (``uzawa``, tol
+1e-10, the working set with its block held, as the package solves), the predictor on (the default) and off
+(``gross_slip_predictor=False``), in turn increment by increment (the same set, so both sweep the held block);
+CPU time of each call (one thread), median of the repeats. An increment is *gross slip* when every loaded contact
+of its answer slides (``contact_states``); the others are the cycle's reversals (partial slip), where the
+predictor stops after a step and the sweeps answer.
+
+Usage (from the repository root)::
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_gross_slip.py --sides 32 38 45 --repeats 3 \\
+        --out /tmp/gross-slip/gross_slip
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import shlex
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+
+from _machine import cpu_model  # noqa: E402  (benchmarks/ is on sys.path when a script runs)
+from bench_loop_speed import APPROACH, MU, SLIP  # noqa: E402
+from support.local_problems import cycle_q, half_space, sphere_flat_cycle  # noqa: E402
+
+from dolfinx_fretting import local_solvers  # noqa: E402
+
+TOL = 1e-10  # the scenes' solver.local_tol
+
+
+def timed(W: np.ndarray, q: np.ndarray, r0: np.ndarray, steps: np.ndarray, predictor: bool
+          ) -> tuple[local_solvers.LocalResult, float]:
+    start = time.process_time()
+    result = local_solvers.solve(W, q, MU, 3, tol=TOL, r0=r0, block_steps=steps, gross_slip_predictor=predictor)
+    elapsed = time.process_time() - start
+    if not result.converged:
+        raise RuntimeError(result.message)
+    return result, elapsed
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sides", type=int, nargs="+", default=[32, 38, 45], help="contacts per side of the grid")
+    ap.add_argument("--increments", type=int, default=20)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--out", type=Path, default=Path("/tmp/gross-slip/gross_slip"))
+    args = ap.parse_args(argv)
+    command = ("OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_gross_slip.py"
+               + "".join(" " + shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])))
+    import numba
+
+    info = {"date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"), "cpu": cpu_model(),
+            "logical_cpus": os.cpu_count(), "python": platform.python_version(), "numpy": np.__version__,
+            "numba": numba.__version__, "load_start": list(os.getloadavg()), "repeats": args.repeats,
+            "increments": args.increments}
+    slips = SLIP * APPROACH * np.cos(2.0 * np.pi * np.arange(1, args.increments + 1) / args.increments)
+    records = []
+    for side in args.sides:
+        W, xy = half_space(side)
+        nc = xy.shape[0]
+        radius = (side / 3.0) ** 2 / APPROACH
+        cycle = sphere_flat_cycle(W, xy, radius, APPROACH, slips, mu=MU, wear=1e-4)
+        steps = local_solvers.block_rho(W, 3)
+        problems = [(cycle_q(cycle, j), cycle["r"][j - 1]) for j in range(1, args.increments)]
+        timed(W, *problems[0], steps, True)   # compiled (cached on disk), W touched, out of the timings
+        times = {True: np.zeros((args.repeats, len(problems))), False: np.zeros((args.repeats, len(problems)))}
+        results: dict[bool, list] = {True: [], False: []}
+        for repeat in range(args.repeats):
+            for j, (q, r0) in enumerate(problems):
+                for predictor in (True, False):
+                    result, times[predictor][repeat, j] = timed(W, q, r0, steps, predictor)
+                    if repeat == 0:
+                        results[predictor].append(result)
+        rows = []
+        for j, (q, _) in enumerate(problems):
+            on, off = results[True][j], results[False][j]
+            states = local_solvers.contact_states(on.r, on.x, MU, 3)
+            loaded = on.r[0::3] > 0
+            rows.append({"increment": j + 1, "loaded": int(loaded.sum()), "working_set": on.working_set,
+                         "gross_slip": bool(np.all(states[loaded] == local_solvers.SLIP)),
+                         "stick": int(np.sum(states == local_solvers.STICK)),
+                         "on_s": float(np.median(times[True][:, j])), "off_s": float(np.median(times[False][:, j])),
+                         "on_steps": on.predictor_steps, "on_sweeps": on.sweeps, "off_sweeps": off.sweeps,
+                         "difference": float(np.abs(on.r - off.r).max() / np.abs(off.r).max()),
+                         "error_on": float(local_solvers.natural_map_error(W, q, on.r, MU, 3))})
+        gross = [row for row in rows if row["gross_slip"]]
+        record = {"nc": nc, "W_mb": W.nbytes / 2**20, "rows": rows,
+                  "gross_on_ms": 1e3 * float(np.median([row["on_s"] for row in gross])) if gross else None,
+                  "gross_off_ms": 1e3 * float(np.median([row["off_s"] for row in gross])) if gross else None,
+                  "gross_max_on_ms": 1e3 * max(row["on_s"] for row in gross) if gross else None,
+                  "cycle_on_ms": 1e3 * float(np.mean([row["on_s"] for row in rows])),
+                  "cycle_off_ms": 1e3 * float(np.mean([row["off_s"] for row in rows]))}
+        records.append(record)
+        print(f"{nc} contacts: gross slip {len(gross)} of {len(rows)} increments, median {record['gross_on_ms']:.3g} "
+              f"ms (off {record['gross_off_ms']:.3g} ms), cycle mean {record['cycle_on_ms']:.3g} ms (off "
+              f"{record['cycle_off_ms']:.3g} ms)", flush=True)
+        info["load_end"] = list(os.getloadavg())
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.with_suffix(".json").write_text(json.dumps({"command": command, "machine": info,
+                                                             "results": records}, indent=1) + "\n")
+        args.out.with_suffix(".md").write_text(markdown(command, info, records))
+    print(f"wrote {args.out.with_suffix('.md')}")
+    return 0
+
+
+def markdown(command: str, info: dict, records: list[dict]) -> str:
+    L = ["## A cycle's local solves one by one: the gross-slip predictor (half-space, uzawa, tol 1e-10)", "",
+         f"Command (from the repository root): `{command}`", "",
+         f"- date: {info['date']}; machine: {info['cpu']}, {info['logical_cpus']} logical CPUs shared with other "
+         f"jobs; Python {info['python']}, numpy {info['numpy']}, numba {info['numba']}",
+         f"- load average (1, 5, 15 min) at start {', '.join(f'{v:.2f}' for v in info['load_start'])}, at end "
+         f"{', '.join(f'{v:.2f}' for v in info['load_end'])}",
+         f"- the increments 1-{info['increments'] - 1} of a cycle of {info['increments']} (slip {SLIP:g} x cos, mu "
+         f"{MU:g}), each from the answer of the one before; CPU time of `local_solvers.solve` per increment, median "
+         f"of {info['repeats']} repeats, the predictor on and off in turn", "",
+         "| contacts | W | gross-slip increments | their median: on | off | their slowest: on | cycle mean: on | off "
+         "|", "|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for rec in records:
+        gross = sum(row["gross_slip"] for row in rec["rows"])
+        L.append(f"| {rec['nc']} | {rec['W_mb']:.0f} MB | {gross} of {len(rec['rows'])} | "
+                 f"{rec['gross_on_ms']:.3g} ms | {rec['gross_off_ms']:.3g} ms | {rec['gross_max_on_ms']:.3g} ms | "
+                 f"{rec['cycle_on_ms']:.3g} ms | {rec['cycle_off_ms']:.3g} ms |")
+    L += ["", "Per increment (predictor on: steps + sweeps; off: sweeps; the answers' largest difference relative to the "
+          "largest force; the natural-map error of the answer on the whole problem, recomputed):", "",
+          "| contacts | increment | loaded | set | sticking | gross slip | on | off | on: steps + sweeps | off: sweeps "
+          "| difference | error |", "|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"]
+    for rec in records:
+        for row in rec["rows"]:
+            L.append(f"| {rec['nc']} | {row['increment']} | {row['loaded']} | {row['working_set']} | {row['stick']} | "
+                     f"{'yes' if row['gross_slip'] else 'no'} | {1e3 * row['on_s']:.3g} ms | "
+                     f"{1e3 * row['off_s']:.3g} ms | {row['on_steps']} + {row['on_sweeps']} | {row['off_sweeps']} | "
+                     f"{row['difference']:.1e} | {row['error_on']:.1e} |")
+    return "\n".join(L) + "\n"
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,141 @@
+"""The gross-slip predictor of the 3D working-set solve (``local_solvers._gross_slip_predictor``, on by default in
+``local_solvers.solve`` and the compiled cycle loops).
+
+References independent of the predictor: the natural-map error recomputed on the whole problem
+(:func:`natural_map_error`), the sweeps alone (``gross_slip_predictor=False``), and, for like half-spaces (no
+normal-tangential coupling in W), the frictionless normal forces: in gross slip every loaded contact slides, and
+with ``W_nt = 0`` the normal rows do not see the tangential forces, so the normal forces are those of the
+frictionless problem (Johnson, Contact Mechanics, section 7.1: like materials uncouple the normal and tangential
+problems), and each tangential force is ``mu r_n`` against the slip.
+"""
+
+import numpy as np
+import pytest
+from support.local_problems import cycle_q, half_space, sphere_flat_cycle, sphere_flat_q
+
+from dolfinx_fretting import local_solvers as ls
+from dolfinx_fretting.local_solvers import natural_map_error, solve
+
+TOL = 1e-10  # the scenes' solver.local_tol
+MU = 0.5
+# Two answers that both meet the natural-map tolerance 1e-10 are different points within it: on these half-spaces
+# they differ by up to ~1e-8 of the largest force (measured 2e-9 - 1.1e-8 over the sphere's cycles at 256 and 2025
+# contacts); 1e-7 leaves a margin of ~10 and still fails a predictor off by a sign or a missing term (those miss by
+# 1e-2 and more, or never converge).
+SAME_ANSWER = 1e-7
+
+
+@pytest.fixture(scope="module")
+def sphere_flat():
+    W, xy = half_space()
+    assert np.array_equal(W, W.T)  # exactly symmetric, as the package's W (the predictor factors W_nn)
+    return W, xy
+
+
+def _gross_slip_increment(W, xy):
+    """An increment of gross slip from the one before (the whole contact slides, at slip 0.6 > mu's reach)."""
+    r_before = solve(W, sphere_flat_q(xy, 40.0, 0.5, 0.6), MU, 3, tol=TOL, gross_slip_predictor=False).r
+    return sphere_flat_q(xy, 40.0, 0.5, 1.2), r_before
+
+
+def test_gross_slip_answered_by_the_predictor(sphere_flat):
+    """A gross-slip increment: the predictor answers alone (no sweep) within the tolerance on the whole problem;
+    its normal forces are the frictionless problem's and its tangential forces mu r_n against the slip (like
+    half-spaces, module docstring); the sweeps alone give the same answer to the tolerance's effect."""
+    W, xy = sphere_flat
+    q, r0 = _gross_slip_increment(W, xy)
+    result = solve(W, q, MU, 3, tol=TOL, r0=r0)
+    assert result.converged and result.predictor_steps >= 1 and result.sweeps == 0, result.message
+    assert result.iterations == result.predictor_steps
+    assert natural_map_error(W, q, result.r, MU, 3) < TOL
+    normal, tangential = result.r[0::3], result.r.reshape(-1, 3)[:, 1:]
+    loaded = normal > 0
+    assert loaded.sum() > 50  # a contact zone, not a handful of nodes
+    frictionless = solve(W, q, 0.0, 3, tol=TOL).r[0::3]
+    scale = normal.max()
+    assert np.abs(normal - frictionless).max() <= SAME_ANSWER * scale
+    slip = result.x.reshape(-1, 3)[loaded, 1:]
+    against = -MU * normal[loaded, None] * slip / np.linalg.norm(slip, axis=1)[:, None]
+    assert np.abs(tangential[loaded] - against).max() <= SAME_ANSWER * scale
+    sweeps = solve(W, q, MU, 3, tol=TOL, r0=r0, gross_slip_predictor=False)
+    assert sweeps.converged and sweeps.predictor_steps == 0
+    assert np.abs(result.r - sweeps.r).max() <= SAME_ANSWER * scale
+
+
+def test_partial_slip_left_to_the_sweeps(sphere_flat):
+    """Partial slip (Cattaneo-Mindlin: a small tangential displacement, the contact sticks but for an annulus),
+    started from the gross-slip answer: the predictor, which lets every loaded contact slide, stops after a step
+    or two, and the sweeps answer from its best iterate: within the tolerance on the whole problem, the sweeps'
+    own answer to the tolerance's effect."""
+    W, xy = sphere_flat
+    r0 = solve(W, sphere_flat_q(xy, 40.0, 0.5, 1.2), MU, 3, tol=TOL).r
+    q = sphere_flat_q(xy, 40.0, 0.5, 0.05)
+    result = solve(W, q, MU, 3, tol=TOL, r0=r0)
+    states = ls.contact_states(result.r, result.x, MU, 3)
+    assert np.sum(states == ls.STICK) > 10  # partial slip indeed
+    assert result.converged and 1 <= result.predictor_steps <= 2 and result.sweeps > 0, result.message
+    assert natural_map_error(W, q, result.r, MU, 3) < TOL
+    sweeps = solve(W, q, MU, 3, tol=TOL, r0=r0, gross_slip_predictor=False)
+    assert np.abs(result.r - sweeps.r).max() <= SAME_ANSWER * result.r[0::3].max()
+
+
+def test_not_tried_on_a_W_it_cannot_factor(sphere_flat):
+    """A W whose normal block is not symmetric (the Cholesky factor would read one triangle of it) or the 2D
+    problem: the predictor takes no step, the sweeps answer as with it off, to the last bit."""
+    W, xy = sphere_flat
+    q, r0 = _gross_slip_increment(W, xy)
+    skewed = W.copy()
+    skewed[0::3, 0::3] += 1e-3 * np.triu(W[0::3, 0::3], 1)  # still positive definite, no longer symmetric
+    on = solve(skewed, q, MU, 3, tol=TOL, r0=r0)
+    off = solve(skewed, q, MU, 3, tol=TOL, r0=r0, gross_slip_predictor=False)
+    assert on.converged and on.predictor_steps == 0 and np.array_equal(on.r, off.r)
+
+
+def test_compiled_loop_gross_slip_by_the_predictor(sphere_flat):
+    """The compiled cycle loop (the package's fretting cycles): its gross-slip increments take a few predictor
+    steps where the sweeps alone take tens (measured 4-8 against ~27 on these problems), and every increment's
+    answer meets the tolerance on its own whole problem; the loop holding its block and factor gives the bits of
+    the loop that gathers and factors at every solve."""
+    W, xy = sphere_flat
+    slips = 1.2 * np.cos(2.0 * np.pi * np.arange(1, 13) / 12)
+    held = sphere_flat_cycle(W, xy, 40.0, 0.5, slips, wear=1e-3)
+    gathered = sphere_flat_cycle(W, xy, 40.0, 0.5, slips, wear=1e-3, hold_block=False)
+    assert held["done"] == slips.size and held["status"] == 1
+    for name in ("r", "x", "y", "wear_gap", "rows"):
+        assert np.array_equal(held[name], gathered[name]), name
+    iterations = held["rows"][:, -2]
+    sliding = [j for j in range(1, slips.size) if np.all(held["states"][j][held["r"][j][0::3] > 0] == ls.SLIP)]
+    assert len(sliding) >= 4
+    for j in sliding:
+        q = cycle_q(held, j)
+        assert natural_map_error(W, q, held["r"][j], MU, 3) < TOL
+    assert np.median(iterations[sliding]) <= 10, iterations
+
+
+def test_factor_held_only_for_its_loaded_set(sphere_flat):
+    """The factor held from an earlier call is used only for the very loaded contacts it was made for: held for
+    another set of the same size (here: a wrong factor, the identity), the call factors anew and answers as a call
+    with nothing held, to the bit; held for its own set, it is used (no factorisation) with the same answer."""
+    W, xy = sphere_flat
+    q, r0 = _gross_slip_increment(W, xy)
+    Wa = np.ascontiguousarray(W.T)   # the working set = every contact
+    nc = xy.shape[0]
+    rho = ls.block_rho(W, 3)
+    scale = ls._force_scale(q, np.full(nc, MU), rho, 3)
+    contacts = np.arange(nc)
+    loaded = contacts[r0[0::3] > 0]
+    others = (loaded + 1) % nc
+    assert not np.array_equal(others, loaded)
+
+    def call(held_loaded, held_factor):
+        r, x, stats = r0.copy(), W @ r0 + q, np.zeros(3, dtype=np.int64)
+        outcome, err, steps, key, factor = ls._gross_slip_predictor(
+            Wa, q, np.full(nc, MU), rho, scale, contacts, r, x, TOL, held_loaded, held_factor, stats)
+        return outcome, r, stats, key, factor
+
+    fresh = call(np.zeros(0, dtype=np.int64), np.zeros((0, 0)))
+    assert fresh[0] == 1 and fresh[2][2] == 1 and np.array_equal(fresh[3], loaded)
+    stale = call(others, np.eye(loaded.size))
+    assert stale[2][2] == 1 and np.array_equal(stale[1], fresh[1])
+    own = call(fresh[3], fresh[4])
+    assert own[2][2] == 0 and own[4] is fresh[4] and np.array_equal(own[1], fresh[1])
