@@ -19,9 +19,9 @@ from dolfinx_fretting.local_solvers import natural_map_error, solve
 TOL = 1e-10  # the scenes' solver.local_tol
 MU = 0.5
 # Two answers that both meet the natural-map tolerance 1e-10 are different points within it: on these half-spaces
-# they differ by up to ~1e-8 of the largest force (measured 2e-9 - 1.1e-8 over the sphere's cycles at 256 and 2025
-# contacts); 1e-7 leaves a margin of ~10 and still fails a predictor off by a sign or a missing term (those miss by
-# 1e-2 and more, or never converge).
+# they differ by up to ~1e-8 of the largest force (measured up to 1.7e-8 over the sphere's cycles at 400-2025
+# contacts, benchmarks/results/gross_slip.md); 1e-7 leaves a margin of ~6 and still fails a predictor off by a sign
+# or a missing term (those miss by 1e-2 and more, or never converge).
 SAME_ANSWER = 1e-7
 
 
