@@ -29,6 +29,7 @@ import sys
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,8 +63,6 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     command = ("OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_gross_slip.py"
                + "".join(" " + shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])))
-    import numba
-
     info = {"date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"), "cpu": cpu_model(),
             "logical_cpus": os.cpu_count(), "python": platform.python_version(), "numpy": np.__version__,
             "numba": numba.__version__, "load_start": list(os.getloadavg()), "repeats": args.repeats,
@@ -135,8 +134,8 @@ def markdown(command: str, info: dict, records: list[dict]) -> str:
         L.append(f"| {rec['nc']} | {rec['W_mb']:.0f} MB | {gross} of {len(rec['rows'])} | "
                  f"{rec['gross_on_ms']:.3g} ms | {rec['gross_off_ms']:.3g} ms | {rec['gross_max_on_ms']:.3g} ms | "
                  f"{rec['cycle_on_ms']:.3g} ms | {rec['cycle_off_ms']:.3g} ms |")
-    L += ["", "Per increment (predictor on: steps + sweeps; off: sweeps; the answers' largest difference relative to the "
-          "largest force; the natural-map error of the answer on the whole problem, recomputed):", "",
+    L += ["", "Per increment (predictor on: steps + sweeps; off: sweeps; the answers' largest difference relative to "
+          "the largest force; the natural-map error of the answer on the whole problem, recomputed):", "",
           "| contacts | increment | loaded | set | sticking | gross slip | on | off | on: steps + sweeps | off: sweeps "
           "| difference | error |", "|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"]
     for rec in records:

@@ -58,8 +58,8 @@ import numba
 import numpy as np
 
 from .loading import FORCE_SWEEPS
-from .local_solvers import (GROSS_SLIP_PREDICTOR, NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _nothing_held, _recompute_x,
-                            _restricted_core)
+from .local_solvers import (GROSS_SLIP_PREDICTOR, NEAR_MARGIN, _error, _force_scale, _lcp_kernel, _nothing_held,
+                            _recompute_x, _restricted_core)
 from .wear import ROW_FIELDS, commit_increment
 
 __all__ = ["run_increments", "run_force_increments", "ActivePatternCache", "FrictionEvolution", "N_ROW",
@@ -384,20 +384,22 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
                  float32_sweeps: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
     """One local solve of increment ``j`` from the warm start ``r`` (in/out; ``x`` out): the exact answer when no
     contact penetrates, else the cached contact pattern (``active``), else the Uzawa sweeps (on the normal rows
-    alone when ``normal_only``; ``Wn`` their W; else on the working set, as ``local_solvers.solve``'s default).
-    ``xs``, ``qn``, ``rn``, ``xn``: work arrays.
+    alone when ``normal_only``; ``Wn`` their W; else on the working set, as ``local_solvers.solve``'s default: in
+    3D the gross-slip predictor first, ``local_solvers.GROSS_SLIP_PREDICTOR``). ``xs``, ``qn``, ``rn``, ``xn``: work
+    arrays.
 
-    ``held``: the working set, its ``(W_AA)^T`` and float32 copy of an earlier solve of this call of the loop
-    (``local_solvers._nothing_held`` at first): the sweeps use the block again while the set is the same, instead
-    of gathering it from W (its cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is fixed within a
-    call of the loop (no loop changes it; a new W is a new call, which starts with nothing held): the same values,
-    so the same bits. ``hold_block`` False: nothing is held (the block gathered at every solve). ``counts`` of 5
+    ``held``: the working set, its ``(W_AA)^T`` and float32 copy, and the gross-slip predictor's loaded contacts and
+    Cholesky factor, of an earlier solve of this call of the loop (``local_solvers._nothing_held`` at first): the
+    sweeps use the block again while the set is the same, the predictor its factor while the loaded contacts are,
+    instead of gathering and factoring again (cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is
+    fixed within a call of the loop (no loop changes it; a new W is a new call, which starts with nothing held): the
+    same values, so the same bits. ``hold_block`` False: nothing is held (the block gathered at every solve). ``counts`` of 5
     entries (an :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those
     that gathered one in ``counts[4]`` (a shorter ``counts``, finite sliding's 3, gets neither). ``float32_sweeps``:
     the sweeps' updates of x read a float32 copy of the block (held beside it), as
     ``local_solvers.solve(..., float32_sweeps=True)``.
 
-    Returns (sweeps, error, local status: 1 converged, what is held for the next solve)."""
+    Returns (sweeps and predictor steps, error, local status: 1 converged, what is held for the next solve)."""
     m = q.size
     nc = mu.size
     empty_i = np.zeros(1, dtype=np.int64)
@@ -459,8 +461,7 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
         its, err, change, status, member, block, block32, loaded, factor = _restricted_core(
             Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0, empty_f,
-            empty_f, NEAR_MARGIN, float32_sweeps, working_stats, held[0], held[1], held[2], GROSS_SLIP_PREDICTOR,
-            held[3], held[4])
+            empty_f, NEAR_MARGIN, float32_sweeps, working_stats, GROSS_SLIP_PREDICTOR, *held)
         if counts.size >= 5:
             counts[3] += 1 if working_stats[3] > 0 else 0
             counts[4] += 1 if working_stats[3] < working_stats[0] else 0

@@ -735,7 +735,7 @@ NEAR_MARGIN = 0.05
 
 #: The 3D working-set Uzawa solve (:func:`solve`'s default and the compiled cycle loops) first tries
 #: :func:`_gross_slip_predictor` on each pass. Its answer meets the same criterion as the sweeps' but is another
-#: point within it (r within ~1e-8 of the sweeps' on the sphere's problems at tol 1e-10).
+#: point within it (r within 1.8e-8 of the sweeps' on the sphere's half-space cycles at tol 1e-10).
 #: (The compiled cycle loop reads it when numba compiles cycling.py: clear its cache after changing it.)
 GROSS_SLIP_PREDICTOR = True
 
@@ -776,12 +776,12 @@ def _gather_block(A: np.ndarray, by_rows: bool, rows: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------------------------------------
 # Gross-slip predictor: the normal forces solved exactly, the slip directions by fixed point
 # ----------------------------------------------------------------------------------------------------------
-#: The predictor stops when a step does not divide the error by at least 2 (stick, a reversal, a contact opening
-#: or closing): the sweeps go on from its best iterate.
+#: The predictor stops when a step does not divide the best error by at least 2 (stick, a reversal, a contact
+#: opening or closing): the sweeps go on from its best output, or from its start when none halved the error.
 PREDICTOR_CONTRACTION = 0.5
-#: At most this many predictor steps a pass (~1.5 sweeps' reads of ``W_AA`` each).
+#: At most this many predictor steps a pass (a step costs ~1.8 sweeps at 2025 contacts: gross_slip.md).
 PREDICTOR_STEPS = 20
-#: Steps Anderson's mixing combines (:func:`_anderson_mix`).
+#: Anderson's mixing (:func:`_anderson_mix`) combines the last ``PREDICTOR_DEPTH + 1`` outputs (that many differences).
 PREDICTOR_DEPTH = 4
 
 
@@ -849,9 +849,9 @@ def _anderson_mix(outputs: np.ndarray, residuals: np.ndarray, outputs_x: np.ndar
 
 @numba.njit(cache=True)
 def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err: np.ndarray, scale: float,
-                          contacts: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float,
+                          contacts: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_steps: int,
                           held_loaded: np.ndarray, held_factor: np.ndarray, stats: np.ndarray
-                          ) -> tuple[int, float, int, np.ndarray, np.ndarray]:
+                          ) -> tuple[int, float, int, float, np.ndarray, np.ndarray]:
     """Steps towards the answer of a 3D sub-problem in gross slip, cheaper than the sweeps there.
 
     ``Wa = (W_AA)^T`` C-contiguous (``W`` symmetric), ``q``, ``mu``, ``rho_err``, ``r``, ``x = W_AA r + q`` (exact)
@@ -862,22 +862,25 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
       factor of ``W_LL``, the normal block of the loaded contacts);
     - puts each on its cone against its slip, ``r_t = -mu r_n x_t / |x_t|`` (De Saxce's law for a sliding
       contact), and forms ``x`` exactly: the step's output, whose error is measured;
-    - mixes the outputs of the last ``PREDICTOR_DEPTH`` steps (Anderson, :func:`_anderson_mix`) into the next
-      step's input (the loaded contacts' forces, and ``x`` as the same mix of the outputs' exact ones).
+    - mixes the last ``PREDICTOR_DEPTH + 1`` outputs (Anderson, :func:`_anderson_mix`) into the next step's input
+      (the loaded contacts' forces, and ``x`` as the same mix of the outputs' exact ones).
 
     A sliding contact with ``x_n = 0`` and ``r_t`` so directed is an exact zero of the natural map, so in gross
-    slip the error falls as the normal forces and the directions settle (4-5 steps from the increment before on
-    the sphere's half-space problems at mu 0.8, where the sweeps take ~20: benchmarks/results/gross_slip.md).
+    slip the error falls as the normal forces and the directions settle: on the sphere's half-space cycle at mu 0.8
+    (benchmarks/results/gross_slip.md) 4-5 steps from the increment before where the sweeps take ~20 (7-8 at the
+    first increment after a reversal; near the stroke's end, where the slip slows, 2 steps and the sweeps finish).
     Where a contact sticks, opens or closes at the answer it does not: the predictor stops at the first output
     that does not divide the best error by ``1 / PREDICTOR_CONTRACTION``, at the tolerance, at a negative normal
-    force, at a loaded contact without slip (``x_t = 0``), or after ``PREDICTOR_STEPS``; ``r``, ``x`` are then
-    the best of the start and the outputs (the start unless an output did better): inside the cones, ``x`` exact.
+    force, at a loaded contact without slip (``x_t = 0``), or after ``max_steps``; ``r``, ``x`` are then the last
+    output that halved the error, or the start (then untouched: the sweeps' own iterates follow): inside the
+    cones, ``x`` exact.
 
     ``held_loaded``/``held_factor``: the loaded contacts (indices in the whole problem) and the factor of an
     earlier call on the same ``W`` (the caller vouches): used again while the loaded set is the same.
     ``stats`` (int64, 3) gets: calls that stepped, steps, factorisations.
-    Returns (1 converged / 0 not, error, steps, the loaded contacts and factor to hold: the held ones, a new
-    pair, or empty arrays when no factor was made).
+    Returns (1 converged / 0 not, error, steps, the relative change of ``r`` of the last step kept (eq. 34, as the
+    sweeps report it; 0 if none), the loaded contacts and factor to hold: the held ones, a new pair, or empty arrays
+    when no factor was made).
     """
     na = mu.size
     nothing_i = np.zeros(0, dtype=np.int64)
@@ -887,14 +890,14 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
         if r[3 * a] > 0.0:
             count += 1
     if count == 0:
-        return 0, 0.0, 0, held_loaded, held_factor
+        return 0, 0.0, 0, 0.0, held_loaded, held_factor
     loaded = np.empty(count, dtype=np.int64)   # positions in the set
     k = 0
     for a in range(na):
         o = 3 * a
         if r[o] > 0.0:
             if x[o + 1] == 0.0 and x[o + 2] == 0.0:   # no direction to slide in
-                return 0, 0.0, 0, held_loaded, held_factor
+                return 0, 0.0, 0, 0.0, held_loaded, held_factor
             loaded[k] = a
             k += 1
     key = contacts[loaded]
@@ -915,11 +918,11 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
         for i in range(count):   # Cholesky reads one triangle: a W that is not symmetric is not for it
             for j in range(i):
                 if block[i, j] != block[j, i]:
-                    return 0, 0.0, 0, nothing_i, nothing_f
+                    return 0, 0.0, 0, 0.0, nothing_i, nothing_f
         try:
             factor = np.linalg.cholesky(block)
         except Exception:  # not positive definite (a rank-deficient W): the sweeps' business
-            return 0, 0.0, 0, nothing_i, nothing_f
+            return 0, 0.0, 0, 0.0, nothing_i, nothing_f
         stats[2] += 1
     stats[0] += 1
     err = _error(r, x, mu, rho_err, 3, scale)
@@ -930,14 +933,15 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
     steps = 0
     empty_i = np.zeros(1, dtype=np.int64)
     empty_f = np.zeros(1)
-    # Anderson mixing of the steps (history of PREDICTOR_DEPTH): the steps' outputs, their exact x and residuals.
-    ml = 3 * count
-    outputs = np.zeros((PREDICTOR_DEPTH + 1, ml))
-    residuals = np.zeros((PREDICTOR_DEPTH + 1, ml))
+    # Anderson's mixing: ring buffers of the last PREDICTOR_DEPTH + 1 outputs, their exact x and their residuals.
+    loaded_rows = 3 * count
+    outputs = np.zeros((PREDICTOR_DEPTH + 1, loaded_rows))
+    residuals = np.zeros((PREDICTOR_DEPTH + 1, loaded_rows))
     outputs_x = np.zeros((PREDICTOR_DEPTH + 1, x.size))
-    inputs = np.empty(ml)
+    inputs = np.empty(loaded_rows)
     stored = 0
-    while steps < PREDICTOR_STEPS:
+    change = 0.0
+    while steps < max_steps:
         for i in range(count):
             o = 3 * loaded[i]
             for c in range(3):
@@ -965,14 +969,20 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
             r[o + 2] = -mu[a] * rn[i] * x[o + 2] / slip
         _recompute_x(Wa, empty_i, empty_i, empty_f, False, q, r, x)
         err = _error(r, x, mu, rho_err, 3, scale)
-        if not math.isfinite(err):
-            break
-        improved = err < PREDICTOR_CONTRACTION * best
-        if err < best:
-            best = err
-            best_r[:] = r
-            best_x[:] = x
-        if err < tol or not improved:
+        if not (err < tol or err < PREDICTOR_CONTRACTION * best):   # NaN included
+            break   # the sweeps start from the best output that halved the error, or from the start
+        best = err
+        best_r[:] = r
+        best_x[:] = x
+        moved = 0.0
+        size = 0.0
+        for i in range(count):
+            o = 3 * loaded[i]
+            for c in range(3):
+                moved += (r[o + c] - inputs[3 * i + c]) ** 2
+                size += r[o + c] ** 2
+        change = math.sqrt(moved) / max(math.sqrt(size), 1e-300)   # eq. (34) of the step, as the sweeps report it
+        if err < tol:
             break
         slot = stored % (PREDICTOR_DEPTH + 1)
         for i in range(count):
@@ -994,15 +1004,15 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
     stats[1] += steps
     r[:] = best_r
     x[:] = best_x
-    return (1 if best < tol else 0), best, steps, key, factor
+    return (1 if best < tol else 0), best, steps, change, key, factor
 
 
 @numba.njit(cache=True)
 def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.ndarray, q: np.ndarray, mu: np.ndarray,
                      rho: np.ndarray, rho_err: np.ndarray, dim: int, r: np.ndarray, x: np.ndarray, tol: float,
                      max_iter: int, refresh: int, nsgs: bool, omega: float, scan_c: np.ndarray, scan_s: np.ndarray,
-                     margin_factor: float, single: bool, stats: np.ndarray, held_member: np.ndarray,
-                     held_block: np.ndarray, held_block32: np.ndarray, predict: bool, held_loaded: np.ndarray,
+                     margin_factor: float, single: bool, stats: np.ndarray, predict: bool,
+                     held_member: np.ndarray, held_block: np.ndarray, held_block32: np.ndarray, held_loaded: np.ndarray,
                      held_factor: np.ndarray
                      ) -> tuple[int, float, float, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Uzawa (``nsgs`` False) or NSGS sweeps on the working set only, with a final check on all contacts.
@@ -1149,13 +1159,14 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
             contacts = np.empty(na, dtype=np.int64)
             for k in range(na):
                 contacts[k] = rows[k * dim] // dim
-            outcome, err, steps, held_loaded, held_factor = _gross_slip_predictor(
-                Wa, qa, mua, rho_erra, scale, contacts, ra, xa, tol, held_loaded, held_factor, stats[4:])
+            outcome, predicted_err, steps, predicted_change, held_loaded, held_factor = _gross_slip_predictor(
+                Wa, qa, mua, rho_erra, scale, contacts, ra, xa, tol, min(PREDICTOR_STEPS, left), held_loaded,
+                held_factor, stats[4:])
             total += steps
             predicted = outcome == 1
             left = max_iter - total
         if predicted:
-            its, change, status = 0, 0.0, 1
+            its, err, change, status = 0, predicted_err, predicted_change, 1
         elif left <= 0:
             its, status = 0, 0
         elif nsgs and single:
@@ -1692,7 +1703,6 @@ class _Counts:
     working_set: int = 0
     joined: int = 0
     block_held: bool = False
-    predicted: int = 0
     predictor_steps: int = 0
 
     @property
@@ -1940,14 +1950,16 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         hold_block: With ``block_steps`` and ``working_set``: use the block held from the previous solve on this
             ``W`` and hold this solve's for the next (see ``block_steps``). False: neither (the block is gathered
             and ``W`` checked at this solve, and what is held is left as it is).
-        gross_slip_predictor: 3D ``"uzawa"`` with ``working_set`` on a symmetric ``W``: each pass first tries a
-            predictor made for gross slip, when every loaded contact of its start slides: the loaded contacts'
-            normal forces solved exactly (a Cholesky factor of their ``W_nn``, held with the block) with the
-            tangential forces held, each put on its cone against its slip, ``x`` formed exactly, again while the
-            error falls at least twofold a step (:func:`_gross_slip_predictor`). The sweeps go on from its best
-            iterate if it does not reach the tolerance. Same stopping criterion; the answer is another point
-            within it (not the sweeps' bits). In gross slip it replaces ~27 sweeps by 4-8 steps of ~1.5 sweeps'
-            cost each (benchmarks/results/loop_speed.md). False: the sweeps alone.
+        gross_slip_predictor: 3D ``"uzawa"`` with ``working_set`` on a symmetric ``W`` whose loaded contacts'
+            normal block is positive definite: each pass first takes the loaded contacts to slide: their normal
+            forces solved exactly (a Cholesky factor of their ``W_nn``, held with the block) with the tangential
+            forces held, each put on its cone against its slip, ``x`` formed exactly, the last outputs mixed
+            (Anderson), again while each output halves the error (:func:`_gross_slip_predictor`); the sweeps go
+            on from its last output if it stops short of the tolerance (stick, a reversal), from the start if
+            its first output did not halve the error. Same stopping criterion, same ``max_iter`` (steps count
+            as iterations, :attr:`LocalResult.predictor_steps`); the answer is another point within the
+            tolerance, not the sweeps' bits. In gross slip 4-5 steps (~1.8 sweeps' cost each at 2025 contacts)
+            where the sweeps take ~20 (benchmarks/results/gross_slip.md). False: the sweeps alone.
 
     Returns:
         A :class:`LocalResult`. ``converged`` is False (with a message) when ``max_iter`` is reached or a
@@ -2001,6 +2013,9 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
     unit = {"uzawa": "sweeps", "nsgs": "sweeps"}.get(method, "iterations")
     gs = "projected Gauss-Seidel" if normal_only else "NSGS"
     detail = "" if method in ("uzawa", "nsgs") else f" ({counts.sweeps} {gs} sweeps, {counts.steps} Newton steps)"
+    if counts.predictor_steps:
+        unit = "iterations"
+        detail = f" ({counts.sweeps} sweeps, {counts.predictor_steps} gross-slip predictor steps)"
     detail += " on the normal problem (mu = 0)" if normal_only else ""
     if converged:
         message = f"converged in {its} {unit}{detail}: error {err:.3e} < tol {tol:.1e}"
@@ -2051,9 +2066,9 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
         counts.sweeps, err, change, status, member, block, block32, loaded, factor = _restricted_core(
             W, True, False, blocks, q, mu_arr, rho_err * (1.0 if nsgs else rho_factor), rho_err, dim, r, x, tol,
             max_iter, _REFRESH, nsgs, rho_factor if nsgs else 1.0, _SCAN_COS, _SCAN_SIN, NEAR_MARGIN, float32_sweeps,
-            stats, *held_arrays[:3], predictor, *held_arrays[3:])
+            stats, predictor, *held_arrays)
         counts.passes, counts.working_set, counts.joined = (int(v) for v in stats[:3])
-        counts.predicted, counts.predictor_steps = int(stats[4]), int(stats[5])
+        counts.predictor_steps = int(stats[5])
         counts.sweeps -= counts.predictor_steps
         counts.block_held = held is not None and block is held.block
         if holding is not None and block.shape[0] > 0 and not counts.block_held:
