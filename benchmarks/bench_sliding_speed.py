@@ -90,8 +90,12 @@ def main() -> None:
         here, there = runs[f"{trees[0]}|finite"], runs[f"{trees[1]}|finite"]
         same = all(a[k] == b[k] for a, b in zip(here, there)
                    for k in ("repairs", "max_wear_depth", "dissipated_energy", "max_pressure"))
+        # how far apart, where they differ (a change of the local solve moves them at its tolerance's level)
+        apart = ", ".join(f"{k} {max(abs(a[k] - b[k]) / abs(b[k]) for a, b in zip(here, there)):.1e}"
+                          for k in ("max_wear_depth", "dissipated_energy", "max_pressure"))
         lines += ["", f"The finite-sliding summaries of both trees (repairs, max_wear_depth, dissipated_energy, "
-                  f"max_pressure): {'identical' if same else 'DIFFERENT'}."]
+                  f"max_pressure): {'identical' if same else 'DIFFERENT'}; largest relative differences: {apart}; "
+                  f"repairs {here[0]['repairs']} / {there[0]['repairs']}."]
     text = "\n".join(lines) + "\n"
     print(text)
     Path(args.out).with_suffix(".md").write_text(text)

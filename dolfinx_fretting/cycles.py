@@ -186,7 +186,7 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
                     out_x[part], out_y[part], out_wear[part], out_states[part], rows[part], found[part],
                     solves[part], active, cache.pattern[part], cache.lu[part], cache.piv[part], cache.lu_ok[part],
                     cache.counts, failure, last_force, cache.factor_mu[part], *evolution.arguments(),
-                    *HELD_BLOCK_ARGUMENTS)
+                    *HELD_BLOCK_ARGUMENTS, False)
             else:
                 done, status, err = run_increments(
                     Wc, rho, mu, dim, contact_set.gap0, wear_gap, G, D[part], Q, S[part], contact_set.tributary,
@@ -194,7 +194,7 @@ def compiled_cycle(operators: ContactOperators, solver: LocalSolver, laws: tuple
                     local_solvers._REFRESH, True, out_r[part], out_x[part], out_y[part], out_wear[part],
                     out_states[part], rows[part], active, cache.pattern[part], cache.lu[part], cache.piv[part],
                     cache.lu_ok[part], cache.counts, cache.factor_mu[part], *evolution.arguments(),
-                    *HELD_BLOCK_ARGUMENTS)
+                    *HELD_BLOCK_ARGUMENTS, False)
             if done < part.stop - part.start:
                 step = part.start + done + 1
                 if status > 2:

@@ -29,6 +29,13 @@ is accepted only if it meets the same natural-map tolerance as the Uzawa iterati
 rounding); otherwise the Uzawa sweeps start from it. Patterns change rarely once the wear is under way,
 so most increments cost one triangular solve and one residual check.
 
+Finite sliding's loop (W changes with every pairing, so nothing can be cached per increment) tries instead the
+pattern of each solve's warm start (``warm_pattern = True``: :func:`warm_pattern_solve`, an LU of the closed
+contacts' unknowns only, the pattern corrected from a failed answer up to ``PATTERN_ATTEMPTS`` times), under
+force control too: the increment-by-increment path of finite sliding tries the same, so the two stay equal to
+rounding while both give exact local solutions (the root finder's trials then meet ``force_tol`` on other values
+than the sweeps' answers: the answers moved by up to 1.5e-7 relative, ``benchmarks/results/sliding_speed.md``).
+
 A prescribed force makes its obstacle component unknown: q is affine in the obstacle's components d,
 ``q_abs(d) = q_abs(0) - G T d`` (T: the translation per unit component), and the total force along them is
 ``F = A r``. :func:`run_force_increments` finds d per increment by the stepwise path's load control
@@ -63,7 +70,7 @@ from .local_solvers import (GROSS_SLIP_PREDICTOR, NEAR_MARGIN, _error, _force_sc
 from .wear import ROW_FIELDS, commit_increment
 
 __all__ = ["run_increments", "run_force_increments", "ActivePatternCache", "FrictionEvolution", "N_ROW",
-           "HELD_BLOCK_ARGUMENTS"]
+           "HELD_BLOCK_ARGUMENTS", "warm_pattern_solve"]
 
 #: The package's ``hold_block``, ``float32_sweeps`` for the loops below (the block held; float64 sweeps). The loops
 #: take them without defaults: an argument left to a default makes numba's dispatcher fold the call in Python and
@@ -291,6 +298,148 @@ def _pattern_rhs(q: np.ndarray, pattern: np.ndarray, b: np.ndarray) -> None:
         b[o + 1] = -q[o + 1] if code == 1 else 0.0
 
 
+#: Attempts of :func:`warm_pattern_solve`: the warm start's pattern, then patterns corrected from each failed answer.
+#: In gross slip the warm start's pattern holds at most trials; at a contact entering or leaving and at the stroke's
+#: reversal (slip, stick, slip the other way, not all contacts at once) a few corrections find it. Measured on
+#: McColl's first 100 cycles: 4 attempts leave 39 000 Uzawa sweeps (the reversals' trials), 8 leave 15 000 (against
+#: 1.47 million with the sweeps alone); a failed attempt costs an LU of the closed contacts' unknowns (~20-40).
+PATTERN_ATTEMPTS = 8
+
+#: Relative margin under which a warm start's |r_t| counts as on the cone (slip): the sweeps leave a sliding contact's
+#: force on the cone to rounding, and carrying it into a new pairing's frames rotates it by a few ulps.
+ON_CONE = 1e-9
+
+
+@numba.njit(cache=True)
+def _pattern_of_forces(r: np.ndarray, mu: np.ndarray, pattern: np.ndarray) -> None:
+    """Each 2D contact's pattern code (:func:`_pattern_matrix`'s) read from its forces: open where r_n <= 0, slip
+    (with r_t's sign) where ``|r_t| >= mu r_n`` within :data:`ON_CONE`, else stick."""
+    for a in range(pattern.size):
+        rn, rt = r[2 * a], r[2 * a + 1]
+        if not rn > 0.0:
+            pattern[a] = 0
+        elif abs(rt) >= mu[a] * rn * (1.0 - ON_CONE):
+            pattern[a] = 3 if rt < 0.0 else 2
+        else:
+            pattern[a] = 1
+
+
+@numba.njit(cache=True)
+def _closed_pattern_solve(W: np.ndarray, q: np.ndarray, mu: np.ndarray, pattern: np.ndarray, r: np.ndarray) -> bool:
+    """r (out) of a 2D contact pattern, :func:`_pattern_matrix`'s equations on the closed contacts only (r = 0 at the
+    open ones): an LU of ``2 n_closed`` unknowns, not of all ``2 nc``. False if that matrix is singular to rounding."""
+    nc = pattern.size
+    closed = np.empty(nc, dtype=np.int64)
+    n_closed = 0
+    for a in range(nc):
+        if pattern[a] != 0:
+            closed[n_closed] = a
+            n_closed += 1
+    for i in range(r.size):
+        r[i] = 0.0
+    if n_closed == 0:
+        return True
+    size = 2 * n_closed
+    A = np.zeros((size, size))
+    b = np.zeros(size)
+    for i in range(n_closed):
+        a = closed[i]
+        code = pattern[a]
+        for k in range(n_closed):          # x_n = 0
+            c = closed[k]
+            A[2 * i, 2 * k] = W[2 * a, 2 * c]
+            A[2 * i, 2 * k + 1] = W[2 * a, 2 * c + 1]
+        b[2 * i] = -q[2 * a]
+        if code == 1:                      # x_t = 0
+            for k in range(n_closed):
+                c = closed[k]
+                A[2 * i + 1, 2 * k] = W[2 * a + 1, 2 * c]
+                A[2 * i + 1, 2 * k + 1] = W[2 * a + 1, 2 * c + 1]
+            b[2 * i + 1] = -q[2 * a + 1]
+        else:                              # r_t - s mu r_n = 0
+            A[2 * i + 1, 2 * i + 1] = 1.0
+            A[2 * i + 1, 2 * i] = -(1.0 if code == 2 else -1.0) * mu[a]
+    piv = np.empty(size, dtype=np.int64)
+    if not _lu_factor(A, piv):
+        return False
+    _lu_solve(A, piv, b)
+    for i in range(n_closed):
+        r[2 * closed[i]] = b[2 * i]
+        r[2 * closed[i] + 1] = b[2 * i + 1]
+    return True
+
+
+@numba.njit(cache=True)
+def _corrected_pattern(r: np.ndarray, x: np.ndarray, mu: np.ndarray, pattern: np.ndarray) -> bool:
+    """Correct a 2D pattern from its answer where it breaks Coulomb's law (a primal-dual active-set step): a closed
+    contact pulling (r_n < 0) opens; an open one penetrating (x_n < 0) closes, sliding against its slip (stuck if
+    x_t = 0); a stuck one beyond the cone slides with r_t's sign; a sliding one whose slip has r_t's sign sticks.
+    False if nothing changed (the answer failed the tolerance on no sign: no better pattern to try)."""
+    changed = False
+    for a in range(pattern.size):
+        rn, rt, xn, xt = r[2 * a], r[2 * a + 1], x[2 * a], x[2 * a + 1]
+        code = pattern[a]
+        new = code
+        if code == 0:
+            if xn < 0.0:
+                new = 1 if xt == 0.0 else (3 if xt > 0.0 else 2)
+        elif rn < 0.0:
+            new = 0
+        elif code == 1:
+            if abs(rt) > mu[a] * rn:
+                new = 3 if rt < 0.0 else 2
+        elif (xt > 0.0 and code == 2) or (xt < 0.0 and code == 3):
+            new = 1
+        if new != code:
+            pattern[a] = new
+            changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def warm_pattern_solve(W: np.ndarray, q: np.ndarray, mu: np.ndarray, rho: np.ndarray, tol: float, r: np.ndarray,
+                       x: np.ndarray) -> tuple[bool, float, int]:
+    """A 2D local problem solved exactly on the contact pattern of its warm start, before any sweep (finite sliding).
+
+    The pattern (open, stick, slip with the sign of r_t) is read from the warm start ``r``
+    (:func:`_pattern_of_forces`), its linear system solved on the closed contacts (:func:`_closed_pattern_solve`),
+    and the answer accepted only if its natural-map error on ``x = W r + q`` recomputed is below ``tol``, the Uzawa
+    sweeps' own criterion (so it is then a solution to rounding). A failed answer corrects the pattern where it
+    breaks Coulomb's law (:func:`_corrected_pattern`), up to ``PATTERN_ATTEMPTS`` patterns in all.
+
+    Args:
+        W: The Delassus matrix (m, m), symmetric (read as W and as W^T).
+        q: The free relative displacement (m,).
+        mu, rho: Per contact: friction coefficient, Uzawa step (the error's scale, as the sweeps').
+        tol: The local tolerance.
+        r: (m,) in: the warm start; out: the answer if accepted, else the warm start unchanged.
+        x: (m,) out: ``W r + q`` of the answer if accepted (else overwritten).
+
+    Returns:
+        (accepted, the last answer's error, patterns tried).
+    """
+    nc = mu.size
+    m = q.size
+    pattern = np.empty(nc, dtype=np.int8)
+    _pattern_of_forces(r, mu, pattern)
+    trial = np.empty(m)
+    empty_i, empty_f = np.zeros(1, dtype=np.int64), np.zeros(1)
+    scale = _force_scale(q, mu, rho, 2)
+    err = np.inf
+    for attempt in range(PATTERN_ATTEMPTS):
+        if not _closed_pattern_solve(W, q, mu, pattern, trial):
+            return False, err, attempt + 1
+        _recompute_x(W, empty_i, empty_i, empty_f, False, q, trial, x)
+        err = _error(trial, x, mu, rho, 2, scale)
+        if err < tol:
+            for i in range(m):
+                r[i] = trial[i]
+            return True, err, attempt + 1
+        if not _corrected_pattern(trial, x, mu, pattern):
+            return False, err, attempt + 1
+    return False, err, PATTERN_ATTEMPTS
+
+
 @numba.njit(cache=True)
 def _normal_rows(Wc: np.ndarray, mu: np.ndarray, dim: int
                  ) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -381,20 +530,21 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
                  j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray,
                  xs: np.ndarray, qn: np.ndarray, rn: np.ndarray, xn: np.ndarray,
                  held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], hold_block: bool,
-                 float32_sweeps: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
+                 float32_sweeps: bool, warm_pattern: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
     """One local solve of increment ``j`` from the warm start ``r`` (in/out; ``x`` out): the exact answer when no
-    contact penetrates, else the cached contact pattern (``active``), else the Uzawa sweeps (on the normal rows
-    alone when ``normal_only``; ``Wn`` their W; else on the working set, as ``local_solvers.solve``'s default: in
-    3D the gross-slip predictor first, ``local_solvers.GROSS_SLIP_PREDICTOR``). ``xs``, ``qn``, ``rn``, ``xn``: work
-    arrays.
+    contact penetrates, else the cached contact pattern (``active``) or the warm start's (``warm_pattern``, 2D:
+    :func:`warm_pattern_solve`, counted in ``counts[0]`` accepted and ``counts[1]`` not), else the Uzawa sweeps (on
+    the normal rows alone when ``normal_only``; ``Wn`` their W; else on the working set, as ``local_solvers.solve``'s
+    default: in 3D the gross-slip predictor first, ``local_solvers.GROSS_SLIP_PREDICTOR``). ``xs``, ``qn``, ``rn``,
+    ``xn``: work arrays.
 
     ``held``: the working set, its ``(W_AA)^T`` and float32 copy, and the gross-slip predictor's loaded contacts and
     Cholesky factor, of an earlier solve of this call of the loop (``local_solvers._nothing_held`` at first): the
     sweeps use the block again while the set is the same, the predictor its factor while the loaded contacts are,
     instead of gathering and factoring again (cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is
     fixed within a call of the loop (no loop changes it; a new W is a new call, which starts with nothing held): the
-    same values, so the same bits. ``hold_block`` False: nothing is held (the block gathered at every solve). ``counts`` of 5
-    entries (an :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those
+    same values, so the same bits. ``hold_block`` False: nothing is held (the block gathered at every solve).
+    ``counts`` of 5 entries (an :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those
     that gathered one in ``counts[4]`` (a shorter ``counts``, finite sliding's 3, gets neither). ``float32_sweeps``:
     the sweeps' updates of x read a float32 copy of the block (held beside it), as
     ``local_solvers.solve(..., float32_sweeps=True)``.
@@ -420,6 +570,14 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
             x[i] = q[i]
         its = 0
         err = 0.0
+    elif warm_pattern and dim == 2:
+        accepted, err, _tried = warm_pattern_solve(Wc, q, mu, rho, tol, r, x)   # Wc = W^T = W
+        if accepted:
+            exact = True
+            its = 0
+            counts[0] += 1
+        else:
+            counts[1] += 1
     elif active and pattern[j, 0] >= 0:
         if not lu_ok[j]:
             _pattern_matrix(Wc, pattern[j], mu, lu[j])   # Wc = W^T = W
@@ -482,7 +640,8 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                    lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray, factor_mu: np.ndarray,
                    evolve: bool, energy: np.ndarray, energy_scale: float, table_of: np.ndarray,
                    abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray, wear_base: np.ndarray,
-                   wear_per_mu: np.ndarray, hold_block: bool, float32_sweeps: bool) -> tuple[int, int, float]:
+                   wear_per_mu: np.ndarray, hold_block: bool, float32_sweeps: bool,
+                   warm_pattern: bool) -> tuple[int, int, float]:
     """Solve ``D.shape[0]`` increments in sequence, committing each converged one.
 
     Args:
@@ -515,6 +674,9 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
             same (see :func:`_solve_local`; the same bits either way). False: gathered at every solve.
         float32_sweeps: The sweeps' incremental updates of x in float32 (the stopping criterion still on x
             recomputed in float64: answers within the tolerance of the float64 ones, not the same bits).
+        warm_pattern: 2D: each local solve first tries its warm start's contact pattern as an exact linear solve
+            (:func:`warm_pattern_solve`; finite sliding's loop, whose W changes with every pairing, so that no
+            pattern can be cached per increment), ``counts[0]`` / ``counts[1]`` its accepted and rejected tries.
 
     Returns:
         (converged increments, local status of the first failure (1 if none), its error).
@@ -542,7 +704,7 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                 r[i] = r_last[i]
         its, err, status, held = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh,
                                               active, j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held,
-                                              hold_block, float32_sweeps)
+                                              hold_block, float32_sweeps, warm_pattern)
         if status != 1:
             return j, status, err
         _finish(j, r, x, q, q_abs, y, mu, dim, tributary, abscissa, k, wear_gap, states, row, its, err, rows,
@@ -567,7 +729,7 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
                  refresh: int, active: bool, j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray,
                  lu_ok: np.ndarray, counts: np.ndarray, xs: np.ndarray, qn: np.ndarray, rn: np.ndarray,
                  xn: np.ndarray, tally: np.ndarray, held: tuple[np.ndarray, ...], hold_block: bool,
-                 float32_sweeps: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
+                 float32_sweeps: bool, warm_pattern: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
     """One trial of the load control: the local problem with the obstacle at ``trial`` (its components), warm
     started from ``r`` (the previous trial's forces, as the stepwise path), then ``F = A r`` (the total force along
     each component). ``tally``: (solves, sweeps) so far, in/out; ``held``, ``hold_block``, ``float32_sweeps``: as
@@ -584,7 +746,7 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
     _rhs(g0, wear_gap, G, Dj, Q, Sj, y, dim, q_abs, q)
     its, err, status, held = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh, active,
                                           j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held, hold_block,
-                                          float32_sweeps)
+                                          float32_sweeps, warm_pattern)
     tally[0] += 1
     tally[1] += its
     for c in range(F.size):
@@ -608,7 +770,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                          factor_mu: np.ndarray, evolve: bool, energy: np.ndarray, energy_scale: float,
                          table_of: np.ndarray, abscissae: np.ndarray, values: np.ndarray, lengths: np.ndarray,
                          wear_base: np.ndarray, wear_per_mu: np.ndarray, hold_block: bool,
-                         float32_sweeps: bool) -> tuple[int, int, float]:
+                         float32_sweeps: bool, warm_pattern: bool) -> tuple[int, int, float]:
     """:func:`run_increments` with force-controlled obstacle components: each increment finds the obstacle
     displacement whose total contact force meets the targets, by the stepwise path's load control
     (``increments._local_with_control``: sweeps over the controlled components, each closed by
@@ -663,7 +825,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
         bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0, wear_gap, G,
                                               Q, S[j], y, q_abs, q, r, x, tol, max_iter, refresh, active, j, pattern,
                                               lu, piv, lu_ok, counts, xs, qn, rn, xn, tally, held, hold_block,
-                                              float32_sweeps)
+                                              float32_sweeps, warm_pattern)
         if bad >= 0:
             failure[0] = bad
             return j, TRIAL_NOT_FINITE, 0.0
@@ -700,7 +862,8 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                     bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
                                                           wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
                                                           refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
-                                                          rn, xn, tally, held, hold_block, float32_sweeps)
+                                                          rn, xn, tally, held, hold_block, float32_sweeps,
+                                                          warm_pattern)
                     if bad >= 0 or status != 1:
                         break
                     f0 = F[kc] - target
@@ -716,7 +879,8 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                     bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0,
                                                           wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
                                                           refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
-                                                          rn, xn, tally, held, hold_block, float32_sweeps)
+                                                          rn, xn, tally, held, hold_block, float32_sweeps,
+                                                          warm_pattern)
                     if bad >= 0 or status != 1:
                         break
                     fb = F[kc] - target
@@ -739,7 +903,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                                                               g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol,
                                                               max_iter, refresh, active, j, pattern, lu, piv, lu_ok,
                                                               counts, xs, qn, rn, xn, tally, held, hold_block,
-                                                              float32_sweeps)
+                                                              float32_sweeps, warm_pattern)
                         if bad >= 0 or status != 1:
                             break
                         fb = F[kc] - target
@@ -756,7 +920,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                                                               g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol,
                                                               max_iter, refresh, active, j, pattern, lu, piv, lu_ok,
                                                               counts, xs, qn, rn, xn, tally, held, hold_block,
-                                                              float32_sweeps)
+                                                              float32_sweeps, warm_pattern)
                         if bad >= 0 or status != 1:
                             break
                         fc = F[kc] - target

@@ -15,6 +15,7 @@ import numpy as np
 from mpi4py import MPI
 
 from . import friction, local_solvers
+from .cycling import warm_pattern_solve
 from .loading import FORCE_SWEEPS, Displacement, Force, LoadControlError, find_displacement, tangential_item
 from .operators import ContactOperators
 from .plasticity import ElastoplasticBody, NewtonError
@@ -147,6 +148,12 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
     count = {"solves": 0, "iterations": 0}
     last: dict[str, Any] = {}
     mu = friction.coefficients(operators.contact, state)   # held over the increment (explicit update)
+    # 2D node-to-segment finite sliding: every local solve first tries its warm start's contact pattern as an exact
+    # linear solve, as the compiled finite-sliding loop does (cycling.warm_pattern_solve): the same rule on both
+    # paths keeps their answers the same.
+    pairing = state.pairing
+    pattern_first = (W is None and dim == 2 and pairing is not None and pairing.master_faces is not None
+                     and isinstance(Wm, np.ndarray) and steps is not None)
 
     def local(trial: np.ndarray) -> np.ndarray:
         if not np.all(np.isfinite(trial)):
@@ -156,8 +163,10 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
             k = int(np.flatnonzero(~np.isfinite(trial))[0])
             raise ConvergenceError(trial_not_finite_message(names[k], targets[k]))
         q, q_abs = operators.q(trial, factors, state.positions, state.wear_gap, q_body)
-        solved = local_solvers.solve(Wm, q, mu, dim, method=solver.method, tol=solver.tol,
-                                  max_iter=solver.max_iter, r0=warm[0], block_steps=steps)
+        solved = _warm_pattern(Wm, q, mu, steps, solver.tol, warm[0]) if pattern_first else None
+        if solved is None:
+            solved = local_solvers.solve(Wm, q, mu, dim, method=solver.method, tol=solver.tol,
+                                         max_iter=solver.max_iter, r0=warm[0], block_steps=steps)
         count["solves"] += 1
         count["iterations"] += solved.iterations
         if not solved.converged:
@@ -200,6 +209,22 @@ def _local_with_control(operators: ContactOperators, solver: LocalSolver, state:
     y = Wm @ solved.r + last["q_abs"]
     return IncrementResult(solved.r.copy(), solved.x.copy(), y, last["d"].copy(), factors.copy(), False,
                            count["iterations"], targets.copy(), controlled.copy(), solved.error, count["solves"])
+
+
+def _warm_pattern(W: np.ndarray, q: np.ndarray, mu: np.ndarray, steps: np.ndarray, tol: float, r0: np.ndarray
+                  ) -> local_solvers.LocalResult | None:
+    """The 2D local problem solved exactly on its warm start's contact pattern (:func:`~dolfinx_fretting.cycling.
+    warm_pattern_solve`, as the compiled finite-sliding loop tries it), or None where that answer misses ``tol``
+    or no contact penetrates (``local_solvers.solve`` then answers r = 0 at once, as the loop does)."""
+    if not np.any(q[0::2] < 0.0):
+        return None
+    r, x = np.array(r0, dtype=float), np.empty(q.size)
+    accepted, error, tried = warm_pattern_solve(W, np.ascontiguousarray(q, dtype=float),
+                                                np.ascontiguousarray(mu, dtype=float), steps, tol, r, x)
+    if not accepted:
+        return None
+    return local_solvers.LocalResult(r, x, 0, error, True, "pattern",
+                                     f"warm start's contact pattern solved exactly ({tried} tried), error {error:.3e}")
 
 
 def force_names(operators: ContactOperators) -> list[str]:

@@ -701,7 +701,10 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
     """The increments of a cycle under finite sliding (2D node-to-segment), each solved on the pairing of the state
     it starts from and committed as :func:`~dolfinx_fretting.commit.commit` commits it: the compiled loop's local
     solve and load control (:func:`~dolfinx_fretting.cycling.run_force_increments` or
-    :func:`~dolfinx_fretting.cycling.run_increments`, one increment per call), Archard's law, the master's share
+    :func:`~dolfinx_fretting.cycling.run_increments`, one increment per call; every local solve first tries its warm
+    start's contact pattern exactly, :func:`~dolfinx_fretting.cycling.warm_pattern_solve`, as the stepwise path's
+    ``increments._local_with_control`` does: no pattern can be cached per increment when W changes with the
+    pairing), Archard's law, the master's share
     of the wear spread on its nodes (:func:`spread_wear`, ``master_share`` its fraction, < 0 without wear), the
     window's outside rows watched, then the re-pairing when a paired point has moved more than ``repair_slip``
     master elements (:func:`offsets`, :func:`repair`, :func:`carry_state`) with the new pairing's W, load responses,
@@ -752,13 +755,15 @@ def run_sliding_increments(fl: np.ndarray, weights: np.ndarray, frames: np.ndarr
                 max_eval, Q, factors[j:j + 1], tributary, abscissa, y, r_last, r_warm, k, tol, max_iter, refresh,
                 True, out_r, out_x, out_y, out_wear, out_states, rows[j:j + 1], found[j:j + 1], solves[j:j + 1],
                 False, pattern, lu, piv, lu_ok, counts, failure, force, factor_mu, False, held_energy, 0.0,
-                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates, *HELD_BLOCK_ARGUMENTS)
+                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates, *HELD_BLOCK_ARGUMENTS,
+                True)
         else:
             done, code, err = run_increments(
                 W, rho, mu, 2, gap0, wear_gap, G, translations[j:j + 1], Q, factors[j:j + 1], tributary, abscissa,
                 y, r_last, r_warm, 0, k, tol, max_iter, refresh, True, out_r, out_x, out_y, out_wear, out_states,
                 rows[j:j + 1], False, pattern, lu, piv, lu_ok, counts, factor_mu, False, held_energy, 0.0,
-                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates, *HELD_BLOCK_ARGUMENTS)
+                held_tables, held_rows, held_rows, held_lengths, held_rates, held_rates, *HELD_BLOCK_ARGUMENTS,
+                True)
         if done < 1:
             return j, SOLVE_FAILED, repairs
         for c in range(nc):

@@ -19,7 +19,7 @@ import pytest
 from mpi4py import MPI  # noqa: F401  (before dolfinx: on the DOLFINx wheel it loads the MPI library DOLFINx needs)
 
 import dolfinx_fretting as dfr
-from dolfinx_fretting import sliding
+from dolfinx_fretting import cycling, local_solvers, sliding
 from dolfinx_fretting.analytic import hertz_line_contact
 from dolfinx_fretting.checkpoint import _find_facets
 from dolfinx_fretting.contact import (MasterSurface, _closest_segments, pair_with_segments, paired_contact_set,
@@ -554,6 +554,84 @@ def test_the_pruned_closest_segment_search_is_the_full_one():
     copies = np.arange(n - 8, n - 5)
     assert np.array_equal(full[0][copies], [20, 21, 22])
     assert np.all(full[0][n - 5:] == A.shape[0] - 2)
+
+
+@pytest.mark.parametrize("q_t, expected", [(0.05, "stick"), (0.5, "slip")])
+def test_the_warm_pattern_solve_is_the_closed_form_of_one_contact(q_t, expected):
+    """One 2D contact, ``x = W r + q`` with ``W = [[a, c], [c, b]]`` (normal-tangential coupling c), pressed
+    (q_n < 0): stuck, ``r = -W^-1 q`` while ``|r_t| <= mu r_n``; sliding, ``r_t = s mu r_n`` with
+    ``r_n = -q_n / (a + s c mu)`` and the slip ``x_t = c r_n + b r_t + q_t`` opposing r_t (s x_t < 0). From a zero
+    warm start (every contact open) the pattern is corrected to the closed form's; the answer is the closed form to
+    rounding (1e-14 of the forces: an LU of two unknowns) and x = W r + q."""
+    a, b, c, mu = 2.0, 1.0, 0.3, 0.5
+    W = np.array([[a, c], [c, b]])
+    q = np.array([-1.0, q_t])
+    stuck = -np.linalg.solve(W, q)
+    if abs(stuck[1]) <= mu * stuck[0]:
+        closed_form, state = stuck, "stick"
+    else:
+        sign = -np.sign(q_t)
+        r_n = -q[0] / (a + sign * c * mu)
+        closed_form, state = np.array([r_n, sign * mu * r_n]), "slip"
+        assert sign * (c * r_n + b * sign * mu * r_n + q_t) < 0    # the slip opposes the friction force
+    assert state == expected
+    r, x = np.zeros(2), np.empty(2)
+    rho = local_solvers.block_rho(W, 2)
+    accepted, error, tried = cycling.warm_pattern_solve(W, q, np.array([mu]), rho, 1e-10, r, x)
+    assert accepted and error < 1e-14 and tried >= 2                       # open first, then corrected
+    assert np.allclose(r, closed_form, rtol=0, atol=1e-14 * np.abs(closed_form).max())
+    assert np.allclose(x, W @ r + q, rtol=0, atol=1e-15)
+
+
+def test_the_warm_pattern_solve_is_the_swept_solution_of_coupled_contacts():
+    """Twelve coupled 2D contacts (W of a chain of springs, diagonally dominant and SPD; some open, some stuck, some
+    sliding either way): from the Uzawa sweeps' solution at tol 1e-14 the answer is accepted on its pattern at once
+    (from that solution perturbed by 1e-3, after at most two corrections), its natural-map error
+    (``local_solvers.natural_map_error``, computed apart) below 1e-13, and it is the swept solution to 1e-9 of the
+    forces (the sweeps' tolerance times cond(W) ~ 10 leaves 1e-12; the margin is for the sweeps' stopping point). A tolerance no answer meets (0) rejects every pattern and leaves
+    the warm start untouched, bit for bit (the sweeps then start from it)."""
+    rng = np.random.default_rng(7)
+    nc = 12
+    m = 2 * nc
+    coupling = rng.uniform(-0.2, 0.2, (m, m))
+    W = np.diag(rng.uniform(1.5, 2.5, m)) + 0.5 * (coupling + coupling.T) * (np.abs(np.subtract.outer(
+        np.arange(m) // 2, np.arange(m) // 2)) <= 1)
+    assert np.all(np.linalg.eigvalsh(W) > 0)
+    q = np.empty(m)
+    q[0::2] = rng.uniform(-1.0, 0.4, nc)          # a few open
+    q[1::2] = rng.uniform(-1.0, 1.0, nc) * np.where(np.arange(nc) % 2, 1.0, 0.05)   # stuck or sliding either way
+    mu = np.full(nc, 0.4)
+    rho = local_solvers.block_rho(W, 2)
+    swept = local_solvers.solve(W, q, mu, 2, tol=1e-14, max_iter=200000)
+    assert swept.converged
+    states = {"open": 0, "stick": 0, "slip": 0}
+    for a in range(nc):
+        rn, rt = swept.r[2 * a], swept.r[2 * a + 1]
+        states["open" if rn <= 0 else "slip" if abs(rt) >= mu[a] * rn * (1 - 1e-9) else "stick"] += 1
+    assert min(states.values()) >= 2, states       # every kind of contact is exercised
+    for warm in (swept.r, swept.r * (1 + 1e-3 * rng.uniform(-1, 1, m))):   # its pattern; one near it
+        r, x = warm.copy(), np.empty(m)
+        accepted, error, tried = cycling.warm_pattern_solve(W, q, mu, rho, 1e-10, r, x)
+        assert accepted and tried <= (1 if warm is swept.r else 3)
+        assert local_solvers.natural_map_error(W, q, r, mu, 2, rho) < 1e-13
+        assert np.abs(r - swept.r).max() <= 1e-9 * np.abs(swept.r).max()
+    r = warm.copy()
+    accepted, _, tried = cycling.warm_pattern_solve(W, q, mu, rho, 0.0, r, x)
+    assert not accepted and np.array_equal(r, warm)
+
+
+def test_the_finite_sliding_loop_solves_most_trials_on_the_warm_start_s_pattern(cylinder_on_flat):
+    """In gross slip under a held normal force nearly every local solve of the compiled finite-sliding loop is its
+    warm start's pattern solved exactly (cycling.warm_pattern_solve): of a cycle's 24 increments (3-5 load-control
+    trials each) at most 2 sweep (measured: none; with 4 patterns tried instead of 8, the two stroke reversals),
+    where the sweeps alone sweep at every trial (~50-130 sweeps a solve, benchmarks/results/sliding_speed.md)."""
+    problem = sliding_problem(cylinder_on_flat, "finite", wear=dfr.Archard(k_slave=2e-6, k_master=3e-6))
+    state = pressed(problem)
+    path = dfr.CyclePath.waveform(24, normal=dfr.Force(P), tangential=0.06)
+    result = problem.run_cycle(state, path)
+    assert result.compiled
+    swept = np.count_nonzero(result.records["local_iterations"])
+    assert result.records["load_solves"].sum() >= 72 and swept <= 2, result.records["local_iterations"]
 
 
 def test_the_contact_operator_maps_displacements_as_its_definition():

@@ -163,6 +163,8 @@ def sphere_flat_cycle(W: np.ndarray, xy: np.ndarray, radius: float, approach: fl
     cache = loop.ActivePatternCache(n, nc, 3)
     held = loop.FrictionEvolution.held().arguments()
     hold = () if hold_block is None else (hold_block, float32_sweeps)
+    if hold_block is not None and hasattr(loop, "warm_pattern_solve"):   # a version whose loops take warm_pattern
+        hold += (False,)
     found, solves = targets.copy(), np.ones(n, dtype=np.int64)
     if normal_force is None:
         done, status, error = loop.run_increments(
