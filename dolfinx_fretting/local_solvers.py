@@ -777,11 +777,12 @@ def _gather_block(A: np.ndarray, by_rows: bool, rows: np.ndarray) -> np.ndarray:
 # Gross-slip predictor: the normal forces solved exactly, the slip directions by fixed point
 # ----------------------------------------------------------------------------------------------------------
 #: The predictor stops when a step does not divide the best error by at least 2 (stick, a reversal, a contact
-#: opening or closing): the sweeps go on from its best output, or from its start when none halved the error.
+#: opening or closing): the sweeps go on from its last output that did, or from its start when none did.
 PREDICTOR_CONTRACTION = 0.5
 #: At most this many predictor steps a pass (a step costs ~1.8 sweeps at 2025 contacts: gross_slip.md).
 PREDICTOR_STEPS = 20
-#: Anderson's mixing (:func:`_anderson_mix`) combines the last ``PREDICTOR_DEPTH + 1`` outputs (that many differences).
+#: Anderson's mixing (:func:`_anderson_mix`) combines the last ``PREDICTOR_DEPTH + 1`` outputs (``PREDICTOR_DEPTH``
+#: differences).
 PREDICTOR_DEPTH = 4
 
 
