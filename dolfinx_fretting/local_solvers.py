@@ -902,13 +902,7 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
             loaded[k] = a
             k += 1
     key = contacts[loaded]
-    same = held_loaded.size == count and held_factor.shape[0] == count
-    if same:
-        for i in range(count):
-            if held_loaded[i] != key[i]:
-                same = False
-                break
-    if same:
+    if held_factor.shape[0] == count and np.array_equal(held_loaded, key):
         factor = held_factor
     else:
         block = np.empty((count, count))
@@ -1117,12 +1111,7 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
                 for c in range(dim):
                     rows[k * dim + c] = a * dim + c
                 k += 1
-        same = held_member.size == nc and held_block.shape[0] == ma
-        if same:
-            for a in range(nc):
-                if member[a] != held_member[a]:
-                    same = False
-                    break
+        same = held_block.shape[0] == ma and np.array_equal(held_member, member)
         Wa = held_block if same else _gather_block(A, by_rows, rows)  # (W_AA)^T, C-contiguous, like Wc
         if same:
             stats[3] += 1
