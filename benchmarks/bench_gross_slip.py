@@ -20,22 +20,17 @@ Usage (from the repository root)::
 from __future__ import annotations
 
 import argparse
-import datetime
-import json
-import os
-import platform
-import shlex
 import sys
 import time
 from pathlib import Path
 
-import numba
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
-from _machine import cpu_model  # noqa: E402  (benchmarks/ is on sys.path when a script runs)
+# benchmarks/ is on sys.path when a script runs
+from _machine import command_line, machine_lines, machine_record, write_results  # noqa: E402
 from bench_loop_speed import APPROACH, MU, SLIP  # noqa: E402
 from support.local_problems import cycle_q, half_space, sphere_flat_cycle  # noqa: E402
 
@@ -61,12 +56,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--out", type=Path, default=Path("/tmp/gross-slip/gross_slip"))
     args = ap.parse_args(argv)
-    command = ("OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_gross_slip.py"
-               + "".join(" " + shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])))
-    info = {"date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"), "cpu": cpu_model(),
-            "logical_cpus": os.cpu_count(), "python": platform.python_version(), "numpy": np.__version__,
-            "numba": numba.__version__, "load_start": list(os.getloadavg()), "repeats": args.repeats,
-            "increments": args.increments}
+    command = command_line("bench_gross_slip.py", sys.argv[1:] if argv is None else argv)
+    info = machine_record(repeats=args.repeats, increments=args.increments)
     slips = SLIP * APPROACH * np.cos(2.0 * np.pi * np.arange(1, args.increments + 1) / args.increments)
     records = []
     for side in args.sides:
@@ -108,11 +99,7 @@ def main(argv=None) -> int:
         print(f"{nc} contacts: gross slip {len(gross)} of {len(rows)} increments, median {record['gross_on_ms']:.3g} "
               f"ms (off {record['gross_off_ms']:.3g} ms), cycle mean {record['cycle_on_ms']:.3g} ms (off "
               f"{record['cycle_off_ms']:.3g} ms)", flush=True)
-        info["load_end"] = list(os.getloadavg())
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.with_suffix(".json").write_text(json.dumps({"command": command, "machine": info,
-                                                             "results": records}, indent=1) + "\n")
-        args.out.with_suffix(".md").write_text(markdown(command, info, records))
+        write_results(args.out, command, info, records, markdown)
     print(f"wrote {args.out.with_suffix('.md')}")
     return 0
 
@@ -120,10 +107,7 @@ def main(argv=None) -> int:
 def markdown(command: str, info: dict, records: list[dict]) -> str:
     L = ["## A cycle's local solves one by one: the gross-slip predictor (half-space, uzawa, tol 1e-10)", "",
          f"Command (from the repository root): `{command}`", "",
-         f"- date: {info['date']}; machine: {info['cpu']}, {info['logical_cpus']} logical CPUs shared with other "
-         f"jobs; Python {info['python']}, numpy {info['numpy']}, numba {info['numba']}",
-         f"- load average (1, 5, 15 min) at start {', '.join(f'{v:.2f}' for v in info['load_start'])}, at end "
-         f"{', '.join(f'{v:.2f}' for v in info['load_end'])}",
+         *machine_lines(info),
          f"- the increments 1-{info['increments'] - 1} of a cycle of {info['increments']} (slip {SLIP:g} x cos, mu "
          f"{MU:g}), each from the answer of the one before; CPU time of `local_solvers.solve` per increment, median "
          f"of {info['repeats']} repeats, the predictor on and off in turn", "",

@@ -29,12 +29,7 @@ Usage (from the repository root)::
 from __future__ import annotations
 
 import argparse
-import datetime
 import importlib
-import json
-import os
-import platform
-import shlex
 import sys
 import time
 import types
@@ -46,7 +41,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parent / "tests"))
 
-from _machine import cpu_model  # noqa: E402  (benchmarks/ is on sys.path when a script runs)
+# benchmarks/ is on sys.path when a script runs
+from _machine import command_line, machine_lines, machine_record, write_results  # noqa: E402
 from support.local_problems import half_space, sphere_flat_cycle  # noqa: E402
 
 from dolfinx_fretting import cycling  # noqa: E402
@@ -95,10 +91,7 @@ def main(argv=None) -> int:
                     help="each increment from the one before, or a second cycle from the first's increments")
     ap.add_argument("--out", type=Path, default=HERE / "results" / "loop_speed")
     args = ap.parse_args(argv)
-    argv_used = sys.argv[1:] if argv is None else argv
-    command = ("OPENBLAS_NUM_THREADS=" + os.environ.get("OPENBLAS_NUM_THREADS", "<unset>") +
-               " .venv/bin/python benchmarks/bench_loop_speed.py" + "".join(" " + shlex.quote(a) for a in argv_used))
-    import numba
+    command = command_line("bench_loop_speed.py", sys.argv[1:] if argv is None else argv)
 
     variants = {}
     if args.before is not None:
@@ -108,10 +101,8 @@ def main(argv=None) -> int:
     variants |= {"gathered": (False, cycling, False), "held": (True, cycling, False)}
     if args.float32:
         variants["held float32"] = (True, cycling, True)
-    info = {"date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"), "cpu": cpu_model(),
-            "logical_cpus": os.cpu_count(), "python": platform.python_version(), "numpy": np.__version__,
-            "numba": numba.__version__, "load_start": list(os.getloadavg()), "repeats": args.repeats,
-            "increments": args.increments, "wear": args.wear, "warm": args.warm, "variants": list(variants)}
+    info = machine_record(repeats=args.repeats, increments=args.increments, wear=args.wear, warm=args.warm,
+                          variants=list(variants))
     slips = SLIP * APPROACH * np.cos(2.0 * np.pi * np.arange(1, args.increments + 1) / args.increments)
     records = []
     for side in args.sides:
@@ -148,11 +139,7 @@ def main(argv=None) -> int:
                                                    for n, v in rec["variants"].items())
                   + f"; {solves} solves, {sweeps / solves:.1f} sweeps a solve, counts {rec['held_counts']}",
                   flush=True)
-            info["load_end"] = list(os.getloadavg())
-            args.out.parent.mkdir(parents=True, exist_ok=True)
-            args.out.with_suffix(".json").write_text(json.dumps({"command": command, "machine": info,
-                                                                 "results": records}, indent=1) + "\n")
-            args.out.with_suffix(".md").write_text(markdown(command, info, records))
+            write_results(args.out, command, info, records, markdown)
     print(f"wrote {args.out.with_suffix('.md')}")
     return 0
 
@@ -161,10 +148,7 @@ def markdown(command: str, info: dict, records: list[dict]) -> str:
     names = info["variants"]
     L = ["## The compiled cycle loop's local solves: the block held (half-space, uzawa, tol 1e-10)", "",
          f"Command (from the repository root): `{command}`", "",
-         f"- date: {info['date']}; machine: {info['cpu']}, {info['logical_cpus']} logical CPUs shared with other "
-         f"jobs; Python {info['python']}, numpy {info['numpy']}, numba {info['numba']}",
-         f"- load average (1, 5, 15 min) at start {', '.join(f'{v:.2f}' for v in info['load_start'])}, at end "
-         f"{', '.join(f'{v:.2f}' for v in info['load_end'])}",
+         *machine_lines(info),
          f"- a cycle of {info['increments']} gross-slip increments (slip {SLIP:g} x cos), warm start "
          f"`{info['warm']}` (`increment`: each increment from the one before; `cycle`: a second cycle, each increment "
          f"from the same of the first; force control from the one before), Archard k = {info['wear']:g}; "
