@@ -529,7 +529,7 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
                  q: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_iter: int, refresh: int, active: bool,
                  j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray,
                  xs: np.ndarray, qn: np.ndarray, rn: np.ndarray, xn: np.ndarray,
-                 held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], hold_block: bool,
+                 held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], hold_block: bool,
                  float32_sweeps: bool, warm_pattern: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
     """One local solve of increment ``j`` from the warm start ``r`` (in/out; ``x`` out): the exact answer when no
     contact penetrates, else the cached contact pattern (``active``) or the warm start's (``warm_pattern``, 2D:
@@ -538,9 +538,10 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
     default: in 3D the gross-slip predictor first, ``local_solvers.GROSS_SLIP_PREDICTOR``). ``xs``, ``qn``, ``rn``,
     ``xn``: work arrays.
 
-    ``held``: the working set, its ``(W_AA)^T`` and float32 copy, and the gross-slip predictor's loaded contacts and
-    Cholesky factor, of an earlier solve of this call of the loop (``local_solvers._nothing_held`` at first): the
-    sweeps use the block again while the set is the same, the predictor its factor while the loaded contacts are,
+    ``held``: the working set, its ``(W_AA)^T`` and float32 copy, and the gross-slip predictor's loaded contacts,
+    Cholesky factor and float32 loaded block, of an earlier solve of this call of the loop
+    (``local_solvers._nothing_held`` at first): the sweeps use the block again while the set is the same, the
+    predictor its factor and loaded block while the loaded contacts are,
     instead of gathering and factoring again (cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is
     fixed within a call of the loop (no loop changes it; a new W is a new call, which starts with nothing held): the
     same values, so the same bits. ``hold_block`` False: nothing is held (the block gathered at every solve).
@@ -617,14 +618,14 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         # every row by W^T's rows, before and at the check: contiguous, vectorised reads, faster here than the rows
         # the sweeps read by W's rows and the check's rows apart (measured: local_speed.md, its loop section).
         _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-        its, err, change, status, member, block, block32, loaded, factor = _restricted_core(
+        its, err, change, status, member, block, block32, loaded, factor, loaded_block32 = _restricted_core(
             Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0, empty_f,
             empty_f, NEAR_MARGIN, float32_sweeps, working_stats, GROSS_SLIP_PREDICTOR, *held)
         if counts.size >= 5:
             counts[3] += 1 if working_stats[3] > 0 else 0
             counts[4] += 1 if working_stats[3] < working_stats[0] else 0
         if hold_block and block.shape[0] > 0:
-            held = (member, block, block32, loaded, factor)
+            held = (member, block, block32, loaded, factor, loaded_block32)
         if status != 1:
             return its, err, status, held
     return its, err, 1, held

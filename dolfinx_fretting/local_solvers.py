@@ -741,11 +741,12 @@ GROSS_SLIP_PREDICTOR = True
 
 
 @numba.njit(cache=True)
-def _nothing_held() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _nothing_held() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Nothing held (:func:`_restricted_core`'s ``held_member``, ``held_block``, ``held_block32``, ``held_loaded``,
-    ``held_factor``): an empty set, block, float32 block, loaded set and factor."""
+    ``held_factor``, ``held_loaded_block32``): an empty set, block, float32 block, loaded set, factor and float32
+    loaded block."""
     return (np.zeros(0, dtype=np.bool_), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32),
-            np.zeros(0, dtype=np.int64), np.zeros((0, 0)))
+            np.zeros(0, dtype=np.int64), np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32))
 
 
 @numba.njit(cache=True)
@@ -779,7 +780,7 @@ def _gather_block(A: np.ndarray, by_rows: bool, rows: np.ndarray) -> np.ndarray:
 #: The predictor stops when a step does not divide the best error by at least 2 (stick, a reversal, a contact
 #: opening or closing): the sweeps go on from its last output that did, or from its start when none did.
 PREDICTOR_CONTRACTION = 0.5
-#: At most this many predictor steps a pass (a step costs ~1.8 sweeps at 2025 contacts: gross_slip.md).
+#: At most this many predictor steps a pass (a step costs ~0.6 sweeps at 2025 contacts: gross_slip.md).
 PREDICTOR_STEPS = 20
 #: Anderson's mixing (:func:`_anderson_mix`) combines the last ``PREDICTOR_DEPTH + 1`` outputs (``PREDICTOR_DEPTH``
 #: differences).
@@ -804,6 +805,22 @@ def _cholesky_solve(factor: np.ndarray, b: np.ndarray) -> np.ndarray:
         for k in range(i):
             y[k] -= row[k] * value
     return y
+
+
+@numba.njit(cache=True)
+def _add_moves32(block32: np.ndarray, positions: np.ndarray, moves: np.ndarray, x: np.ndarray) -> None:
+    """``x[positions] += B moves`` for ``block32 = B^T`` float32 (rows = ``B``'s columns, C-contiguous), summed in
+    float64, skipping zero moves."""
+    added = np.zeros(positions.size)
+    for p in range(positions.size):
+        move = moves[p]
+        if move == 0.0:
+            continue
+        row = block32[p]
+        for s in range(added.size):
+            added[s] += row[s] * move
+    for s in range(positions.size):
+        x[positions[s]] += added[s]
 
 
 @numba.njit(cache=True)
@@ -851,8 +868,8 @@ def _anderson_mix(outputs: np.ndarray, residuals: np.ndarray, outputs_x: np.ndar
 @numba.njit(cache=True)
 def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err: np.ndarray, scale: float,
                           contacts: np.ndarray, r: np.ndarray, x: np.ndarray, tol: float, max_steps: int,
-                          held_loaded: np.ndarray, held_factor: np.ndarray, stats: np.ndarray
-                          ) -> tuple[int, float, int, float, np.ndarray, np.ndarray]:
+                          held_loaded: np.ndarray, held_factor: np.ndarray, held_loaded_block32: np.ndarray,
+                          stats: np.ndarray) -> tuple[int, float, int, float, np.ndarray, np.ndarray, np.ndarray]:
     """Steps towards the answer of a 3D sub-problem in gross slip, cheaper than the sweeps there.
 
     ``Wa = (W_AA)^T`` C-contiguous (``W`` symmetric), ``q``, ``mu``, ``rho_err``, ``r``, ``x = W_AA r + q`` (exact)
@@ -860,11 +877,22 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
     scale. The loaded contacts ``L`` (``r_n > 0`` at the start) are taken to slide; a step
 
     - solves their normal rows exactly with the tangential forces held: ``r_n <- r_n - W_LL^{-1} x_n`` (a Cholesky
-      factor of ``W_LL``, the normal block of the loaded contacts);
+      factor of ``W_LL``'s normal rows and columns);
     - puts each on its cone against its slip, ``r_t = -mu r_n x_t / |x_t|`` (De Saxce's law for a sliding
-      contact), and forms ``x`` exactly: the step's output, whose error is measured;
+      contact), and updates the loaded contacts' ``x`` by ``W_LL`` times the change of ``r``, ``W_LL`` (all three
+      rows and columns of each loaded contact) read from a float32 copy and summed in float64: the step's output,
+      whose error is measured (the other contacts of the set have ``r = 0`` and their ``x`` of the last exact
+      formation);
     - mixes the last ``PREDICTOR_DEPTH + 1`` outputs (Anderson, :func:`_anderson_mix`) into the next step's input
-      (the loaded contacts' forces, and ``x`` as the same mix of the outputs' exact ones).
+      (the loaded contacts' forces, and ``x`` as the same mix of the outputs' ones).
+
+    Why float32 there: the step is memory-bound, and at 2025 contacts the float32 ``W_LL`` (18.5 MB) is 2.5x fewer
+    bytes than ``Wa``'s loaded rows (46 MB) and mostly stays in this machine's 32 MB cache from step to step. Its
+    updates leave ``x`` off ``W_AA r + q`` by ~6e-8 of ``W``'s entries times the change of ``r`` (the changes fall
+    from step to step); so wherever a decision rests on a step's error (below the tolerance: converged; not halving
+    the best error: stop), ``x`` is first formed exactly on the whole set from ``Wa`` (float64) and the error
+    measured again: every answer and every stop is judged on an exact ``x``, and the output handed to the sweeps
+    has its exact ``x``.
 
     A sliding contact with ``x_n = 0`` and ``r_t`` so directed is an exact zero of the natural map, so in gross
     slip the error falls as the normal forces and the directions settle: on the sphere's half-space cycle at mu 0.8
@@ -876,34 +904,41 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
     output that halved the error, or the start (then untouched: the sweeps' own iterates follow): inside the
     cones, ``x`` exact.
 
-    ``held_loaded``/``held_factor``: the loaded contacts (indices in the whole problem) and the factor of an
-    earlier call on the same ``W`` (the caller vouches): used again while the loaded set is the same.
-    ``stats`` (int64, 3) gets: calls that stepped, steps, factorisations.
+    ``held_loaded``/``held_factor``/``held_loaded_block32``: the loaded contacts (indices in the whole problem), the
+    factor and the float32 ``W_LL`` of an earlier call on the same ``W`` (the caller vouches): used again while the
+    loaded set is the same. ``stats`` (int64, 3) gets: calls that stepped, steps, factorisations.
     Returns (1 converged / 0 not, error, steps, the relative change of ``r`` of the last step kept (eq. 34, as the
-    sweeps report it; 0 if none), the loaded contacts and factor to hold: the held ones, a new pair, or empty arrays
-    when no factor was made).
+    sweeps report it; 0 if none), the loaded contacts, factor and float32 ``W_LL`` to hold: the held ones, new ones,
+    or empty arrays when no factor was made).
     """
     na = mu.size
     nothing_i = np.zeros(0, dtype=np.int64)
     nothing_f = np.zeros((0, 0))
+    nothing_32 = np.zeros((0, 0), dtype=np.float32)
     count = 0
     for a in range(na):
         if r[3 * a] > 0.0:
             count += 1
     if count == 0:
-        return 0, 0.0, 0, 0.0, held_loaded, held_factor
+        return 0, 0.0, 0, 0.0, held_loaded, held_factor, held_loaded_block32
     loaded = np.empty(count, dtype=np.int64)   # positions in the set
     k = 0
     for a in range(na):
         o = 3 * a
         if r[o] > 0.0:
             if x[o + 1] == 0.0 and x[o + 2] == 0.0:   # no direction to slide in
-                return 0, 0.0, 0, 0.0, held_loaded, held_factor
+                return 0, 0.0, 0, 0.0, held_loaded, held_factor, held_loaded_block32
             loaded[k] = a
             k += 1
     key = contacts[loaded]
+    loaded_rows = 3 * count
+    positions = np.empty(loaded_rows, dtype=np.int64)   # the loaded contacts' rows in the set
+    for i in range(count):
+        for c in range(3):
+            positions[3 * i + c] = 3 * loaded[i] + c
     if held_factor.shape[0] == count and np.array_equal(held_loaded, key):
         factor = held_factor
+        loaded_block32 = held_loaded_block32
     else:
         block = np.empty((count, count))
         for i in range(count):
@@ -913,34 +948,38 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
         for i in range(count):   # Cholesky reads one triangle: a W that is not symmetric is not for it
             for j in range(i):
                 if block[i, j] != block[j, i]:
-                    return 0, 0.0, 0, 0.0, nothing_i, nothing_f
+                    return 0, 0.0, 0, 0.0, nothing_i, nothing_f, nothing_32
         try:
             factor = np.linalg.cholesky(block)
         except Exception:  # not positive definite (a rank-deficient W): the sweeps' business
-            return 0, 0.0, 0, 0.0, nothing_i, nothing_f
+            return 0, 0.0, 0, 0.0, nothing_i, nothing_f, nothing_32
+        loaded_block32 = np.empty((loaded_rows, loaded_rows), dtype=np.float32)   # (W_LL)^T, as Wa
+        for p in range(loaded_rows):
+            row = Wa[positions[p]]
+            for s in range(loaded_rows):
+                loaded_block32[p, s] = row[positions[s]]
         stats[2] += 1
     stats[0] += 1
     err = _error(r, x, mu, rho_err, 3, scale)
     best, best_r, best_x = err, r.copy(), x.copy()
+    best_exact = True   # best_x is W_AA best_r + q formed from Wa
     rn = np.empty(count)
     for i in range(count):
         rn[i] = r[3 * loaded[i]]
     steps = 0
     empty_i = np.zeros(1, dtype=np.int64)
     empty_f = np.zeros(1)
-    # Anderson's mixing: ring buffers of the last PREDICTOR_DEPTH + 1 outputs, their exact x and their residuals.
-    loaded_rows = 3 * count
+    # Anderson's mixing: ring buffers of the last PREDICTOR_DEPTH + 1 outputs, their x and their residuals.
     outputs = np.zeros((PREDICTOR_DEPTH + 1, loaded_rows))
     residuals = np.zeros((PREDICTOR_DEPTH + 1, loaded_rows))
     outputs_x = np.zeros((PREDICTOR_DEPTH + 1, x.size))
     inputs = np.empty(loaded_rows)
+    moves = np.empty(loaded_rows)
     stored = 0
     change = 0.0
     while steps < max_steps:
-        for i in range(count):
-            o = 3 * loaded[i]
-            for c in range(3):
-                inputs[3 * i + c] = r[o + c]
+        for p in range(loaded_rows):
+            inputs[p] = r[positions[p]]
         # x_n = W_LL r_n + (the rest, held): the r_n that zeroes it is r_n - W_LL^{-1} x_n.
         gaps = np.empty(count)
         for i in range(count):
@@ -962,29 +1001,33 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
             r[o] = rn[i]
             r[o + 1] = -mu[a] * rn[i] * x[o + 1] / slip
             r[o + 2] = -mu[a] * rn[i] * x[o + 2] / slip
-        _recompute_x(Wa, empty_i, empty_i, empty_f, False, q, r, x)
+        for p in range(loaded_rows):
+            moves[p] = r[positions[p]] - inputs[p]
+        _add_moves32(loaded_block32, positions, moves, x)
         err = _error(r, x, mu, rho_err, 3, scale)
+        exact = False
+        if err < tol or not err < PREDICTOR_CONTRACTION * best:   # a decision (NaN included): on the exact x
+            _recompute_x(Wa, empty_i, empty_i, empty_f, False, q, r, x)
+            err = _error(r, x, mu, rho_err, 3, scale)
+            exact = True
         if not (err < tol or err < PREDICTOR_CONTRACTION * best):   # NaN included
             break   # the sweeps start from the best output that halved the error, or from the start
         best = err
         best_r[:] = r
         best_x[:] = x
+        best_exact = exact
         moved = 0.0
         size = 0.0
-        for i in range(count):
-            o = 3 * loaded[i]
-            for c in range(3):
-                moved += (r[o + c] - inputs[3 * i + c]) ** 2
-                size += r[o + c] ** 2
+        for p in range(loaded_rows):
+            moved += moves[p] ** 2
+            size += r[positions[p]] ** 2
         change = math.sqrt(moved) / max(math.sqrt(size), 1e-300)   # eq. (34) of the step, as the sweeps report it
         if err < tol:
             break
         slot = stored % (PREDICTOR_DEPTH + 1)
-        for i in range(count):
-            o = 3 * loaded[i]
-            for c in range(3):
-                outputs[slot, 3 * i + c] = r[o + c]
-                residuals[slot, 3 * i + c] = r[o + c] - inputs[3 * i + c]
+        for p in range(loaded_rows):
+            outputs[slot, p] = r[positions[p]]
+            residuals[slot, p] = moves[p]
         outputs_x[slot] = x
         stored += 1
         _anderson_mix(outputs, residuals, outputs_x, slot, min(stored, PREDICTOR_DEPTH + 1), loaded, r, x)
@@ -998,8 +1041,47 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
             break
     stats[1] += steps
     r[:] = best_r
-    x[:] = best_x
-    return (1 if best < tol else 0), best, steps, change, key, factor
+    if best_exact:
+        x[:] = best_x
+    else:   # an output that halved the error but decided nothing: its exact x, for the sweeps
+        _recompute_x(Wa, empty_i, empty_i, empty_f, False, q, r, x)
+    return (1 if best < tol else 0), best, steps, change, key, factor, loaded_block32
+
+
+@numba.njit(cache=True)
+def _x_from_held_block(A: np.ndarray, by_rows: bool, held_member: np.ndarray, held_block: np.ndarray, q: np.ndarray,
+                       r: np.ndarray, x: np.ndarray, dim: int) -> np.ndarray:
+    """``x = W r + q`` on the held set's rows from the held block ``(W_AA)^T`` instead of ``W``'s rows (``A = W``,
+    ``by_rows``), when every force of ``r`` lies in the held set (a warm start from the solve before): ``W``'s
+    columns outside the set then meet zero forces, and the block's columns give each row the same products in the
+    same order (ascending columns, zeros skipped) as :func:`_recompute_x_by_rows` on ``W``: the same bits, from the
+    set's ``|A|^2`` entries instead of ``|A| m``. Returns the contacts so formed (none when it does not apply)."""
+    nc = q.size // dim
+    formed = np.zeros(nc, dtype=np.bool_)
+    if not by_rows or held_block.shape[0] == 0 or held_member.size != nc:
+        return formed
+    for a in range(nc):
+        if not held_member[a]:
+            for c in range(dim):
+                if r[a * dim + c] != 0.0:
+                    return formed
+    rows = np.empty(held_block.shape[0], dtype=np.int64)
+    k = 0
+    for a in range(nc):
+        if held_member[a]:
+            for c in range(dim):
+                rows[k] = a * dim + c
+                k += 1
+    qa = q[rows]
+    ra = r[rows]
+    xa = np.empty(rows.size)
+    _recompute_x(held_block, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1), False, qa, ra,
+                 xa)
+    for i in range(rows.size):
+        x[rows[i]] = xa[i]
+    for a in range(nc):
+        formed[a] = held_member[a]
+    return formed
 
 
 @numba.njit(cache=True)
@@ -1008,8 +1090,9 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
                      max_iter: int, refresh: int, nsgs: bool, omega: float, scan_c: np.ndarray, scan_s: np.ndarray,
                      margin_factor: float, single: bool, stats: np.ndarray, predict: bool,
                      held_member: np.ndarray, held_block: np.ndarray, held_block32: np.ndarray, held_loaded: np.ndarray,
-                     held_factor: np.ndarray
-                     ) -> tuple[int, float, float, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                     held_factor: np.ndarray, held_loaded_block32: np.ndarray
+                     ) -> tuple[int, float, float, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                np.ndarray]:
     """Uzawa (``nsgs`` False) or NSGS sweeps on the working set only, with a final check on all contacts.
 
     Dense ``W`` only, given as ``A = W`` (``by_rows``: no transposed copy to make, a solve's own ``W``) or
@@ -1031,21 +1114,22 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
     ``x_ready`` False (``by_rows`` only): ``x`` is formed here on the rows the sweeps read, the normal rows of every
     contact (the set is chosen from them) and the set's other rows; the outside contacts' other rows wait for the
     check after the sweeps (an outside contact has ``x_n >= margin >= 0``, so it adds exactly 0 to the error
-    whatever its ``x_t``: 0 stands in for it until then, and ``x`` is complete on return).
+    whatever its ``x_t``: 0 stands in for it until then, and ``x`` is complete on return); when every force of the
+    start lies in the held set, that set's rows come from the held block (:func:`_x_from_held_block`, the same bits).
     ``held_block`` (``held_block32``: its float32 copy, or an empty array) is ``(W_AA)^T`` of a previous solve for
     the set ``held_member``: a pass on the same set uses it instead of gathering ``W_AA`` again (the caller vouches
     that it is this ``W``'s: the same values, so the same bits). Empty arrays: nothing held.
 
     ``predict`` (3D Uzawa only): each pass first tries :func:`_gross_slip_predictor` on the set (``held_loaded``,
-    ``held_factor``: its factor of an earlier solve, or empty arrays) and sweeps only if it does not converge,
-    from its best iterate.
+    ``held_factor``, ``held_loaded_block32``: its factor and float32 block of an earlier solve, or empty arrays) and
+    sweeps only if it does not converge, from its best iterate.
 
     ``stats`` (int64, 7) gets: passes, working-set size at the end, contacts that joined after the start, passes
     that swept the held block, then the predictor's passes that stepped, steps and factorisations.
-    Returns (iterations, error, change, status, member, block, block32, loaded, factor): sweeps plus predictor steps
-    over all passes, status 1 converged, 0 max_iter, 2 non-finite (as :func:`_uzawa_kernel`); the last pass's set,
-    its ``(W_AA)^T`` and the float32 copy (empty unless ``single``; empty blocks when no pass ran), and the
-    predictor's loaded contacts and factor, for the caller to hold.
+    Returns (iterations, error, change, status, member, block, block32, loaded, factor, loaded_block32): sweeps plus
+    predictor steps over all passes, status 1 converged, 0 max_iter, 2 non-finite (as :func:`_uzawa_kernel`); the
+    last pass's set, its ``(W_AA)^T`` and the float32 copy (empty unless ``single``; empty blocks when no pass ran),
+    and the predictor's loaded contacts, factor and float32 loaded block, for the caller to hold.
     """
     nc = mu.size
     m = q.size
@@ -1062,8 +1146,17 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
     for a in range(nc):
         deepest = max(deepest, -q[a * dim])
     margin = margin_factor * deepest
+    # formed: the contacts whose rows of x are all formed before the set is chosen (none, or the held set's)
+    formed = np.zeros(nc, dtype=np.bool_)
     if not x_ready:
-        _recompute_x_by_rows(A, q, r, x, np.arange(0, m, dim))
+        formed = _x_from_held_block(A, by_rows, held_member, held_block, q, r, x, dim)
+        normal = np.empty(nc - np.count_nonzero(formed), dtype=np.int64)
+        k = 0
+        for a in range(nc):
+            if not formed[a]:
+                normal[k] = a * dim
+                k += 1
+        _recompute_x_by_rows(A, q, r, x, normal)
     member = np.zeros(nc, dtype=np.bool_)
     for a in range(nc):
         o = a * dim
@@ -1072,17 +1165,17 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
     if not x_ready:
         count = 0
         for a in range(nc):
-            if member[a]:
+            if member[a] and not formed[a]:
                 count += 1
         tangential = np.empty(count * (dim - 1), dtype=np.int64)
         k = 0
         for a in range(nc):
             for c in range(1, dim):
-                if member[a]:
+                if not member[a]:
+                    x[a * dim + c] = 0.0  # formed at the check
+                elif not formed[a]:
                     tangential[k] = a * dim + c
                     k += 1
-                else:
-                    x[a * dim + c] = 0.0  # formed at the check
         _recompute_x_by_rows(A, q, r, x, tangential)
     err = _error(r, x, mu, rho_err, dim, scale)
     empty_i = np.zeros(1, dtype=np.int64)
@@ -1092,7 +1185,8 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
         _recompute_x_by_rows(A, q, r, x, np.arange(m))
         err = _error(r, x, mu, rho_err, dim, scale)
     if err < tol:
-        return 0, err, 0.0, 1, member, np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32), held_loaded, held_factor
+        return (0, err, 0.0, 1, member, np.zeros((0, 0)), np.zeros((0, 0), dtype=np.float32), held_loaded, held_factor,
+                held_loaded_block32)
     total = 0
     change = np.inf
     status = 0
@@ -1143,15 +1237,16 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
         if left <= 0:
             if not x_ready:
                 _recompute_x_by_rows(A, q, r, x, np.arange(m))
-            return total, err, change, 0, member, Wa, Wa32, held_loaded, held_factor
+            return total, err, change, 0, member, Wa, Wa32, held_loaded, held_factor, held_loaded_block32
         predicted = False
         if predict:
             contacts = np.empty(na, dtype=np.int64)
             for k in range(na):
                 contacts[k] = rows[k * dim] // dim
-            outcome, predicted_err, steps, predicted_change, held_loaded, held_factor = _gross_slip_predictor(
-                Wa, qa, mua, rho_erra, scale, contacts, ra, xa, tol, min(PREDICTOR_STEPS, left), held_loaded,
-                held_factor, stats[4:])
+            (outcome, predicted_err, steps, predicted_change, held_loaded, held_factor,
+             held_loaded_block32) = _gross_slip_predictor(Wa, qa, mua, rho_erra, scale, contacts, ra, xa, tol,
+                                                          min(PREDICTOR_STEPS, left), held_loaded, held_factor,
+                                                          held_loaded_block32, stats[4:])
             total += steps
             predicted = outcome == 1
             left = max_iter - total
@@ -1195,12 +1290,12 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
         else:
             _recompute_x(A, empty_i, empty_i, empty_f, False, q, r, x)
         if status == 2:
-            return total, err, change, 2, member, Wa, Wa32, held_loaded, held_factor
+            return total, err, change, 2, member, Wa, Wa32, held_loaded, held_factor, held_loaded_block32
         err = _error(r, x, mu, rho_err, dim, scale)
         if status != 1:
-            return total, err, change, status, member, Wa, Wa32, held_loaded, held_factor
+            return total, err, change, status, member, Wa, Wa32, held_loaded, held_factor, held_loaded_block32
         if err < tol:
-            return total, err, change, 1, member, Wa, Wa32, held_loaded, held_factor
+            return total, err, change, 1, member, Wa, Wa32, held_loaded, held_factor, held_loaded_block32
         added = 0
         for a in range(nc):
             if not member[a] and x[a * dim] < margin:
@@ -1211,7 +1306,7 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
             # Not reached in exact arithmetic (the outside terms are exact zeros): finish with full sweeps.
             left = max_iter - total
             if left <= 0:
-                return total, err, change, 0, member, Wa, Wa32, held_loaded, held_factor
+                return total, err, change, 0, member, Wa, Wa32, held_loaded, held_factor, held_loaded_block32
             Wc = np.ascontiguousarray(A.T) if by_rows else A
             if nsgs:
                 its, err, change, status = _nsgs_sweeps(Wc, Wc, empty_i, empty_i, empty_f, False, blocks, q, mu,
@@ -1223,7 +1318,7 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
             stats[1] = nc
             if status == 0:  # the sweeps update x step by step: a failed solve reports the x of its r, x = W r + q
                 _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-            return total + its, err, change, status, member, Wa, Wa32, held_loaded, held_factor
+            return total + its, err, change, status, member, Wa, Wa32, held_loaded, held_factor, held_loaded_block32
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -1807,19 +1902,19 @@ class _HeldBlock:
     """The working set's block of the last solve on a ``W`` whose :func:`block_rho` the caller holds, for the next
     solve on it (a gross-slip cycle's increments sweep the same set, and gathering ``W_AA`` reads ``W`` at every
     one): the set, ``(W_AA)^T`` and its float32 copy (or an empty array), and the gross-slip predictor's loaded
-    contacts and Cholesky factor (or empty arrays). Keyed on the identity of the caller's
+    contacts, Cholesky factor and float32 loaded block (or empty arrays). Keyed on the identity of the caller's
     ``W`` and ``block_steps`` arrays (weak references: the block goes with its ``W``), and dropped when ``W``'s
     diagonal or the steps' values are not those held (a ``W`` rebuilt in place). Its ``W`` had its values checked
     (finite) when it was first solved on."""
 
     def __init__(self, W: np.ndarray, steps: np.ndarray, member: np.ndarray, block: np.ndarray, block32: np.ndarray,
-                 loaded: np.ndarray, factor: np.ndarray):
+                 loaded: np.ndarray, factor: np.ndarray, loaded_block32: np.ndarray):
         self._W = weakref.ref(W, _forget_block)
         self._steps = weakref.ref(steps)
         self._diagonal = W.diagonal().copy()
         self._step_values = steps.copy()
         self.member, self.block, self.block32 = member, block, block32
-        self.loaded, self.factor = loaded, factor
+        self.loaded, self.factor, self.loaded_block32 = loaded, factor, loaded_block32
 
     def serves(self, W: object, steps: object) -> bool:
         """Whether ``W`` and ``steps`` are the very arrays held, with the diagonal and the steps held."""
@@ -1943,12 +2038,13 @@ def solve(W: np.ndarray | sp.spmatrix, q: np.ndarray, mu: float | np.ndarray, di
         gross_slip_predictor: 3D ``"uzawa"`` with ``working_set`` on a symmetric ``W`` whose loaded contacts'
             normal block is positive definite: each pass first takes the loaded contacts to slide: their normal
             forces solved exactly (a Cholesky factor of their ``W_nn``, held with the block) with the tangential
-            forces held, each put on its cone against its slip, ``x`` formed exactly, the last outputs mixed
+            forces held, each put on its cone against its slip, their ``x`` updated from a float32 copy of their
+            block (held too; every decision judged on ``x`` formed exactly), the last outputs mixed
             (Anderson), again while each output halves the error (:func:`_gross_slip_predictor`); the sweeps go
             on from its last output if it stops short of the tolerance (stick, a reversal), from the start if
             its first output did not halve the error. Same stopping criterion, same ``max_iter`` (steps count
             as iterations, :attr:`LocalResult.predictor_steps`); the answer is another point within the
-            tolerance, not the sweeps' bits. In gross slip 4-5 steps (~1.8 sweeps' cost each at 2025 contacts)
+            tolerance, not the sweeps' bits. In gross slip 4-5 steps (~0.6 sweeps' cost each at 2025 contacts)
             where the sweeps take ~20 (benchmarks/results/gross_slip.md). False: the sweeps alone.
 
     Returns:
@@ -2052,8 +2148,8 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
         blocks = np.ascontiguousarray(_diag_blocks(W, dim)) if nsgs else np.zeros((1, dim, dim))
         stats = np.zeros(7, dtype=np.int64)
         held_arrays = (_nothing_held() if held is None
-                       else (held.member, held.block, held.block32, held.loaded, held.factor))
-        counts.sweeps, err, change, status, member, block, block32, loaded, factor = _restricted_core(
+                       else (held.member, held.block, held.block32, held.loaded, held.factor, held.loaded_block32))
+        counts.sweeps, err, change, status, member, block, block32, loaded, factor, loaded_block32 = _restricted_core(
             W, True, False, blocks, q, mu_arr, rho_err * (1.0 if nsgs else rho_factor), rho_err, dim, r, x, tol,
             max_iter, _REFRESH, nsgs, rho_factor if nsgs else 1.0, _SCAN_COS, _SCAN_SIN, NEAR_MARGIN, float32_sweeps,
             stats, predictor, *held_arrays)
@@ -2062,11 +2158,11 @@ def _solve_full(W: np.ndarray | sp.csc_matrix, q: np.ndarray, mu_arr: np.ndarray
         counts.sweeps -= counts.predictor_steps
         counts.block_held = held is not None and block is held.block
         if holding is not None and block.shape[0] > 0 and not counts.block_held:
-            _held[0] = _HeldBlock(holding[0], holding[1], member, block, block32, loaded, factor)
+            _held[0] = _HeldBlock(holding[0], holding[1], member, block, block32, loaded, factor, loaded_block32)
         elif counts.block_held:
             if float32_sweeps and held.block32.shape[0] == 0:
                 held.block32 = block32
-            held.loaded, held.factor = loaded, factor
+            held.loaded, held.factor, held.loaded_block32 = loaded, factor, loaded_block32
         if nsgs and status != 2 and not _in_cones(r, mu_arr, dim):
             # As after the full NSGS below: a rounding step outside the cones is projected if that is as good.
             rp = r.copy()

@@ -61,6 +61,40 @@ def test_gross_slip_answered_by_the_predictor(sphere_flat):
     sweeps = solve(W, q, MU, 3, tol=TOL, r0=r0, gross_slip_predictor=False)
     assert sweeps.converged and sweeps.predictor_steps == 0
     assert np.abs(result.r - sweeps.r).max() <= SAME_ANSWER * scale
+    # The steps update x from a float32 copy of W_LL; the answer's x is formed exactly (float64, from W): the bits
+    # of W r + q summed row by row.
+    exact = np.empty(q.size)
+    ls._recompute_x_by_rows(W, q, result.r, exact, np.arange(q.size))
+    assert np.array_equal(result.x, exact)
+    # Its stops are judged on an exact x, so the float32 updates' rounding does not bound what it reaches: at 1e-13,
+    # near float64's reach, it still answers alone (judged on the updates' x it stops at 6 steps and sweeps).
+    tight = solve(W, q, MU, 3, tol=1e-13, r0=r0)
+    assert tight.converged and tight.sweeps == 0 and natural_map_error(W, q, tight.r, MU, 3) < 1e-13
+
+
+def test_an_output_handed_on_has_its_exact_x(sphere_flat):
+    """Stopped by max_steps after an output that halved the error but decided nothing (its x from the float32
+    updates), the kernel hands that output on with x formed exactly from ``Wa`` (float64), the bits the sweeps
+    start from; the float32 updates alone are off by rounding on the loaded rows (7e-12 of the largest x here)."""
+    W, xy = sphere_flat
+    q, r0 = _gross_slip_increment(W, xy)
+    Wa = np.ascontiguousarray(W.T)   # the working set = every contact
+    nc = xy.shape[0]
+    rho = ls.block_rho(W, 3)
+    r, x, stats = r0.copy(), W @ r0 + q, np.zeros(3, dtype=np.int64)
+    outcome, err, steps, change, key, factor, loaded_block32 = ls._gross_slip_predictor(
+        Wa, q, np.full(nc, MU), rho, ls._force_scale(q, np.full(nc, MU), rho, 3), np.arange(nc), r, x, TOL, 1,
+        *ls._nothing_held()[3:], stats)
+    assert (outcome, steps) == (0, 1) and change > 0   # one output kept, short of the tolerance
+    exact = np.empty(q.size)
+    empty_i = np.zeros(1, dtype=np.int64)
+    ls._recompute_x(Wa, empty_i, empty_i, np.zeros(1), False, q, r, exact)
+    assert np.array_equal(x, exact)
+    moved = W @ r0 + q
+    positions = np.flatnonzero(np.repeat(r0[0::3] > 0, 3))
+    ls._add_moves32(loaded_block32, positions, (r - r0)[positions], moved)
+    off = np.abs(moved - exact)[positions].max()   # the loaded rows (the only ones the updates move)
+    assert 0 < off < 1e-9 * np.abs(exact).max()
 
 
 def test_partial_slip_left_to_the_sweeps(sphere_flat):
@@ -97,10 +131,10 @@ def test_not_tried_on_a_W_it_cannot_factor(sphere_flat):
     negative = np.ascontiguousarray(-W)
     r, x, stats = r0.copy(), negative @ r0 + q, np.zeros(3, dtype=np.int64)
     start_r, start_x = r.copy(), x.copy()
-    outcome, err, steps, change, key, factor = ls._gross_slip_predictor(
+    outcome, err, steps, change, key, factor, loaded_block32 = ls._gross_slip_predictor(
         negative, q, np.full(nc, MU), ls.block_rho(W, 3), 1.0, np.arange(nc), r, x, TOL, ls.PREDICTOR_STEPS,
-        np.zeros(0, dtype=np.int64), np.zeros((0, 0)), stats)
-    assert (outcome, steps, key.size, factor.size) == (0, 0, 0, 0) and not stats.any()
+        *ls._nothing_held()[3:], stats)
+    assert (outcome, steps, key.size, factor.size, loaded_block32.size) == (0, 0, 0, 0, 0) and not stats.any()
     assert np.array_equal(r, start_r) and np.array_equal(x, start_x)
 
 
@@ -178,9 +212,10 @@ def test_compiled_loop_gross_slip_by_the_predictor(sphere_flat, normal_force):
 
 
 def test_factor_held_only_for_its_loaded_set(sphere_flat):
-    """The factor held from an earlier call is used only for the very loaded contacts it was made for: held for
-    another set of the same size (here: a wrong factor, the identity), the call factors anew and answers as a call
-    with nothing held, to the bit; held for its own set, it is used (no factorisation) with the same answer."""
+    """The factor and float32 loaded block held from an earlier call are used only for the very loaded contacts
+    they were made for: held for another set of the same size (here: wrong ones, the identity and zeros), the call
+    factors and gathers anew and answers as a call with nothing held, to the bit; held for its own set, they are
+    used (no factorisation) with the same answer."""
     W, xy = sphere_flat
     q, r0 = _gross_slip_increment(W, xy)
     Wa = np.ascontiguousarray(W.T)   # the working set = every contact
@@ -192,16 +227,17 @@ def test_factor_held_only_for_its_loaded_set(sphere_flat):
     others = (loaded + 1) % nc
     assert not np.array_equal(others, loaded)
 
-    def call(held_loaded, held_factor):
+    def call(held_loaded, held_factor, held_loaded_block32):
         r, x, stats = r0.copy(), W @ r0 + q, np.zeros(3, dtype=np.int64)
-        outcome, err, steps, change, key, factor = ls._gross_slip_predictor(
+        outcome, err, steps, change, key, factor, loaded_block32 = ls._gross_slip_predictor(
             Wa, q, np.full(nc, MU), rho, scale, contacts, r, x, TOL, ls.PREDICTOR_STEPS, held_loaded, held_factor,
-            stats)
-        return outcome, r, stats, key, factor
+            held_loaded_block32, stats)
+        return outcome, r, stats, key, factor, loaded_block32
 
-    fresh = call(np.zeros(0, dtype=np.int64), np.zeros((0, 0)))
+    fresh = call(*ls._nothing_held()[3:])
     assert fresh[0] == 1 and fresh[2][2] == 1 and np.array_equal(fresh[3], loaded)
-    stale = call(others, np.eye(loaded.size))
+    assert fresh[5].shape == (3 * loaded.size,) * 2
+    stale = call(others, np.eye(loaded.size), np.zeros_like(fresh[5]))
     assert stale[2][2] == 1 and np.array_equal(stale[1], fresh[1])
-    own = call(fresh[3], fresh[4])
-    assert own[2][2] == 0 and own[4] is fresh[4] and np.array_equal(own[1], fresh[1])
+    own = call(fresh[3], fresh[4], fresh[5])
+    assert own[2][2] == 0 and own[4] is fresh[4] and own[5] is fresh[5] and np.array_equal(own[1], fresh[1])

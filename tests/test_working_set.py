@@ -235,6 +235,33 @@ def test_held_block_only_for_its_own_set(sphere_flat):
     assert np.array_equal(left.r, fresh.r) and np.array_equal(left.x, fresh.x)
 
 
+def test_x_from_the_held_block_only_for_its_forces(sphere_flat):
+    """A solve on a held block forms x on the held set's rows from the block (W's columns outside the set meet zero
+    forces) when every force of its warm start lies in the set: the same bits as W's rows. A warm start with forces
+    outside the set (a sphere moved 2 spacings, its answer as the start) forms x from W's rows: the answer is a fresh
+    solve's to the last bit (from the block alone, x would miss those forces' columns)."""
+    W, xy = sphere_flat
+    scale = np.repeat(np.random.default_rng(7).uniform(0.7, 1.3, xy.shape[0]), 3)
+    W = W * scale[:, None] * scale[None, :]   # no two sets' blocks alike (test_held_block_only_for_its_own_set)
+    steps = ls.block_rho(W, 3)
+    shift = np.array([2.0, 0.0])
+    q_right, q_left = sphere_flat_q(xy - shift, 40.0, 0.5, 0.6), sphere_flat_q(xy + shift, 40.0, 0.5, 0.6)
+    r_left = solve(W.copy(), q_left, 0.5, 3, tol=TOL, hold_block=False).r
+    right = solve(W, q_right, 0.5, 3, tol=TOL, block_steps=steps)
+    x = np.full(W.shape[0], np.nan)
+    held = ls._held[0]
+    formed = ls._x_from_held_block(W, True, held.member, held.block, q_right, right.r, x, 3)
+    assert np.array_equal(formed, held.member) and formed.sum() == right.working_set
+    rows = np.flatnonzero(np.repeat(formed, 3))
+    exact = np.empty(W.shape[0])
+    ls._recompute_x_by_rows(W, q_right, right.r, exact, rows)
+    assert np.array_equal(x[rows], exact[rows]) and np.isnan(np.delete(x, rows)).all()
+    assert not ls._x_from_held_block(W, True, held.member, held.block, q_left, r_left, x, 3).any()
+    left = solve(W, q_left, 0.5, 3, tol=TOL, r0=r_left, block_steps=steps)
+    fresh = solve(W.copy(), q_left, 0.5, 3, tol=TOL, r0=r_left, hold_block=False)
+    assert left.converged and np.array_equal(left.r, fresh.r) and np.array_equal(left.x, fresh.x)
+
+
 def test_held_block_goes_with_its_W(sphere_flat):
     """The block held (tens of MB at 1000+ contacts) is dropped when its W is freed."""
     W, xy, steps = _own(sphere_flat)
