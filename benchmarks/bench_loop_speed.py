@@ -53,13 +53,15 @@ SLIP = 3.4      # the gross-slip amplitude of its gross-slip problem (times the 
 OUTPUTS = ("rows", "r", "x", "y", "wear_gap", "states", "d", "solves")
 
 
-def loop_of(tree: Path) -> types.ModuleType:
-    """``cycling`` of the checkout at ``tree``, as the package ``dolfinx_fretting_before`` (its ``__init__`` is not
-    run: the loop imports only ``loading``, ``local_solvers`` and ``wear``, all pure NumPy/numba)."""
-    package = types.ModuleType("dolfinx_fretting_before")
-    package.__path__ = [str(tree / "dolfinx_fretting")]
-    sys.modules["dolfinx_fretting_before"] = package
-    return importlib.import_module("dolfinx_fretting_before.cycling")
+def module_of(tree: Path, name: str = "cycling") -> types.ModuleType:
+    """The module ``name`` of the checkout at ``tree``, as ``dolfinx_fretting_before.<name>`` (the package's
+    ``__init__`` is not run: ``cycling`` imports only ``loading``, ``local_solvers`` and ``wear``, all pure
+    NumPy/numba, and ``local_solvers`` nothing of the package)."""
+    if "dolfinx_fretting_before" not in sys.modules:
+        package = types.ModuleType("dolfinx_fretting_before")
+        package.__path__ = [str(tree / "dolfinx_fretting")]
+        sys.modules["dolfinx_fretting_before"] = package
+    return importlib.import_module(f"dolfinx_fretting_before.{name}")
 
 
 def timed(W: np.ndarray, xy: np.ndarray, radius: float, slips: np.ndarray, force: float | None, wear: float,
@@ -95,7 +97,7 @@ def main(argv=None) -> int:
 
     variants = {}
     if args.before is not None:
-        before = loop_of(args.before.resolve())
+        before = module_of(args.before.resolve())
         # A tree whose loops take hold_block / float32_sweeps (HELD_BLOCK_ARGUMENTS) holds the block, as this one.
         variants["before"] = (True if hasattr(before, "HELD_BLOCK_ARGUMENTS") else None, before, False)
     variants |= {"gathered": (False, cycling, False), "held": (True, cycling, False)}
