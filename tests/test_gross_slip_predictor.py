@@ -72,6 +72,51 @@ def test_gross_slip_answered_by_the_predictor(sphere_flat):
     assert tight.converged and tight.sweeps == 0 and natural_map_error(W, q, tight.r, MU, 3) < 1e-13
 
 
+def test_a_large_change_of_the_forces(sphere_flat):
+    """The load moved outward (a worn centre: its gaps raised by up to 0.05-0.2 of the approach) from the increment
+    before: the float32 updates' offset grows with the change of r since x was last formed exactly and can hide the
+    last of the error (a claim of convergence the exact x denies); the steps then go on from the exact x, and the
+    predictor still answers alone at 0.05 and 0.1 (judged on the updated x it stopped and swept). At 0.2 a contact
+    of the rim closes during the steps (its x is not updated by them: seen at the first exact x) and the sweeps
+    finish. Every answer within the tolerance on the whole problem, its reported error the recomputed one."""
+    W, xy = sphere_flat
+    r0 = solve(W, sphere_flat_q(xy, 40.0, 0.5, 0.6), MU, 3, tol=TOL, gross_slip_predictor=False).r
+    squared = (xy ** 2).sum(axis=1)
+    contact = squared[r0[0::3] > 0].max()
+    for wear, alone in ((0.05, True), (0.1, True), (0.2, False)):
+        q = sphere_flat_q(xy, 40.0, 0.5, 1.2)
+        q[0::3] += wear * np.exp(-squared / (0.3 * contact))
+        result = solve(W, q, MU, 3, tol=TOL, r0=r0)
+        assert result.converged and result.predictor_steps > 0 and (result.sweeps == 0) == alone, result.message
+        error = natural_map_error(W, q, result.r, MU, 3)
+        assert error < TOL and result.error == pytest.approx(error, rel=1e-6)
+
+
+def test_held_factor_and_block_follow_the_loaded_set(sphere_flat):
+    """A solve on the held working set whose loaded contacts are not the held factor's (warm starts with the rim's
+    forces removed beyond 0.8 and then 0.9 of the contact radius: the same set, the rim's gaps closed, more contacts
+    loaded) makes and holds the factor and the float32 loaded block of its own loaded contacts beside the held
+    block: L L^T = W_LL's normal rows and columns, the float32 block W_LL's values."""
+    W, xy = sphere_flat
+    W = W.copy()
+    steps = ls.block_rho(W, 3)
+    q = sphere_flat_q(xy, 40.0, 0.5, 1.2)
+    answer = solve(W, q, MU, 3, tol=TOL, block_steps=steps).r
+    radius = np.hypot(*xy.T)
+    contact = radius[answer[0::3] > 0].max()
+    inner = [np.where(np.repeat(radius > share * contact, 3), 0.0, answer) for share in (0.8, 0.9)]
+    first = solve(W, q, MU, 3, tol=TOL, r0=inner[0], block_steps=steps)
+    second = solve(W, q, MU, 3, tol=TOL, r0=inner[1], block_steps=steps)
+    held = ls._held[0]
+    loaded = np.flatnonzero(inner[1][0::3] > 0)
+    assert first.working_set == second.working_set and second.block_held and second.predictor_steps > 0
+    assert np.count_nonzero(inner[0][0::3] > 0) < loaded.size and np.array_equal(held.loaded, loaded)
+    normal = W[np.ix_(3 * loaded, 3 * loaded)]
+    assert np.allclose(held.factor @ held.factor.T, normal, rtol=0, atol=1e-12 * np.abs(normal).max())
+    rows = np.repeat(3 * loaded, 3) + np.tile(np.arange(3), loaded.size)
+    assert np.array_equal(held.loaded_block32, W[np.ix_(rows, rows)].T.astype(np.float32))
+
+
 def test_an_output_handed_on_has_its_exact_x(sphere_flat):
     """Stopped by max_steps after an output that halved the error but decided nothing (its x from the float32
     updates), the kernel hands that output on with x formed exactly from ``Wa`` (float64), the bits the sweeps
