@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import types
 from pathlib import Path
 
 import numpy as np
@@ -41,8 +42,8 @@ from dolfinx_fretting import local_solvers  # noqa: E402
 TOL = 1e-10  # the scenes' solver.local_tol
 
 
-def timed(W: np.ndarray, q: np.ndarray, r0: np.ndarray, steps: np.ndarray, variant: str, before=None
-          ) -> tuple[local_solvers.LocalResult, float]:
+def timed(W: np.ndarray, q: np.ndarray, r0: np.ndarray, steps: np.ndarray, variant: str,
+          before: types.ModuleType | None = None) -> tuple[local_solvers.LocalResult, float]:
     start = time.process_time()
     if variant == "before":
         result = before.solve(W, q, MU, 3, tol=TOL, r0=r0, block_steps=steps)
@@ -156,6 +157,7 @@ def markdown(command: str, info: dict, records: list[dict]) -> str:
                      + f"{row['on_steps']} + {row['on_sweeps']} | {row['off_sweeps']} | {row['difference']:.1e}"
                      + (f" ({row['difference_before']:.1e})" if before else "") + f" | {row['error_on']:.1e} |")
     return "\n".join(L) + "\n"
+
 
 if __name__ == "__main__":
     sys.exit(main())

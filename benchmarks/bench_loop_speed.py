@@ -56,7 +56,8 @@ OUTPUTS = ("rows", "r", "x", "y", "wear_gap", "states", "d", "solves")
 def module_of(tree: Path, name: str = "cycling") -> types.ModuleType:
     """The module ``name`` of the checkout at ``tree``, as ``dolfinx_fretting_before.<name>`` (the package's
     ``__init__`` is not run: ``cycling`` imports only ``loading``, ``local_solvers`` and ``wear``, all pure
-    NumPy/numba, and ``local_solvers`` nothing of the package)."""
+    NumPy/numba, and ``local_solvers`` nothing of the package). One tree a process: the first call's tree serves
+    every later call."""
     if "dolfinx_fretting_before" not in sys.modules:
         package = types.ModuleType("dolfinx_fretting_before")
         package.__path__ = [str(tree / "dolfinx_fretting")]
