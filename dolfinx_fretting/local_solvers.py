@@ -1070,13 +1070,14 @@ def _x_from_held_block(A: np.ndarray, by_rows: bool, held_member: np.ndarray, he
     """``x = W r + q`` on the held set's rows from the held block ``(W_AA)^T`` instead of ``W``'s rows (``A = W``,
     ``by_rows``), when every force of ``r`` lies in the held set (a warm start from the solve before): ``W``'s
     columns outside the set then meet zero forces, and the block's columns give each row the same products in the
-    same order (ascending columns, zeros skipped) as :func:`_recompute_x_by_rows` on ``W``: the same bits, and the
-    same products, read along the block's contiguous rows (the loaded contacts' columns of ``W_AA``) instead of
-    gathered from ``W``'s rows (the start's ``x`` 9.3-9.6 -> 6.0-6.5 ms at 2025 contacts, gross_slip.md). Returns
-    the contacts so formed (none when it does not apply)."""
+    same order (ascending columns, zeros skipped) as :func:`_recompute_x_by_rows` on ``W``: the same bits, read
+    along the block's contiguous rows (the loaded contacts' columns of ``W_AA``) instead of gathered from ``W``'s
+    rows (the start's ``x`` 9.3-9.6 -> 6.0-6.5 ms at 2025 contacts, gross_slip.md). Returns the contacts so formed
+    (none when it does not apply, or when the held set and block do not match in size)."""
     nc = q.size // dim
     formed = np.zeros(nc, dtype=np.bool_)
-    if not by_rows or held_block.shape[0] == 0 or held_member.size != nc:
+    if (not by_rows or held_block.shape[0] == 0 or held_member.size != nc
+            or np.count_nonzero(held_member) * dim != held_block.shape[0]):
         return formed
     for a in range(nc):
         if not held_member[a]:
