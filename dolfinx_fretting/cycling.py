@@ -530,7 +530,8 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
                  j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray, lu_ok: np.ndarray, counts: np.ndarray,
                  xs: np.ndarray, qn: np.ndarray, rn: np.ndarray, xn: np.ndarray,
                  held: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], hold_block: bool,
-                 float32_sweeps: bool, warm_pattern: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
+                 float32_sweeps: bool, warm_pattern: bool, q_before: np.ndarray, x_known: np.ndarray
+                 ) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
     """One local solve of increment ``j`` from the warm start ``r`` (in/out; ``x`` out): the exact answer when no
     contact penetrates, else the cached contact pattern (``active``) or the warm start's (``warm_pattern``, 2D:
     :func:`warm_pattern_solve`, counted in ``counts[0]`` accepted and ``counts[1]`` not), else the Uzawa sweeps (on
@@ -550,6 +551,12 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
     the sweeps' updates of x read a float32 copy of the block (held beside it), as
     ``local_solvers.solve(..., float32_sweeps=True)``.
 
+    ``x_known`` (bool, 1; in/out) True: ``x = W r + q_before`` on entry, ``q_before`` the right-hand side of the solve
+    before (the caller vouches that ``r`` has not changed since): the sweeps' start ``W r + q`` is then ``x + q -
+    q_before`` (O(m); forming it from ``W`` reads every loaded column, 7.1 ms at 2025 contacts, local_speed.md), the
+    same up to rounding; an answer at that start is judged again on ``x`` formed exactly. On return ``x_known`` says
+    whether ``x = W r + q`` exactly (a converged solve), and ``q_before`` holds ``q`` then.
+
     Returns (sweeps and predictor steps, error, local status: 1 converged, what is held for the next solve)."""
     m = q.size
     nc = mu.size
@@ -559,6 +566,8 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
     working_stats = np.zeros(7, dtype=np.int64)
     its = 0
     err = 0.0
+    known = x_known[0]
+    x_known[0] = False   # until this solve's x is W r + q
     # No contact penetrates: r = 0 is an exact solution (x = q), as in local_solvers.solve.
     exact = True
     for a in range(nc):
@@ -572,6 +581,7 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         its = 0
         err = 0.0
     elif warm_pattern and dim == 2:
+        known = False   # the tries leave r and x as they please
         accepted, err, _tried = warm_pattern_solve(Wc, q, mu, rho, tol, r, x)   # Wc = W^T = W
         if accepted:
             exact = True
@@ -580,6 +590,7 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         else:
             counts[1] += 1
     elif active and pattern[j, 0] >= 0:
+        known = False   # the pattern's x replaces the warm start's
         if not lu_ok[j]:
             _pattern_matrix(Wc, pattern[j], mu, lu[j])   # Wc = W^T = W
             lu_ok[j] = _lu_factor(lu[j], piv[j])
@@ -617,10 +628,21 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
         # Sweeps on the closed and nearly closed contacts, then a check on all (local_solvers.solve's default). x on
         # every row by W^T's rows, before and at the check: contiguous, vectorised reads, faster here than the rows
         # the sweeps read by W's rows and the check's rows apart (measured: local_speed.md, its loop section).
-        _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
+        if known:
+            for i in range(m):
+                x[i] += q[i] - q_before[i]
+        else:
+            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
         its, err, change, status, member, block, block32, loaded, factor, loaded_block32 = _restricted_core(
             Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0, empty_f,
             empty_f, NEAR_MARGIN, float32_sweeps, working_stats, GROSS_SLIP_PREDICTOR, *held)
+        if known and its == 0 and status == 1:
+            # Answered at the start, whose x came from the solve before's: judged again on x formed exactly (the
+            # core checks x only after it has swept or stepped).
+            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
+            its, err, change, status, member, block, block32, loaded, factor, loaded_block32 = _restricted_core(
+                Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0,
+                empty_f, empty_f, NEAR_MARGIN, float32_sweeps, working_stats, GROSS_SLIP_PREDICTOR, *held)
         if counts.size >= 5:
             counts[3] += 1 if working_stats[3] > 0 else 0
             counts[4] += 1 if working_stats[3] < working_stats[0] else 0
@@ -628,6 +650,9 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
             held = (member, block, block32, loaded, factor, loaded_block32)
         if status != 1:
             return its, err, status, held
+    for i in range(m):
+        q_before[i] = q[i]
+    x_known[0] = True
     return its, err, 1, held
 
 
@@ -690,6 +715,8 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
     row = np.empty(N_ROW - 2)
     normal_only, Wn, qn, rn, xn = _normal_rows(Wc, mu, dim)
     held = _nothing_held()   # the working set's block, held from one local solve to the next (Wc is fixed here)
+    q_before = np.empty(m)   # the last solve's q, and whether x = W r + q_before (_solve_local)
+    x_known = np.zeros(1, dtype=np.bool_)
     for j in range(n):
         if evolve:
             _friction_before(j, mu, k, energy, table_of, abscissae, values, lengths, wear_base, wear_per_mu,
@@ -698,14 +725,15 @@ def run_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: int, g0
                 normal_only, Wn, qn, rn, xn = _normal_rows(Wc, mu, dim)
         _rhs(g0, wear_gap, G, D[j], Q, S[j], y, dim, q_abs, q)
         if warm == 1:
+            x_known[0] = False   # another start than the last answer, whose x is known
             for i in range(m):
                 r[i] = r_warm[j, i]
         else:
-            for i in range(m):
+            for i in range(m):   # the last answer itself (_finish wrote it to r_last): x stays known
                 r[i] = r_last[i]
         its, err, status, held = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh,
                                               active, j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held,
-                                              hold_block, float32_sweeps, warm_pattern)
+                                              hold_block, float32_sweeps, warm_pattern, q_before, x_known)
         if status != 1:
             return j, status, err
         _finish(j, r, x, q, q_abs, y, mu, dim, tributary, abscissa, k, wear_gap, states, row, its, err, rows,
@@ -730,11 +758,12 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
                  refresh: int, active: bool, j: int, pattern: np.ndarray, lu: np.ndarray, piv: np.ndarray,
                  lu_ok: np.ndarray, counts: np.ndarray, xs: np.ndarray, qn: np.ndarray, rn: np.ndarray,
                  xn: np.ndarray, tally: np.ndarray, held: tuple[np.ndarray, ...], hold_block: bool,
-                 float32_sweeps: bool, warm_pattern: bool) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
+                 float32_sweeps: bool, warm_pattern: bool, q_before: np.ndarray, x_known: np.ndarray
+                 ) -> tuple[int, float, int, tuple[np.ndarray, ...]]:
     """One trial of the load control: the local problem with the obstacle at ``trial`` (its components), warm
     started from ``r`` (the previous trial's forces, as the stepwise path), then ``F = A r`` (the total force along
-    each component). ``tally``: (solves, sweeps) so far, in/out; ``held``, ``hold_block``, ``float32_sweeps``: as
-    :func:`_solve_local`.
+    each component). ``tally``: (solves, sweeps) so far, in/out; ``held``, ``hold_block``, ``float32_sweeps``,
+    ``q_before``, ``x_known``: as :func:`_solve_local` (``r`` and ``x`` go from trial to trial).
     Returns (the first non-finite component or -1, error, local status, what is held for the next solve)."""
     for c in range(trial.size):
         if not math.isfinite(trial[c]):
@@ -747,7 +776,7 @@ def _force_trial(trial: np.ndarray, T: np.ndarray, A: np.ndarray, Dj: np.ndarray
     _rhs(g0, wear_gap, G, Dj, Q, Sj, y, dim, q_abs, q)
     its, err, status, held = _solve_local(Wc, Wn, normal_only, rho, mu, dim, q, r, x, tol, max_iter, refresh, active,
                                           j, pattern, lu, piv, lu_ok, counts, xs, qn, rn, xn, held, hold_block,
-                                          float32_sweeps, warm_pattern)
+                                          float32_sweeps, warm_pattern, q_before, x_known)
     tally[0] += 1
     tally[1] += its
     for c in range(F.size):
@@ -809,6 +838,8 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
     trial = np.empty(ncomp)
     tally = np.zeros(2, dtype=np.int64)
     held = _nothing_held()   # the working set's block, held from one local solve to the next (Wc is fixed here)
+    q_before = np.empty(m)   # the last trial's q, and whether x = W r + q_before (_solve_local)
+    x_known = np.zeros(1, dtype=np.bool_)
     for i in range(m):
         r[i] = r_last[i]
     for j in range(n):
@@ -826,7 +857,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
         bad, err, status, held = _force_trial(trial, T, A, Dj, F, Wc, Wn, normal_only, rho, mu, dim, g0, wear_gap, G,
                                               Q, S[j], y, q_abs, q, r, x, tol, max_iter, refresh, active, j, pattern,
                                               lu, piv, lu_ok, counts, xs, qn, rn, xn, tally, held, hold_block,
-                                              float32_sweeps, warm_pattern)
+                                              float32_sweeps, warm_pattern, q_before, x_known)
         if bad >= 0:
             failure[0] = bad
             return j, TRIAL_NOT_FINITE, 0.0
@@ -864,7 +895,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                                                           wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
                                                           refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
                                                           rn, xn, tally, held, hold_block, float32_sweeps,
-                                                          warm_pattern)
+                                                          warm_pattern, q_before, x_known)
                     if bad >= 0 or status != 1:
                         break
                     f0 = F[kc] - target
@@ -881,7 +912,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                                                           wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol, max_iter,
                                                           refresh, active, j, pattern, lu, piv, lu_ok, counts, xs, qn,
                                                           rn, xn, tally, held, hold_block, float32_sweeps,
-                                                          warm_pattern)
+                                                          warm_pattern, q_before, x_known)
                     if bad >= 0 or status != 1:
                         break
                     fb = F[kc] - target
@@ -904,7 +935,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                                                               g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol,
                                                               max_iter, refresh, active, j, pattern, lu, piv, lu_ok,
                                                               counts, xs, qn, rn, xn, tally, held, hold_block,
-                                                              float32_sweeps, warm_pattern)
+                                                              float32_sweeps, warm_pattern, q_before, x_known)
                         if bad >= 0 or status != 1:
                             break
                         fb = F[kc] - target
@@ -921,7 +952,7 @@ def run_force_increments(Wc: np.ndarray, rho: np.ndarray, mu: np.ndarray, dim: i
                                                               g0, wear_gap, G, Q, S[j], y, q_abs, q, r, x, tol,
                                                               max_iter, refresh, active, j, pattern, lu, piv, lu_ok,
                                                               counts, xs, qn, rn, xn, tally, held, hold_block,
-                                                              float32_sweeps, warm_pattern)
+                                                              float32_sweeps, warm_pattern, q_before, x_known)
                         if bad >= 0 or status != 1:
                             break
                         fc = F[kc] - target

@@ -13,6 +13,7 @@ import pytest
 from support.fclib_problems import needs_fclib, problem
 from support.local_problems import cycle_q, half_space, sphere_flat_cycle, sphere_flat_q
 
+from dolfinx_fretting import cycling
 from dolfinx_fretting import local_solvers as ls
 from dolfinx_fretting.local_solvers import natural_map_error, solve
 
@@ -314,6 +315,45 @@ def test_compiled_loop_holds_the_block(sphere_flat, normal_force):
     assert max(held["counts"][3], held["counts"][4]) <= swept <= held["counts"][3] + held["counts"][4]
     assert swept <= int(held["solves"].sum())
     assert held["counts"][3] >= swept // 2 and gathered["counts"][3] == 0
+
+
+def test_compiled_loop_starts_from_the_known_x(sphere_flat):
+    """The compiled loop's local solve from the answer of the solve before (force control's trials, the increments
+    warm started from the last one) starts from ``x + q - q_before`` instead of forming ``W r + q`` again: the same
+    answer to the tolerance's effect, every answer's ``x`` formed exactly (the bits of ``W r + q`` by W's rows), and
+    an answer at the start judged again on the exact ``x`` (the start's own ``x`` differs in the last bits)."""
+    W, xy = sphere_flat
+    nc, m = xy.shape[0], W.shape[0]
+    mu = np.full(nc, 0.5)
+    rho = ls.block_rho(W, 3)
+    cache = cycling.ActivePatternCache(1, nc, 3)
+    normal_only, Wn, qn, rn, xn = cycling._normal_rows(W, mu, 3)
+
+    def local(q, r, x, q_before, known):
+        x_known = np.array([known])
+        its, err, status, _ = cycling._solve_local(
+            W, Wn, normal_only, rho, mu, 3, q, r, x, TOL, 20000, ls._REFRESH, False, 0, cache.pattern, cache.lu,
+            cache.piv, cache.lu_ok, cache.counts, np.empty(m), qn, rn, xn, ls._nothing_held(), False, False, False,
+            q_before, x_known)
+        assert status == 1 and x_known[0] and np.array_equal(q_before, q)
+        exact = np.empty(m)
+        ls._recompute_x_by_rows(W, q, r, exact, np.arange(m))
+        assert np.array_equal(x, exact)   # the answer's x formed exactly
+        return its
+
+    q1, q2 = sphere_flat_q(xy, 40.0, 0.5, 0.6), sphere_flat_q(xy, 40.0, 0.52, 0.7)
+    r, x, q_before = np.zeros(m), np.empty(m), np.empty(m)
+    local(q1, r, x, q_before, False)
+    r_known, x_known_start, r_formed = r.copy(), x.copy(), r.copy()
+    assert local(q2, r_known, x_known_start, q_before.copy(), True) > 0
+    assert local(q2, r_formed, np.empty(m), q_before.copy(), False) > 0
+    assert np.abs(r_known - r_formed).max() <= 1e-7 * np.abs(r_formed).max()   # as test_contacts_outside_...
+    q3 = q2 * (1.0 + 1e-14)   # r_known still answers it: returned at the start
+    start = x_known_start + (q3 - q2)
+    exact = np.empty(m)
+    ls._recompute_x_by_rows(W, q3, r_known, exact, np.arange(m))
+    assert not np.array_equal(start, exact)   # the known start is off in the last bits
+    assert local(q3, r_known, x_known_start, q2.copy(), True) == 0
 
 
 def test_compiled_loop_float32_sweeps_meet_the_tolerance(sphere_flat):
