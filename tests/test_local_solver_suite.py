@@ -275,6 +275,11 @@ NOT_CONVERGING = {
     "auto": {"RockPile_tob1", "fc2d_granularflowonwall_07002_00801"},
 }
 CAPS = {"nsgs": 5000, "newton": 500, "auto": 2000}
+# Problems whose outcome the BLAS kernel decides (the Newton steps' dense LU): spheres-in-a-box-98 converges in 115
+# (newton) and 205 (auto) iterations with OpenBLAS's Haswell, Zen and Nehalem kernels and stalls at 2.32e-8 within the
+# caps with its Sandybridge kernel, which an AVX-512 machine here gets by default (measured with OPENBLAS_CORETYPE,
+# the same code): either outcome is accepted, each checked as any other (an honest report, or a verified answer).
+KERNEL_DEPENDENT = {"newton": {"spheres-in-a-box-98-i10000-256-10"}, "auto": {"spheres-in-a-box-98-i10000-256-10"}}
 
 
 @needs_fclib
@@ -285,7 +290,8 @@ def test_fclib_problem(method, name):
     P = problem(name)
     res = solve(P.W, P.q, P.mu, P.dim, method=method, tol=1e-10, max_iter=CAPS[method])
     if not res.converged:
-        assert name in NOT_CONVERGING[method], f"{name}: unexpected failure: {res.message}"
+        assert name in NOT_CONVERGING[method] | KERNEL_DEPENDENT.get(method, set()), \
+            f"{name}: unexpected failure: {res.message}"
         assert "not converged" in res.message and res.error >= 1e-10
         return
     check_result(res, P.W, P.q, P.mu, P.dim, 1e-10)
