@@ -277,8 +277,9 @@ NOT_CONVERGING = {
 CAPS = {"nsgs": 5000, "newton": 500, "auto": 2000}
 # Problems whose outcome the BLAS kernel decides (the Newton steps' dense LU): spheres-in-a-box-98 converges in 115
 # (newton) and 205 (auto) iterations with OpenBLAS's Haswell, Zen and Nehalem kernels and stalls at 2.32e-8 within the
-# caps with its Sandybridge kernel, which an AVX-512 machine here gets by default (measured with OPENBLAS_CORETYPE,
-# the same code): either outcome is accepted, each checked as any other (an honest report, or a verified answer).
+# caps with its Sandybridge, SkylakeX and Cooperlake kernels (Cooperlake: an AVX-512 machine's default here; measured
+# with OPENBLAS_CORETYPE, the same code): either outcome is accepted, each checked as any other (an honest report, or
+# a verified answer).
 KERNEL_DEPENDENT = {"newton": {"spheres-in-a-box-98-i10000-256-10"}, "auto": {"spheres-in-a-box-98-i10000-256-10"}}
 
 
