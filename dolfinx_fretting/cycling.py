@@ -542,13 +542,13 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
     ``held``: the working set, its ``(W_AA)^T`` and float32 copy, and the gross-slip predictor's loaded contacts,
     Cholesky factor and float32 loaded block, of an earlier solve of this call of the loop
     (``local_solvers._nothing_held`` at first): the sweeps use the block again while the set is the same, the
-    predictor its factor and loaded block while the loaded contacts are,
-    instead of gathering and factoring again (cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is
-    fixed within a call of the loop (no loop changes it; a new W is a new call, which starts with nothing held): the
-    same values, so the same bits. ``hold_block`` False: nothing is held (the block gathered at every solve).
-    ``counts`` of 5 entries (an :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those
-    that gathered one in ``counts[4]`` (a shorter ``counts``, finite sliding's 3, gets neither). ``float32_sweeps``:
-    the sweeps' updates of x read a float32 copy of the block (held beside it), as
+    predictor its factor and loaded block while the loaded contacts are, instead of gathering and factoring again
+    (cost: ``benchmarks/results/loop_speed.md``). Sound because ``Wc`` is fixed within a call of the loop (no loop
+    changes it; a new W is a new call, which starts with nothing held): the same values, so the same bits.
+    ``hold_block`` False: nothing is held (the block gathered at every solve). ``counts`` of 5 entries (an
+    :class:`ActivePatternCache`'s) gets the solves that swept the held block in ``counts[3]`` and those that
+    gathered one in ``counts[4]`` (a shorter ``counts``, finite sliding's 3, gets neither). ``float32_sweeps``: the
+    sweeps' updates of x read a float32 copy of the block (held beside it), as
     ``local_solvers.solve(..., float32_sweeps=True)``.
 
     ``x_known`` (bool, 1; in/out) True: ``x = W r + q_before`` on entry, ``q_before`` the right-hand side of the solve
@@ -633,16 +633,16 @@ def _solve_local(Wc: np.ndarray, Wn: np.ndarray, normal_only: bool, rho: np.ndar
                 x[i] += q[i] - q_before[i]
         else:
             _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
-        its, err, change, status, member, block, block32, loaded, factor, loaded_block32 = _restricted_core(
-            Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0, empty_f,
-            empty_f, NEAR_MARGIN, float32_sweeps, working_stats, GROSS_SLIP_PREDICTOR, *held)
-        if known and its == 0 and status == 1:
-            # Answered at the start, whose x came from the solve before's: judged again on x formed exactly (the
-            # core checks x only after it has swept or stepped).
-            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
+        for _start in range(2):   # the start's own x, then (if it answered at once) x formed exactly
             its, err, change, status, member, block, block32, loaded, factor, loaded_block32 = _restricted_core(
                 Wc, False, True, empty_blocks, q, mu, rho, rho, dim, r, x, tol, max_iter, refresh, False, 1.0,
                 empty_f, empty_f, NEAR_MARGIN, float32_sweeps, working_stats, GROSS_SLIP_PREDICTOR, *held)
+            if not (known and its == 0 and status == 1):
+                break
+            # Answered at the start, whose x came from the solve before's: judged again on x formed exactly (the
+            # core checks x only after it has swept or stepped).
+            _recompute_x(Wc, empty_i, empty_i, empty_f, False, q, r, x)
+            known = False
         if counts.size >= 5:
             counts[3] += 1 if working_stats[3] > 0 else 0
             counts[4] += 1 if working_stats[3] < working_stats[0] else 0

@@ -1065,32 +1065,38 @@ def _gross_slip_predictor(Wa: np.ndarray, q: np.ndarray, mu: np.ndarray, rho_err
 
 
 @numba.njit(cache=True)
+def _member_rows(member: np.ndarray, dim: int) -> np.ndarray:
+    """The rows of ``W`` of the contacts ``member`` (bool, one a contact), ascending: ``dim`` a contact."""
+    rows = np.empty(np.count_nonzero(member) * dim, dtype=np.int64)
+    k = 0
+    for a in range(member.size):
+        if member[a]:
+            for c in range(dim):
+                rows[k] = a * dim + c
+                k += 1
+    return rows
+
+
+@numba.njit(cache=True)
 def _x_from_held_block(A: np.ndarray, by_rows: bool, held_member: np.ndarray, held_block: np.ndarray, q: np.ndarray,
-                       r: np.ndarray, x: np.ndarray, dim: int) -> np.ndarray:
+                       r: np.ndarray, x: np.ndarray, dim: int) -> bool:
     """``x = W r + q`` on the held set's rows from the held block ``(W_AA)^T`` instead of ``W``'s rows (``A = W``,
     ``by_rows``), when every force of ``r`` lies in the held set (a warm start from the solve before): ``W``'s
     columns outside the set then meet zero forces, and the block's columns give each row the same products in the
     same order (ascending columns, zeros skipped) as :func:`_recompute_x_by_rows` on ``W``: the same bits, read
     along the block's contiguous rows (the loaded contacts' columns of ``W_AA``) instead of gathered from ``W``'s
-    rows (the start's ``x`` 9.3-9.6 -> 6.0-6.5 ms at 2025 contacts, gross_slip.md). Returns the contacts so formed
-    (none when it does not apply, or when the held set and block do not match in size)."""
+    rows (the start's ``x`` 9.3-9.6 -> 6.0-6.5 ms at 2025 contacts, gross_slip.md). Returns whether it did (not when
+    it does not apply, or when the held set and block do not match in size)."""
     nc = q.size // dim
-    formed = np.zeros(nc, dtype=np.bool_)
     if (not by_rows or held_block.shape[0] == 0 or held_member.size != nc
             or np.count_nonzero(held_member) * dim != held_block.shape[0]):
-        return formed
+        return False
     for a in range(nc):
         if not held_member[a]:
             for c in range(dim):
                 if r[a * dim + c] != 0.0:
-                    return formed
-    rows = np.empty(held_block.shape[0], dtype=np.int64)
-    k = 0
-    for a in range(nc):
-        if held_member[a]:
-            for c in range(dim):
-                rows[k] = a * dim + c
-                k += 1
+                    return False
+    rows = _member_rows(held_member, dim)
     qa = q[rows]
     ra = r[rows]
     xa = np.empty(rows.size)
@@ -1098,9 +1104,7 @@ def _x_from_held_block(A: np.ndarray, by_rows: bool, held_member: np.ndarray, he
                  xa)
     for i in range(rows.size):
         x[rows[i]] = xa[i]
-    for a in range(nc):
-        formed[a] = held_member[a]
-    return formed
+    return True
 
 
 @numba.njit(cache=True)
@@ -1168,7 +1172,8 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
     # formed: the contacts whose rows of x are all formed before the set is chosen (none, or the held set's)
     formed = np.zeros(nc, dtype=np.bool_)
     if not x_ready:
-        formed = _x_from_held_block(A, by_rows, held_member, held_block, q, r, x, dim)
+        if _x_from_held_block(A, by_rows, held_member, held_block, q, r, x, dim):
+            formed = held_member
         normal = np.empty(nc - np.count_nonzero(formed), dtype=np.int64)
         k = 0
         for a in range(nc):
@@ -1217,13 +1222,7 @@ def _restricted_core(A: np.ndarray, by_rows: bool, x_ready: bool, blocks: np.nda
                 na += 1
         stats[1] = na
         ma = na * dim
-        rows = np.empty(ma, dtype=np.int64)
-        k = 0
-        for a in range(nc):
-            if member[a]:
-                for c in range(dim):
-                    rows[k * dim + c] = a * dim + c
-                k += 1
+        rows = _member_rows(member, dim)
         same = held_block.shape[0] == ma and np.array_equal(held_member, member)
         Wa = held_block if same else _gather_block(A, by_rows, rows)  # (W_AA)^T, C-contiguous, like Wc
         if same:

@@ -251,13 +251,13 @@ def test_x_from_the_held_block_only_for_its_forces(sphere_flat):
     right = solve(W, q_right, 0.5, 3, tol=TOL, block_steps=steps)
     x = np.full(W.shape[0], np.nan)
     held = ls._held[0]
-    formed = ls._x_from_held_block(W, True, held.member, held.block, q_right, right.r, x, 3)
-    assert np.array_equal(formed, held.member) and formed.sum() == right.working_set
-    rows = np.flatnonzero(np.repeat(formed, 3))
+    assert ls._x_from_held_block(W, True, held.member, held.block, q_right, right.r, x, 3)
+    assert held.member.sum() == right.working_set   # formed: the held set's rows
+    rows = np.flatnonzero(np.repeat(held.member, 3))
     exact = np.empty(W.shape[0])
     ls._recompute_x_by_rows(W, q_right, right.r, exact, rows)
     assert np.array_equal(x[rows], exact[rows]) and np.isnan(np.delete(x, rows)).all()
-    assert not ls._x_from_held_block(W, True, held.member, held.block, q_left, r_left, x, 3).any()
+    assert not ls._x_from_held_block(W, True, held.member, held.block, q_left, r_left, x, 3)
     left = solve(W, q_left, 0.5, 3, tol=TOL, r0=r_left, block_steps=steps)
     fresh = solve(W.copy(), q_left, 0.5, 3, tol=TOL, r0=r_left, hold_block=False)
     assert left.converged and np.array_equal(left.r, fresh.r) and np.array_equal(left.x, fresh.x)
